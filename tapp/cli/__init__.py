@@ -1,0 +1,15 @@
+"""The ``tapp`` console command: one typer app, one module per subcommand group.
+
+Only this package imports typer. Each submodule defines its commands on ``app`` (or on a
+sub-app it adds); every command turns a ``TappError`` into one line on stderr and a non-zero
+exit code through :func:`tapp.cli.common.run_guarded`.
+"""
+
+from __future__ import annotations
+
+from tapp.cli.common import app
+
+
+def main() -> None:
+    """Entry point of the ``tapp`` console script."""
+    app()
