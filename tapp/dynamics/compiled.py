@@ -1,0 +1,181 @@
+"""C code generation, compilation and on-disk caching of the propagator.
+
+The CasADi functions of :mod:`tapp.dynamics.equations` are emitted as C, joined with the DOP853
+driver ``dop853_driver.c`` and compiled once by the system C compiler (``$CC``, default
+``cc``) into a shared library loaded with ctypes. The library is cached under
+``$TAPP_CACHE_DIR`` (default ``~/.cache/tapp``) by a hash of its source and the compiler
+flags, so a second run, or another process, pays no compile cost. The cache file is written
+to a temporary name and renamed: concurrent workers never load a half-written library.
+
+Status codes returned by the driver:
+
+====  =============================================
+code  meaning
+====  =============================================
+0     ok
+1     more steps than ``max_steps``
+2     step size underflow (stiff or singular right-hand side)
+3     non-finite state
+4     a time outside the third-body ephemeris table
+====  =============================================
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from functools import cache
+from importlib.resources import files
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as dop
+
+from tapp.errors import TappError
+
+STATUS = {
+    0: "ok",
+    1: "more steps than max_steps",
+    2: "step size underflow",
+    3: "non-finite state",
+    4: "time outside the ephemeris table",
+}
+
+_CFLAGS = ("-O2", "-fPIC", "-shared", "-fno-math-errno")
+_DOUBLE_P = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+
+
+class CompileError(TappError):
+    """The C compiler is missing or failed; the message carries its output."""
+
+
+def _c_array(name: str, values: np.ndarray) -> str:
+    values = np.asarray(values, dtype=float)
+    dims = "".join(f"[{d}]" for d in values.shape)
+    body = ", ".join(repr(float(v)) for v in values.ravel())
+    return f"static const double {name}{dims} = {{{body}}};\n"
+
+
+def _tableau() -> str:
+    """The DOP853 tableau as C arrays, from SciPy's copy of Hairer's coefficients."""
+    return "".join([
+        _c_array("DOP_C", dop.C),
+        _c_array("DOP_A", dop.A),
+        _c_array("DOP_B", dop.B),
+        _c_array("DOP_E3", dop.E3),
+        _c_array("DOP_E5", dop.E5),
+        _c_array("DOP_D", dop.D),
+    ])
+
+
+def generate_source(f_state: ca.Function, f_var: ca.Function) -> str:
+    """Return the full C source: CasADi functions, tableau and driver."""
+    cg = ca.CodeGenerator("tapp_rhs.c", {"with_header": False, "casadi_real": "double",
+                                         "casadi_int": "long long int"})
+    cg.add(f_state)
+    cg.add(f_var)
+    driver = files("tapp.dynamics").joinpath("dop853_driver.c").read_text()
+    return cg.dump() + "\n" + _tableau() + "\n" + driver
+
+
+def cache_dir() -> Path:
+    """Directory of compiled libraries (``$TAPP_CACHE_DIR`` or ``~/.cache/tapp``)."""
+    return Path(os.environ.get("TAPP_CACHE_DIR", Path.home() / ".cache" / "tapp"))
+
+
+def _compile(source: str, target: Path) -> None:
+    cc = os.environ.get("CC", "cc")
+    if shutil.which(cc) is None:
+        raise CompileError(f"C compiler {cc!r} not found: install gcc or set $CC")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+        src = Path(tmp) / "rhs.c"
+        out = Path(tmp) / "rhs.so"
+        src.write_text(source)
+        proc = subprocess.run([cc, *_CFLAGS, "-o", str(out), str(src), "-lm"],
+                              capture_output=True, text=True, check=False)
+        if proc.returncode != 0:
+            raise CompileError(f"{cc} failed ({proc.returncode}): {proc.stderr[-2000:]}")
+        os.replace(out, target)
+
+
+@dataclass(frozen=True, slots=True)
+class CompiledPropagator:
+    """A loaded shared library with the driver entry point ``tapp_integrate``."""
+
+    path: Path
+    fn: ctypes._CFuncPtr
+
+    def integrate(self, which: int, y0: np.ndarray, t0_s: float, t_out_s: np.ndarray,
+                  q: np.ndarray, c: np.ndarray, eph: EphemerisTable, rtol: float, atol: float,
+                  n_err: int, max_steps: int) -> tuple[int, np.ndarray, np.ndarray]:
+        """Run the driver; return (status, y (N, ny), stats [accepted, rejected, nfev])."""
+        y0 = np.ascontiguousarray(y0, dtype=float)
+        t_out_s = np.ascontiguousarray(t_out_s, dtype=float)
+        y_out = np.zeros((t_out_s.size, y0.size))
+        stats = np.zeros(3)
+        status = self.fn(which, y0.size, float(t0_s), y0, t_out_s.size, t_out_s, y_out,
+                         np.ascontiguousarray(q, dtype=float) if len(q) else np.zeros(1),
+                         np.ascontiguousarray(c, dtype=float), eph.coeffs, eph.n_bodies,
+                         eph.n_segments, eph.n_coef, eph.t0_s, eph.h_s, rtol, atol, n_err,
+                         max_steps, stats)
+        return int(status), y_out, stats
+
+
+@dataclass(frozen=True, slots=True)
+class EphemerisTable:
+    """Piecewise Chebyshev positions of third bodies relative to the centre.
+
+    ``coeffs`` has shape (n_bodies, n_segments, 3, n_coef), km; segment k covers
+    [t0_s + k h_s, t0_s + (k+1) h_s] in seconds from the epoch.
+    """
+
+    coeffs: np.ndarray
+    t0_s: float
+    h_s: float
+
+    @property
+    def n_bodies(self) -> int:
+        return int(self.coeffs.shape[0])
+
+    @property
+    def n_segments(self) -> int:
+        return int(self.coeffs.shape[1])
+
+    @property
+    def n_coef(self) -> int:
+        return int(self.coeffs.shape[3])
+
+    @staticmethod
+    def empty() -> EphemerisTable:
+        """A table with no bodies (the driver never reads it)."""
+        return EphemerisTable(np.zeros((0, 1, 3, 1)), 0.0, 1.0)
+
+
+@cache
+def _load(path: Path) -> CompiledPropagator:
+    lib = ctypes.CDLL(str(path))
+    fn = lib.tapp_integrate
+    fn.restype = ctypes.c_int
+    fn.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_double, _DOUBLE_P, ctypes.c_int,
+                   _DOUBLE_P, _DOUBLE_P, _DOUBLE_P, _DOUBLE_P,
+                   np.ctypeslib.ndpointer(dtype=np.float64), ctypes.c_int, ctypes.c_int,
+                   ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_double,
+                   ctypes.c_double, ctypes.c_int, ctypes.c_long, _DOUBLE_P]
+    return CompiledPropagator(path, fn)
+
+
+def compiled_propagator(f_state: ca.Function, f_var: ca.Function) -> CompiledPropagator:
+    """Return the compiled propagator of a function pair, compiling only on a cache miss."""
+    source = generate_source(f_state, f_var)
+    digest = hashlib.sha256((source + " ".join(_CFLAGS)).encode()).hexdigest()[:20]
+    path = cache_dir() / f"rhs_{digest}.so"
+    if not path.exists():
+        _compile(source, path)
+    return _load(path)

@@ -1,0 +1,255 @@
+/*
+ * DOP853 (Dormand & Prince 8(5,3)) with 7th-order dense output, driving a CasADi-generated
+ * right-hand side. Algorithm: Hairer, Norsett & Wanner, "Solving Ordinary Differential
+ * Equations I", 2nd ed., Sec. II.5 and II.10; step-size control and dense output as in the
+ * authors' DOP853 code. The Butcher tableau (DOP_C, DOP_A, DOP_B, DOP_E3, DOP_E5, DOP_D) is
+ * emitted above this file by tapp.dynamics.compiled from SciPy's published copy of the same
+ * coefficients, so no coefficient is typed by hand here.
+ *
+ * Third-body positions come from piecewise Chebyshev series (fitted to DE421 by
+ * tapp.ephemeris) evaluated here, so the right-hand side stays a pure function.
+ *
+ * Return codes (documented in tapp.dynamics.compiled.STATUS):
+ *   0 ok, 1 too many steps, 2 step size underflow, 3 non-finite state, 4 time outside the
+ *   ephemeris table.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define DOP_SAFETY 0.9
+#define DOP_MIN_FACTOR 0.2
+#define DOP_MAX_FACTOR 10.0
+#define DOP_ORDER_EXP (-1.0 / 8.0)
+
+typedef int (*rhs_fn)(const casadi_real **arg, casadi_real **res, casadi_int *iw,
+                      casadi_real *w, int mem);
+
+typedef struct {
+    rhs_fn f;
+    int ny;
+    casadi_real t_buf;
+    const double *q, *c;
+    const double *eph;
+    int nb, nseg, ncoef;
+    double eph_t0, eph_h;
+    double *rb;
+    const casadi_real **arg;
+    casadi_real **res;
+    casadi_int *iw;
+    casadi_real *w;
+    long nfev;
+    int eph_error;
+} ctx_t;
+
+static void eph_eval(ctx_t *cx, double t) {
+    double u = (t - cx->eph_t0) / cx->eph_h;
+    int seg = (int)floor(u);
+    if (seg < 0 || seg >= cx->nseg) {
+        /* allow the end point of the last segment and rounding at the first */
+        if (seg == cx->nseg && u <= cx->nseg + 1e-9) seg = cx->nseg - 1;
+        else if (seg == -1 && u >= -1e-9) seg = 0;
+        else { cx->eph_error = 1; seg = seg < 0 ? 0 : cx->nseg - 1; }
+    }
+    double tau = 2.0 * (u - seg) - 1.0;
+    for (int b = 0; b < cx->nb; ++b) {
+        for (int k = 0; k < 3; ++k) {
+            const double *a = cx->eph + (((size_t)b * cx->nseg + seg) * 3 + k) * cx->ncoef;
+            double b1 = 0.0, b2 = 0.0;
+            for (int j = cx->ncoef - 1; j >= 1; --j) {
+                double tmp = 2.0 * tau * b1 - b2 + a[j];
+                b2 = b1;
+                b1 = tmp;
+            }
+            cx->rb[3 * b + k] = tau * b1 - b2 + a[0];
+        }
+    }
+}
+
+static void rhs(ctx_t *cx, double t, const double *y, double *dy) {
+    if (cx->nb > 0) eph_eval(cx, t);
+    cx->t_buf = t;
+    cx->arg[0] = &cx->t_buf;
+    cx->arg[1] = y;
+    cx->arg[2] = cx->q;
+    cx->arg[3] = cx->c;
+    cx->arg[4] = cx->rb;
+    cx->res[0] = dy;
+    cx->f(cx->arg, cx->res, cx->iw, cx->w, 0);
+    cx->nfev++;
+}
+
+static double rms_scaled(const double *v, const double *scale, int n) {
+    double s = 0.0;
+    for (int i = 0; i < n; ++i) { double e = v[i] / scale[i]; s += e * e; }
+    return sqrt(s / n);
+}
+
+/* Dense output: extra stages 13..15 and the 7 interpolation vectors F (scipy layout). */
+static void dense_prepare(ctx_t *cx, int ny, double t_old, double h, const double *y_old,
+                          const double *y_new, double *K, double *F, double *ytmp) {
+    for (int s = 13; s < 16; ++s) {
+        for (int i = 0; i < ny; ++i) {
+            double acc = 0.0;
+            for (int j = 0; j < s; ++j) acc += DOP_A[s][j] * K[(size_t)j * ny + i];
+            ytmp[i] = y_old[i] + h * acc;
+        }
+        rhs(cx, t_old + DOP_C[s] * h, ytmp, K + (size_t)s * ny);
+    }
+    for (int i = 0; i < ny; ++i) {
+        double f_old = K[i], f_new = K[(size_t)12 * ny + i];
+        double dy = y_new[i] - y_old[i];
+        F[i] = dy;
+        F[(size_t)ny + i] = h * f_old - dy;
+        F[(size_t)2 * ny + i] = 2.0 * dy - h * (f_new + f_old);
+        for (int r = 0; r < 4; ++r) {
+            double acc = 0.0;
+            for (int j = 0; j < 16; ++j) acc += DOP_D[r][j] * K[(size_t)j * ny + i];
+            F[(size_t)(3 + r) * ny + i] = h * acc;
+        }
+    }
+}
+
+static void dense_eval(int ny, double x, const double *y_old, const double *F, double *out) {
+    for (int i = 0; i < ny; ++i) {
+        double y = 0.0;
+        for (int r = 6; r >= 0; --r) {
+            y += F[(size_t)r * ny + i];
+            y *= ((6 - r) % 2 == 0) ? x : (1.0 - x);
+        }
+        out[i] = y + y_old[i];
+    }
+}
+
+/*
+ * Integrate y' = f(t, y) from (t0, y0) through the monotonic output times tout[0..nout-1]
+ * (either direction), writing y(tout[k]) to yout[k*ny ...]. Error control uses the first
+ * n_err components. stats[0..2] = accepted steps, rejected steps, RHS evaluations.
+ */
+int tapp_integrate(int which, int ny, double t0, const double *y0, int nout, const double *tout,
+                   double *yout, const double *q, const double *c, const double *eph, int nb,
+                   int nseg, int ncoef, double eph_t0, double eph_h, double rtol, double atol,
+                   int n_err, long max_steps, double *stats) {
+    ctx_t cx;
+    memset(&cx, 0, sizeof cx);
+    casadi_int sz_arg, sz_res, sz_iw, sz_w;
+    if (which == 0) { cx.f = f_state; f_state_work(&sz_arg, &sz_res, &sz_iw, &sz_w); }
+    else { cx.f = f_var; f_var_work(&sz_arg, &sz_res, &sz_iw, &sz_w); }
+    cx.ny = ny; cx.q = q; cx.c = c; cx.eph = eph; cx.nb = nb; cx.nseg = nseg;
+    cx.ncoef = ncoef; cx.eph_t0 = eph_t0; cx.eph_h = eph_h;
+    double rb_static[3 * 16];
+    cx.rb = rb_static;
+    cx.arg = malloc(sizeof(casadi_real *) * (sz_arg > 5 ? sz_arg : 5));
+    cx.res = malloc(sizeof(casadi_real *) * (sz_res > 1 ? sz_res : 1));
+    cx.iw = malloc(sizeof(casadi_int) * (sz_iw > 0 ? sz_iw : 1));
+    cx.w = malloc(sizeof(casadi_real) * (sz_w > 0 ? sz_w : 1));
+    double *K = malloc(sizeof(double) * 16 * (size_t)ny);
+    double *F = malloc(sizeof(double) * 7 * (size_t)ny);
+    double *y = malloc(sizeof(double) * (size_t)ny);
+    double *y_new = malloc(sizeof(double) * (size_t)ny);
+    double *ytmp = malloc(sizeof(double) * (size_t)ny);
+    double *scale = malloc(sizeof(double) * (size_t)ny);
+    double *e3 = malloc(sizeof(double) * (size_t)ny);
+    double *e5 = malloc(sizeof(double) * (size_t)ny);
+    int status = 0;
+    long n_acc = 0, n_rej = 0;
+    memcpy(y, y0, sizeof(double) * (size_t)ny);
+    double t = t0;
+    double t_end = tout[nout - 1];
+    double dir = (t_end >= t0) ? 1.0 : -1.0;
+    int k_out = 0;
+    while (k_out < nout && tout[k_out] == t0) {
+        memcpy(yout + (size_t)k_out * ny, y, sizeof(double) * (size_t)ny);
+        ++k_out;
+    }
+    double *f0 = K; /* K[0] holds f(t, y) at the start of every step */
+    rhs(&cx, t, y, f0);
+    /* Initial step: Hairer, Norsett & Wanner, Sec. II.4 (as in DOP853's HINIT). */
+    double h_abs;
+    {
+        for (int i = 0; i < n_err; ++i) scale[i] = atol + fabs(y[i]) * rtol;
+        double d0 = rms_scaled(y, scale, n_err), d1 = rms_scaled(f0, scale, n_err);
+        double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+        for (int i = 0; i < ny; ++i) ytmp[i] = y[i] + h0 * dir * f0[i];
+        double *f1 = K + (size_t)1 * ny;
+        rhs(&cx, t + h0 * dir, ytmp, f1);
+        for (int i = 0; i < n_err; ++i) e3[i] = f1[i] - f0[i];
+        double d2 = rms_scaled(e3, scale, n_err) / h0;
+        double dmax = d1 > d2 ? d1 : d2;
+        double h1 = (dmax <= 1e-15) ? fmax(1e-6, h0 * 1e-3) : pow(0.01 / dmax, 1.0 / 8.0);
+        h_abs = fmin(100.0 * h0, h1);
+    }
+    int rejected = 0;
+    while (k_out < nout) {
+        if (n_acc + n_rej >= max_steps) { status = 1; break; }
+        double min_step = 10.0 * fabs(nextafter(t, dir * INFINITY) - t);
+        if (h_abs < min_step) { status = 2; break; }
+        double h = h_abs * dir;
+        double t_new = t + h;
+        if (dir * (t_new - t_end) > 0) { t_new = t_end; h = t_new - t; h_abs = fabs(h); }
+        for (int s = 1; s < 12; ++s) {
+            for (int i = 0; i < ny; ++i) {
+                double acc = 0.0;
+                for (int j = 0; j < s; ++j) acc += DOP_A[s][j] * K[(size_t)j * ny + i];
+                ytmp[i] = y[i] + h * acc;
+            }
+            rhs(&cx, t + DOP_C[s] * h, ytmp, K + (size_t)s * ny);
+        }
+        for (int i = 0; i < ny; ++i) {
+            double acc = 0.0;
+            for (int j = 0; j < 12; ++j) acc += DOP_B[j] * K[(size_t)j * ny + i];
+            y_new[i] = y[i] + h * acc;
+        }
+        rhs(&cx, t_new, y_new, K + (size_t)12 * ny);
+        if (cx.eph_error) { status = 4; break; }
+        double s5 = 0.0, s3 = 0.0;
+        for (int i = 0; i < n_err; ++i) {
+            double sc = atol + rtol * fmax(fabs(y[i]), fabs(y_new[i]));
+            double a5 = 0.0, a3 = 0.0;
+            for (int j = 0; j < 13; ++j) {
+                a5 += DOP_E5[j] * K[(size_t)j * ny + i];
+                a3 += DOP_E3[j] * K[(size_t)j * ny + i];
+            }
+            a5 /= sc; a3 /= sc;
+            s5 += a5 * a5; s3 += a3 * a3;
+        }
+        double err = 0.0;
+        if (s5 > 0.0 || s3 > 0.0) err = h_abs * s5 / sqrt((s5 + 0.01 * s3) * n_err);
+        if (!isfinite(err)) {
+            h_abs *= DOP_MIN_FACTOR; rejected = 1; ++n_rej; continue;
+        }
+        if (err < 1.0) {
+            double factor = (err == 0.0) ? DOP_MAX_FACTOR
+                                         : fmin(DOP_MAX_FACTOR, DOP_SAFETY * pow(err, DOP_ORDER_EXP));
+            if (rejected && factor > 1.0) factor = 1.0;
+            int prepared = 0;
+            while (k_out < nout && dir * (tout[k_out] - t_new) <= 0) {
+                if (tout[k_out] == t_new) {
+                    memcpy(yout + (size_t)k_out * ny, y_new, sizeof(double) * (size_t)ny);
+                } else {
+                    if (!prepared) { dense_prepare(&cx, ny, t, h, y, y_new, K, F, ytmp); prepared = 1; }
+                    dense_eval(ny, (tout[k_out] - t) / h, y, F, yout + (size_t)k_out * ny);
+                }
+                ++k_out;
+            }
+            if (cx.eph_error) { status = 4; break; }
+            t = t_new;
+            memcpy(y, y_new, sizeof(double) * (size_t)ny);
+            memcpy(K, K + (size_t)12 * ny, sizeof(double) * (size_t)ny);
+            h_abs *= factor;
+            rejected = 0;
+            ++n_acc;
+            int finite = 1;
+            for (int i = 0; i < ny; ++i) if (!isfinite(y[i])) { finite = 0; break; }
+            if (!finite) { status = 3; break; }
+        } else {
+            h_abs *= fmax(DOP_MIN_FACTOR, DOP_SAFETY * pow(err, DOP_ORDER_EXP));
+            rejected = 1;
+            ++n_rej;
+        }
+    }
+    stats[0] = (double)n_acc; stats[1] = (double)n_rej; stats[2] = (double)cx.nfev;
+    free(cx.arg); free(cx.res); free(cx.iw); free(cx.w);
+    free(K); free(F); free(y); free(y_new); free(ytmp); free(scale); free(e3); free(e5);
+    return status;
+}

@@ -1,0 +1,197 @@
+"""Force models as CasADi symbolic expressions; their Jacobians come from differentiation.
+
+Central field: the geopotential of a body of gravitational parameter GM and reference radius R,
+
+.. math::
+    U(\\mathbf r) = \\frac{GM}{R} \\sum_{n=0}^{N} \\sum_{m=0}^{\\min(n, M)}
+        \\left(\\bar C_{nm} \\bar V_{nm} + \\bar S_{nm} \\bar W_{nm}\\right),
+
+with the fully normalised solid harmonics \\bar V_{nm}, \\bar W_{nm} of the Earth-fixed position
+built by the Cunningham recursion in Cartesian coordinates (Montenbruck & Gill, *Satellite
+Orbits*, 2000, eqs. 3.27-3.31), normalised with N_nm = sqrt((2-δ_m0)(2n+1)(n-m)!/(n+m)!) so
+the recursion factors stay O(1) at any degree:
+
+.. math::
+    \\bar V_{mm} = \\sqrt{k_m\\frac{2m+1}{2m}}\\,\\frac{R}{r^2}
+        (x \\bar V_{m-1,m-1} - y \\bar W_{m-1,m-1}),\\quad k_1 = 2,\\ k_{m>1} = 1,
+
+    \\bar V_{nm} = \\sqrt{\\frac{(2n-1)(2n+1)}{(n-m)(n+m)}}\\,\\frac{zR}{r^2}\\bar V_{n-1,m}
+        - \\sqrt{\\frac{(2n+1)(n+m-1)(n-m-1)}{(2n-3)(n+m)(n-m)}}\\,\\frac{R^2}{r^2}\\bar V_{n-2,m}
+
+(the same for \\bar W), \\bar V_{00} = R/r, \\bar W_{00} = 0. The acceleration is ∇U, taken
+by CasADi; with tesserals the Earth-fixed position is R3(θ(t)) r with
+θ(t) = θ0 + ω_E t (GMST at the epoch plus the IERS rotation rate), so ∇U w.r.t. the inertial
+position is already the inertial acceleration.
+
+Third bodies (point masses, relative to a possibly accelerated centre; Montenbruck & Gill
+eq. 3.37):
+
+.. math::
+    \\mathbf a = -GM_b\\left(\\frac{\\mathbf r - \\mathbf s}{|\\mathbf r - \\mathbf s|^3}
+        + \\frac{\\mathbf s}{|\\mathbf s|^3}\\right).
+
+Model parameters (values in :func:`default_parameters`) may be symbols so that their
+sensitivities come out of the variational equations: ``GM`` (centre, km^3/s^2), ``Jn``
+(unnormalised zonal, \\bar C_{n0} = -J_n/\\sqrt{2n+1}), ``Cnm``/``Snm`` (normalised, single
+digits n, m), ``GM_<body>`` for a third body.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+
+import casadi as ca
+
+from tapp.constants import GM_km3_s2, OMEGA_EARTH_rad_s, R_EARTH_km, egm96_coefficients
+from tapp.dynamics.spec import ForceModel
+from tapp.errors import InputError
+
+_HARMONIC = re.compile(r"^([CS])(\d)(\d)$")
+_ZONAL_J = re.compile(r"^J(\d)$")
+
+
+def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, float]:
+    """Return the nominal value of each named model parameter (units as in the module doc).
+
+    Raises
+    ------
+    InputError
+        For a name the model does not contain (a harmonic outside its truncation, a third
+        body it does not have, an unknown name).
+    """
+    c_bar, s_bar = egm96_coefficients()
+    values: dict[str, float] = {}
+    for name in names:
+        if name == "GM":
+            values[name] = model.gm_center_km3_s2
+        elif name.startswith("GM_") and name[3:] in model.third_bodies:
+            values[name] = GM_km3_s2[name[3:]]
+        elif (m := _ZONAL_J.match(name)) and _in_field(model, int(m.group(1)), 0):
+            n = int(m.group(1))
+            values[name] = -math.sqrt(2 * n + 1) * c_bar[n, 0]
+        elif (m := _HARMONIC.match(name)) and _in_field(model, int(m.group(2)),
+                                                        int(m.group(3))):
+            n, mm = int(m.group(2)), int(m.group(3))
+            if m.group(1) == "S" and mm == 0:
+                raise InputError("model", "parameters", "no S_n0 (identically zero)", name)
+            values[name] = (c_bar if m.group(1) == "C" else s_bar)[n, mm]
+        else:
+            raise InputError("model", "parameters",
+                             f"GM, Jn, Cnm, Snm within {model.gravity.name} or GM_<third body>",
+                             name)
+    return values
+
+
+def _in_field(model: ForceModel, n: int, m: int) -> bool:
+    return model.center == "earth" and 2 <= n <= model.gravity.degree and m <= min(
+        n, model.gravity.order)
+
+
+def _recursion_factors(n: int, m: int) -> tuple[float, float]:
+    """Return (alpha_nm, beta_nm) of the normalised vertical recursion (module docstring)."""
+    alpha = math.sqrt((2 * n - 1) * (2 * n + 1) / ((n - m) * (n + m)))
+    if n - m < 2:
+        return alpha, 0.0
+    beta = math.sqrt((2 * n + 1) * (n + m - 1) * (n - m - 1) / ((2 * n - 3) * (n + m) * (n - m)))
+    return alpha, beta
+
+
+def central_potential(model: ForceModel, r_fixed: ca.SX, gm: ca.SX,
+                      coefficients: Mapping[tuple[str, int, int], ca.SX | float]) -> ca.SX:
+    """Return U(r) (km^2/s^2) of the centre's truncated field at body-fixed position r (km).
+
+    ``coefficients`` maps ('C'|'S', n, m) to the value or symbol of each normalised
+    coefficient present in the truncation (degree >= 2); missing entries are zero.
+    """
+    deg, order = model.gravity.degree, model.gravity.order
+    x, y, z = r_fixed[0], r_fixed[1], r_fixed[2]
+    r2 = x * x + y * y + z * z
+    if deg < 2:
+        return gm / ca.sqrt(r2)
+    radius = R_EARTH_km
+    rr = radius / r2
+    v = {(0, 0): radius / ca.sqrt(r2)}
+    w = {(0, 0): ca.SX(0)}
+    for m in range(0, order + 1):
+        if m > 0:
+            k = 2.0 if m == 1 else 1.0
+            g = math.sqrt(k * (2 * m + 1) / (2 * m))
+            v[m, m] = g * rr * (x * v[m - 1, m - 1] - y * w[m - 1, m - 1])
+            w[m, m] = g * rr * (x * w[m - 1, m - 1] + y * v[m - 1, m - 1])
+        for n in range(m + 1, deg + 1):
+            alpha, beta = _recursion_factors(n, m)
+            v[n, m] = alpha * z * rr * v[n - 1, m]
+            w[n, m] = alpha * z * rr * w[n - 1, m]
+            if beta:
+                v[n, m] -= beta * radius * rr * v[n - 2, m]
+                w[n, m] -= beta * radius * rr * w[n - 2, m]
+    total = v[0, 0]
+    for n in range(2, deg + 1):
+        for m in range(0, min(n, order) + 1):
+            total += coefficients.get(("C", n, m), 0.0) * v[n, m]
+            if m > 0:
+                total += coefficients.get(("S", n, m), 0.0) * w[n, m]
+    return gm / radius * total
+
+
+def field_coefficients(model: ForceModel, q: Mapping[str, ca.SX]
+                       ) -> dict[tuple[str, int, int], ca.SX | float]:
+    """Return the normalised coefficients of the truncation, symbols where ``q`` names them."""
+    c_bar, s_bar = egm96_coefficients()
+    coeffs: dict[tuple[str, int, int], ca.SX | float] = {}
+    if model.center != "earth":
+        return coeffs
+    for n in range(2, model.gravity.degree + 1):
+        for m in range(0, min(n, model.gravity.order) + 1):
+            coeffs["C", n, m] = float(c_bar[n, m])
+            if m > 0:
+                coeffs["S", n, m] = float(s_bar[n, m])
+    for name, sym in q.items():
+        if m := _ZONAL_J.match(name):
+            n = int(m.group(1))
+            if ("C", n, 0) in coeffs:
+                coeffs["C", n, 0] = -sym / math.sqrt(2 * n + 1)
+        elif m := _HARMONIC.match(name):
+            key = (m.group(1), int(m.group(2)), int(m.group(3)))
+            if key in coeffs:
+                coeffs[key] = sym
+    return coeffs
+
+
+def body_fixed_position(model: ForceModel, r: ca.SX, t: ca.SX, theta0: ca.SX) -> ca.SX:
+    """Rotate inertial r (km) into the body-fixed frame when the field has tesserals.
+
+    r_fixed = R3(θ) r with θ = θ0 + ω_E t (rad). A zonal field is symmetric about the spin
+    axis, so no rotation is applied (and the model stays autonomous).
+    """
+    if model.gravity.order == 0:
+        return r
+    theta = theta0 + OMEGA_EARTH_rad_s * t
+    c, s = ca.cos(theta), ca.sin(theta)
+    return ca.vertcat(c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2])
+
+
+def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mapping[str, ca.SX],
+                 r_bodies: Mapping[str, ca.SX]) -> ca.SX:
+    """Return the inertial acceleration (km/s^2) of ``model`` as a CasADi expression.
+
+    Parameters
+    ----------
+    t : SX (1,)  seconds from the epoch.
+    r : SX (3,)  inertial position relative to the centre, km.
+    theta0 : SX (1,)  Earth rotation angle at the epoch, rad.
+    q : mapping of parameter name to symbol; absent names take their nominal values.
+    r_bodies : mapping of third-body name to its position relative to the centre (km).
+    """
+    gm = q.get("GM", model.gm_center_km3_s2)
+    r_fixed = body_fixed_position(model, r, t, theta0)
+    u = central_potential(model, r_fixed, gm, field_coefficients(model, q))
+    acc = ca.gradient(u, r)
+    for body in model.third_bodies:
+        s = r_bodies[body]
+        d = r - s
+        gm_b = q.get(f"GM_{body}", GM_km3_s2[body])
+        acc = acc - gm_b * (d / ca.norm_2(d) ** 3 + s / ca.norm_2(s) ** 3)
+    return acc

@@ -1,0 +1,167 @@
+"""Propagation of a state with its STM and parameter sensitivities on a time grid.
+
+The caller names two force models: ``state_model`` moves the trajectory, ``var_model``
+drives Φ(t, t0) and S(t) = ∂x(t)/∂q (see :mod:`tapp.dynamics.equations`). Integration runs
+in compiled code (CasADi-generated C under a DOP853 driver, :mod:`tapp.dynamics.compiled`),
+never a Python callback per step. Outputs come on the requested grid by the integrator's
+7th-order dense output, so the grid does not constrain the step size.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cache
+
+import numpy as np
+
+from tapp.dynamics.compiled import STATUS, CompiledPropagator, compiled_propagator
+from tapp.dynamics.equations import Equations, build_equations, initial_augmented, split_augmented
+from tapp.dynamics.forces import default_parameters
+from tapp.dynamics.spec import ForceModel
+from tapp.errors import InputError, TappError
+
+
+class PropagationError(TappError):
+    """The integrator stopped early; the message gives the status and the time reached."""
+
+
+@dataclass(frozen=True, slots=True)
+class Trajectory:
+    """States and partials on a time grid (time-major arrays).
+
+    Attributes
+    ----------
+    t_s : (N,) seconds from the epoch.
+    states : (N, 6) position (km) and velocity (km/s), inertial axes, relative to the centre.
+    stm : (N, 6, 6) or None, Φ(t_k, t0).
+    sensitivity : (N, 6, n_q) or None, ∂x(t_k)/∂q for the parameters ``params``.
+    params : names of q, in column order of ``sensitivity``.
+    steps : accepted integration steps; ``rhs_evaluations`` : right-hand-side calls.
+    """
+
+    t_s: np.ndarray
+    states: np.ndarray
+    stm: np.ndarray | None
+    sensitivity: np.ndarray | None
+    params: tuple[str, ...]
+    steps: int
+    rhs_evaluations: int
+
+
+@cache
+def _compiled(state_model: ForceModel, var_model: ForceModel, params: tuple[str, ...]
+              ) -> tuple[Equations, CompiledPropagator]:
+    eqs = build_equations(state_model, var_model, params)
+    return eqs, compiled_propagator(eqs.f_state, eqs.f_var)
+
+
+@dataclass(frozen=True, slots=True)
+class Propagator:
+    """A (state model, variational model, parameters) triple with integrator settings.
+
+    Parameters
+    ----------
+    state_model, var_model : ForceModel
+        ``var_model`` defaults to ``state_model`` (exact variational equations).
+    params : names of the model parameters whose sensitivities are wanted (see
+        :mod:`tapp.dynamics.forces`).
+    rtol, atol : relative and absolute (km, km/s) local error tolerances, > 0.
+    error_control : ``"state"`` controls the step on the 6 state components only;
+        ``"all"`` includes Φ and S.
+    max_steps : cap on integration steps per call.
+    """
+
+    state_model: ForceModel
+    var_model: ForceModel | None = None
+    params: tuple[str, ...] = ()
+    rtol: float = 1e-12
+    atol: float = 1e-12
+    error_control: str = "state"
+    max_steps: int = 10_000_000
+    _nominal: dict[str, float] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.var_model is None:
+            object.__setattr__(self, "var_model", self.state_model)
+        for name in ("rtol", "atol"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise InputError("propagator", name, "a finite tolerance > 0", value)
+        if self.error_control not in ("state", "all"):
+            raise InputError("propagator", "error_control", "'state' or 'all'",
+                             self.error_control)
+        object.__setattr__(self, "_nominal", default_parameters(self.state_model, self.params))
+
+    def compiled(self) -> tuple[Equations, CompiledPropagator]:
+        """Build (or fetch from the cache) the equations and the compiled library."""
+        return _compiled(self.state_model, self.var_model, self.params)
+
+    def propagate(self, x0: np.ndarray, t_s: np.ndarray, *, t0_s: float = 0.0,
+                  stm: bool = True, param_values: Mapping[str, float] | None = None,
+                  theta0_rad: float = 0.0, epoch_jd_utc: float | None = None) -> Trajectory:
+        """Integrate from (t0_s, x0) to every time in ``t_s``.
+
+        Parameters
+        ----------
+        x0 : (6,) km, km/s, inertial, relative to the model's centre.
+        t_s : (N,) output times, seconds from the epoch, monotonic away from t0_s.
+        stm : integrate Φ and S too (else only the state, with ``state_model``).
+        param_values : values of ``params`` other than their nominal ones.
+        theta0_rad : Earth rotation angle at the epoch (GMST), used by tesseral fields.
+        epoch_jd_utc : UTC Julian date of t = 0; required when third bodies are present.
+
+        Raises
+        ------
+        InputError
+            Non-finite x0 or times, times not monotonic, unknown parameter names.
+        PropagationError
+            The integrator stopped early (see ``tapp.dynamics.compiled.STATUS``).
+        """
+        x0 = np.asarray(x0, dtype=float)
+        if x0.shape != (6,) or not np.all(np.isfinite(x0)):
+            raise InputError("propagate", "state", "6 finite numbers (km, km/s)", x0.tolist())
+        t_s = np.atleast_1d(np.asarray(t_s, dtype=float))
+        if not np.all(np.isfinite(t_s)) or t_s.size == 0:
+            raise InputError("propagate", "times", "a non-empty grid of finite times", None)
+        steps = np.diff(np.concatenate([[t0_s], t_s]))
+        if not (np.all(steps >= 0) or np.all(steps <= 0)):
+            raise InputError("propagate", "times", "times monotonic away from t0", None)
+        eqs, lib = self.compiled()
+        values = dict(self._nominal)
+        for name, value in (param_values or {}).items():
+            if name not in values:
+                raise InputError("propagate", "param_values", f"one of {self.params}", name)
+            values[name] = float(value)
+        q = np.array([values[name] for name in self.params])
+        eph = self._ephemeris(eqs.bodies, epoch_jd_utc, t0_s, t_s)
+        if stm:
+            y0 = initial_augmented(x0, len(self.params))
+            n_err = 6 if self.error_control == "state" else y0.size
+        else:
+            y0, n_err = x0, 6
+        status, y, stats = lib.integrate(1 if stm else 0, y0, t0_s, t_s, q,
+                                         np.array([theta0_rad]), eph, self.rtol, self.atol,
+                                         n_err, self.max_steps)
+        if status != 0:
+            raise PropagationError(f"propagation stopped: {STATUS.get(status, status)} after "
+                                   f"{int(stats[0])} steps")
+        if stm:
+            states, phi, sens = split_augmented(y, len(self.params))
+        else:
+            states, phi, sens = y, None, None
+        return Trajectory(t_s, states, phi, sens, self.params, int(stats[0]), int(stats[2]))
+
+    def _ephemeris(self, bodies: tuple[str, ...], epoch_jd_utc: float | None, t0_s: float,
+                   t_s: np.ndarray):
+        from tapp.dynamics.compiled import EphemerisTable
+
+        if not bodies:
+            return EphemerisTable.empty()
+        if epoch_jd_utc is None:
+            raise InputError("propagate", "epoch", "an epoch (UTC) when third bodies are "
+                             "modelled", None)
+        from tapp.ephemeris import chebyshev_table
+
+        return chebyshev_table(bodies, self.state_model.center, epoch_jd_utc,
+                               min(t0_s, t_s.min()), max(t0_s, t_s.max()))

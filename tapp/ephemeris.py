@@ -1,0 +1,123 @@
+"""Positions of the Sun, Moon and planets from JPL DE421, and time scales for reading it.
+
+DE421 (Folkner, Williams & Boggs 2009, IPN Progress Report 42-178) ships inside the
+``skyfield-data`` package and is read with ``jplephem``: nothing is downloaded at run time.
+Its axes are the ICRF, which we take as EME2000 (they differ by ~20 mas, far below what
+matters for third-body accelerations). Its time argument is TDB; we use TDB ≈ TT =
+UTC + ΔAT + 32.184 s (the periodic TDB−TT term, under 2 ms, is neglected).
+
+For the compiled propagator the positions relative to the integration centre are fitted by
+piecewise Chebyshev series (:func:`chebyshev_table`), evaluated inside the C driver.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+from jplephem.spk import SPK
+
+from tapp.constants import SECONDS_PER_DAY
+from tapp.dynamics.compiled import EphemerisTable
+from tapp.errors import InputError
+
+#: TAI − UTC (s) from the given UTC Julian date on (IERS Bulletin C; 37 s since 2017-01-01).
+LEAP_SECONDS = (
+    (2441317.5, 10), (2441499.5, 11), (2441683.5, 12), (2442048.5, 13), (2442413.5, 14),
+    (2442778.5, 15), (2443144.5, 16), (2443509.5, 17), (2443874.5, 18), (2444239.5, 19),
+    (2444786.5, 20), (2445151.5, 21), (2445516.5, 22), (2446247.5, 23), (2447161.5, 24),
+    (2447892.5, 25), (2448257.5, 26), (2448804.5, 27), (2449169.5, 28), (2449534.5, 29),
+    (2450083.5, 30), (2450630.5, 31), (2451179.5, 32), (2453736.5, 33), (2454832.5, 34),
+    (2456109.5, 35), (2457204.5, 36), (2457754.5, 37),
+)
+TT_MINUS_TAI_s = 32.184
+
+# NAIF paths from the solar-system barycentre (0) in DE421: lists of (center, target).
+_PATHS = {
+    "sun": ((0, 10),),
+    "mercury": ((0, 1), (1, 199)),
+    "venus": ((0, 2), (2, 299)),
+    "earth": ((0, 3), (3, 399)),
+    "moon": ((0, 3), (3, 301)),
+    "mars": ((0, 4), (4, 499)),
+    "jupiter": ((0, 5),),
+    "saturn": ((0, 6),),
+    "uranus": ((0, 7),),
+    "neptune": ((0, 8),),
+}
+
+
+def tai_minus_utc_s(jd_utc: float) -> float:
+    """Return TAI − UTC (s) at a UTC Julian date (10 s before 1972 is not supported)."""
+    if jd_utc < LEAP_SECONDS[0][0]:
+        raise InputError("epoch", "date", "a UTC date on or after 1972-01-01", jd_utc)
+    value = LEAP_SECONDS[0][1]
+    for start, dat in LEAP_SECONDS:
+        if jd_utc >= start:
+            value = dat
+    return float(value)
+
+
+def utc_to_tdb_jd(jd_utc: float) -> float:
+    """Return the TDB Julian date of a UTC Julian date (TDB ≈ TT, see module docstring)."""
+    return jd_utc + (tai_minus_utc_s(jd_utc) + TT_MINUS_TAI_s) / SECONDS_PER_DAY
+
+
+def de421_path() -> Path:
+    """Path of de421.bsp inside skyfield-data (found without importing the package,
+    whose import warns about its Earth-orientation file's age)."""
+    spec = importlib.util.find_spec("skyfield_data")
+    if spec is None or not spec.submodule_search_locations:
+        raise InputError("ephemeris", "skyfield-data", "the skyfield-data package installed")
+    return Path(next(iter(spec.submodule_search_locations))) / "data" / "de421.bsp"
+
+
+@cache
+def _kernel() -> SPK:
+    return SPK.open(str(de421_path()))
+
+
+def _barycentric_km(body: str, jd_tdb: np.ndarray) -> np.ndarray:
+    kernel = _kernel()
+    total = np.zeros((3, jd_tdb.size))
+    for center, target in _PATHS[body]:
+        total += kernel[center, target].compute(jd_tdb)
+    return total.T
+
+
+def position_km(body: str, center: str, jd_tdb: np.ndarray) -> np.ndarray:
+    """Return the position (N, 3), km, of ``body`` relative to ``center`` at TDB dates (N,)."""
+    jd = np.atleast_1d(np.asarray(jd_tdb, dtype=float))
+    if body == "moon" and center == "earth":  # avoid the barycentric round trip
+        kernel = _kernel()
+        return (kernel[3, 301].compute(jd) - kernel[3, 399].compute(jd)).T
+    return _barycentric_km(body, jd) - _barycentric_km(center, jd)
+
+
+def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t_start_s: float,
+                    t_end_s: float, segment_s: float = 43200.0, n_coef: int = 14
+                    ) -> EphemerisTable:
+    """Fit piecewise Chebyshev series to body positions relative to ``center``.
+
+    Covers [min(t_start, t_end), max(...)] seconds from the UTC epoch, in segments of
+    ``segment_s`` with ``n_coef`` coefficients per coordinate, interpolating at the
+    Chebyshev points of the first kind. With the defaults (12 h, 14 coefficients) the fit
+    reproduces DE421 to well under a metre for the Moon (checked in the tests).
+    """
+    if not bodies:
+        return EphemerisTable.empty()
+    lo, hi = min(t_start_s, t_end_s), max(t_start_s, t_end_s)
+    n_seg = max(1, int(np.ceil((hi - lo) / segment_s - 1e-12)))
+    k = np.arange(n_coef)
+    tau = np.cos(np.pi * (k + 0.5) / n_coef)  # first-kind nodes in (-1, 1)
+    seg_start = lo + segment_s * np.arange(n_seg)
+    t_nodes = seg_start[:, None] + 0.5 * (tau[None, :] + 1.0) * segment_s  # (n_seg, n_coef)
+    jd_tdb = utc_to_tdb_jd(epoch_jd_utc) + t_nodes.ravel() / SECONDS_PER_DAY
+    coeffs = np.empty((len(bodies), n_seg, 3, n_coef))
+    for b, body in enumerate(bodies):
+        pos = position_km(body, center, jd_tdb).reshape(n_seg, n_coef, 3)
+        for s in range(n_seg):
+            coeffs[b, s] = np.polynomial.chebyshev.chebfit(tau, pos[s], n_coef - 1).T
+    return EphemerisTable(np.ascontiguousarray(coeffs), float(lo), float(segment_s))
