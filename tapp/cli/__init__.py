@@ -7,6 +7,7 @@ exit code through :func:`tapp.cli.common.run_guarded`.
 
 from __future__ import annotations
 
+from tapp.cli import propagate as _propagate  # noqa: F401  (registers its command)
 from tapp.cli.common import app
 
 

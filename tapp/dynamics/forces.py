@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import casadi as ca
 
@@ -98,22 +98,24 @@ def _recursion_factors(n: int, m: int) -> tuple[float, float]:
     return alpha, beta
 
 
-def central_potential(model: ForceModel, r_fixed: ca.SX, gm: ca.SX,
-                      coefficients: Mapping[tuple[str, int, int], ca.SX | float]) -> ca.SX:
+def central_potential(model: ForceModel, r_fixed, gm, coefficients: Mapping[tuple[str, int, int],
+                      object], sqrt: Callable = ca.sqrt):
     """Return U(r) (km^2/s^2) of the centre's truncated field at body-fixed position r (km).
 
     ``coefficients`` maps ('C'|'S', n, m) to the value or symbol of each normalised
-    coefficient present in the truncation (degree >= 2); missing entries are zero.
+    coefficient present in the truncation (degree >= 2); missing entries are zero. The
+    recursion uses only arithmetic and ``sqrt``, so any expression system with those
+    (CasADi by default; heyoka in the benchmark) can build the same field.
     """
     deg, order = model.gravity.degree, model.gravity.order
     x, y, z = r_fixed[0], r_fixed[1], r_fixed[2]
     r2 = x * x + y * y + z * z
     if deg < 2:
-        return gm / ca.sqrt(r2)
+        return gm / sqrt(r2)
     radius = R_EARTH_km
     rr = radius / r2
-    v = {(0, 0): radius / ca.sqrt(r2)}
-    w = {(0, 0): ca.SX(0)}
+    v = {(0, 0): radius / sqrt(r2)}
+    w = {(0, 0): 0.0}
     for m in range(0, order + 1):
         if m > 0:
             k = 2.0 if m == 1 else 1.0

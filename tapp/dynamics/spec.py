@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from tapp.constants import GM_km3_s2, MAX_DEGREE
+from tapp.constants import MAX_DEGREE, GM_km3_s2
 from tapp.errors import InputError
 
 _ZONAL = re.compile(r"^[Jj](\d+)$")
