@@ -79,21 +79,28 @@ def _kernel() -> SPK:
     return SPK.open(str(de421_path()))
 
 
-def _barycentric_km(body: str, jd_tdb: np.ndarray) -> np.ndarray:
+def _barycentric_km(body: str, jd: np.ndarray, jd2: np.ndarray) -> np.ndarray:
     kernel = _kernel()
-    total = np.zeros((3, jd_tdb.size))
+    total = np.zeros((3, jd.size))
     for center, target in _PATHS[body]:
-        total += kernel[center, target].compute(jd_tdb)
+        total += kernel[center, target].compute(jd, jd2)
     return total.T
 
 
-def position_km(body: str, center: str, jd_tdb: np.ndarray) -> np.ndarray:
-    """Return the position (N, 3), km, of ``body`` relative to ``center`` at TDB dates (N,)."""
-    jd = np.atleast_1d(np.asarray(jd_tdb, dtype=float))
+def position_km(body: str, center: str, jd_tdb: float | np.ndarray,
+                jd_tdb2: float | np.ndarray = 0.0) -> np.ndarray:
+    """Return the position (N, 3), km, of ``body`` relative to ``center``.
+
+    The TDB date is ``jd_tdb + jd_tdb2`` (days), split so that a whole date plus a small
+    offset keeps sub-microsecond resolution (one float JD resolves only ~40 us, i.e. a metre
+    of the Earth's heliocentric motion).
+    """
+    jd, jd2 = np.broadcast_arrays(np.atleast_1d(np.asarray(jd_tdb, dtype=float)),
+                                  np.atleast_1d(np.asarray(jd_tdb2, dtype=float)))
     if body == "moon" and center == "earth":  # avoid the barycentric round trip
         kernel = _kernel()
-        return (kernel[3, 301].compute(jd) - kernel[3, 399].compute(jd)).T
-    return _barycentric_km(body, jd) - _barycentric_km(center, jd)
+        return (kernel[3, 301].compute(jd, jd2) - kernel[3, 399].compute(jd, jd2)).T
+    return _barycentric_km(body, jd, jd2) - _barycentric_km(center, jd, jd2)
 
 
 def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t_start_s: float,
@@ -114,10 +121,11 @@ def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t
     tau = np.cos(np.pi * (k + 0.5) / n_coef)  # first-kind nodes in (-1, 1)
     seg_start = lo + segment_s * np.arange(n_seg)
     t_nodes = seg_start[:, None] + 0.5 * (tau[None, :] + 1.0) * segment_s  # (n_seg, n_coef)
-    jd_tdb = utc_to_tdb_jd(epoch_jd_utc) + t_nodes.ravel() / SECONDS_PER_DAY
+    jd_tdb = utc_to_tdb_jd(epoch_jd_utc)
+    offset_days = t_nodes.ravel() / SECONDS_PER_DAY
     coeffs = np.empty((len(bodies), n_seg, 3, n_coef))
     for b, body in enumerate(bodies):
-        pos = position_km(body, center, jd_tdb).reshape(n_seg, n_coef, 3)
+        pos = position_km(body, center, jd_tdb, offset_days).reshape(n_seg, n_coef, 3)
         for s in range(n_seg):
             coeffs[b, s] = np.polynomial.chebyshev.chebfit(tau, pos[s], n_coef - 1).T
     return EphemerisTable(np.ascontiguousarray(coeffs), float(lo), float(segment_s))
