@@ -1,0 +1,145 @@
+"""Earth rotation: the one angle model, and the ECI <-> ECEF rotations with their rates.
+
+The project's Earth rotation is
+
+.. math:: \\theta(t) = \\theta_0 + \\omega_\\oplus t,
+
+with :math:`\\theta_0` the GMST IAU-82 at the scenario epoch (UT1 = UTC, see
+:mod:`tapp.frames.time`) and :math:`\\omega_\\oplus` = ``OMEGA_EARTH_rad_s``. The dynamics
+(tesseral harmonics) and the measurements (station positions) both call
+:func:`earth_rotation_angle_rad`, so the two stay consistent.
+
+Frames: "ECI" is EME2000; "ECEF" is the frame turned from it by :math:`R_3(\\theta)` about the
+EME2000 z axis. Precession and nutation since J2000 (about 0.36 deg of longitude by 2026) and
+polar motion are neglected, as DESIGN.md allows: the ECEF here is a pseudo Earth-fixed frame,
+consistent between dynamics and measurements, not ITRF.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tapp.constants import OMEGA_EARTH_rad_s
+
+
+def earth_rotation_angle_rad(theta0_rad, t_s, omega_rad_s: float = OMEGA_EARTH_rad_s):
+    """Return the Earth rotation angle theta(t) = theta0 + omega t, rad (not wrapped).
+
+    This is THE Earth rotation model of the project (GMST at the epoch, uniform rotation after),
+    not the IAU 2000 Earth rotation angle.
+
+    Parameters
+    ----------
+    theta0_rad : float or array_like, shape (...)
+        GMST at the scenario epoch, rad (e.g. ``Epoch.gmst_rad()``).
+    t_s : float or array_like, shape (...)
+        Seconds from the scenario epoch; broadcast with ``theta0_rad``.
+    omega_rad_s : float
+        Earth rotation rate, rad/s.
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        theta, rad, continuous in t (no reduction to [0, 2 pi), so it is smooth to differentiate).
+    """
+    return np.asarray(theta0_rad, dtype=float) + omega_rad_s * np.asarray(t_s, dtype=float)
+
+
+def r3(angle_rad):
+    """Return the frame rotation R3(angle) about z, shape (..., 3, 3).
+
+    .. math:: R_3(\\alpha) = \\begin{pmatrix} \\cos\\alpha & \\sin\\alpha & 0 \\\\
+              -\\sin\\alpha & \\cos\\alpha & 0 \\\\ 0 & 0 & 1 \\end{pmatrix}
+
+    Vallado, Fundamentals of Astrodynamics and Applications, eq. 3-15 (ROT3): the coordinates of
+    a fixed vector in axes turned by +angle about z.
+    """
+    angle = np.asarray(angle_rad, dtype=float)
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(angle.shape + (3, 3))
+    out[..., 0, 0] = c
+    out[..., 0, 1] = s
+    out[..., 1, 0] = -s
+    out[..., 1, 1] = c
+    out[..., 2, 2] = 1.0
+    return out
+
+
+def r3_derivative(angle_rad):
+    """Return dR3/dangle, shape (..., 3, 3), 1/rad."""
+    angle = np.asarray(angle_rad, dtype=float)
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(angle.shape + (3, 3))
+    out[..., 0, 0] = -s
+    out[..., 0, 1] = c
+    out[..., 1, 0] = -c
+    out[..., 1, 1] = -s
+    return out
+
+
+def eci_to_ecef_matrix(theta_rad):
+    """Return T = R3(theta), shape (..., 3, 3), with r_ecef = T r_eci."""
+    return r3(theta_rad)
+
+
+def eci_to_ecef_matrix_dot(theta_rad, omega_rad_s: float = OMEGA_EARTH_rad_s):
+    """Return dT/dt = omega dR3/dtheta, shape (..., 3, 3), 1/s."""
+    return omega_rad_s * r3_derivative(theta_rad)
+
+
+def ecef_to_eci_matrix(theta_rad):
+    """Return T^T = R3(-theta), shape (..., 3, 3), with r_eci = T^T r_ecef."""
+    return r3(-np.asarray(theta_rad, dtype=float))
+
+
+def ecef_to_eci_matrix_dot(theta_rad, omega_rad_s: float = OMEGA_EARTH_rad_s):
+    """Return d(T^T)/dt, shape (..., 3, 3), 1/s."""
+    return np.swapaxes(eci_to_ecef_matrix_dot(theta_rad, omega_rad_s), -1, -2)
+
+
+def eci_to_ecef_state(state_eci, theta_rad, omega_rad_s: float = OMEGA_EARTH_rad_s):
+    """Return the Earth-fixed state [r, v] (km, km/s), shape (..., 6).
+
+    .. math:: r_f = T r, \\qquad v_f = T v + \\dot T r = T (v - \\omega \\times r)
+
+    Parameters
+    ----------
+    state_eci : array_like, shape (..., 6)
+        Inertial (EME2000) position km and velocity km/s.
+    theta_rad : array_like, shape (...)
+        Earth rotation angle (see :func:`earth_rotation_angle_rad`), rad.
+    omega_rad_s : float
+        Earth rotation rate, rad/s.
+    """
+    x = np.asarray(state_eci, dtype=float)
+    t_mat = eci_to_ecef_matrix(theta_rad)
+    t_dot = eci_to_ecef_matrix_dot(theta_rad, omega_rad_s)
+    r_f = np.einsum("...ij,...j->...i", t_mat, x[..., :3])
+    v_f = np.einsum("...ij,...j->...i", t_mat, x[..., 3:]) + np.einsum(
+        "...ij,...j->...i", t_dot, x[..., :3]
+    )
+    return np.concatenate([r_f, v_f], axis=-1)
+
+
+def ecef_to_eci_state(state_ecef, theta_rad, omega_rad_s: float = OMEGA_EARTH_rad_s):
+    """Return the inertial (EME2000) state [r, v] (km, km/s), shape (..., 6).
+
+    .. math:: r = T^T r_f, \\qquad v = T^T v_f + \\dot T^T r_f = T^T v_f + \\omega \\times r
+
+    Parameters
+    ----------
+    state_ecef : array_like, shape (..., 6)
+        Earth-fixed position km and velocity km/s.
+    theta_rad : array_like, shape (...)
+        Earth rotation angle, rad.
+    omega_rad_s : float
+        Earth rotation rate, rad/s.
+    """
+    x = np.asarray(state_ecef, dtype=float)
+    t_mat = ecef_to_eci_matrix(theta_rad)
+    t_dot = ecef_to_eci_matrix_dot(theta_rad, omega_rad_s)
+    r = np.einsum("...ij,...j->...i", t_mat, x[..., :3])
+    v = np.einsum("...ij,...j->...i", t_mat, x[..., 3:]) + np.einsum(
+        "...ij,...j->...i", t_dot, x[..., :3]
+    )
+    return np.concatenate([r, v], axis=-1)
