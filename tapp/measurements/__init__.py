@@ -1,0 +1,60 @@
+"""Tracking measurements: stations, observables with partials, visibility and passes.
+
+Numerical kernels only (pure NumPy, no I/O), shared by the tracking simulator (TAPP I) and the
+orbit-determination code. Conventions: km, km/s, s, rad; time-major arrays (N, ...); spacecraft
+states in EME2000; Earth rotation by :func:`tapp.frames.earth_rotation_angle_rad`.
+"""
+
+from tapp.measurements.observables import (
+    BIAS_NAMES,
+    OBSERVABLE_UNITS,
+    LightTime,
+    LightTimeSolution,
+    MeasurementModel,
+    Observable,
+    azimuth_elevation_partials,
+    azimuth_elevation_rad,
+    light_time_range_km,
+    light_time_range_rate_km_s,
+    range_km,
+    range_partials,
+    range_rate_km_s,
+    range_rate_partials,
+    residual,
+    solve_light_time,
+    wrap_angle_rad,
+)
+from tapp.measurements.stations import (
+    STATION_PARAMETER_NAMES,
+    Station,
+    station_state_eci,
+    station_state_partials,
+)
+from tapp.measurements.visibility import find_passes, is_visible, pass_labels
+
+__all__ = [
+    "BIAS_NAMES",
+    "OBSERVABLE_UNITS",
+    "STATION_PARAMETER_NAMES",
+    "LightTime",
+    "LightTimeSolution",
+    "MeasurementModel",
+    "Observable",
+    "Station",
+    "azimuth_elevation_partials",
+    "azimuth_elevation_rad",
+    "find_passes",
+    "is_visible",
+    "light_time_range_km",
+    "light_time_range_rate_km_s",
+    "pass_labels",
+    "range_km",
+    "range_partials",
+    "range_rate_km_s",
+    "range_rate_partials",
+    "residual",
+    "solve_light_time",
+    "station_state_eci",
+    "station_state_partials",
+    "wrap_angle_rad",
+]

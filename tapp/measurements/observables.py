@@ -1,0 +1,562 @@
+"""Ground-station observables (range, range-rate, azimuth, elevation) and their partials.
+
+Shapes are time-major: N observation times, spacecraft states (N, 6) = [r km, v km/s] in
+EME2000 at the receive times, observables (N, m), partials (N, m, 6) w.r.t. the spacecraft
+state, (N, m, 3) w.r.t. the station location, (N, m, 2) w.r.t. the biases. Kernels are pure
+NumPy and noise-free.
+
+Observables (biases are added: observed = model + bias)
+
+- ``range``: km. Without light time the instantaneous distance |r - r_st|. With light time,
+  the two-way (round trip) range c (tau_up + tau_down) / 2, or the one-way down-leg c tau_down.
+- ``range_rate``: km/s, the time derivative of the range above (so the two-way range-rate is
+  the average over the round trip, what a two-way Doppler count measures).
+- ``azimuth``: rad in [0, 2 pi), from north towards east, and ``elevation``: rad in
+  [-pi/2, pi/2], in the station's topocentric East-North-Up frame (geodetic normal "up").
+  With light time they are taken along the down-leg, from the station at reception to the
+  spacecraft at transmission (no aberration, no refraction).
+
+Light time (:class:`LightTime`), following the iterative light-time solution of Moyer (2003),
+Formulation for Observed and Computed Values of DSN Data Types, JPL DESCANSO Monograph 2,
+ch. 8, with all times in one uniform time scale (no relativistic terms):
+
+.. math::
+
+    c\\,\\tau_d = |\\mathbf r(t - \\tau_d) - \\mathbf r_{st}(t)|,\\qquad
+    c\\,\\tau_u = |\\mathbf r(t - \\tau_d) - \\mathbf r_{st}(t - \\tau_d - \\tau_u)|.
+
+The spacecraft state at the bounce time t - tau_d comes from a callback (an interpolating
+ephemeris) or, without one, from the second-order Taylor expansion about the receive-time
+state with the two-body acceleration a = -mu r / r^3:
+r(t - tau) ~ r - tau v + tau^2 a / 2, v(t - tau) ~ v - tau a (errors ~ tau^3 |da/dt| / 6 in
+position: < 1e-9 km for LEO to GEO). Station positions at every time are exact (rotation).
+
+Partials are analytic, of the instantaneous model (no light time). With light time on, the
+same expressions are returned: they differ from the exact light-time partials by O(v / c)
+~ 3e-5 relative, which only slows Gauss-Newton convergence and never biases the estimate
+(Montenbruck & Gill, Satellite Orbits, 2000, ch. 7, make the same approximation).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from enum import StrEnum
+
+import numpy as np
+
+from tapp.constants import C_LIGHT_km_s, GM_EARTH_km3_s2, OMEGA_EARTH_rad_s
+from tapp.errors import DivergenceError, InputError
+from tapp.frames.rotation import earth_rotation_angle_rad
+from tapp.measurements.stations import (
+    Station,
+    StationParameters,
+    station_state_eci,
+    station_state_partials,
+)
+
+#: Light-time iterations stop when the change is below this fraction of tau (the contraction
+#: factor is v/c ~ 3e-5, so 3 to 4 iterations reach it).
+LIGHT_TIME_REL_TOL = 4.0 * np.finfo(float).eps
+LIGHT_TIME_MAX_ITERATIONS = 10
+
+
+class Observable(StrEnum):
+    """The observable kinds; plain strings ("range", ...) are accepted wherever these are."""
+
+    RANGE = "range"
+    RANGE_RATE = "range_rate"
+    AZIMUTH = "azimuth"
+    ELEVATION = "elevation"
+
+
+#: Units of each observable, for tapes and reports.
+OBSERVABLE_UNITS = {
+    Observable.RANGE: "km",
+    Observable.RANGE_RATE: "km/s",
+    Observable.AZIMUTH: "rad",
+    Observable.ELEVATION: "rad",
+}
+#: Names and units of the bias parameters, in the order of ``bias_partials``' last axis.
+BIAS_NAMES = ("range_bias_km", "range_rate_bias_km_s")
+
+
+def wrap_angle_rad(angle_rad):
+    """Return the angle wrapped to (-pi, pi], rad, same shape."""
+    return np.pi - np.mod(np.pi - np.asarray(angle_rad, dtype=float), 2.0 * np.pi)
+
+
+def residual(observed, computed, kinds: Sequence[str]):
+    """Return observed - computed, shape (N, m), azimuth columns wrapped to (-pi, pi].
+
+    The residual function to inject into estimators (filterpy's ``residual=`` hook): an azimuth
+    of 359.9 deg against 0.1 deg is a -0.2 deg residual, not 359.8 deg.
+
+    Parameters
+    ----------
+    observed, computed : array_like, shape (N, m)
+        Observables in the units of ``OBSERVABLE_UNITS``, columns in ``kinds`` order.
+    kinds : sequence of str
+        The m observable kinds.
+    """
+    res = np.asarray(observed, dtype=float) - np.asarray(computed, dtype=float)
+    azimuth = np.array([Observable(k) is Observable.AZIMUTH for k in kinds])
+    if azimuth.any():
+        res = res.copy()
+        res[..., azimuth] = wrap_angle_rad(res[..., azimuth])
+    return res
+
+
+# ---------------------------------------------------------------------------------------------
+# Geometric (instantaneous) observables and partials
+# ---------------------------------------------------------------------------------------------
+
+
+def range_km(state_eci, station_eci):
+    """Return |r - r_st|, km, shape (N,).
+
+    Parameters
+    ----------
+    state_eci, station_eci : array_like, shape (N, 6)
+        Spacecraft and station inertial states [km, km/s] at the same times.
+    """
+    rel = np.asarray(state_eci, float)[..., :3] - np.asarray(station_eci, float)[..., :3]
+    return np.linalg.norm(rel, axis=-1)
+
+
+def range_rate_km_s(state_eci, station_eci):
+    """Return the range-rate (r - r_st).(v - v_st) / |r - r_st|, km/s, shape (N,)."""
+    rel = np.asarray(state_eci, float) - np.asarray(station_eci, float)
+    return np.sum(rel[..., :3] * rel[..., 3:], -1) / np.linalg.norm(rel[..., :3], axis=-1)
+
+
+def azimuth_elevation_rad(rho_enu_km):
+    """Return (azimuth in [0, 2 pi), elevation in [-pi/2, pi/2]), rad, from an ENU vector.
+
+    .. math:: A = \\operatorname{atan2}(E, N),\\qquad
+              El = \\operatorname{atan2}(U, \\sqrt{E^2 + N^2})
+
+    Parameters
+    ----------
+    rho_enu_km : array_like, shape (..., 3)
+        Station-to-spacecraft vector in the station's East-North-Up frame, km.
+
+    Notes
+    -----
+    Vallado, Fundamentals of Astrodynamics and Applications, Algorithm 27, in ENU instead of
+    SEZ axes (E = E, N = -S, U = Z). At the zenith the azimuth is undefined and returned as 0.
+    """
+    rho = np.asarray(rho_enu_km, dtype=float)
+    east, north, up = rho[..., 0], rho[..., 1], rho[..., 2]
+    azimuth = np.mod(np.arctan2(east, north), 2.0 * np.pi)
+    return azimuth, np.arctan2(up, np.hypot(east, north))
+
+
+def range_partials(state_eci, station_eci):
+    """Return d range / d spacecraft state, shape (N, 1, 6): [rho_hat^T, 0].
+
+    The partial w.r.t. the station inertial state is its negative.
+    """
+    rel = np.asarray(state_eci, float)[..., :3] - np.asarray(station_eci, float)[..., :3]
+    out = np.zeros(rel.shape[:-1] + (1, 6))
+    out[..., 0, :3] = rel / np.linalg.norm(rel, axis=-1)[..., None]
+    return out
+
+
+def range_rate_partials(state_eci, station_eci):
+    """Return d range-rate / d spacecraft state, shape (N, 1, 6).
+
+    .. math::
+
+        \\frac{\\partial\\dot\\rho}{\\partial\\mathbf r} =
+        \\frac{(\\Delta\\mathbf v - \\dot\\rho\\,\\hat{\\boldsymbol\\rho})^T}{\\rho},\\qquad
+        \\frac{\\partial\\dot\\rho}{\\partial\\mathbf v} = \\hat{\\boldsymbol\\rho}^T
+
+    (Tapley, Schutz & Born, Statistical Orbit Determination, 2004, ch. 3 and 4). The partial
+    w.r.t. the station inertial state is its negative.
+    """
+    rel = np.asarray(state_eci, float) - np.asarray(station_eci, float)
+    rho = np.linalg.norm(rel[..., :3], axis=-1)[..., None]
+    rho_hat = rel[..., :3] / rho
+    rho_dot = np.sum(rho_hat * rel[..., 3:], -1)[..., None]
+    out = np.zeros(rel.shape[:-1] + (1, 6))
+    out[..., 0, :3] = (rel[..., 3:] - rho_dot * rho_hat) / rho
+    out[..., 0, 3:] = rho_hat
+    return out
+
+
+def azimuth_elevation_partials(rho_enu_km, enu_from_eci):
+    """Return d(azimuth, elevation) / d spacecraft state, rad per km, shape (N, 2, 6).
+
+    .. math::
+
+        \\frac{\\partial A}{\\partial(E,N,U)} = \\frac{(N, -E, 0)}{E^2 + N^2},\\qquad
+        \\frac{\\partial El}{\\partial(E,N,U)} =
+        \\frac{(-E U, -N U, E^2 + N^2)}{\\rho^2\\sqrt{E^2 + N^2}},
+
+    chained with d(ENU)/d r = ``enu_from_eci``; the angles do not depend on velocity. The
+    partial w.r.t. the station inertial position is the negative (axes held fixed).
+
+    Parameters
+    ----------
+    rho_enu_km : array_like, shape (N, 3)
+        Station-to-spacecraft vector in ENU, km.
+    enu_from_eci : array_like, shape (N, 3, 3)
+        Rotation inertial -> ENU at each time.
+
+    Notes
+    -----
+    Not finite at the zenith (E = N = 0), where the azimuth is undefined.
+    """
+    rho = np.asarray(rho_enu_km, dtype=float)
+    east, north, up = rho[..., 0], rho[..., 1], rho[..., 2]
+    horiz2 = east * east + north * north
+    horiz = np.sqrt(horiz2)
+    range2 = horiz2 + up * up
+    d_enu = np.zeros(rho.shape[:-1] + (2, 3))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d_enu[..., 0, 0] = north / horiz2
+        d_enu[..., 0, 1] = -east / horiz2
+        d_enu[..., 1, 0] = -east * up / (range2 * horiz)
+        d_enu[..., 1, 1] = -north * up / (range2 * horiz)
+        d_enu[..., 1, 2] = horiz / range2
+    out = np.zeros(rho.shape[:-1] + (2, 6))
+    out[..., :3] = d_enu @ np.asarray(enu_from_eci, dtype=float)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Light time
+# ---------------------------------------------------------------------------------------------
+
+StateCallback = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True, slots=True)
+class LightTime:
+    """Light-time model of the observables (module docstring for the equations).
+
+    Attributes
+    ----------
+    two_way : bool
+        True: round trip station -> spacecraft -> same station, range = c (tau_u + tau_d) / 2.
+        False: down-leg only, range = c tau_d.
+    state_at : callable or None
+        ``state_at(t_s (N,)) -> (N, 6)`` spacecraft inertial states [km, km/s] at scenario
+        times, e.g. an interpolating ephemeris; None: second-order two-body Taylor expansion
+        about the receive-time state.
+    mu_km3_s2 : float
+        Gravitational parameter of the Taylor expansion, km^3/s^2.
+    """
+
+    two_way: bool = True
+    state_at: StateCallback | None = None
+    mu_km3_s2: float = GM_EARTH_km3_s2
+
+    def spacecraft_state(self, t_s, state_eci, tau_s):
+        """Return the spacecraft state at t_s - tau_s, shape (N, 6)."""
+        t = np.asarray(t_s, dtype=float)
+        tau = np.asarray(tau_s, dtype=float)
+        if self.state_at is not None:
+            return np.asarray(self.state_at(t - tau), dtype=float)
+        x = np.asarray(state_eci, dtype=float)
+        r, v = x[..., :3], x[..., 3:]
+        acc = -self.mu_km3_s2 * r / np.linalg.norm(r, axis=-1)[..., None] ** 3
+        dt = -tau[..., None]
+        return np.concatenate([r + dt * (v + 0.5 * dt * acc), v + dt * acc], axis=-1)
+
+
+@dataclass(frozen=True, slots=True)
+class LightTimeSolution:
+    """Solved light-time geometry at N receive times.
+
+    Attributes
+    ----------
+    tau_down_s, tau_up_s : numpy.ndarray, shape (N,)
+        Down-leg and up-leg light times, s (tau_up_s is zero for a one-way model).
+    spacecraft_eci : numpy.ndarray, shape (N, 6)
+        Spacecraft state at the bounce (transmit) time t - tau_down.
+    station_receive_eci, station_transmit_eci : numpy.ndarray, shape (N, 6)
+        Station state at reception t and at transmission t - tau_down - tau_up.
+    """
+
+    tau_down_s: np.ndarray
+    tau_up_s: np.ndarray
+    spacecraft_eci: np.ndarray
+    station_receive_eci: np.ndarray
+    station_transmit_eci: np.ndarray
+
+
+def _iterate_light_time(distance_km, tau0_s, what: str):
+    tau = tau0_s
+    for _ in range(LIGHT_TIME_MAX_ITERATIONS):
+        new = distance_km(tau) / C_LIGHT_km_s
+        done = np.abs(new - tau) <= LIGHT_TIME_REL_TOL * new
+        tau = new
+        if done.all():
+            return tau
+    raise DivergenceError(f"light time ({what}) not converged", LIGHT_TIME_MAX_ITERATIONS)
+
+
+def solve_light_time(
+    t_s,
+    state_eci,
+    r_station_ecef_km,
+    theta0_rad: float,
+    light_time: LightTime,
+    omega_rad_s: float = OMEGA_EARTH_rad_s,
+) -> LightTimeSolution:
+    """Return the light-time geometry for receive times t_s (N,) at a station.
+
+    Parameters
+    ----------
+    t_s : array_like, shape (N,)
+        Receive times, s from the scenario epoch.
+    state_eci : array_like, shape (N, 6)
+        Spacecraft inertial states at t_s, [km, km/s].
+    r_station_ecef_km : array_like, shape (3,)
+        Station Earth-fixed position, km.
+    theta0_rad : float
+        GMST at the scenario epoch, rad.
+    light_time : LightTime
+        The model.
+    omega_rad_s : float
+        Earth rotation rate, rad/s.
+
+    Raises
+    ------
+    DivergenceError
+        If the fixed-point iteration (contraction v/c) fails to converge in 10 iterations.
+    """
+    t = np.asarray(t_s, dtype=float)
+    x = np.asarray(state_eci, dtype=float)
+    station_rx = station_state_eci(
+        r_station_ecef_km, earth_rotation_angle_rad(theta0_rad, t, omega_rad_s), omega_rad_s
+    )
+
+    def down_distance(tau):
+        bounce = light_time.spacecraft_state(t, x, tau)
+        return np.linalg.norm(bounce[..., :3] - station_rx[..., :3], axis=-1)
+
+    tau_d = _iterate_light_time(down_distance, range_km(x, station_rx) / C_LIGHT_km_s, "down")
+    bounce = light_time.spacecraft_state(t, x, tau_d)
+    if not light_time.two_way:
+        return LightTimeSolution(tau_d, np.zeros_like(tau_d), bounce, station_rx, station_rx)
+
+    def station_at(tau_u):
+        theta = earth_rotation_angle_rad(theta0_rad, t - tau_d - tau_u, omega_rad_s)
+        return station_state_eci(r_station_ecef_km, theta, omega_rad_s)
+
+    def up_distance(tau_u):
+        return np.linalg.norm(bounce[..., :3] - station_at(tau_u)[..., :3], axis=-1)
+
+    tau_u = _iterate_light_time(up_distance, tau_d, "up")
+    return LightTimeSolution(tau_d, tau_u, bounce, station_rx, station_at(tau_u))
+
+
+def light_time_range_km(solution: LightTimeSolution, two_way: bool = True):
+    """Return c (tau_u + tau_d) / 2 (two-way) or c tau_d (one-way), km, shape (N,)."""
+    if two_way:
+        return 0.5 * C_LIGHT_km_s * (solution.tau_up_s + solution.tau_down_s)
+    return C_LIGHT_km_s * solution.tau_down_s
+
+
+def light_time_range_rate_km_s(solution: LightTimeSolution, two_way: bool = True):
+    """Return the time derivative of :func:`light_time_range_km`, km/s, shape (N,).
+
+    .. math::
+
+        \\dot\\tau_d = \\frac{\\hat{\\mathbf d}_d\\cdot(\\mathbf v_B - \\mathbf v_{st}(t))}
+                          {c + \\hat{\\mathbf d}_d\\cdot\\mathbf v_B},\\qquad
+        \\dot\\tau_u = (1 - \\dot\\tau_d)\\,
+            \\frac{\\hat{\\mathbf d}_u\\cdot(\\mathbf v_B - \\mathbf v_{st}(t_T))}
+                  {c - \\hat{\\mathbf d}_u\\cdot\\mathbf v_{st}(t_T)}
+
+    from differentiating the two light-time equations in t (d_d, d_u the down- and up-leg
+    vectors from station to spacecraft, v_B the spacecraft velocity at the bounce, t_T the
+    transmit time). Exact for the light-time model: the 1/c terms (~ rho_dot v / c, up to
+    1e-4 km/s in LEO) are kept.
+    """
+    sc = solution.spacecraft_eci
+    d_down = sc[..., :3] - solution.station_receive_eci[..., :3]
+    d_down_hat = d_down / np.linalg.norm(d_down, axis=-1)[..., None]
+    v_b = sc[..., 3:]
+    tau_d_dot = np.sum(d_down_hat * (v_b - solution.station_receive_eci[..., 3:]), -1) / (
+        C_LIGHT_km_s + np.sum(d_down_hat * v_b, -1)
+    )
+    if not two_way:
+        return C_LIGHT_km_s * tau_d_dot
+    d_up = sc[..., :3] - solution.station_transmit_eci[..., :3]
+    d_up_hat = d_up / np.linalg.norm(d_up, axis=-1)[..., None]
+    v_st_t = solution.station_transmit_eci[..., 3:]
+    tau_u_dot = (1.0 - tau_d_dot) * np.sum(d_up_hat * (v_b - v_st_t), -1) / (
+        C_LIGHT_km_s - np.sum(d_up_hat * v_st_t, -1)
+    )
+    return 0.5 * C_LIGHT_km_s * (tau_u_dot + tau_d_dot)
+
+
+# ---------------------------------------------------------------------------------------------
+# The measurement model: one station, a list of observable kinds
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class MeasurementModel:
+    """Observables of kinds ``kinds`` of a spacecraft from one station, with their partials.
+
+    The interface TAPP I and the orbit-determination code share: ``compute`` gives h(x) (N, m),
+    ``state_partials`` H = dh/dx (N, m, 6), ``station_partials`` dh/d(location) (N, m, 3),
+    ``bias_partials`` dh/d(range bias, range-rate bias) (N, m, 2), and ``residual`` the
+    angle-wrapping observed - computed. Columns follow ``kinds``.
+
+    Attributes
+    ----------
+    station : Station
+        The tracking station.
+    theta0_rad : float
+        GMST at the scenario epoch, rad (``Epoch.gmst_rad()``).
+    kinds : tuple of str
+        Observable kinds, a subset of ("range", "range_rate", "azimuth", "elevation").
+    light_time : LightTime or None
+        None: instantaneous geometry (observation and signal at the receive time).
+    range_bias_km, range_rate_bias_km_s : float
+        Constant biases added to range and range-rate.
+    omega_rad_s : float
+        Earth rotation rate, rad/s.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> model = MeasurementModel(Station("EQ", 0.0, 0.0, 0.0), 0.0, ("range", "elevation"))
+    >>> overhead = np.array([[7000.0, 0.0, 0.0, 0.0, 7.5, 0.0]])
+    >>> np.round(model.compute(np.array([0.0]), overhead), 6)
+    array([[621.863   ,   1.570796]])
+    """
+
+    station: Station
+    theta0_rad: float
+    kinds: tuple[str, ...] = ("range", "range_rate")
+    light_time: LightTime | None = None
+    range_bias_km: float = 0.0
+    range_rate_bias_km_s: float = 0.0
+    omega_rad_s: float = OMEGA_EARTH_rad_s
+
+    def __post_init__(self) -> None:
+        try:
+            kinds = tuple(Observable(k) for k in self.kinds)
+        except ValueError as err:
+            raise InputError(
+                "MeasurementModel", "kinds", f"a subset of {[o.value for o in Observable]}",
+                self.kinds,
+            ) from err
+        object.__setattr__(self, "kinds", kinds)
+
+    def _theta(self, t_s):
+        return earth_rotation_angle_rad(self.theta0_rad, t_s, self.omega_rad_s)
+
+    def station_eci(self, t_s):
+        """Return the station inertial state at t_s (N,), shape (N, 6)."""
+        return station_state_eci(self.station.r_ecef_km, self._theta(t_s), self.omega_rad_s)
+
+    def _observables(self, t_s, state_eci, kinds):
+        """Return {kind: values (N,)} without biases, solving the light time once."""
+        t = np.asarray(t_s, dtype=float)
+        x = np.asarray(state_eci, dtype=float)
+        out = {}
+        if self.light_time is None:
+            spacecraft, station_rx = x, self.station_eci(t)
+            if Observable.RANGE in kinds:
+                out[Observable.RANGE] = range_km(x, station_rx)
+            if Observable.RANGE_RATE in kinds:
+                out[Observable.RANGE_RATE] = range_rate_km_s(x, station_rx)
+        else:
+            sol = solve_light_time(
+                t, x, self.station.r_ecef_km, self.theta0_rad, self.light_time, self.omega_rad_s
+            )
+            spacecraft, station_rx = sol.spacecraft_eci, sol.station_receive_eci
+            if Observable.RANGE in kinds:
+                out[Observable.RANGE] = light_time_range_km(sol, self.light_time.two_way)
+            if Observable.RANGE_RATE in kinds:
+                out[Observable.RANGE_RATE] = light_time_range_rate_km_s(
+                    sol, self.light_time.two_way
+                )
+        if Observable.AZIMUTH in kinds or Observable.ELEVATION in kinds:
+            rot = self.station.enu_from_eci(self._theta(t))
+            enu = np.einsum("...ij,...j->...i", rot, spacecraft[..., :3] - station_rx[..., :3])
+            out[Observable.AZIMUTH], out[Observable.ELEVATION] = azimuth_elevation_rad(enu)
+        return out
+
+    def azimuth_elevation(self, t_s, state_eci):
+        """Return (azimuth, elevation), rad, each (N,), along the down-leg if light time is on."""
+        obs = self._observables(t_s, state_eci, (Observable.AZIMUTH,))
+        return obs[Observable.AZIMUTH], obs[Observable.ELEVATION]
+
+    def compute(self, t_s, state_eci):
+        """Return the observables (biases included), shape (N, m), units of OBSERVABLE_UNITS.
+
+        Parameters
+        ----------
+        t_s : array_like, shape (N,)
+            Receive times, s from the scenario epoch.
+        state_eci : array_like, shape (N, 6)
+            Spacecraft inertial states at t_s, [km, km/s].
+        """
+        obs = self._observables(t_s, state_eci, self.kinds)
+        bias = {Observable.RANGE: self.range_bias_km, Observable.RANGE_RATE: self.range_rate_bias_km_s}
+        return np.stack([obs[k] + bias.get(k, 0.0) for k in self.kinds], axis=-1)
+
+    def state_partials(self, t_s, state_eci):
+        """Return H = d observables / d spacecraft state [r, v], shape (N, m, 6).
+
+        Analytic partials of the instantaneous model (module docstring on light time).
+        """
+        t = np.asarray(t_s, dtype=float)
+        x = np.asarray(state_eci, dtype=float)
+        station = self.station_eci(t)
+        rows = []
+        angles = None
+        for kind in self.kinds:
+            if kind is Observable.RANGE:
+                rows.append(range_partials(x, station))
+            elif kind is Observable.RANGE_RATE:
+                rows.append(range_rate_partials(x, station))
+            else:
+                if angles is None:
+                    rot = self.station.enu_from_eci(self._theta(t))
+                    enu = np.einsum("...ij,...j->...i", rot, x[..., :3] - station[..., :3])
+                    angles = azimuth_elevation_partials(enu, rot)
+                rows.append(angles[..., 0:1, :] if kind is Observable.AZIMUTH else angles[..., 1:2, :])
+        return np.concatenate(rows, axis=-2)
+
+    def station_partials(self, t_s, state_eci, parameters: StationParameters = "cylindrical"):
+        """Return d observables / d station location, shape (N, m, 3).
+
+        Columns named by ``STATION_PARAMETER_NAMES[parameters]``: (r_s km, lon rad, z km) or
+        Earth-fixed (x, y, z) km. Chain rule: dh/dp = (dh/d station state) (d station state/dp)
+        with dh/d station state = -dh/dx for every kind (angles: axes held fixed).
+        """
+        t = np.asarray(t_s, dtype=float)
+        d_station = -self.state_partials(t, state_eci)
+        d_state_d_p = station_state_partials(
+            self.station.r_ecef_km, self._theta(t), parameters, self.omega_rad_s
+        )
+        return d_station @ d_state_d_p
+
+    def bias_partials(self, t_s):
+        """Return d observables / d (range_bias_km, range_rate_bias_km_s), shape (N, m, 2)."""
+        t = np.asarray(t_s, dtype=float)
+        out = np.zeros(t.shape + (len(self.kinds), 2))
+        for row, kind in enumerate(self.kinds):
+            if kind is Observable.RANGE:
+                out[..., row, 0] = 1.0
+            elif kind is Observable.RANGE_RATE:
+                out[..., row, 1] = 1.0
+        return out
+
+    def residual(self, observed, computed):
+        """Return observed - computed, shape (N, m), azimuth wrapped to (-pi, pi]."""
+        return residual(observed, computed, self.kinds)
+
+    def elevation_rad(self, t_s, state_eci):
+        """Return the elevation, rad, shape (N,) (visibility uses this)."""
+        return self.azimuth_elevation(t_s, state_eci)[1]
