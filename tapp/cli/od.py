@@ -20,8 +20,8 @@ from tapp.frames.elements import cartesian_to_elements
 from tapp.od import setup
 from tapp.od.batch import DCSettings, differential_correction
 from tapp.od.ekf import extended_kalman_filter
-from tapp.od.obsfile import read_observations, write_observations
 from tapp.od.observations import Observations
+from tapp.od.obsfile import read_observations, write_observations
 from tapp.od.rsig import r_signature
 from tapp.orbits import DEFAULT_SCENARIO
 from tapp.stations_file import load_stations

@@ -19,6 +19,8 @@ the noise level), made explicit and configurable in :class:`DCSettings`:
 - converged at iteration k when |RMS_{k-1} - RMS_k| / RMS_k < ``rms_rel_tol`` (the RMS
   stopped decreasing appreciably, and did not grow appreciably either), or when RMS_k <
   ``rms_floor`` (a noise-free fit is exact to rounding);
+- stalled (converged by the rule above but to a wrong orbit) when the settled RMS exceeds
+  ``rms_fit_limit`` (the data are not fitted to their noise level);
 - diverged when RMS_k > ``divergence_ratio`` × min_{j<k} RMS_j (the RMS grows), when the
   reference trajectory cannot be propagated (it hit the Earth or blew up), or when
   ``max_iterations`` pass without convergence (the RMS fails to settle).
@@ -44,6 +46,7 @@ class DCSettings:
     rms_rel_tol: float = 1e-3
     divergence_ratio: float = 10.0
     rms_floor: float = 1e-6
+    rms_fit_limit: float = 3.0
 
     def __post_init__(self) -> None:
         if self.max_iterations < 1:
@@ -73,7 +76,7 @@ class DCIteration:
 class DCResult:
     """Outcome of a differential correction.
 
-    ``status`` is "converged" or "diverged"; ``reason`` says which rule fired; ``x0`` is the
+    ``status`` is "converged", "stalled" or "diverged"; ``reason`` says which rule fired; ``x0`` is the
     final estimate (the start of the last iteration, whose RMS is the last one reported);
     ``covariance`` its formal covariance.
     """
@@ -155,8 +158,10 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
             status, reason = "converged", f"RMS below {settings.rms_floor:g} at iteration {k}"
             break
         if rms_prev and abs(rms_prev[-1] - rms) / rms < settings.rms_rel_tol:
-            status, reason = "converged", (f"RMS changed by less than {settings.rms_rel_tol:g} "
-                                           f"(relative) at iteration {k}")
+            status = "converged" if rms <= settings.rms_fit_limit else "stalled"
+            reason = (f"RMS changed by less than {settings.rms_rel_tol:g} (relative) at "
+                      f"iteration {k}" + ("" if status == "converged" else
+                                          f", settling at {rms:.4g} > {settings.rms_fit_limit:g}"))
             break
         if rms_prev and rms > settings.divergence_ratio * min(rms_prev):
             reason = (f"RMS grew to {rms:.4g}, more than {settings.divergence_ratio:g} x its "
