@@ -25,7 +25,7 @@ Longitudes are measured from the x axis in the direction of motion (for a retrog
 orbit, i = pi, that is clockwise seen from +z, the convention under which the rotation
 R3(-raan) R1(-i) R3(-argp) rebuilds the state). M is then the mean anomaly of that nu (equal
 to it within 2e). Setting argp = 0 (or raan = 0) below the tolerance moves the rebuilt state by
-at most about e r (or r sin i), i.e. < 1e-11 r.
+at most about 2 e r (or r sin i), i.e. < 2e-13 r.
 
 Frames: the inertial frame of the state (EME2000 in this project). Units: km, km/s, rad.
 """
@@ -39,13 +39,15 @@ import numpy as np
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.errors import DivergenceError, InputError
 
-#: Below this eccentricity the periapsis direction is taken as undefined (circular orbit).
-E_CIRCULAR_TOL = 1e-11
-#: Below this sin(i) the node is taken as undefined (equatorial orbit).
-I_EQUATORIAL_TOL = 1e-11
+#: Below this eccentricity the periapsis direction is taken as undefined (circular orbit). A
+#: circular state carries e ~ 1e-15 of rounding noise; the fallback moves the rebuilt state by
+#: at most ~2 e r, so the threshold is kept just above the noise.
+E_CIRCULAR_TOL = 1e-13
+#: Below this sin(i) the node is taken as undefined (equatorial orbit); same reasoning.
+I_EQUATORIAL_TOL = 1e-13
 #: |1 - e| below this is a parabola, which these elements (a finite) cannot hold.
 PARABOLIC_TOL = 1e-12
-#: Newton stops when the anomaly step is below this many rad times max(1, |anomaly|).
+#: Newton stops when the anomaly step is below this times |anomaly| (relative convergence).
 KEPLER_STEP_TOL = 4.0 * np.finfo(float).eps
 KEPLER_MAX_ITERATIONS = 100
 
@@ -56,14 +58,22 @@ KEPLER_MAX_ITERATIONS = 100
 
 
 def _kepler_newton(f_and_fprime, x0, what: str):
-    """Vectorised Newton from a start on the side of the root where it converges monotonically."""
+    """Vectorised Newton from a start above a root of an increasing convex f.
+
+    In exact arithmetic every step is positive and the iterates decrease monotonically to the
+    root. A step that is not positive (rounding noise once the root is reached) is not taken and
+    ends that element's iteration, as does a step below KEPLER_STEP_TOL |x|. This stops
+    cleanly even where f' is tiny (e -> 1 near periapsis) and rounding noise in f would make a
+    plain step test wander.
+    """
     x = np.array(x0, dtype=float)
     active = np.ones(x.shape, dtype=bool)
     for _ in range(KEPLER_MAX_ITERATIONS):
         f, fprime = f_and_fprime(x)
-        step = np.where(active, f / fprime, 0.0)
-        x = x - step
-        active = active & (np.abs(step) > KEPLER_STEP_TOL * np.maximum(1.0, np.abs(x)))
+        step = f / fprime
+        take = active & (step > 0.0)
+        x = np.where(take, x - step, x)
+        active = take & (step > KEPLER_STEP_TOL * np.abs(x))
         if not active.any():
             return x
     raise DivergenceError(
@@ -91,15 +101,21 @@ def mean_to_eccentric_anomaly(mean_anomaly_rad, e):
     -----
     M is reduced to m in [-pi, pi) and solved for |m| in [0, pi], where f(E) = E - e sin E - |m|
     is increasing and convex. Newton started at a point where f >= 0,
-    E0 = min(|m| + e, (12 |m|)^(1/3), pi) (each term bounds the root from above: E - |m| <= e;
-    E - e sin E >= E - sin E >= E^3/12 for E <= pi), then decreases monotonically to the root
-    with no overshoot, for every e < 1 (including e -> 1, |m| -> 0). Vallado, Algorithm 2, with
-    this start instead of Danby's.
+    E0 = min(|m| + e, (12 |m|)^(1/3), |m| / (1 - e), pi) (each term bounds the root from above:
+    E - |m| <= e; E - e sin E >= E - sin E >= E^3/12 and >= (1 - e) E for E <= pi), then
+    decreases monotonically to the root with no overshoot, for every e < 1 (including e -> 1,
+    |m| -> 0); the last bound keeps the start within a factor of the root for tiny |m|, where a
+    far start would cancel to zero. Vallado, Algorithm 2, with this start instead of Danby's.
     """
     m_all, e_b = np.broadcast_arrays(np.asarray(mean_anomaly_rad, float), np.asarray(e, float))
-    m_red = np.remainder(m_all + np.pi, 2.0 * np.pi) - np.pi
+    # Reduce only when needed: pi + m would round away the low bits of a small m.
+    m_red = np.where(
+        np.abs(m_all) <= np.pi, m_all, np.remainder(m_all + np.pi, 2.0 * np.pi) - np.pi
+    )
     m_abs = np.abs(m_red)
-    start = np.minimum(np.minimum(m_abs + e_b, np.cbrt(12.0 * m_abs)), np.pi)
+    start = np.minimum.reduce(
+        [m_abs + e_b, np.cbrt(12.0 * m_abs), m_abs / (1.0 - e_b), np.full_like(m_abs, np.pi)]
+    )
 
     def f_and_fprime(big_e):
         return big_e - e_b * np.sin(big_e) - m_abs, 1.0 - e_b * np.cos(big_e)
@@ -121,13 +137,14 @@ def mean_to_hyperbolic_anomaly(mean_anomaly_rad, e):
     Notes
     -----
     For |M|, f(H) = e sinh H - H - |M| is increasing (f' = e cosh H - 1 > 0) and convex on
-    H >= 0. Newton starts above the root, at min((6|M|)^(1/3), asinh(2|M|/e)) (the second only
-    for |M| >= 3, where asinh(2|M|/e) <= |M|), so it decreases monotonically to it without
-    overshoot, also for e -> 1 where f'(0) = e - 1 -> 0. Vallado, Algorithm 4, with this start.
+    H >= 0. Newton starts above the root, at min((6|M|)^(1/3), |M| / (e - 1), asinh(2|M|/e))
+    (e sinh H - H >= H^3/6 and >= (e - 1) H; the last only for |M| >= 3, where
+    asinh(2|M|/e) <= |M|), so it decreases monotonically to it without overshoot, also for
+    e -> 1 where f'(0) = e - 1 -> 0. Vallado, Algorithm 4, with this start.
     """
     m_all, e_b = np.broadcast_arrays(np.asarray(mean_anomaly_rad, float), np.asarray(e, float))
     m_abs = np.abs(m_all)
-    start = np.cbrt(6.0 * m_abs)
+    start = np.minimum(np.cbrt(6.0 * m_abs), m_abs / (e_b - 1.0))
     large = m_abs >= 3.0
     start = np.where(large, np.minimum(start, np.arcsinh(2.0 * m_abs / e_b)), start)
 

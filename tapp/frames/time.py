@@ -23,6 +23,7 @@ from tapp.errors import InputError
 #: Julian date of J2000.0 (2000 Jan 1 12h), the origin of the GMST polynomial.
 JD_J2000 = 2451545.0
 DAYS_PER_JULIAN_CENTURY = 36525.0
+NANOSECONDS_PER_DAY = 86_400 * 10**9
 
 _ISO = re.compile(
     r"^\s*(\d{4})-(\d{2})-(\d{2})"
@@ -83,20 +84,22 @@ def jd_to_calendar(jd_whole: float, jd_fraction: float = 0.0) -> tuple[int, int,
     Returns
     -------
     tuple
-        ``(year, month, day, hour, minute, second)``, second a float in [0, 60).
+        ``(year, month, day, hour, minute, second)``, second a float in [0, 60), resolved to
+        1 ns (the split Julian date itself holds about 1e-11 s).
 
     Notes
     -----
     Inverse of :func:`calendar_to_jd` (Richards, in Explanatory Supplement to the Astronomical
     Almanac, 3rd ed., 2013, section 15.11.3, algorithm for the Gregorian calendar).
     """
-    # Move to days counted from 0h so the day number is the floor of the whole part.
+    # Move to days counted from 0h so the day number is the floor of the whole part; resolve
+    # the time of day to integer nanoseconds so that 00:33:00 does not print as 00:32:59.999...
     whole = float(jd_whole) + 0.5
     day_number = np.floor(whole)
-    fraction = (whole - day_number) + float(jd_fraction)
-    carry = np.floor(fraction)
-    jdn = int(day_number + carry)
-    seconds_of_day = (fraction - carry) * SECONDS_PER_DAY
+    carry, nanoseconds = divmod(
+        round(((whole - day_number) + float(jd_fraction)) * NANOSECONDS_PER_DAY), NANOSECONDS_PER_DAY
+    )
+    jdn = int(day_number) + carry
     f = jdn + 1401 + (((4 * jdn + 274277) // 146097) * 3) // 4 - 38
     e = 4 * f + 3
     g = (e % 1461) // 4
@@ -104,9 +107,9 @@ def jd_to_calendar(jd_whole: float, jd_fraction: float = 0.0) -> tuple[int, int,
     day = (h % 153) // 5 + 1
     month = (h // 153 + 2) % 12 + 1
     year = e // 1461 - 4716 + (12 + 2 - month) // 12
-    hour = int(seconds_of_day // 3600.0)
-    minute = int((seconds_of_day - 3600.0 * hour) // 60.0)
-    second = float(seconds_of_day - 3600.0 * hour - 60.0 * minute)
+    hour, nanoseconds = divmod(nanoseconds, 3600 * 10**9)
+    minute, nanoseconds = divmod(nanoseconds, 60 * 10**9)
+    second = nanoseconds / 1e9
     return year, month, day, hour, minute, second
 
 

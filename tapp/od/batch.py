@@ -76,9 +76,9 @@ class DCIteration:
 class DCResult:
     """Outcome of a differential correction.
 
-    ``status`` is "converged", "stalled" or "diverged"; ``reason`` says which rule fired; ``x0`` is the
-    final estimate (the start of the last iteration, whose RMS is the last one reported);
-    ``covariance`` its formal covariance.
+    ``status`` is "converged", "stalled" or "diverged"; ``reason`` says which rule fired;
+    ``x0`` is the final estimate (the start of the last iteration, whose RMS is the last
+    one reported); ``covariance`` its formal covariance.
     """
 
     status: str
