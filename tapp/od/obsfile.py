@@ -127,8 +127,9 @@ def _read_csv(path: Path, stations: dict[str, Station], sigma: np.ndarray | None
         raise InputError(str(path), "header", "t_s,station then columns among "
                          f"{', '.join(_COLUMNS.values())}", ",".join(header))
     if sigma is None or len(sigma) != len(kinds):
-        raise InputError(str(path), "sigma", f"{len(kinds)} standard deviations from the "
-                         "scenario")
+        n = "no" if sigma is None else len(sigma)
+        raise InputError(str(path), "header", f"one observable column per standard deviation "
+                         f"of the scenario ({n} given)", ",".join(header))
     names = sorted({r[1] for r in rows[1:] if len(r) > 1})
     unknown = [n for n in names if n not in stations]
     if unknown:
