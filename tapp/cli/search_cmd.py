@@ -1,0 +1,160 @@
+"""``tapp search``: SEARCH's Newton-Raphson targeting of a B-plane scenario.
+
+Prints SEARCH's report in the spirit of the seed's Figs. 4 and 5 (inputs, each case's
+dependent variables, the partials, their inverse, the increments and total increments, the
+exit taken) followed by the encounter of the final trajectory, or one JSON object with
+``--json``. Exit codes follow SEARCH's three non-standard exits (:data:`search.EXIT_FLAG`):
+0 converged, FLAG + 1 otherwise (3 diverged, 4 singular), so that they stay clear of 1 (a
+failed case or any other error) and 2 (bad input, one line on stderr naming file and field).
+"""
+
+from __future__ import annotations
+
+import time
+import tomllib
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from search import EXIT_FLAG, format_report
+from tapp.cli.common import app, print_json, run_guarded
+from tapp.constants import SECONDS_PER_DAY, RADIUS_km
+from tapp.errors import InputError
+from tapp.frames.time import Epoch
+from tapp.targeting import (
+    X_NAMES,
+    Y_NAMES,
+    BPlaneSearch,
+    TargetingRun,
+    run_search,
+    scenario_search,
+)
+
+#: Exit code of each SEARCH exit: 0 converged, the seed's FLAG + 1 otherwise.
+EXIT_CODE = {status: 0 if status == "converged" else flag + 1
+             for status, flag in EXIT_FLAG.items()}
+
+# Column names in the report (the seed's IV1N.., DV1N..), at most 17 characters.
+_X_LABELS = ("VX (KM/S)", "VY (KM/S)", "VZ (KM/S)")
+_Y_LABELS = ("B.R (KM)", "B.T (KM)", "TF (S)")
+
+
+def read_scenario(path: Path) -> BPlaneSearch:
+    """Read and validate a B-plane search scenario (TOML); errors name the file and field."""
+    try:
+        text = Path(path).read_text()
+    except FileNotFoundError:
+        raise InputError(str(path), "file", "an existing scenario file") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(str(path), "TOML", f"valid TOML ({exc})") from None
+    return scenario_search(data, str(path))
+
+
+def _periapsis_utc(problem: BPlaneSearch, t_s: float) -> str:
+    epoch = problem.program.epoch
+    return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(3)
+
+
+def _encounter_dict(problem: BPlaneSearch, run: TargetingRun) -> dict:
+    enc = run.encounter
+    body = problem.program.target
+    r_p = float(enc.b_plane.periapsis_radius_km)
+    return {"body": body,
+            "t_periapsis_s": enc.t_periapsis_s,
+            "periapsis_utc": _periapsis_utc(problem, enc.t_periapsis_s),
+            "periapsis_radius_km": r_p,
+            "periapsis_altitude_km": r_p - RADIUS_km[body],
+            "v_inf_km_s": float(enc.b_plane.v_inf_km_s),
+            "eccentricity": float(enc.b_plane.eccentricity),
+            "ltof_s": float(enc.b_plane.ltof_s)}
+
+
+def _history_dict(run: TargetingRun) -> dict:
+    history = run.result.history
+    return {
+        "cases": [{"n": c.number, "kind": c.kind, "set": c.partial_set, "index": c.index,
+                   "x": c.x, "y": c.y} for c in history.cases],
+        "partial_sets": [{"set": ps.number, "update": ps.update, "source": ps.source,
+                          "after_case": ps.after_case, "partials": ps.partials,
+                          "determinant": ps.determinant,
+                          "steps": [{"case": s.case, "step": s.step, "total_step": s.total_step}
+                                    for s in ps.steps]}
+                         for ps in history.partial_sets],
+    }
+
+
+def _json(path: Path, problem: BPlaneSearch, run: TargetingRun, analytic: bool,
+          elapsed_s: float) -> dict:
+    result = run.result
+    return {
+        "scenario": str(path),
+        "status": result.status,
+        "flag": result.flag,
+        "exit_code": EXIT_CODE[result.status],
+        "x_names": list(X_NAMES),
+        "y_names": list(Y_NAMES),
+        "x": result.x,
+        "y": result.y,
+        "targets": result.targets,
+        "miss": result.miss,
+        "tolerances": result.inputs.tolerances,
+        "total_increments_km_s": result.x - result.inputs.x0,
+        "cases_run": result.n_cases,
+        "cases": {"nominal": result.n_nominal, "perturbed": result.n_perturbed,
+                  "applied": result.n_applied},
+        "trajectories": run.trajectories,
+        "propagations": run.propagations,
+        "analytic_partials": analytic,
+        "wall_time_s": elapsed_s,
+        "encounter": _encounter_dict(problem, run),
+        "history": _history_dict(run),
+    }
+
+
+def _summary(problem: BPlaneSearch, run: TargetingRun, analytic: bool,
+             elapsed_s: float) -> str:
+    enc = _encounter_dict(problem, run)
+    dv_m_s = 1e3 * float(sum((run.result.x - run.result.inputs.x0) ** 2) ** 0.5)
+    partials = "ANALYTIC (VARIATIONAL EQUATIONS)" if analytic else "DIFFERENCED"
+    return (
+        f"ENCOUNTER WITH THE {enc['body'].upper()}: PERIAPSIS {enc['periapsis_utc']} UTC "
+        f"(T = {enc['t_periapsis_s']:.3f} S), RADIUS {enc['periapsis_radius_km']:.3f} KM "
+        f"(ALTITUDE {enc['periapsis_altitude_km']:.3f} KM), V_INF {enc['v_inf_km_s']:.6f} KM/S\n"
+        f"TOTAL CHANGE OF THE INJECTION VELOCITY {dv_m_s:.3f} M/S\n"
+        f"{run.trajectories} TRAJECTORIES ({run.propagations} PROPAGATIONS), PARTIALS "
+        f"{partials}, {elapsed_s:.2f} S\n")
+
+
+@app.command("search")
+def search_command(
+    scenario: Annotated[Path, typer.Argument(help="B-plane search scenario (TOML).")],
+    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    analytic_partials: Annotated[bool, typer.Option(
+        "--analytic-partials",
+        help="Partials from the variational equations (overrides the scenario).")] = False,
+) -> None:
+    """Target the injection velocity to B·R, B·T and flight time at the target body.
+
+    Exit codes: 0 converged, 3 diverged, 4 singular, 2 bad input, 1 a case that failed (the
+    trajectory missed the target's sphere of influence, or was not hyperbolic there).
+    """
+
+    def body() -> int:
+        problem = read_scenario(scenario)
+        analytic = analytic_partials or problem.analytic_partials
+        start = time.perf_counter()
+        run = run_search(problem, analytic_partials=analytic)
+        elapsed = time.perf_counter() - start
+        if json_out:
+            print_json(_json(scenario, problem, run, analytic, elapsed))
+        else:
+            typer.echo(format_report(run.result, _X_LABELS, _Y_LABELS), nl=False)
+            typer.echo(_summary(problem, run, analytic, elapsed), nl=False)
+        return EXIT_CODE[run.result.status]
+
+    code = run_guarded(body)
+    if code:
+        raise typer.Exit(code)

@@ -1,0 +1,715 @@
+r"""B-plane targeting: the astrodynamic program that SEARCH drives.
+
+SEARCH (:mod:`search`) knows nothing of orbits; it drives a plain ``f(x) -> y``. This module
+supplies that ``f`` for the seed's "typical search over a trajectory" (TM 33-203, section II):
+x = the injection velocity (vx, vy, vz) in km/s, EME2000, Earth-centred; y = (B·R km, B·T km,
+flight time s) at a target body, computed through the numerical integrator with the Sun, the
+Moon (and any target) from DE421. Optionally it supplies the analytic partials
+:math:`\partial y/\partial x` from the variational equations.
+
+The evaluation of one case (:meth:`BPlaneProgram.evaluate`):
+
+1. **Scan.** Propagate the state alone from the injection (t = 0, the scenario epoch) to the
+   horizon ``max_flight_time_s`` on a grid of ``scan_step_s``, and form the target-relative
+   state :math:`\mathbf z = \mathbf x - \mathbf x_b(t)` on it (target ephemeris from DE421).
+   The encounter is the first grid interval where :math:`h = \mathbf r\cdot\mathbf v` of
+   :math:`\mathbf z` changes sign from - to + (a closest approach) with the target within its
+   sphere of influence :math:`r_{SOI} = D\,(\mu_b/\mu_c)^{2/5}` (Laplace; D the centre-target
+   distance at that time). No such interval: :class:`TargetMissedError`.
+2. **Periapsis.** The evaluation time :math:`t_e` is the periapsis of the *integrated*
+   trajectory relative to the target, the root of :math:`h(t) = 0`. It is found by Newton's
+   method with the two-body step :math:`t \leftarrow t + t_p(\mathbf z(t))` (:math:`t_p` the
+   osculating hyperbola's time to periapsis, :func:`tapp.bplane.b_plane`), starting at the
+   grid point of the bracket nearer the target, until :math:`|t_p| \le`
+   ``periapsis_time_tol_s``; each step is one propagation from t = 0 (with the STM when
+   partials are wanted). The step converges at the rate of the non-Keplerian part of the
+   motion (the Earth's tidal acceleration against the Moon's attraction): from a grid point
+   up to ``scan_step_s``/2 away, the first step leaves milliseconds on a close flyby (a
+   fraction of a second on a distant one), so one or two steps follow the scan. An
+   osculating orbit that is not hyperbolic there: :class:`TargetMissedError`.
+3. **Values.** :math:`y = (B\cdot R, B\cdot T)` of the osculating target-relative hyperbola at
+   :math:`t_e`, and the flight time :math:`t_f = t_e + t_p(\mathbf z(t_e))`, the time of
+   periapsis passage measured from the injection (the :math:`t_p` term is the last Newton
+   correction, below ``periapsis_time_tol_s``). LTOF is *not* used: it is a far-field proxy
+   that differs from the periapsis time by :math:`(\mu/v_\infty^3)(e^F/e - 1 - F)` (see
+   :func:`tapp.bplane.b_plane`), and at periapsis it is not zero.
+
+Analytic partials (consistent with that choice of :math:`t_e`). With
+:math:`\Phi_v = \Phi(t_e, 0)[:, 3{:}6]` (6x3, from the variational equations),
+:math:`\dot{\mathbf z} = (\mathbf v - \mathbf v_b,\ \mathbf a(\mathbf x) - \mathbf a_b)` and
+:math:`\nabla h = (\mathbf v_z, \mathbf r_z)` the gradient of :math:`h = \mathbf r\cdot\mathbf v`:
+
+.. math::
+
+    \frac{\partial t_e}{\partial \mathbf v_0} =
+        -\frac{\nabla h\,\Phi_v}{\nabla h\cdot\dot{\mathbf z}}, \qquad
+    \frac{\partial \mathbf z(t_e)}{\partial \mathbf v_0} =
+        \Phi_v + \dot{\mathbf z}\,\frac{\partial t_e}{\partial \mathbf v_0},
+
+    \frac{\partial (B\cdot R, B\cdot T)}{\partial \mathbf v_0} =
+        G\,\frac{\partial \mathbf z(t_e)}{\partial \mathbf v_0}, \qquad
+    \frac{\partial t_f}{\partial \mathbf v_0} = \frac{\partial t_e}{\partial \mathbf v_0}
+
+(implicit differentiation of :math:`h(\mathbf z(t_e)) = 0`; the :math:`t_p` term of
+:math:`t_f` has zero derivative because :math:`t_p(\mathbf z(t_e)) \equiv 0`).
+:math:`G = \partial(B\cdot R, B\cdot T)/\partial\mathbf z` (2x6) is the B-plane Jacobian: its
+velocity block is :attr:`tapp.bplane.BPlane.jacobian_v` (complex step), its position block is
+taken here by central differences of :func:`tapp.bplane.b_plane` (cheap: two-body formulas
+only). :math:`\mathbf a(\mathbf x)` is the state model's acceleration (its CasADi function);
+the target's velocity and acceleration are central differences of the DE421 position. The
+expensive part, the trajectory's sensitivity, comes from the STM alone. With a variational
+model other than the state model (:class:`tapp.dynamics.Propagator` ``var_model``) the
+partials are those of the approximate STM, as the (J_N, J_M) study intends.
+
+Failures. A case whose trajectory misses the target's sphere of influence, or whose
+target-relative orbit is not hyperbolic, raises :class:`TargetMissedError` (a
+:class:`~tapp.errors.NotHyperbolicError`). :func:`search.solve` lets exceptions of ``f``
+propagate unchanged (only non-finite or mis-shaped outputs become its own
+``SearchInputError``), which is what we want: a Newton step that throws the trajectory off
+the target has no meaningful y, and inventing one (NaN, a penalty) would either stop SEARCH
+with a less clear message or corrupt its partials. :func:`run_search` therefore lets the
+search stop there and re-raises the failure as :class:`FailedCaseError`, naming the case
+number (as in SEARCH's history and report), its x and the reason; the CLI turns it into one
+line on stderr and exit code 1.
+
+References
+----------
+N. S. Newhall, "A Users' Guide for SEARCH and ITER", JPL TM 33-203 (1965), section II (the
+3x3 search of B·T, B·R, t_f over the injection velocity).
+W. Kizner, Planetary and Space Science 7 (1961) 125-131 (the B-plane).
+R. H. Battin, *An Introduction to the Mathematics and Methods of Astrodynamics*, rev. ed.
+(1999), section 9.6 (sphere of influence, :math:`r_{SOI} = D (m/M)^{2/5}`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from search import SearchResult, solve
+from tapp.bplane import REFERENCE_POLES, BPlane, b_plane
+from tapp.constants import SECONDS_PER_DAY, GM_km3_s2, RADIUS_km
+from tapp.dynamics import BODIES, PropagationError, Propagator, earth_model
+from tapp.ephemeris import position_km, utc_to_tdb_jd
+from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
+from tapp.frames.time import Epoch, parse_epoch
+
+#: Names of the independent variables x (injection velocity, EME2000) and dependent ones y.
+X_NAMES = ("vx_km_s", "vy_km_s", "vz_km_s")
+Y_NAMES = ("b_dot_r_km", "b_dot_t_km", "flight_time_s")
+
+#: Newton steps allowed on the periapsis time before giving up (one usually suffices).
+MAX_PERIAPSIS_ITERATIONS = 6
+
+# Central-difference step for the target's velocity and acceleration from DE421 positions:
+# a 4th-order stencil with h = 60 s has truncation ~1e-17 km/s for the Moon, round-off
+# ~1e-12 km/s (positions good to ~4e-11 km).
+_EPHEMERIS_STEP_s = 60.0
+# Relative step of the central differences of the B-plane in position: truncation
+# ~(1e-6)^2, round-off ~1e-16 |B| / (1e-6 |r|), both far below 1e-8 of the partials.
+_B_PLANE_POSITION_STEP = 1e-6
+
+
+class TargetMissedError(NotHyperbolicError):
+    """No hyperbolic encounter: the trajectory misses the target's sphere of influence within
+    the horizon, or its target-relative orbit at closest approach is not hyperbolic. The
+    message gives the closest approach (km), its time (s) and the sphere of influence (km),
+    or the eccentricity and energy."""
+
+
+class FailedCaseError(TappError):
+    """A SEARCH case could not be evaluated; names the case number, its x and the reason.
+
+    Attributes
+    ----------
+    case : int
+        1-based case number, as in ``SearchResult.history.cases`` and the report.
+    x : numpy.ndarray, shape (3,)
+        Injection velocity of the case, km/s.
+    """
+
+    def __init__(self, case: int, x: np.ndarray, reason: Exception):
+        self.case = case
+        self.x = np.array(x, dtype=float)
+        values = ", ".join(f"{v:.9f}" for v in self.x)
+        super().__init__(f"search case {case} at v0 = [{values}] km/s failed: {reason}")
+
+
+@dataclass(frozen=True, slots=True)
+class Encounter:
+    """One evaluation of the program: y, the target-relative state at periapsis, partials.
+
+    Attributes
+    ----------
+    v0_km_s : numpy.ndarray, shape (3,)
+        The injection velocity evaluated (x), km/s, EME2000.
+    y : numpy.ndarray, shape (3,)
+        (B·R km, B·T km, flight time s) in the order of :data:`Y_NAMES`.
+    t_periapsis_s : float
+        Evaluation time t_e, s from the injection: periapsis of the integrated trajectory.
+    state_rel : numpy.ndarray, shape (6,)
+        Target-relative position (km) and velocity (km/s) at t_e, EME2000 axes.
+    b_plane : BPlane
+        B-plane parameters of the osculating hyperbola at t_e (its ``periapsis_radius_km``
+        tells an impacting case).
+    partials : numpy.ndarray of shape (3, 3), or None
+        dy/dv0, rows as ``y``, columns vx, vy, vz: (s, s, s^2/km); None unless asked for.
+    propagations : int
+        Numerical integrations run for this case (scan + Newton steps on t_e).
+    """
+
+    v0_km_s: np.ndarray
+    y: np.ndarray
+    t_periapsis_s: float
+    state_rel: np.ndarray
+    b_plane: BPlane
+    partials: np.ndarray | None
+    propagations: int
+
+
+def _frozen(a: ArrayLike) -> np.ndarray:
+    out = np.array(a, dtype=np.float64, copy=True)
+    out.setflags(write=False)
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class BPlaneProgram:
+    r"""The trajectory program of a B-plane search: injection velocity -> (B·R, B·T, t_f).
+
+    Call it as ``program(v0_km_s) -> y`` (what :func:`search.solve` drives), or use
+    :meth:`evaluate` for the whole :class:`Encounter` and :meth:`partials` for the analytic
+    dy/dv0. The module docstring gives the definitions and the equations.
+
+    Parameters
+    ----------
+    epoch : Epoch
+        UTC instant of the injection, t = 0.
+    r0_km : array_like, shape (3,)
+        Injection position, km, EME2000, relative to the propagator's centre.
+    propagator : Propagator
+        State and variational models (the target must be one of the state model's third
+        bodies), tolerances. No model parameters (``params == ()``).
+    target : str, optional
+        Target body, one of :data:`tapp.dynamics.BODIES` (default ``"moon"``).
+    reference : str, optional
+        B-plane reference plane, ``"earth_equator"`` (default) or ``"ecliptic"``.
+    max_flight_time_s : float, optional
+        Horizon of the scan, s (default 8 days).
+    scan_step_s : float, optional
+        Output step of the scan for the closest approach, s (default 600).
+    periapsis_time_tol_s : float, optional
+        Stop the Newton iteration on t_e when the osculating time to periapsis is below this,
+        s (default 1e-3: B moves ~3e-7 km and t_f ~1e-8 s in that time near the Moon).
+    """
+
+    epoch: Epoch
+    r0_km: np.ndarray
+    propagator: Propagator
+    target: str = "moon"
+    reference: str = "earth_equator"
+    max_flight_time_s: float = 8.0 * SECONDS_PER_DAY
+    scan_step_s: float = 600.0
+    periapsis_time_tol_s: float = 1e-3
+    _jd_tdb: float = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        r0 = np.asarray(self.r0_km, dtype=np.float64)
+        if r0.shape != (3,) or not np.all(np.isfinite(r0)) or not np.any(r0):
+            raise InputError("targeting", "r0_km", "3 finite numbers, not all zero (km)",
+                             r0.tolist())
+        object.__setattr__(self, "r0_km", _frozen(r0))
+        model = self.propagator.state_model
+        if self.target not in model.third_bodies:
+            raise InputError("targeting", "target",
+                             f"one of the state model's third bodies {model.third_bodies}",
+                             self.target)
+        if self.propagator.params:
+            raise InputError("targeting", "propagator.params", "no model parameters",
+                             self.propagator.params)
+        if self.reference not in REFERENCE_POLES:
+            raise InputError("targeting", "reference", f"one of {sorted(REFERENCE_POLES)}",
+                             self.reference)
+        for name in ("max_flight_time_s", "scan_step_s", "periapsis_time_tol_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise InputError("targeting", name, "a finite number > 0 (s)", value)
+        if self.scan_step_s >= self.max_flight_time_s:
+            raise InputError("targeting", "scan_step_s", "a step shorter than "
+                             f"max_flight_time_s = {self.max_flight_time_s} s", self.scan_step_s)
+        object.__setattr__(self, "_jd_tdb", utc_to_tdb_jd(self.epoch.jd))
+
+    @property
+    def gm_target_km3_s2(self) -> float:
+        """GM of the target body, km^3/s^2 (DE430 value, :data:`tapp.constants.GM_km3_s2`)."""
+        return GM_km3_s2[self.target]
+
+    # --- ephemeris and dynamics -----------------------------------------------------------
+
+    def target_state(self, t_s: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """Return the target's state (N, 6) (km, km/s) and acceleration (N, 3) (km/s^2)
+        relative to the centre at ``t_s`` (N,) seconds from the epoch (DE421).
+
+        Velocity and acceleration are the 4th-order central differences
+        :math:`(8(p_{+1} - p_{-1}) - (p_{+2} - p_{-2}))/12h` and
+        :math:`(-p_{+2} + 16 p_{+1} - 30 p_0 + 16 p_{-1} - p_{-2})/12h^2`, h = 60 s.
+        """
+        t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))
+        h = _EPHEMERIS_STEP_s
+        offsets = np.array([-2.0, -1.0, 0.0, 1.0, 2.0]) * h
+        days = (t[:, None] + offsets[None, :]).ravel() / SECONDS_PER_DAY
+        p = position_km(self.target, self.propagator.state_model.center, self._jd_tdb, days)
+        p = p.reshape(t.size, 5, 3)
+        vel = (8.0 * (p[:, 3] - p[:, 1]) - (p[:, 4] - p[:, 0])) / (12.0 * h)
+        acc = (-p[:, 4] + 16.0 * p[:, 3] - 30.0 * p[:, 2] + 16.0 * p[:, 1] - p[:, 0]) / (
+            12.0 * h * h)
+        return np.concatenate([p[:, 2], vel], axis=1), acc
+
+    def acceleration_km_s2(self, t_s: float, state: np.ndarray) -> np.ndarray:
+        """Return the state model's acceleration (3,), km/s^2, at one time and state (6,)."""
+        eqs, _ = self.propagator.compiled()
+        center = self.propagator.state_model.center
+        rb = np.concatenate([position_km(body, center, self._jd_tdb, t_s / SECONDS_PER_DAY)[0]
+                             for body in eqs.bodies])
+        xdot = eqs.f_state(t_s, state, np.zeros(0), [self.epoch.gmst_rad()], rb)
+        return np.asarray(xdot, dtype=np.float64).ravel()[3:6]
+
+    def soi_radius_km(self, distance_km: ArrayLike) -> np.ndarray:
+        r"""Return Laplace's sphere-of-influence radius :math:`D(\mu_b/\mu_c)^{2/5}`, km."""
+        ratio = self.gm_target_km3_s2 / self.propagator.state_model.gm_center_km3_s2
+        return np.asarray(distance_km, dtype=np.float64) * ratio**0.4
+
+    def _propagate(self, v0: np.ndarray, t_s: np.ndarray, stm: bool):
+        try:
+            return self.propagator.propagate(
+                np.concatenate([self.r0_km, v0]), t_s, stm=stm,
+                theta0_rad=self.epoch.gmst_rad(), epoch_jd_utc=self.epoch.jd)
+        except PropagationError as exc:
+            raise PropagationError(f"{exc} (injection velocity {v0.tolist()} km/s)") from exc
+
+    def _b_plane(self, z: np.ndarray) -> BPlane:
+        return b_plane(z[..., :3], z[..., 3:], self.gm_target_km3_s2, reference=self.reference)
+
+    # --- the program ----------------------------------------------------------------------
+
+    def _closest_approach_time(self, v0: np.ndarray) -> float:
+        """Scan for the first closest approach inside the SOI; return the Newton start (s)."""
+        n = int(math.ceil(self.max_flight_time_s / self.scan_step_s))
+        t = np.minimum(self.scan_step_s * np.arange(1, n + 1), self.max_flight_time_s)
+        states = self._propagate(v0, t, stm=False).states
+        body, _ = self.target_state(t)
+        z = states - body
+        dist = np.linalg.norm(z[:, :3], axis=1)
+        rdotv = np.sum(z[:, :3] * z[:, 3:], axis=1)
+        soi = self.soi_radius_km(np.linalg.norm(body[:, :3], axis=1))
+        bracket = (rdotv[:-1] < 0.0) & (rdotv[1:] >= 0.0)
+        bracket &= np.minimum(dist[:-1], dist[1:]) < np.minimum(soi[:-1], soi[1:])
+        hits = np.flatnonzero(bracket)
+        if hits.size == 0:
+            k = int(np.argmin(dist))
+            raise TargetMissedError(
+                f"the trajectory does not reach the {self.target}'s sphere of influence within "
+                f"{self.max_flight_time_s:.0f} s: closest approach on the {self.scan_step_s:g} s "
+                f"grid {dist[k]:.1f} km at t = {t[k]:.0f} s (sphere of influence "
+                f"{soi[k]:.1f} km)")
+        k = int(hits[0])
+        k = k if dist[k] <= dist[k + 1] else k + 1
+        try:
+            t_p = float(self._b_plane(z[k]).time_to_periapsis_s)
+        except NotHyperbolicError as exc:
+            raise TargetMissedError(
+                f"the {self.target}-relative orbit at closest approach (t = {t[k]:.0f} s, "
+                f"{dist[k]:.1f} km) is not hyperbolic: {exc}") from exc
+        return float(t[k]) + t_p
+
+    def evaluate(self, v0_km_s: ArrayLike, *, partials: bool = False) -> Encounter:
+        """Run one case: propagate from the injection, find periapsis, return the encounter.
+
+        Parameters
+        ----------
+        v0_km_s : array_like, shape (3,)
+            Injection velocity, km/s, EME2000.
+        partials : bool, optional
+            Also integrate the STM and return the analytic dy/dv0.
+
+        Raises
+        ------
+        TargetMissedError
+            No closest approach inside the sphere of influence within the horizon, or a
+            target-relative orbit that is not hyperbolic there.
+        PropagationError
+            The integrator stopped (message names the injection velocity).
+        DivergenceError
+            The Newton iteration on the periapsis time did not reach ``periapsis_time_tol_s``
+            in :data:`MAX_PERIAPSIS_ITERATIONS` steps.
+        InputError
+            A velocity that is not 3 finite numbers.
+        """
+        v0 = np.asarray(v0_km_s, dtype=np.float64)
+        if v0.shape != (3,) or not np.all(np.isfinite(v0)):
+            raise InputError("targeting", "v0_km_s", "3 finite numbers (km/s)", v0.tolist())
+        t_e = self._closest_approach_time(v0)
+        steps = 0
+        while True:
+            if not 0.0 < t_e <= self.max_flight_time_s:
+                raise TargetMissedError(
+                    f"periapsis time {t_e:.3f} s outside the horizon (0, "
+                    f"{self.max_flight_time_s:.0f}] s")
+            traj = self._propagate(v0, np.array([t_e]), stm=partials)
+            steps += 1
+            body, body_acc = self.target_state(t_e)
+            z = traj.states[0] - body[0]
+            try:
+                bp = self._b_plane(z)
+            except NotHyperbolicError as exc:
+                raise TargetMissedError(
+                    f"the {self.target}-relative orbit at t = {t_e:.3f} s is not hyperbolic: "
+                    f"{exc}") from exc
+            t_p = float(bp.time_to_periapsis_s)
+            if abs(t_p) <= self.periapsis_time_tol_s:
+                break
+            if steps == MAX_PERIAPSIS_ITERATIONS:
+                raise DivergenceError(
+                    f"periapsis time not found to {self.periapsis_time_tol_s:g} s (last step "
+                    f"{t_p:.3e} s)", steps)
+            t_e += t_p
+        y = np.array([float(bp.b_dot_r_km), float(bp.b_dot_t_km), t_e + t_p])
+        jac = None
+        if partials:
+            jac = self._partials(t_e, traj.states[0], traj.stm[0], z, body_acc[0], bp)
+        return Encounter(
+            v0_km_s=_frozen(v0),
+            y=_frozen(y),
+            t_periapsis_s=t_e,
+            state_rel=_frozen(z),
+            b_plane=bp,
+            partials=None if jac is None else _frozen(jac),
+            propagations=1 + steps,
+        )
+
+    def _partials(self, t_e: float, state: np.ndarray, phi: np.ndarray, z: np.ndarray,
+                  body_acc: np.ndarray, bp: BPlane) -> np.ndarray:
+        """dy/dv0 (3, 3) at periapsis; equations in the module docstring."""
+        r, v = z[:3], z[3:]
+        # G = d(B.R, B.T)/dz (2, 6): position block by central differences of b_plane,
+        # velocity block from its complex-step Jacobian (rows B.R, B.T, LTOF).
+        step_km = _B_PLANE_POSITION_STEP * float(np.linalg.norm(r))
+        dr = step_km * np.eye(3)
+        plus = self._b_plane(np.concatenate([r + dr, np.broadcast_to(v, (3, 3))], axis=1))
+        minus = self._b_plane(np.concatenate([r - dr, np.broadcast_to(v, (3, 3))], axis=1))
+        g_r = np.stack([plus.b_dot_r_km - minus.b_dot_r_km,
+                        plus.b_dot_t_km - minus.b_dot_t_km]) / (2.0 * step_km)
+        g = np.concatenate([g_r, bp.jacobian_v[:2]], axis=1)
+        # zdot = (v_rel, a - a_b); grad h of h = r.v is (v, r).
+        zdot = np.concatenate([v, self.acceleration_km_s2(t_e, state) - body_acc])
+        grad_h = np.concatenate([v, r])
+        phi_v = phi[:, 3:6]
+        dte_dv0 = -(grad_h @ phi_v) / (grad_h @ zdot)
+        dz_dv0 = phi_v + np.outer(zdot, dte_dv0)
+        return np.vstack([g @ dz_dv0, dte_dv0])
+
+    def partials(self, v0_km_s: ArrayLike) -> np.ndarray:
+        """Return the analytic dy/dv0 (3, 3) (s, s, s^2/km) from the variational equations."""
+        return np.array(self.evaluate(v0_km_s, partials=True).partials)
+
+    def __call__(self, v0_km_s: ArrayLike) -> np.ndarray:
+        """Return y = (B·R km, B·T km, flight time s) for an injection velocity (km/s)."""
+        return np.array(self.evaluate(v0_km_s).y)
+
+
+@dataclass(frozen=True, slots=True)
+class BPlaneSearch:
+    """A complete B-plane targeting problem: the program, the start and SEARCH's inputs.
+
+    Arrays have shape (3,), in the order of :data:`X_NAMES` (km/s) and :data:`Y_NAMES`
+    (km, km, s). ``target_increments`` are SEARCH's theta (y_T = y_0 + theta where != 0).
+    """
+
+    program: BPlaneProgram
+    v0_km_s: np.ndarray
+    targets: np.ndarray
+    target_increments: np.ndarray
+    tolerances: np.ndarray
+    increments: np.ndarray
+    iterations_per_partials: int = 3
+    partial_sets: int = 3
+    analytic_partials: bool = False
+    broyden: bool = False
+    step_halving: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class TargetingRun:
+    """What :func:`run_search` returns.
+
+    Attributes
+    ----------
+    result : SearchResult
+        SEARCH's outcome and history.
+    encounter : Encounter
+        The evaluation at ``result.x`` (periapsis radius, v_inf, ...).
+    propagations : int
+        Numerical integrations run by all cases (scan + periapsis steps; analytic partials
+        ride on the cases' own integrations).
+    """
+
+    result: SearchResult
+    encounter: Encounter
+    propagations: int
+
+    @property
+    def trajectories(self) -> int:
+        """Trajectories flown (cases run by SEARCH, one trajectory each)."""
+        return self.result.n_cases
+
+
+def run_search(problem: BPlaneSearch, *, analytic_partials: bool | None = None) -> TargetingRun:
+    """Target the injection velocity to (B·R, B·T, t_f) with SEARCH.
+
+    Parameters
+    ----------
+    problem : BPlaneSearch
+        Program, start and SEARCH inputs.
+    analytic_partials : bool, optional
+        Override ``problem.analytic_partials``. When on, every case integrates the STM and
+        every set of partials is the analytic dy/dv0 at its nominal point (no perturbed case).
+
+    Returns
+    -------
+    TargetingRun
+
+    Raises
+    ------
+    FailedCaseError
+        A case missed the target, was not hyperbolic there, or could not be integrated (see
+        the module docstring for why the search stops there).
+    """
+    program = problem.program
+    analytic = problem.analytic_partials if analytic_partials is None else analytic_partials
+    encounters: dict[bytes, Encounter] = {}
+    counts = {"cases": 0, "propagations": 0}
+
+    def evaluate(x: np.ndarray, case: int) -> Encounter:
+        key = np.asarray(x, dtype=np.float64).tobytes()
+        if key not in encounters:
+            try:
+                encounters[key] = program.evaluate(x, partials=analytic)
+            except (NotHyperbolicError, PropagationError, DivergenceError) as exc:
+                raise FailedCaseError(case, x, exc) from exc
+            counts["propagations"] += encounters[key].propagations
+        return encounters[key]
+
+    def f(x: np.ndarray) -> np.ndarray:
+        counts["cases"] += 1  # search.solve runs f exactly once per case, in case order
+        return np.array(evaluate(x, counts["cases"]).y)
+
+    def partials(x: np.ndarray) -> np.ndarray:
+        # The nominal of a set has always just been run at this very x: a cache hit.
+        return np.array(evaluate(x, counts["cases"]).partials)
+
+    result = solve(
+        f,
+        problem.v0_km_s,
+        problem.targets,
+        tolerances=problem.tolerances,
+        increments=problem.increments,
+        iterations_per_partials=problem.iterations_per_partials,
+        partial_sets=problem.partial_sets,
+        target_increments=problem.target_increments,
+        partials=partials if analytic else None,
+        broyden=problem.broyden,
+        step_halving=problem.step_halving,
+    )
+    final = evaluate(result.x, result.n_cases)
+    return TargetingRun(result=result, encounter=final, propagations=counts["propagations"])
+
+
+# --- scenario tables ----------------------------------------------------------------------
+
+_TOP_KEYS = {"title", "epoch", "injection", "model", "target", "search"}
+_INJECTION_KEYS = {"r_km", "v_km_s"}
+_MODEL_KEYS = {"gravity", "third_bodies", "stm_gravity", "stm_third_bodies", "rtol", "atol"}
+_TARGET_KEYS = {"body", "reference", "max_flight_time_s", "scan_step_s", "periapsis_time_tol_s"}
+_SEARCH_KEYS = {"targets", "target_increments", "tolerances", "increments",
+                "iterations_per_partials", "partial_sets", "analytic_partials", "broyden",
+                "step_halving"}
+
+
+def _table(data: Mapping, key: str, source: str, allowed: set[str], required: bool = True
+           ) -> Mapping:
+    value = data.get(key)
+    if value is None and not required:
+        return {}
+    if not isinstance(value, Mapping):
+        raise InputError(source, key, "a table", value)
+    unknown = sorted(set(value) - allowed)
+    if unknown:
+        raise InputError(source, f"{key}.{unknown[0]}", f"one of {', '.join(sorted(allowed))}",
+                         unknown[0])
+    return value
+
+
+def _number(table: Mapping, key: str, source: str, where: str, *, default: float | None = None,
+            positive: bool = False, nonzero: bool = False) -> float:
+    value = table.get(key, default)
+    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+    if ok and positive:
+        ok = value > 0
+    if ok and nonzero:
+        ok = value != 0
+    if not ok:
+        what = "a finite number" + (" > 0" if positive else "") + (" != 0" if nonzero else "")
+        raise InputError(source, where, what, value)
+    return float(value)
+
+
+def _vector3(table: Mapping, key: str, source: str, where: str) -> np.ndarray:
+    value = table.get(key)
+    if (not isinstance(value, list) or len(value) != 3 or not all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value)):
+        raise InputError(source, where, "a list of 3 finite numbers", value)
+    return np.array(value, dtype=np.float64)
+
+
+def _named(table: Mapping, key: str, names: tuple[str, ...], source: str, *,
+           required: bool = True, positive: bool = False, nonzero: bool = False) -> np.ndarray:
+    where = f"search.{key}"
+    sub = table.get(key)
+    if sub is None and not required:
+        return np.zeros(len(names))
+    if not isinstance(sub, Mapping):
+        raise InputError(source, where, f"a table with keys {', '.join(names)}", sub)
+    unknown = sorted(set(sub) - set(names))
+    if unknown:
+        raise InputError(source, f"{where}.{unknown[0]}", f"one of {', '.join(names)}",
+                         unknown[0])
+    default = None if required else 0.0
+    return np.array([_number(sub, name, source, f"{where}.{name}", default=default,
+                             positive=positive, nonzero=nonzero) for name in names])
+
+
+def _count(table: Mapping, key: str, source: str, default: int) -> int:
+    value = table.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise InputError(source, f"search.{key}", "an integer >= 1", value)
+    return value
+
+
+def _flag(table: Mapping, key: str, source: str) -> bool:
+    value = table.get(key, False)
+    if not isinstance(value, bool):
+        raise InputError(source, f"search.{key}", "true or false", value)
+    return value
+
+
+def _bodies(table: Mapping, key: str, source: str, default: list) -> tuple[str, ...]:
+    value = table.get(key, default)
+    allowed = [b for b in BODIES if b != "earth"]  # the integration is Earth-centred
+    if not isinstance(value, list) or not all(isinstance(b, str) and b in allowed
+                                              for b in value):
+        raise InputError(source, f"model.{key}",
+                         f"a list of third bodies among {', '.join(allowed)}", value)
+    return tuple(value)
+
+
+def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
+    """Build a :class:`BPlaneSearch` from a parsed scenario table (TOML), validating it all.
+
+    Tables and keys (units in the names; the file ``scenarios/search_bplane.toml`` is the
+    commented example):
+
+    - ``epoch``: UTC date of the injection (t = 0); ``title``: free text (optional).
+    - ``[injection]``: ``r_km`` (3), ``v_km_s`` (3, the first guess x0), EME2000, Earth-centred.
+    - ``[model]``: ``gravity`` (J0, Jn, NxM), ``third_bodies`` (list), optional
+      ``stm_gravity``/``stm_third_bodies`` (variational model, default the state model),
+      ``rtol``/``atol`` (default 1e-13).
+    - ``[target]``: ``body`` (default moon), ``reference`` (earth_equator | ecliptic),
+      ``max_flight_time_s``, ``scan_step_s``, ``periapsis_time_tol_s`` (optional).
+    - ``[search]``: ``targets``, ``tolerances`` (tables keyed b_dot_r_km, b_dot_t_km,
+      flight_time_s), ``target_increments`` (same keys, optional, theta), ``increments``
+      (keyed vx_km_s, vy_km_s, vz_km_s), ``iterations_per_partials``, ``partial_sets``,
+      ``analytic_partials``, ``broyden``, ``step_halving``.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and the field (dotted path) for any missing, unknown or invalid
+        entry.
+    """
+    unknown = sorted(set(data) - _TOP_KEYS)
+    if unknown:
+        raise InputError(source, unknown[0], f"one of {', '.join(sorted(_TOP_KEYS))}",
+                         unknown[0])
+    epoch_text = data.get("epoch")
+    if not isinstance(epoch_text, str):
+        raise InputError(source, "epoch", "an ISO 8601 UTC date string", epoch_text)
+    epoch = parse_epoch(epoch_text, source=source)
+
+    inj = _table(data, "injection", source, _INJECTION_KEYS)
+    r0 = _vector3(inj, "r_km", source, "injection.r_km")
+    if np.linalg.norm(r0) <= RADIUS_km["earth"]:
+        raise InputError(source, "injection.r_km", "a position above the Earth's surface",
+                         r0.tolist())
+    v0 = _vector3(inj, "v_km_s", source, "injection.v_km_s")
+
+    mod = _table(data, "model", source, _MODEL_KEYS)
+    gravity = mod.get("gravity")
+    if not isinstance(gravity, str):
+        raise InputError(source, "model.gravity", "a gravity model J0, Jn or NxM", gravity)
+    bodies = _bodies(mod, "third_bodies", source, [])
+    stm_gravity = mod.get("stm_gravity", gravity)
+    if not isinstance(stm_gravity, str):
+        raise InputError(source, "model.stm_gravity", "a gravity model J0, Jn or NxM",
+                         stm_gravity)
+    stm_bodies = _bodies(mod, "stm_third_bodies", source, list(bodies))
+    state_model = earth_model(gravity, bodies, source=source, field="model.gravity")
+    var_model = earth_model(stm_gravity, stm_bodies, source=source, field="model.stm_gravity")
+    propagator = Propagator(state_model, var_model,
+                            rtol=_number(mod, "rtol", source, "model.rtol", default=1e-13,
+                                         positive=True),
+                            atol=_number(mod, "atol", source, "model.atol", default=1e-13,
+                                         positive=True))
+
+    tgt = _table(data, "target", source, _TARGET_KEYS)
+    body = tgt.get("body", "moon")
+    if body not in bodies:
+        raise InputError(source, "target.body", f"one of model.third_bodies {list(bodies)}",
+                         body)
+    reference = tgt.get("reference", "earth_equator")
+    if reference not in REFERENCE_POLES:
+        raise InputError(source, "target.reference", f"one of {', '.join(REFERENCE_POLES)}",
+                         reference)
+    horizon = _number(tgt, "max_flight_time_s", source, "target.max_flight_time_s",
+                      default=8.0 * SECONDS_PER_DAY, positive=True)
+    scan = _number(tgt, "scan_step_s", source, "target.scan_step_s", default=600.0,
+                   positive=True)
+    if scan >= horizon:
+        raise InputError(source, "target.scan_step_s",
+                         f"a step shorter than target.max_flight_time_s = {horizon:g} s", scan)
+    program = BPlaneProgram(
+        epoch=epoch, r0_km=r0, propagator=propagator, target=body, reference=reference,
+        max_flight_time_s=horizon, scan_step_s=scan,
+        periapsis_time_tol_s=_number(tgt, "periapsis_time_tol_s", source,
+                                     "target.periapsis_time_tol_s", default=1e-3,
+                                     positive=True))
+
+    srch = _table(data, "search", source, _SEARCH_KEYS)
+    return BPlaneSearch(
+        program=program,
+        v0_km_s=_frozen(v0),
+        targets=_frozen(_named(srch, "targets", Y_NAMES, source)),
+        target_increments=_frozen(_named(srch, "target_increments", Y_NAMES, source,
+                                         required=False)),
+        tolerances=_frozen(_named(srch, "tolerances", Y_NAMES, source, positive=True)),
+        increments=_frozen(_named(srch, "increments", X_NAMES, source, nonzero=True)),
+        iterations_per_partials=_count(srch, "iterations_per_partials", source, 3),
+        partial_sets=_count(srch, "partial_sets", source, 3),
+        analytic_partials=_flag(srch, "analytic_partials", source),
+        broyden=_flag(srch, "broyden", source),
+        step_halving=_flag(srch, "step_halving", source),
+    )
