@@ -32,6 +32,7 @@ Frames: the inertial frame of the state (EME2000 in this project). Units: km, km
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,9 +63,9 @@ def _kepler_newton(f_and_fprime, x0, what: str):
 
     In exact arithmetic every step is positive and the iterates decrease monotonically to the
     root. A step that is not positive (rounding noise once the root is reached) is not taken and
-    ends that element's iteration, as does a step below KEPLER_STEP_TOL |x|. This stops
-    cleanly even where f' is tiny (e -> 1 near periapsis) and rounding noise in f would make a
-    plain step test wander.
+    ends that element's iteration, as does a step below KEPLER_STEP_TOL |x|. The callers
+    evaluate f without cancellation (series for x - sin x and sinh x - x), so this stops
+    cleanly even where f' is tiny (e -> 1 near periapsis).
     """
     x = np.array(x0, dtype=float)
     active = np.ones(x.shape, dtype=bool)
@@ -80,6 +81,26 @@ def _kepler_newton(f_and_fprime, x0, what: str):
         f"Kepler solver ({what}): {int(active.sum())} of {active.size} anomalies unconverged",
         KEPLER_MAX_ITERATIONS,
     )
+
+
+def _x_minus_sin_x(x):
+    """Return x - sin x without cancellation: Taylor series for |x| < 1 (terms to x^19)."""
+    x = np.asarray(x, dtype=float)
+    x2 = x * x
+    series = np.zeros_like(x)
+    for k in range(8, -1, -1):  # x^3 sum_k (-1)^k x^(2k) / (2k+3)!, in Horner form
+        series = (-1) ** k / math.factorial(2 * k + 3) + x2 * series
+    return np.where(np.abs(x) < 1.0, x * x2 * series, x - np.sin(x))
+
+
+def _sinh_x_minus_x(x):
+    """Return sinh x - x without cancellation: Taylor series for |x| < 1 (terms to x^19)."""
+    x = np.asarray(x, dtype=float)
+    x2 = x * x
+    series = np.zeros_like(x)
+    for k in range(8, -1, -1):  # x^3 sum_k x^(2k) / (2k+3)!, in Horner form
+        series = 1.0 / math.factorial(2 * k + 3) + x2 * series
+    return np.where(np.abs(x) < 1.0, x * x2 * series, np.sinh(x) - x)
 
 
 def mean_to_eccentric_anomaly(mean_anomaly_rad, e):
@@ -117,8 +138,13 @@ def mean_to_eccentric_anomaly(mean_anomaly_rad, e):
         [m_abs + e_b, np.cbrt(12.0 * m_abs), m_abs / (1.0 - e_b), np.full_like(m_abs, np.pi)]
     )
 
+    one_minus_e = 1.0 - e_b
+
     def f_and_fprime(big_e):
-        return big_e - e_b * np.sin(big_e) - m_abs, 1.0 - e_b * np.cos(big_e)
+        # E - e sin E = (1 - e) E + e (E - sin E) and 1 - e cos E = (1 - e) + 2 e sin^2(E/2):
+        # no cancellation for e -> 1 near periapsis.
+        f = one_minus_e * big_e + e_b * _x_minus_sin_x(big_e) - m_abs
+        return f, one_minus_e + 2.0 * e_b * np.sin(0.5 * big_e) ** 2
 
     big_e = _kepler_newton(f_and_fprime, start, "elliptic")
     return np.sign(m_red) * big_e + (m_all - m_red)
@@ -148,22 +174,29 @@ def mean_to_hyperbolic_anomaly(mean_anomaly_rad, e):
     large = m_abs >= 3.0
     start = np.where(large, np.minimum(start, np.arcsinh(2.0 * m_abs / e_b)), start)
 
+    e_minus_one = e_b - 1.0
+
     def f_and_fprime(big_h):
-        return e_b * np.sinh(big_h) - big_h - m_abs, e_b * np.cosh(big_h) - 1.0
+        # e sinh H - H = (e - 1) sinh H + (sinh H - H), e cosh H - 1 = (e - 1) + 2 e sinh^2(H/2).
+        f = e_minus_one * np.sinh(big_h) + _sinh_x_minus_x(big_h) - m_abs
+        return f, e_minus_one + 2.0 * e_b * np.sinh(0.5 * big_h) ** 2
 
     return np.sign(m_all) * _kepler_newton(f_and_fprime, start, "hyperbolic")
 
 
 def eccentric_to_mean_anomaly(eccentric_anomaly_rad, e):
-    """Return M = E - e sin E, rad (Kepler's equation)."""
+    """Return M = E - e sin E, rad (Kepler's equation), as (1 - e) E + e (E - sin E).
+
+    The second form does not cancel for e -> 1 near periapsis.
+    """
     big_e = np.asarray(eccentric_anomaly_rad, dtype=float)
-    return big_e - e * np.sin(big_e)
+    return (1.0 - e) * big_e + e * _x_minus_sin_x(big_e)
 
 
 def hyperbolic_to_mean_anomaly(hyperbolic_anomaly_rad, e):
-    """Return M = e sinh H - H, rad."""
+    """Return M = e sinh H - H, rad, as (e - 1) sinh H + (sinh H - H) (no cancellation)."""
     big_h = np.asarray(hyperbolic_anomaly_rad, dtype=float)
-    return e * np.sinh(big_h) - big_h
+    return (e - 1.0) * np.sinh(big_h) + _sinh_x_minus_x(big_h)
 
 
 def eccentric_to_true_anomaly(eccentric_anomaly_rad, e):
@@ -354,8 +387,9 @@ def cartesian_to_elements(state, mu_km3_s2: float = GM_EARTH_km3_s2):
     come from atan2 in the orbit plane instead of arccos plus a quadrant test, which keeps full
     precision near 0 and pi. With node unit vector n = (cos raan, sin raan, 0) (raan = 0 when
     equatorial) and m = h_hat x n: u = atan2(r.m, r.n), argp = atan2(e.m, e.n) (0 when
-    circular), nu = u - argp. Near e = 1 the mean anomaly loses about log10(1/|1-e|) digits
-    near periapsis (M = E - e sin E cancels); a universal-variable form would be needed there.
+    circular), nu = u - argp. Near e = 1, a (from the energy) and 1 - e carry relative errors
+    ~ eps / |1 - e| from cancellation, which the state round trip does not feel; an element set
+    without a (e.g. periapsis distance q) would be needed to hold them better.
     """
     x = np.asarray(state, dtype=float)
     r_vec, v_vec = x[..., :3], x[..., 3:]

@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from tapp.constants import WGS84_A_km, WGS84_F
+from tapp.constants import WGS84_F, WGS84_A_km
 
-#: Bowring iterations in :func:`ecef_to_geodetic`. Each one multiplies the latitude error by
-#: about e^4 sin^2(2 phi) h / a ~ 1e-5 or less, so three leave < 1e-15 rad for |h| < 1e5 km.
+#: Bowring iterations in :func:`ecef_to_geodetic`. Measured over 2e5 random points: one leaves
+#: 1e-13 rad of latitude error on the ground and 8e-9 rad at 1e5 km height; two reach the
+#: rounding level (3e-16 rad) everywhere; a third is a margin.
 BOWRING_ITERATIONS = 3
 
 

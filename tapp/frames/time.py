@@ -73,7 +73,9 @@ def calendar_to_jd(
     return float(jdn) - 0.5, (3600.0 * hour + 60.0 * minute + second) / SECONDS_PER_DAY
 
 
-def jd_to_calendar(jd_whole: float, jd_fraction: float = 0.0) -> tuple[int, int, int, int, int, float]:
+def jd_to_calendar(
+    jd_whole: float, jd_fraction: float = 0.0
+) -> tuple[int, int, int, int, int, float]:
     """Return the Gregorian UTC calendar date (year, month, day, hour, minute, second) of a JD.
 
     Parameters
@@ -96,9 +98,8 @@ def jd_to_calendar(jd_whole: float, jd_fraction: float = 0.0) -> tuple[int, int,
     # the time of day to integer nanoseconds so that 00:33:00 does not print as 00:32:59.999...
     whole = float(jd_whole) + 0.5
     day_number = np.floor(whole)
-    carry, nanoseconds = divmod(
-        round(((whole - day_number) + float(jd_fraction)) * NANOSECONDS_PER_DAY), NANOSECONDS_PER_DAY
-    )
+    day_fraction = (whole - day_number) + float(jd_fraction)
+    carry, nanoseconds = divmod(round(day_fraction * NANOSECONDS_PER_DAY), NANOSECONDS_PER_DAY)
     jdn = int(day_number) + carry
     f = jdn + 1401 + (((4 * jdn + 274277) // 146097) * 3) // 4 - 38
     e = 4 * f + 3

@@ -9,8 +9,9 @@ Observables (biases are added: observed = model + bias)
 
 - ``range``: km. Without light time the instantaneous distance |r - r_st|. With light time,
   the two-way (round trip) range c (tau_up + tau_down) / 2, or the one-way down-leg c tau_down.
-- ``range_rate``: km/s, the time derivative of the range above (so the two-way range-rate is
-  the average over the round trip, what a two-way Doppler count measures).
+- ``range_rate``: km/s, the time derivative of the range above (with light time, half the
+  rate of change of the round-trip light time: instantaneous two-way Doppler; a count-averaged
+  Doppler, a range difference over a count interval, is not modelled here).
 - ``azimuth``: rad in [0, 2 pi), from north towards east, and ``elevation``: rad in
   [-pi/2, pi/2], in the station's topocentric East-North-Up frame (geodetic normal "up").
   With light time they are taken along the down-leg, from the station at reception to the
@@ -26,15 +27,22 @@ ch. 8, with all times in one uniform time scale (no relativistic terms):
     c\\,\\tau_u = |\\mathbf r(t - \\tau_d) - \\mathbf r_{st}(t - \\tau_d - \\tau_u)|.
 
 The spacecraft state at the bounce time t - tau_d comes from a callback (an interpolating
-ephemeris) or, without one, from the second-order Taylor expansion about the receive-time
-state with the two-body acceleration a = -mu r / r^3:
-r(t - tau) ~ r - tau v + tau^2 a / 2, v(t - tau) ~ v - tau a (errors ~ tau^3 |da/dt| / 6 in
-position: < 1e-9 km for LEO to GEO). Station positions at every time are exact (rotation).
+ephemeris) or, without one, from the third-order Taylor expansion about the receive-time
+state with the two-body acceleration a = -mu r / r^3 and its rate j = da/dt:
+r(t - tau) ~ r - tau v + tau^2 a / 2 - tau^3 j / 6, v(t - tau) ~ v - tau a + tau^2 j / 2
+(truncation: tau^4 |d2a/dt2| / 24 < 1e-12 km and tau^3 |d2a/dt2| / 6 < 1e-12 km/s for
+tau < 0.15 s, LEO to GEO). Perturbing accelerations a_p are not in the expansion: they move
+the bounce state by tau^2 a_p / 2 and tau a_p (J2 in LEO: < 1e-8 km and < 1e-6 km/s); pass a
+callback where that matters. Station positions at every time are exact (rotation).
 
-Partials are analytic, of the instantaneous model (no light time). With light time on, the
-same expressions are returned: they differ from the exact light-time partials by O(v / c)
-~ 3e-5 relative, which only slows Gauss-Newton convergence and never biases the estimate
-(Montenbruck & Gill, Satellite Orbits, 2000, ch. 7, make the same approximation).
+Partials are analytic. Without light time they are exact. With light time they are those of
+the first-order light-time model: the instantaneous partials of each leg, taken at the solved
+geometry (spacecraft at the bounce, station at reception and, for the up-leg, at transmission)
+and weighted as in the observable, then chained through x(t - tau_d) ~ x(t) - tau_d [v, 0]
+(d/dv picks up -tau_d d/dr). They neglect the dependence of tau on the state, the terms
+(dh/dt)(d tau/dx) with d tau/dx ~ rho_hat / c: a relative O(v / c) ~ 3e-5 per block, at most
+|rho_dot| / c per km in range and |rho_ddot| / c (< 3e-7 1/s in LEO) per km in range-rate.
+That only slows Gauss-Newton convergence and does not bias an estimate.
 """
 
 from __future__ import annotations
@@ -54,6 +62,7 @@ from tapp.measurements.stations import (
     station_state_eci,
     station_state_partials,
 )
+from tapp.measurements.visibility import is_visible
 
 #: Light-time iterations stop when the change is below this fraction of tau (the contraction
 #: factor is v/c ~ 3e-5, so 3 to 4 iterations reach it).
@@ -243,7 +252,7 @@ class LightTime:
         False: down-leg only, range = c tau_d.
     state_at : callable or None
         ``state_at(t_s (N,)) -> (N, 6)`` spacecraft inertial states [km, km/s] at scenario
-        times, e.g. an interpolating ephemeris; None: second-order two-body Taylor expansion
+        times, e.g. an interpolating ephemeris; None: third-order two-body Taylor expansion
         about the receive-time state.
     mu_km3_s2 : float
         Gravitational parameter of the Taylor expansion, km^3/s^2.
@@ -261,9 +270,15 @@ class LightTime:
             return np.asarray(self.state_at(t - tau), dtype=float)
         x = np.asarray(state_eci, dtype=float)
         r, v = x[..., :3], x[..., 3:]
-        acc = -self.mu_km3_s2 * r / np.linalg.norm(r, axis=-1)[..., None] ** 3
+        r_norm = np.linalg.norm(r, axis=-1)[..., None]
+        # Two-body acceleration and jerk: a = -mu r / r^3, da/dt = -mu (v / r^3 - 3 (r.v) r / r^5).
+        acc = -self.mu_km3_s2 * r / r_norm**3
+        r_dot_v = np.sum(r * v, axis=-1)[..., None]
+        jerk = -self.mu_km3_s2 * (v / r_norm**3 - 3.0 * r_dot_v * r / r_norm**5)
         dt = -tau[..., None]
-        return np.concatenate([r + dt * (v + 0.5 * dt * acc), v + dt * acc], axis=-1)
+        position = r + dt * (v + dt * (0.5 * acc + dt * jerk / 6.0))
+        velocity = v + dt * (acc + 0.5 * dt * jerk)
+        return np.concatenate([position, velocity], axis=-1)
 
 
 @dataclass(frozen=True, slots=True)
@@ -401,13 +416,30 @@ def light_time_range_rate_km_s(solution: LightTimeSolution, two_way: bool = True
 
 
 @dataclass(frozen=True, slots=True)
+class _Geometry:
+    """Spacecraft at the bounce, tau_down, and the legs (weight, station state, theta)."""
+
+    spacecraft: np.ndarray
+    tau_down_s: np.ndarray
+    theta_rx: np.ndarray
+    solution: LightTimeSolution | None
+    legs: tuple[tuple[float, np.ndarray, np.ndarray], ...]
+
+    def enu(self, station: Station):
+        """Down-leg station-to-spacecraft vector in the station's ENU axes at reception, km."""
+        relative = self.spacecraft[..., :3] - self.legs[0][1][..., :3]
+        return np.einsum("...ij,...j->...i", station.enu_from_eci(self.theta_rx), relative)
+
+
+@dataclass(frozen=True, slots=True)
 class MeasurementModel:
     """Observables of kinds ``kinds`` of a spacecraft from one station, with their partials.
 
     The interface TAPP I and the orbit-determination code share: ``compute`` gives h(x) (N, m),
     ``state_partials`` H = dh/dx (N, m, 6), ``station_partials`` dh/d(location) (N, m, 3),
-    ``bias_partials`` dh/d(range bias, range-rate bias) (N, m, 2), and ``residual`` the
-    angle-wrapping observed - computed. Columns follow ``kinds``.
+    ``bias_partials`` dh/d(range bias, range-rate bias) (N, m, 2), ``residual`` the
+    angle-wrapping observed - computed, and ``visible`` the mask test (N,). Columns follow
+    ``kinds``; pass the visible samples, grouped by :func:`find_passes`, to the estimator.
 
     Attributes
     ----------
@@ -458,32 +490,43 @@ class MeasurementModel:
         """Return the station inertial state at t_s (N,), shape (N, 6)."""
         return station_state_eci(self.station.r_ecef_km, self._theta(t_s), self.omega_rad_s)
 
-    def _observables(self, t_s, state_eci, kinds):
-        """Return {kind: values (N,)} without biases, solving the light time once."""
+    def _geometry(self, t_s, state_eci) -> _Geometry:
         t = np.asarray(t_s, dtype=float)
         x = np.asarray(state_eci, dtype=float)
-        out = {}
+        theta_rx = self._theta(t)
         if self.light_time is None:
-            spacecraft, station_rx = x, self.station_eci(t)
+            station = self.station_eci(t)
+            return _Geometry(x, np.zeros(t.shape), theta_rx, None, ((1.0, station, theta_rx),))
+        sol = solve_light_time(
+            t, x, self.station.r_ecef_km, self.theta0_rad, self.light_time, self.omega_rad_s
+        )
+        legs = ((1.0, sol.station_receive_eci, theta_rx),)
+        if self.light_time.two_way:
+            theta_tx = self._theta(t - sol.tau_down_s - sol.tau_up_s)
+            legs = ((0.5, sol.station_receive_eci, theta_rx),
+                    (0.5, sol.station_transmit_eci, theta_tx))
+        return _Geometry(sol.spacecraft_eci, sol.tau_down_s, theta_rx, sol, legs)
+
+    def _observables(self, t_s, state_eci, kinds):
+        """Return {kind: values (N,)} without biases, solving the light time once."""
+        geo = self._geometry(t_s, state_eci)
+        out = {}
+        if geo.solution is None:
+            station = geo.legs[0][1]
             if Observable.RANGE in kinds:
-                out[Observable.RANGE] = range_km(x, station_rx)
+                out[Observable.RANGE] = range_km(geo.spacecraft, station)
             if Observable.RANGE_RATE in kinds:
-                out[Observable.RANGE_RATE] = range_rate_km_s(x, station_rx)
+                out[Observable.RANGE_RATE] = range_rate_km_s(geo.spacecraft, station)
         else:
-            sol = solve_light_time(
-                t, x, self.station.r_ecef_km, self.theta0_rad, self.light_time, self.omega_rad_s
-            )
-            spacecraft, station_rx = sol.spacecraft_eci, sol.station_receive_eci
+            two_way = self.light_time.two_way
             if Observable.RANGE in kinds:
-                out[Observable.RANGE] = light_time_range_km(sol, self.light_time.two_way)
+                out[Observable.RANGE] = light_time_range_km(geo.solution, two_way)
             if Observable.RANGE_RATE in kinds:
-                out[Observable.RANGE_RATE] = light_time_range_rate_km_s(
-                    sol, self.light_time.two_way
-                )
+                out[Observable.RANGE_RATE] = light_time_range_rate_km_s(geo.solution, two_way)
         if Observable.AZIMUTH in kinds or Observable.ELEVATION in kinds:
-            rot = self.station.enu_from_eci(self._theta(t))
-            enu = np.einsum("...ij,...j->...i", rot, spacecraft[..., :3] - station_rx[..., :3])
-            out[Observable.AZIMUTH], out[Observable.ELEVATION] = azimuth_elevation_rad(enu)
+            out[Observable.AZIMUTH], out[Observable.ELEVATION] = azimuth_elevation_rad(
+                geo.enu(self.station)
+            )
         return out
 
     def azimuth_elevation(self, t_s, state_eci):
@@ -502,45 +545,63 @@ class MeasurementModel:
             Spacecraft inertial states at t_s, [km, km/s].
         """
         obs = self._observables(t_s, state_eci, self.kinds)
-        bias = {Observable.RANGE: self.range_bias_km, Observable.RANGE_RATE: self.range_rate_bias_km_s}
+        bias = {
+            Observable.RANGE: self.range_bias_km,
+            Observable.RANGE_RATE: self.range_rate_bias_km_s,
+        }
         return np.stack([obs[k] + bias.get(k, 0.0) for k in self.kinds], axis=-1)
 
-    def state_partials(self, t_s, state_eci):
-        """Return H = d observables / d spacecraft state [r, v], shape (N, m, 6).
+    def _leg_partials(self, geo: _Geometry):
+        """Return per leg (theta (N,), weighted dh/d bounce state (N, m, 6)).
 
-        Analytic partials of the instantaneous model (module docstring on light time).
+        Range and range-rate rows carry the leg's weight; the angle rows are whole on the
+        down-leg (leg 0) and zero on the up-leg.
         """
-        t = np.asarray(t_s, dtype=float)
-        x = np.asarray(state_eci, dtype=float)
-        station = self.station_eci(t)
-        rows = []
         angles = None
-        for kind in self.kinds:
-            if kind is Observable.RANGE:
-                rows.append(range_partials(x, station))
-            elif kind is Observable.RANGE_RATE:
-                rows.append(range_rate_partials(x, station))
-            else:
-                if angles is None:
-                    rot = self.station.enu_from_eci(self._theta(t))
-                    enu = np.einsum("...ij,...j->...i", rot, x[..., :3] - station[..., :3])
-                    angles = azimuth_elevation_partials(enu, rot)
-                rows.append(angles[..., 0:1, :] if kind is Observable.AZIMUTH else angles[..., 1:2, :])
-        return np.concatenate(rows, axis=-2)
+        if Observable.AZIMUTH in self.kinds or Observable.ELEVATION in self.kinds:
+            rot = self.station.enu_from_eci(geo.theta_rx)
+            angles = azimuth_elevation_partials(geo.enu(self.station), rot)
+        out = []
+        for number, (weight, station, theta) in enumerate(geo.legs):
+            rows = np.zeros(geo.tau_down_s.shape + (len(self.kinds), 6))
+            for row, kind in enumerate(self.kinds):
+                if kind is Observable.RANGE:
+                    rows[..., row, :] = weight * range_partials(geo.spacecraft, station)[..., 0, :]
+                elif kind is Observable.RANGE_RATE:
+                    rows[..., row, :] = (
+                        weight * range_rate_partials(geo.spacecraft, station)[..., 0, :]
+                    )
+                elif number == 0:
+                    rows[..., row, :] = angles[..., 0 if kind is Observable.AZIMUTH else 1, :]
+            out.append((theta, rows))
+        return out
+
+    def state_partials(self, t_s, state_eci):
+        """Return H = d observables / d spacecraft state [r, v] at t_s, shape (N, m, 6).
+
+        Exact without light time; first-order light-time model otherwise (module docstring).
+        """
+        geo = self._geometry(t_s, state_eci)
+        h_bounce = sum(rows for _, rows in self._leg_partials(geo))
+        # x(t - tau) ~ x(t) - tau [v, 0]: d/dv = d/dv_B - tau d/dr_B.
+        h = h_bounce.copy()
+        h[..., 3:] -= geo.tau_down_s[..., None, None] * h_bounce[..., :3]
+        return h
 
     def station_partials(self, t_s, state_eci, parameters: StationParameters = "cylindrical"):
         """Return d observables / d station location, shape (N, m, 3).
 
         Columns named by ``STATION_PARAMETER_NAMES[parameters]``: (r_s km, lon rad, z km) or
-        Earth-fixed (x, y, z) km. Chain rule: dh/dp = (dh/d station state) (d station state/dp)
-        with dh/d station state = -dh/dx for every kind (angles: axes held fixed).
+        Earth-fixed (x, y, z) km. Chain rule per leg: dh/dp = (dh/d station state at the leg's
+        time) (d station state / dp at that time's rotation angle), with dh/d station state =
+        -dh/d spacecraft state for every kind (angles: axes held fixed).
         """
-        t = np.asarray(t_s, dtype=float)
-        d_station = -self.state_partials(t, state_eci)
-        d_state_d_p = station_state_partials(
-            self.station.r_ecef_km, self._theta(t), parameters, self.omega_rad_s
+        geo = self._geometry(t_s, state_eci)
+        r_ecef = self.station.r_ecef_km
+        return -sum(
+            rows @ station_state_partials(r_ecef, theta, parameters, self.omega_rad_s)
+            for theta, rows in self._leg_partials(geo)
         )
-        return d_station @ d_state_d_p
 
     def bias_partials(self, t_s):
         """Return d observables / d (range_bias_km, range_rate_bias_km_s), shape (N, m, 2)."""
@@ -558,5 +619,9 @@ class MeasurementModel:
         return residual(observed, computed, self.kinds)
 
     def elevation_rad(self, t_s, state_eci):
-        """Return the elevation, rad, shape (N,) (visibility uses this)."""
+        """Return the elevation, rad, shape (N,)."""
         return self.azimuth_elevation(t_s, state_eci)[1]
+
+    def visible(self, t_s, state_eci):
+        """Return True where the elevation is strictly above the station's mask, (N,) bool."""
+        return is_visible(self.elevation_rad(t_s, state_eci), self.station.elev_mask_rad)

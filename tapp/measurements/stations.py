@@ -32,6 +32,7 @@ from tapp.frames.geodesy import ecef_to_geodetic, enu_matrix, geodetic_to_ecef
 from tapp.frames.rotation import earth_rotation_angle_rad, eci_to_ecef_matrix, r3
 
 StationParameters = Literal["cylindrical", "ecef"]
+_PARAMETER_CHOICES = '"cylindrical" or "ecef"'
 #: Names and units of the location parameters, in the order of the partials' last axis.
 STATION_PARAMETER_NAMES = {
     "cylindrical": ("spin_radius_km", "lon_rad", "z_km"),
@@ -114,7 +115,7 @@ def station_state_partials(
         out[..., 3, :] = -omega_rad_s * rot[..., 1, :]
         out[..., 4, :] = omega_rad_s * rot[..., 0, :]
     else:
-        raise InputError("station_state_partials", "parameters", '"cylindrical" or "ecef"', parameters)
+        raise InputError("station_state_partials", "parameters", _PARAMETER_CHOICES, parameters)
     return out
 
 
@@ -172,7 +173,12 @@ class Station:
 
     @classmethod
     def from_cylindrical(
-        cls, name: str, spin_radius_km: float, lon_rad: float, z_km: float, elev_mask_rad=0.0
+        cls,
+        name: str,
+        spin_radius_km: float,
+        lon_rad: float,
+        z_km: float,
+        elev_mask_rad: float = 0.0,
     ) -> Station:
         """Build from (distance off the spin axis km, longitude rad, z km)."""
         r = [spin_radius_km * np.cos(lon_rad), spin_radius_km * np.sin(lon_rad), z_km]
@@ -194,7 +200,7 @@ class Station:
             return np.array([self.spin_radius_km, self.lon_rad, self.z_km])
         if parameters == "ecef":
             return self.r_ecef_km.copy()
-        raise InputError(f"station {self.name}", "parameters", '"cylindrical" or "ecef"', parameters)
+        raise InputError(f"station {self.name}", "parameters", _PARAMETER_CHOICES, parameters)
 
     @property
     def enu_from_ecef(self) -> np.ndarray:
