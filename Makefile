@@ -14,8 +14,8 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
-test: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow"
+test: $(STAMP) lint
+	$(BIN)/python -m pytest -q -m "not slow" --doctest-modules tapp search iter tests --ignore=tests/bench
 
 scenario: $(STAMP)
 	$(BIN)/python -m scenarios.run_all
