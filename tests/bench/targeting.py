@@ -34,6 +34,9 @@ def _problem() -> BPlaneSearch:
     return scenario_search(tomllib.loads(SCENARIO.read_text()), str(SCENARIO))
 
 
+NAME = "targeting"
+
+
 def run() -> str:
     """Return the Markdown section of the targeting benchmark."""
     problem = _problem()
