@@ -1,0 +1,34 @@
+"""ITER: run a body over nested loops of cases, serially or on Dask (seed section VI).
+
+A *loop* varies n named parameters over ``sets`` cases, either from a full table (type 1) or
+from a first row plus increments (type 2); loops nest to any depth, inner loops restarting
+for every outer case. The *body* is a Python callable (``"module:function"``) or a command-line
+program; each case gives one row of a results table (varied values, outputs, status, error),
+written to HDF5 and CSV. See :mod:`iter.sweepfile` for the sweep-file format.
+
+This package knows nothing of ``tapp`` and never imports it. Inside it, use relative imports:
+``import iter`` would shadow the builtin ``iter()``; from outside, ``from iter import ...`` or
+``import iter as sweeps``.
+
+>>> from iter import Loop, generate_cases
+>>> azimuths = Loop(type=2, names=("azimuth_deg",), sets=5, vary=(96.0,), delta=(3.0,))
+>>> [case.values[0] for case in generate_cases([azimuths])]
+[96.0, 99.0, 102.0, 105.0, 108.0]
+"""
+
+from .body import CallableBody, ProgramBody, resolve_callable, run_case
+from .errors import IterError, ResultFileError, SchedulerError, SweepInputError
+from .execute import Execution, SweepResult, SweepSummary, probe_scheduler, run_sweep
+from .loops import Case, Loop, case_count, generate_cases
+from .results import read_hdf5, write_csv, write_hdf5
+from .sweep import Sweep
+from .sweepfile import load_sweep, parse_sweep
+from .table import CaseResult, CaseStatus, ResultTable
+
+__all__ = [
+    "CallableBody", "Case", "CaseResult", "CaseStatus", "Execution", "IterError", "Loop",
+    "ProgramBody", "ResultFileError", "ResultTable", "SchedulerError", "Sweep",
+    "SweepInputError", "SweepResult", "SweepSummary", "case_count", "generate_cases",
+    "load_sweep", "parse_sweep", "probe_scheduler", "read_hdf5", "resolve_callable",
+    "run_case", "run_sweep", "write_csv", "write_hdf5",
+]

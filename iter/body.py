@@ -1,0 +1,277 @@
+"""Bodies: what ITER runs for each case (the seed's "program iterated over").
+
+Two kinds, both picklable so Dask can ship them to workers:
+
+* :class:`CallableBody`: a Python function named ``"module:function"``, called with the
+  varied values and the constants as keyword arguments; it returns a mapping of named
+  outputs.
+* :class:`ProgramBody`: a command-line program (a ``tapp`` subcommand or any executable),
+  run once per case with each constant and varied value passed as ``--name value``, and
+  ``--json`` appended (unless turned off); its stdout must be one JSON object, which is taken
+  as the outputs.
+
+Outputs are flattened into named scalars: a nested mapping ``{"b": {"t_km": 1.0}}`` gives
+``b.t_km``, a list ``{"r_km": [1, 2, 3]}`` gives ``r_km[0]``, ``r_km[1]``, ``r_km[2]``. Numbers
+become floats, ``null`` becomes NaN, text stays text; anything else fails the case.
+
+:func:`run_case` turns whatever the body does into a :class:`~iter.table.CaseResult`: a body
+that raises, a program that exits non-zero or times out, or outputs that are not named scalars
+give a FAILED row carrying the message, and the sweep goes on.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import IterError, SweepInputError
+from .loops import Case
+from .table import RESERVED_COLUMNS, CaseResult, CaseStatus, OutputValue
+
+#: Characters of a failing program's stderr kept in the error message (its tail).
+STDERR_TAIL_CHARS = 400
+
+
+class CaseFailure(IterError):
+    """A body ran but its case failed: non-zero exit, timeout, or unusable outputs."""
+
+
+def resolve_callable(target: str, source: str = "body") -> Callable[..., object]:
+    """Return the function named by ``"module:function"`` (``function`` may be dotted).
+
+    Raises
+    ------
+    SweepInputError
+        Field ``body.callable``: not of the form ``module:function``, the module cannot be
+        imported, or it has no such callable attribute.
+    """
+    module_name, sep, attr_path = target.partition(":")
+    if not sep or not module_name or not attr_path:
+        raise SweepInputError(source, "body.callable", '"module:function"', target)
+    try:
+        obj: object = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise SweepInputError(source, "body.callable",
+                              f"an importable module ({exc})", target) from None
+    for part in attr_path.split("."):
+        if not hasattr(obj, part):
+            raise SweepInputError(source, "body.callable",
+                                  f"a function {attr_path!r} in module {module_name!r}",
+                                  target)
+        obj = getattr(obj, part)
+    if not callable(obj):
+        raise SweepInputError(source, "body.callable", "a callable",
+                              f"{target} is a {type(obj).__name__}")
+    return obj
+
+
+@functools.lru_cache(maxsize=16)
+def _cached_callable(target: str) -> Callable[..., object]:
+    return resolve_callable(target)
+
+
+def find_executable(name: str) -> str | None:
+    """Return the path of program ``name``, or None when it cannot be found.
+
+    A name with a directory part is taken as it is. A bare name is looked up on ``PATH``,
+    then next to the running Python interpreter, so ``tapp`` is found in an unactivated
+    virtual environment.
+    """
+    if os.sep in name or (os.altsep is not None and os.altsep in name):
+        return name if os.access(name, os.X_OK) else None
+    return shutil.which(name) or shutil.which(name, path=str(Path(sys.executable).parent))
+
+
+def flatten_outputs(raw: object) -> dict[str, OutputValue]:
+    """Return the body's outputs as named scalars (floats or text).
+
+    Raises
+    ------
+    CaseFailure
+        ``raw`` is not a mapping with string keys, a name contains ``/``, or a value is
+        not a number, bool, null, text, list or mapping.
+    """
+    if not isinstance(raw, Mapping):
+        raise CaseFailure(f"outputs must be a mapping of name to value, got "
+                          f"{type(raw).__name__}")
+    flat: dict[str, OutputValue] = {}
+    _flatten_into(flat, "", raw)
+    return flat
+
+
+def _flatten_into(flat: dict[str, OutputValue], name: str, value: object) -> None:
+    if isinstance(value, np.ndarray | np.generic):
+        value = value.tolist()
+    if isinstance(value, Mapping):
+        for key, item in value.items():
+            if not isinstance(key, str) or not key or "/" in key:
+                raise CaseFailure(f"output name {key!r} under {name or 'the outputs'!r}: "
+                                  "expected a non-empty string without '/'")
+            _flatten_into(flat, f"{name}.{key}" if name else key, item)
+    elif isinstance(value, list | tuple):
+        for j, item in enumerate(value):
+            _flatten_into(flat, f"{name}[{j}]", item)
+    elif isinstance(value, bool | int | float):
+        flat[name] = float(value)
+    elif value is None:
+        flat[name] = math.nan
+    elif isinstance(value, str):
+        flat[name] = value
+    else:
+        raise CaseFailure(f"output {name!r} is a {type(value).__name__}; expected a number, "
+                          "text, null, or a list or mapping of those")
+
+
+@dataclass(frozen=True, slots=True)
+class CallableBody:
+    """A Python function run in-process for each case.
+
+    Parameters
+    ----------
+    target : str
+        ``"module:function"``; the module must be importable where the case runs (on every
+        Dask worker).
+    constants : mapping of str to object
+        Keyword arguments passed unchanged to every case.
+    """
+
+    target: str
+    constants: Mapping[str, object] = field(default_factory=dict)
+
+    def check(self, source: str) -> None:
+        """Raise SweepInputError (field ``body.callable``) unless the target resolves."""
+        resolve_callable(self.target, source)
+
+    def definition(self) -> dict[str, object]:
+        """Return the body as the ``[body]`` table of a sweep file."""
+        return {"callable": self.target, "constants": dict(self.constants)}
+
+    def __call__(self, case: Case) -> object:
+        """Run the function for ``case``; return what it returns (outputs, unchecked)."""
+        function = _cached_callable(self.target)
+        return function(**self.constants, **case.kwargs())
+
+
+@dataclass(frozen=True, slots=True)
+class ProgramBody:
+    """A command-line program run once per case; its ``--json`` stdout is the outputs.
+
+    Parameters
+    ----------
+    argv : tuple of str
+        The program and its fixed arguments, e.g. ``("tapp", "propagate")`` or
+        ``("python", "body.py")``. The program is run in the current working directory.
+    constants : mapping of str to str, int, float or bool
+        Passed to every case as ``--name value``; ``true`` as a bare ``--name`` flag, and
+        ``false`` not at all.
+    json_option : bool
+        Append ``--json`` to the command line (the ``json`` key of the sweep file).
+    dashes : bool
+        Spell options with dashes, ``--azimuth-deg`` for ``azimuth_deg``, as typer/click
+        programs (``tapp``) expect.
+    timeout_s : float or None
+        Wall-time limit per case, s; None for no limit.
+    """
+
+    argv: tuple[str, ...]
+    constants: Mapping[str, object] = field(default_factory=dict)
+    json_option: bool = True
+    dashes: bool = False
+    timeout_s: float | None = None
+
+    def check(self, source: str) -> None:
+        """Raise SweepInputError (field ``body.program``) unless the program is found."""
+        if find_executable(self.argv[0]) is None:
+            raise SweepInputError(source, "body.program",
+                                  "a program on PATH, next to the Python interpreter, or a "
+                                  "path to an executable", self.argv[0])
+
+    def definition(self) -> dict[str, object]:
+        """Return the body as the ``[body]`` table of a sweep file."""
+        table: dict[str, object] = {"program": list(self.argv), "json": self.json_option,
+                                    "dashes": self.dashes, "constants": dict(self.constants)}
+        if self.timeout_s is not None:
+            table["timeout_s"] = self.timeout_s
+        return table
+
+    def command(self, case: Case) -> list[str]:
+        """Return the command line for ``case``."""
+        executable = find_executable(self.argv[0]) or self.argv[0]
+        args = [executable, *self.argv[1:]]
+        for name, value in (*self.constants.items(), *case.kwargs().items()):
+            option = "--" + (name.replace("_", "-") if self.dashes else name)
+            if value is True:
+                args.append(option)
+            elif value is not False:
+                args += [option, repr(value) if isinstance(value, float) else str(value)]
+        if self.json_option:
+            args.append("--json")
+        return args
+
+    def __call__(self, case: Case) -> Mapping[str, object]:
+        """Run the program for ``case``; return its stdout parsed as one JSON object.
+
+        Raises
+        ------
+        CaseFailure
+            Non-zero exit (with the tail of stderr), timeout, or stdout not one JSON object.
+        """
+        try:
+            proc = subprocess.run(self.command(case), capture_output=True, text=True,
+                                  stdin=subprocess.DEVNULL, timeout=self.timeout_s,
+                                  check=False)
+        except subprocess.TimeoutExpired:
+            raise CaseFailure(f"{self.argv[0]} timed out after {self.timeout_s:g} s") from None
+        if proc.returncode != 0:
+            tail = proc.stderr.strip()[-STDERR_TAIL_CHARS:] or "(no stderr)"
+            raise CaseFailure(f"{self.argv[0]} exited with status {proc.returncode}: {tail}")
+        try:
+            outputs = json.loads(proc.stdout)
+        except json.JSONDecodeError as exc:
+            raise CaseFailure(f"{self.argv[0]} stdout is not one JSON object: {exc} "
+                              f"(stdout starts {proc.stdout[:80]!r})") from None
+        if not isinstance(outputs, dict):
+            raise CaseFailure(f"{self.argv[0]} printed JSON {type(outputs).__name__}, "
+                              "expected one object")
+        return outputs
+
+
+Body = CallableBody | ProgramBody
+
+
+def run_case(body: Body, case: Case) -> CaseResult:
+    """Run ``body`` for ``case`` and return its row; a failure becomes a FAILED row.
+
+    Any exception from the body is caught here on purpose: a failing case is data (recorded
+    with ``"ExceptionType: message"``), and the other cases must still run.
+    """
+    start_s = time.perf_counter()
+    try:
+        outputs = flatten_outputs(body(case))
+        clash = sorted(set(outputs) & {*case.names, *RESERVED_COLUMNS})
+        if clash:
+            raise CaseFailure(f"output names {clash} clash with varied names or the "
+                              f"columns {list(RESERVED_COLUMNS)}")
+    except Exception as exc:  # noqa: BLE001 - recorded in the row; see docstring
+        return CaseResult(index=case.index, values=case.values, outputs={},
+                          status=CaseStatus.FAILED, error=f"{type(exc).__name__}: {exc}",
+                          elapsed_s=time.perf_counter() - start_s)
+    return CaseResult(index=case.index, values=case.values, outputs=outputs,
+                      status=CaseStatus.OK, elapsed_s=time.perf_counter() - start_s)
+
+
+def run_chunk(body: Body, cases: Sequence[Case]) -> list[CaseResult]:
+    """Run ``body`` for each case of a chunk in turn (the unit of work sent to a worker)."""
+    return [run_case(body, case) for case in cases]

@@ -1,0 +1,71 @@
+"""The typed failures of ``iter``; every message names where the problem is and the numbers.
+
+``iter`` knows nothing of ``tapp`` (an import-linter contract forbids it), so it has its own
+small hierarchy. The ``tapp iter`` command maps :class:`SweepInputError` onto
+``tapp.errors.InputError`` field for field, and the others onto ``tapp.errors.TappError``.
+
+A failing *case* (the body raises, or the program exits non-zero) is not an exception at this
+level: it is recorded in the results table with its message, and the sweep goes on.
+"""
+
+from __future__ import annotations
+
+
+class IterError(Exception):
+    """Base class of every error ``iter`` raises on purpose."""
+
+
+class SweepInputError(IterError, ValueError):
+    """Bad sweep input: names the source, the field, what was expected and what was given.
+
+    Parameters
+    ----------
+    source : str
+        Where the input came from: a sweep file path, a results file path, or ``"options"``
+        for execution settings.
+    field : str
+        The offending field, e.g. ``"loop[1].vary"`` or ``"body.callable"``.
+    expected : str
+        What a valid value looks like.
+    got : object, optional
+        The value given; omitted from the message when None.
+    """
+
+    def __init__(self, source: str, field: str, expected: str, got: object = None):
+        self.source = source
+        self.field = field
+        self.expected = expected
+        self.got = got
+        detail = "" if got is None else f" (got {got!r})"
+        super().__init__(f"{source}: {field}: expected {expected}{detail}")
+
+
+class SchedulerError(IterError):
+    """No Dask scheduler answered at an address within the connect timeout.
+
+    Parameters
+    ----------
+    address : str
+        The scheduler address tried, ``tcp://HOST:PORT``.
+    timeout_s : float
+        The connect timeout that expired or was in force, in seconds.
+    reason : str
+        What went wrong (timed out, refused, not a Dask scheduler, ...).
+    """
+
+    def __init__(self, address: str, timeout_s: float, reason: str):
+        self.address = address
+        self.timeout_s = timeout_s
+        self.reason = reason
+        super().__init__(
+            f"no Dask scheduler at {address} within {timeout_s:g} s: {reason}"
+        )
+
+
+class ResultFileError(IterError):
+    """A results file cannot be read or written; names the file and the reason."""
+
+    def __init__(self, path: str, reason: str):
+        self.path = path
+        self.reason = reason
+        super().__init__(f"{path}: {reason}")

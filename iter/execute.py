@@ -1,0 +1,441 @@
+"""Run a sweep: serially, on a local Dask cluster, or on a running Dask cluster.
+
+Cases are grouped into chunks (one Dask task per chunk) so the scheduling cost is paid per
+chunk, not per case. Chunks complete in any order; the table is always sorted by case index.
+A case whose body fails is recorded as FAILED with its message and the sweep goes on; a chunk
+lost on Dask (a worker died) records each of its cases as FAILED the same way.
+
+With an output file the sweep is resumable: completed rows are written to the HDF5 file as
+chunks finish (at most every ``checkpoint_interval_s``, and at the end, also on an error or
+Ctrl-C), each time atomically. Running the same sweep again with the same file skips every
+case already OK and runs the rest (cases that failed are tried again).
+
+Workers, local or remote, must be able to import ``iter`` and the body's module.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import os
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import TYPE_CHECKING, Protocol
+from urllib.parse import urlsplit
+
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+
+from .body import Body, run_chunk
+from .errors import SchedulerError, SweepInputError
+from .loops import Case
+from .results import read_hdf5, write_csv, write_hdf5
+from .sweep import Sweep
+from .table import CaseResult, CaseStatus, ResultTable
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+#: Default connect timeout for a scheduler address, s.
+CONNECT_TIMEOUT_S = 5.0
+#: Extra time the whole scheduler probe gets beyond the connect timeout, s, so that a failed
+#: connect reports its own reason rather than racing the overall deadline.
+PROBE_MARGIN_S = 0.5
+#: Chunks per worker slot when the chunk size is chosen automatically (load balance).
+CHUNKS_PER_SLOT = 4
+#: Largest automatic chunk, cases (keeps progress and checkpoints moving).
+MAX_CHUNK_CASES = 256
+#: Source named in errors about execution settings.
+OPTIONS_SOURCE = "options"
+#: Address schemes accepted for ``scheduler``.
+SCHEDULER_SCHEMES = ("tcp", "tls")
+
+
+def available_cores() -> int:
+    """Return the number of CPU cores this process may use."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+@dataclass(frozen=True, slots=True)
+class Execution:
+    """Where and how the cases run.
+
+    Parameters
+    ----------
+    serial : bool
+        Run every case in this process, no Dask (debugging, tests).
+    scheduler : str or None
+        ``tcp://HOST:PORT`` of a running dask.distributed scheduler; None starts a local
+        cluster.
+    workers : int or None
+        Worker processes of the local cluster (one thread each); None for one per core.
+    chunk_size : int or None
+        Cases per Dask task; None chooses about :data:`CHUNKS_PER_SLOT` chunks per worker
+        (serial runs use 1, which only sets the checkpoint granularity).
+    connect_timeout_s : float
+        How long to wait for a scheduler to answer, s.
+    checkpoint_interval_s : float
+        Least time between two rewrites of the results file, s; 0 writes after every chunk.
+
+    Raises
+    ------
+    SweepInputError
+        Conflicting or out-of-range settings (source ``"options"``).
+    """
+
+    serial: bool = False
+    scheduler: str | None = None
+    workers: int | None = None
+    chunk_size: int | None = None
+    connect_timeout_s: float = CONNECT_TIMEOUT_S
+    checkpoint_interval_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.serial and (self.scheduler is not None or self.workers is not None):
+            raise SweepInputError(OPTIONS_SOURCE, "serial",
+                                  "no scheduler or workers with a serial run",
+                                  {"scheduler": self.scheduler, "workers": self.workers})
+        if self.scheduler is not None and self.workers is not None:
+            raise SweepInputError(OPTIONS_SOURCE, "workers",
+                                  "no worker count with a scheduler address (the running "
+                                  "cluster has its own workers)", self.workers)
+        for name in ("workers", "chunk_size"):
+            value = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, int)
+                                      or value < 1):
+                raise SweepInputError(OPTIONS_SOURCE, name, "a whole number >= 1", value)
+        if self.scheduler is not None:
+            parts = urlsplit(self.scheduler)
+            if (parts.scheme not in SCHEDULER_SCHEMES or not parts.hostname
+                    or _port(self.scheduler) is None):
+                raise SweepInputError(OPTIONS_SOURCE, "scheduler",
+                                      "an address tcp://HOST:PORT", self.scheduler)
+        if not self.connect_timeout_s > 0:
+            raise SweepInputError(OPTIONS_SOURCE, "connect_timeout_s", "a positive time, s",
+                                  self.connect_timeout_s)
+        if not self.checkpoint_interval_s >= 0:
+            raise SweepInputError(OPTIONS_SOURCE, "checkpoint_interval_s",
+                                  "a time >= 0, s", self.checkpoint_interval_s)
+
+
+def _port(address: str) -> int | None:
+    try:
+        return urlsplit(address).port
+    except ValueError:
+        return None
+
+
+class Executor(Protocol):
+    """Runs chunks of cases and yields each chunk's rows as the chunk completes."""
+
+    description: str
+    slots: int
+
+    def run(self, body: Body, chunks: Sequence[Sequence[Case]]) -> Iterator[list[CaseResult]]:
+        """Yield the rows of each chunk, in completion order."""
+        ...
+
+
+class SerialExecutor:
+    """Runs every chunk in this process, in order."""
+
+    description = "serial"
+    slots = 1
+
+    def run(self, body: Body, chunks: Sequence[Sequence[Case]]) -> Iterator[list[CaseResult]]:
+        """Yield the rows of each chunk, in order."""
+        for chunk in chunks:
+            yield run_chunk(body, chunk)
+
+
+class DaskExecutor:
+    """Runs one Dask task per chunk on a dask.distributed client.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        Connected to a cluster with at least one worker.
+    description : str
+        How the cluster is described in the summary.
+    """
+
+    def __init__(self, client: Client, description: str):
+        self.client = client
+        self.description = description
+        self.slots = max(1, sum(client.nthreads().values()))
+
+    def run(self, body: Body, chunks: Sequence[Sequence[Case]]) -> Iterator[list[CaseResult]]:
+        """Submit every chunk; yield each chunk's rows as it completes."""
+        from distributed import as_completed
+
+        pending = {self.client.submit(run_chunk, body, chunk, pure=False): chunk
+                   for chunk in chunks}
+        try:
+            for future in as_completed(list(pending), loop=self.client.loop):
+                chunk = pending.pop(future)
+                if future.status == "finished":
+                    yield future.result()
+                else:
+                    reason = future.status
+                    if future.status == "error":
+                        exc = future.exception()
+                        reason = f"{type(exc).__name__}: {exc}"
+                    yield [_lost(case, reason) for case in chunk]
+                future.release()
+        finally:
+            if pending:
+                self.client.cancel(list(pending))
+
+
+def _lost(case: Case, reason: str) -> CaseResult:
+    return CaseResult(index=case.index, values=case.values, outputs={},
+                      status=CaseStatus.FAILED, error=f"chunk lost on Dask: {reason}")
+
+
+def probe_scheduler(address: str, timeout_s: float) -> Mapping[str, object]:
+    """Return the identity of the Dask scheduler at ``address``, within ``timeout_s``.
+
+    The whole exchange (connect, handshake, one ``identity`` request) is bounded by
+    ``timeout_s`` + :data:`PROBE_MARGIN_S`: a plain ``Client(address, timeout=...)`` bounds
+    only the connect, and hangs when something else (say, a web server) accepts the
+    connection and never answers.
+
+    Raises
+    ------
+    SchedulerError
+        Nothing answered in time, the connection was refused, or what answered is not a
+        Dask scheduler.
+    """
+    from distributed.comm import connect
+
+    async def identity() -> object:
+        comm = await connect(address, timeout=timeout_s)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        reply = asyncio.run(asyncio.wait_for(identity(), timeout_s + PROBE_MARGIN_S))
+    except TimeoutError:
+        raise SchedulerError(address, timeout_s, "timed out") from None
+    except OSError as exc:
+        raise SchedulerError(address, timeout_s, str(exc) or type(exc).__name__) from None
+    except (MemoryError, ValueError) as exc:
+        # What answered is not speaking Dask's protocol: its bytes read as an absurd frame
+        # length (MemoryError) or as malformed msgpack (ValueError).
+        raise SchedulerError(address, timeout_s,
+                             f"not a Dask scheduler ({type(exc).__name__})") from None
+    if not isinstance(reply, Mapping) or reply.get("type") != "Scheduler":
+        raise SchedulerError(address, timeout_s, f"not a Dask scheduler (answered {reply!r})")
+    return reply
+
+
+@contextmanager
+def local_cluster(workers: int | None = None) -> Iterator[str]:
+    """Start a dask.distributed LocalCluster; yield its scheduler address; stop it on exit.
+
+    One process per worker (``workers``, default one per core), one thread each, no
+    dashboard. Scripts that call this must guard their entry point with
+    ``if __name__ == "__main__":`` (workers are spawned).
+    """
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=workers or available_cores(), threads_per_worker=1,
+                      processes=True, dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster:
+        yield cluster.scheduler_address
+
+
+@contextmanager
+def open_executor(execution: Execution) -> Iterator[Executor]:
+    """Yield the executor ``execution`` asks for; shut down what was started on exit.
+
+    Raises
+    ------
+    SchedulerError
+        The scheduler address does not answer, or its cluster has no worker, within
+        ``execution.connect_timeout_s``.
+    """
+    if execution.serial:
+        yield SerialExecutor()
+        return
+    from distributed import Client
+
+    if execution.scheduler is None:
+        n_workers = execution.workers or available_cores()
+        with (local_cluster(n_workers) as address,
+              Client(address, set_as_default=False) as client):
+            yield DaskExecutor(client, f"local cluster ({n_workers} workers)")
+        return
+    address, timeout_s = execution.scheduler, execution.connect_timeout_s
+    probe_scheduler(address, timeout_s)
+    try:
+        client = Client(address, timeout=timeout_s, set_as_default=False)
+    except OSError as exc:
+        raise SchedulerError(address, timeout_s, str(exc)) from None
+    with client:
+        try:
+            client.wait_for_workers(1, timeout=timeout_s)
+        except TimeoutError:
+            raise SchedulerError(address, timeout_s, "the cluster has no worker") from None
+        yield DaskExecutor(client, f"scheduler {address} ({len(client.nthreads())} workers)")
+
+
+def chunk_cases(cases: Sequence[Case], chunk_size: int) -> list[tuple[Case, ...]]:
+    """Return ``cases`` split into consecutive chunks of at most ``chunk_size``."""
+    return [tuple(cases[k:k + chunk_size]) for k in range(0, len(cases), chunk_size)]
+
+
+def default_chunk_size(n_cases: int, slots: int) -> int:
+    """Return about :data:`CHUNKS_PER_SLOT` chunks per slot, 1 to :data:`MAX_CHUNK_CASES`."""
+    return max(1, min(MAX_CHUNK_CASES, math.ceil(n_cases / (CHUNKS_PER_SLOT * slots))))
+
+
+@dataclass(frozen=True, slots=True)
+class SweepSummary:
+    """Counts and timing of one run of a sweep.
+
+    Parameters
+    ----------
+    n_cases : int
+        Cases in the sweep.
+    n_succeeded, n_failed : int
+        Cases OK and FAILED in the table after this run (resumed cases included).
+    n_resumed : int
+        Cases found OK in the results file and not run again.
+    wall_s : float
+        Wall time of this run, s.
+    mode : str
+        Where the cases ran (``serial``, ``local cluster (2 workers)``, ...).
+    output_h5, output_csv : str or None
+        The files written.
+    """
+
+    n_cases: int
+    n_succeeded: int
+    n_failed: int
+    n_resumed: int
+    wall_s: float
+    mode: str
+    output_h5: str | None
+    output_csv: str | None
+
+
+@dataclass(frozen=True, slots=True)
+class SweepResult:
+    """The results table and the summary of a run."""
+
+    table: ResultTable
+    summary: SweepSummary
+
+
+def _utc_now() -> str:
+    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _resume(sweep: Sweep, output_h5: Path) -> tuple[dict[int, CaseResult], str]:
+    """Return the OK rows already in ``output_h5`` and its creation time."""
+    if not output_h5.exists():
+        return {}, _utc_now()
+    stored = read_hdf5(output_h5)
+    if stored.definition_json != sweep.definition_json():
+        raise SweepInputError(str(output_h5), "definition_json",
+                              f"results of the same sweep as {sweep.source} to resume (the "
+                              "loops or the body differ: remove the file or choose another "
+                              "output)")
+    done = {row.index: row for row in stored.table.rows if row.status is CaseStatus.OK}
+    return done, stored.created_utc
+
+
+def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
+              output_csv: str | Path | None = None, execution: Execution | None = None,
+              progress: bool = False) -> SweepResult:
+    """Run every case of ``sweep`` not already done; return the table, sorted by case index.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        Loops and body.
+    output_h5 : str or Path or None
+        HDF5 results file; written as cases complete and resumed from if it exists.
+    output_csv : str or Path or None
+        CSV copy of the table, written at the end.
+    execution : Execution or None
+        Where to run; None for a local Dask cluster with one worker per core.
+    progress : bool
+        Show a rich progress bar on stderr.
+
+    Returns
+    -------
+    SweepResult
+        The table (every case, resumed ones included) and the summary.
+
+    Raises
+    ------
+    SweepInputError
+        ``output_h5`` holds results of a different sweep.
+    SchedulerError
+        The scheduler address does not answer within the connect timeout.
+    ResultFileError
+        A results file cannot be read or written.
+    """
+    execution = Execution() if execution is None else execution
+    start_s = time.perf_counter()
+    h5_path = None if output_h5 is None else Path(output_h5)
+    results, created_utc = ({}, _utc_now()) if h5_path is None else _resume(sweep, h5_path)
+    n_resumed = len(results)
+    pending = [case for case in sweep.cases() if case.index not in results]
+
+    def checkpoint() -> None:
+        if h5_path is not None:
+            write_hdf5(h5_path, ResultTable.from_results(sweep.names, results),
+                       sweep_json=sweep.contents_json(),
+                       definition_json=sweep.definition_json(), source=sweep.source,
+                       n_cases=sweep.n_cases, created_utc=created_utc,
+                       updated_utc=_utc_now())
+
+    bar = Progress(TextColumn("[bold]iter"), BarColumn(), MofNCompleteColumn(),
+                   TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(),
+                   TimeRemainingColumn(), console=Console(stderr=True), disable=not progress)
+    with open_executor(execution) as executor, bar:
+        chunk_size = execution.chunk_size or (
+            1 if execution.serial else default_chunk_size(len(pending), executor.slots))
+        task = bar.add_task("iter", total=sweep.n_cases, completed=n_resumed, failed=0)
+        n_failed_now = 0
+        checkpoint()  # fails fast on an unwritable output, before any case runs
+        last_checkpoint_s = time.perf_counter()
+        try:
+            for rows in executor.run(sweep.body, chunk_cases(pending, chunk_size)):
+                results.update((row.index, row) for row in rows)
+                n_failed_now += sum(row.status is CaseStatus.FAILED for row in rows)
+                bar.update(task, advance=len(rows), failed=n_failed_now)
+                if time.perf_counter() - last_checkpoint_s >= execution.checkpoint_interval_s:
+                    checkpoint()
+                    last_checkpoint_s = time.perf_counter()
+        finally:
+            checkpoint()
+    table = ResultTable.from_results(sweep.names, results)
+    if output_csv is not None:
+        write_csv(output_csv, table)
+    summary = SweepSummary(n_cases=sweep.n_cases, n_succeeded=table.n_succeeded,
+                           n_failed=table.n_failed, n_resumed=n_resumed,
+                           wall_s=time.perf_counter() - start_s, mode=executor.description,
+                           output_h5=None if h5_path is None else str(h5_path),
+                           output_csv=None if output_csv is None else str(output_csv))
+    return SweepResult(table=table, summary=summary)

@@ -1,0 +1,131 @@
+"""``tapp iter``: run an ITER sweep file, locally on Dask, on a cluster, or serially.
+
+The engine is the ``iter`` package; this module only turns options into an
+:class:`iter.Execution`, maps ``iter``'s errors onto tapp's (so bad input is one line on
+stderr and exit code 2) and prints the summary.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from iter import (
+    Execution,
+    IterError,
+    SchedulerError,
+    SweepInputError,
+    SweepResult,
+    load_sweep,
+    run_sweep,
+)
+from iter.table import CaseStatus
+from tapp.cli.common import app, print_json, run_guarded
+from tapp.errors import InputError, TappError
+
+#: Failed cases listed under the summary table (the rest are in the results file).
+MAX_FAILURES_SHOWN = 10
+
+
+@app.command("iter")
+def iter_command(
+    sweep_file: Annotated[Path, typer.Argument(help="Sweep file (TOML): [body] and [[loop]]s.")],
+    output: Annotated[
+        Path | None,
+        typer.Option("--output", "-o",
+                     help="HDF5 results file, resumed if it exists [default: SWEEP.h5 in the "
+                          "current directory]."),
+    ] = None,
+    csv: Annotated[Path | None, typer.Option("--csv", help="Also write the table as CSV.")]
+    = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option("--scheduler", help="Address tcp://HOST:PORT of a running Dask "
+                                         "scheduler [default: start a local cluster]."),
+    ] = None,
+    workers: Annotated[
+        int | None,
+        typer.Option("--workers", help="Local-cluster worker processes [default: one per "
+                                       "core]."),
+    ] = None,
+    serial: Annotated[bool, typer.Option("--serial", help="Run in this process, no Dask.")]
+    = False,
+    chunk_size: Annotated[
+        int | None, typer.Option("--chunk-size", help="Cases per Dask task [default: auto].")
+    ] = None,
+    connect_timeout_s: Annotated[
+        float, typer.Option("--connect-timeout-s", help="Wait for the scheduler, s.")
+    ] = 5.0,
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the summary as one JSON object.")
+    ] = False,
+) -> None:
+    """Run every case of SWEEP_FILE (seed section VI, ITER) and write the results table.
+
+    Failing cases are recorded with their message and do not stop the sweep. Running again
+    with the same results file resumes: cases already OK are skipped.
+    """
+    h5_path = output if output is not None else Path(sweep_file.stem + ".h5")
+
+    def run() -> SweepResult:
+        try:
+            execution = Execution(serial=serial, scheduler=scheduler, workers=workers,
+                                  chunk_size=chunk_size, connect_timeout_s=connect_timeout_s)
+            sweep = load_sweep(sweep_file)
+            return run_sweep(sweep, output_h5=h5_path, output_csv=csv, execution=execution,
+                             progress=not json_output)
+        except SweepInputError as exc:
+            source = "command line" if exc.source == "options" else exc.source
+            field = f"--{exc.field.replace('_', '-')}" if exc.source == "options" else exc.field
+            raise InputError(source, field, exc.expected, exc.got) from exc
+        except SchedulerError as exc:
+            raise InputError("command line", "--scheduler",
+                             f"a Dask scheduler answering within {exc.timeout_s:g} s "
+                             f"({exc.reason})", exc.address) from exc
+        except IterError as exc:
+            raise TappError(str(exc)) from exc
+
+    result = run_guarded(run)
+    if json_output:
+        print_json(_summary_dict(result))
+    else:
+        _print_summary(result)
+
+
+def _summary_dict(result: SweepResult) -> dict[str, object]:
+    summary = result.summary
+    return {
+        "n_cases": summary.n_cases, "n_succeeded": summary.n_succeeded,
+        "n_failed": summary.n_failed, "n_resumed": summary.n_resumed,
+        "wall_s": summary.wall_s, "mode": summary.mode, "output_h5": summary.output_h5,
+        "output_csv": summary.output_csv,
+        "failed_cases": {row.index: row.error for row in result.table.rows
+                         if row.status is CaseStatus.FAILED},
+    }
+
+
+def _print_summary(result: SweepResult) -> None:
+    summary = result.summary
+    table = Table(title="ITER sweep", show_header=False)
+    table.add_column("item", style="bold")
+    table.add_column("value")
+    table.add_row("cases", str(summary.n_cases))
+    table.add_row("succeeded", f"[green]{summary.n_succeeded}[/]")
+    table.add_row("failed", f"[red]{summary.n_failed}[/]" if summary.n_failed else "0")
+    table.add_row("resumed (skipped)", str(summary.n_resumed))
+    table.add_row("ran on", summary.mode)
+    table.add_row("wall time", f"{summary.wall_s:.2f} s")
+    table.add_row("results", summary.output_h5 or "-")
+    if summary.output_csv:
+        table.add_row("csv", summary.output_csv)
+    console = Console()
+    console.print(table)
+    failed = [row for row in result.table.rows if row.status is CaseStatus.FAILED]
+    for row in failed[:MAX_FAILURES_SHOWN]:
+        console.print(f"case {row.index}: {row.error}", markup=False, highlight=False)
+    if len(failed) > MAX_FAILURES_SHOWN:
+        console.print(f"... and {len(failed) - MAX_FAILURES_SHOWN} more failed cases")

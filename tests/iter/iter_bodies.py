@@ -1,0 +1,48 @@
+"""Bodies for the iter tests; imported as ``iter_bodies`` with this folder put on sys.path.
+
+Each call is logged, one line per call, in ``<calls_dir>/calls.txt`` so a test can check
+which cases a run did (and did not) call.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+#: Azimuth at which :func:`counting_body` fails while the flag file exists, deg.
+FAILING_AZIMUTH_deg = 102.0
+#: Azimuth at which :func:`interrupting_body` raises KeyboardInterrupt, deg.
+INTERRUPT_AZIMUTH_deg = 105.0
+
+
+def calls(calls_dir: str | Path) -> list[float]:
+    """Return the azimuths the bodies were called with, in call order, deg."""
+    log = Path(calls_dir) / "calls.txt"
+    if not log.exists():
+        return []
+    return [float(line) for line in log.read_text().split()]
+
+
+def _log(calls_dir: str, azimuth_deg: float) -> None:
+    with (Path(calls_dir) / "calls.txt").open("a") as stream:
+        stream.write(f"{azimuth_deg!r}\n")
+
+
+def counting_body(azimuth_deg: float, calls_dir: str) -> dict[str, float]:
+    """Return twice the azimuth; raise at 102 deg while ``<calls_dir>/fail`` exists."""
+    _log(calls_dir, azimuth_deg)
+    if azimuth_deg == FAILING_AZIMUTH_deg and (Path(calls_dir) / "fail").exists():
+        raise ValueError(f"cannot fly at {azimuth_deg} deg")
+    return {"double_deg": 2.0 * azimuth_deg}
+
+
+def interrupting_body(azimuth_deg: float, calls_dir: str) -> dict[str, float]:
+    """Like counting_body, but Ctrl-C at 105 deg while ``<calls_dir>/interrupt`` exists."""
+    if azimuth_deg == INTERRUPT_AZIMUTH_deg and (Path(calls_dir) / "interrupt").exists():
+        raise KeyboardInterrupt
+    _log(calls_dir, azimuth_deg)
+    return {"double_deg": 2.0 * azimuth_deg}
+
+
+def not_a_mapping(azimuth_deg: float) -> list[float]:
+    """Return a list, which is not a valid set of outputs."""
+    return [azimuth_deg]

@@ -1,0 +1,251 @@
+"""Running sweeps: serial and Dask agree, failures are recorded, re-runs resume, programs."""
+
+from __future__ import annotations
+
+import math
+import socket
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import pytest
+
+from iter import (
+    CallableBody,
+    Case,
+    CaseStatus,
+    Execution,
+    Loop,
+    ProgramBody,
+    SchedulerError,
+    Sweep,
+    SweepInputError,
+    load_sweep,
+    parse_sweep,
+    read_hdf5,
+    run_sweep,
+)
+from iter.execute import local_cluster
+
+HERE = Path(__file__).resolve().parent
+SCENARIOS = HERE.parents[1] / "scenarios"
+SERIAL = Execution(serial=True, checkpoint_interval_s=0.0)
+AZIMUTHS = Loop(type=2, names=("azimuth_deg",), sets=5, vary=(96.0,), delta=(3.0,))
+
+
+@pytest.fixture(scope="module")
+def cluster_address():
+    """A 2-worker local Dask cluster shared by this module's Dask tests."""
+    with local_cluster(2) as address:
+        yield address
+
+
+@pytest.fixture
+def bodies(monkeypatch):
+    """The helper module iter_bodies, importable by name for CallableBody."""
+    monkeypatch.syspath_prepend(str(HERE))
+    import iter_bodies
+
+    return iter_bodies
+
+
+def _closed_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def test_local_dask_cluster_equals_serial_row_for_row(cluster_address):
+    sweep = load_sweep(SCENARIOS / "iter_days_azimuths.toml")
+    serial = run_sweep(sweep, execution=SERIAL)
+    # chunk_size 7 spreads 22 chunks over both workers, so they complete out of order.
+    on_dask = run_sweep(sweep, execution=Execution(scheduler=cluster_address, chunk_size=7))
+    assert on_dask.summary.mode.startswith(f"scheduler {cluster_address}")
+    assert serial.table.n_succeeded == on_dask.table.n_succeeded == 150
+    assert [row.index for row in on_dask.table.rows] == list(range(150))
+    assert on_dask.table.rows == serial.table.rows
+
+
+def test_failure_on_dask_is_recorded_and_the_sweep_goes_on(cluster_address):
+    # An altitude below the Earth's centre makes sqrt of a negative number: ValueError.
+    loop = Loop(type=1, names=("altitude_km",), sets=3, vary=(185.0, -7000.0, 400.0))
+    body = CallableBody("iter.examples:launch_azimuth_case",
+                        {"launch_day": 0.0, "azimuth_deg": 90.0, "latitude_deg": 28.5,
+                         "east_longitude_deg": 0.0})
+    result = run_sweep(Sweep(loops=(loop,), body=body),
+                       execution=Execution(scheduler=cluster_address, chunk_size=1))
+    statuses = [row.status for row in result.table.rows]
+    assert statuses == [CaseStatus.OK, CaseStatus.FAILED, CaseStatus.OK]
+    assert result.table.rows[1].error == "ValueError: math domain error"
+    assert result.table.rows[1].outputs == {}
+
+
+def test_failing_case_is_recorded_and_a_rerun_resumes(tmp_path, bodies):
+    calls_dir = tmp_path / "calls"
+    calls_dir.mkdir()
+    (calls_dir / "fail").touch()
+    sweep = Sweep(loops=(AZIMUTHS,), body=CallableBody("iter_bodies:counting_body",
+                                                       {"calls_dir": str(calls_dir)}))
+    output = tmp_path / "out.h5"
+
+    first = run_sweep(sweep, output_h5=output, execution=SERIAL)
+    assert bodies.calls(calls_dir) == [96.0, 99.0, 102.0, 105.0, 108.0]
+    assert [row.status for row in first.table.rows] == [
+        CaseStatus.OK, CaseStatus.OK, CaseStatus.FAILED, CaseStatus.OK, CaseStatus.OK]
+    assert first.table.rows[2].error == "ValueError: cannot fly at 102.0 deg"
+    assert first.table.rows[3].outputs == {"double_deg": 210.0}
+    assert (first.summary.n_succeeded, first.summary.n_failed) == (4, 1)
+    stored = read_hdf5(output)
+    assert stored.table.rows == first.table.rows
+
+    (calls_dir / "fail").unlink()
+    second = run_sweep(sweep, output_h5=output, execution=SERIAL)
+    # Only the failed case ran again.
+    assert bodies.calls(calls_dir) == [96.0, 99.0, 102.0, 105.0, 108.0, 102.0]
+    assert second.summary.n_resumed == 4
+    assert second.table.n_succeeded == 5
+    assert second.table.rows[2].outputs == {"double_deg": 204.0}
+
+    third = run_sweep(sweep, output_h5=output, execution=SERIAL)
+    assert len(bodies.calls(calls_dir)) == 6
+    assert third.summary.n_resumed == 5
+
+
+def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path, bodies):
+    calls_dir = tmp_path / "calls"
+    calls_dir.mkdir()
+    (calls_dir / "interrupt").touch()
+    sweep = Sweep(loops=(AZIMUTHS,), body=CallableBody("iter_bodies:interrupting_body",
+                                                       {"calls_dir": str(calls_dir)}))
+    output = tmp_path / "out.h5"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(sweep, output_h5=output, execution=SERIAL)
+    assert [row.index for row in read_hdf5(output).table.rows] == [0, 1, 2]
+    assert list(tmp_path.glob(".out.h5.tmp*")) == []
+
+    (calls_dir / "interrupt").unlink()
+    result = run_sweep(sweep, output_h5=output, execution=SERIAL)
+    assert bodies.calls(calls_dir) == [96.0, 99.0, 102.0, 105.0, 108.0]
+    assert result.summary.n_resumed == 3
+    assert result.table.n_succeeded == 5
+
+
+def test_resuming_a_different_sweep_is_refused(tmp_path):
+    output = tmp_path / "out.h5"
+    run_sweep(load_sweep(SCENARIOS / "iter_azimuth_type1.toml"), output_h5=output,
+              execution=SERIAL)
+    with pytest.raises(SweepInputError, match="definition_json"):
+        run_sweep(load_sweep(SCENARIOS / "iter_days_azimuths.toml"), output_h5=output,
+                  execution=SERIAL)
+
+
+def test_outputs_that_are_not_a_mapping_fail_the_case(bodies):
+    sweep = Sweep(loops=(AZIMUTHS,), body=CallableBody("iter_bodies:not_a_mapping"))
+    result = run_sweep(sweep, execution=SERIAL)
+    assert result.table.n_failed == 5
+    assert "outputs must be a mapping" in result.table.rows[0].error
+
+
+# A tiny program: reads --azimuth_deg and --scale, refuses 102 deg, prints one JSON object.
+PROGRAM = """
+import argparse, json
+parser = argparse.ArgumentParser()
+parser.add_argument("--azimuth_deg", type=float, required=True)
+parser.add_argument("--scale", type=float, required=True)
+parser.add_argument("--json", action="store_true")
+args = parser.parse_args()
+if args.azimuth_deg == 102.0:
+    raise SystemExit("refusing 102 deg")
+print(json.dumps({"scaled_deg": args.scale * args.azimuth_deg, "r_km": [1, 2],
+                  "meta": {"json_flag": args.json, "label": "ok", "none": None}}))
+"""
+
+
+def test_program_body_outputs_and_failures():
+    document = {"body": {"program": [sys.executable, "-c", PROGRAM],
+                         "constants": {"scale": 2.0}},
+                "loop": [{"type": 2, "names": ["azimuth_deg"], "sets": 5, "vary": [96.0],
+                          "delta": [3.0]}]}
+    result = run_sweep(parse_sweep(document, source="program.toml"), execution=SERIAL)
+    rows = result.table.rows
+    assert [row.status for row in rows] == [
+        CaseStatus.OK, CaseStatus.OK, CaseStatus.FAILED, CaseStatus.OK, CaseStatus.OK]
+    outputs = dict(rows[0].outputs)
+    assert math.isnan(outputs.pop("meta.none"))
+    assert outputs == {"scaled_deg": 192.0, "r_km[0]": 1.0, "r_km[1]": 2.0,
+                       "meta.json_flag": 1.0, "meta.label": "ok"}
+    assert rows[2].error == (f"CaseFailure: {sys.executable} exited with status 1: "
+                             "refusing 102 deg")
+
+
+def test_program_body_with_dashes_and_flags():
+    body = ProgramBody(argv=("prog", "sub"), constants={"step_s": 10.0, "fast": True,
+                                                        "slow": False},
+                       json_option=False, dashes=True)
+    command = body.command(Case(index=0, names=("azimuth_deg",), values=(96.0,)))
+    assert command[1:] == ["sub", "--step-s", "10.0", "--fast", "--azimuth-deg", "96.0"]
+
+
+def test_program_timeout_fails_the_case():
+    body = ProgramBody(argv=(sys.executable, "-c", "import time; time.sleep(30)"),
+                       json_option=False, timeout_s=0.5)
+    loop = Loop(type=1, names=("x_km",), sets=1, vary=(1.0,))
+    result = run_sweep(Sweep(loops=(loop,), body=body), execution=SERIAL)
+    assert "timed out after 0.5 s" in result.table.rows[0].error
+
+
+def test_unreachable_scheduler_fails_fast():
+    address = f"tcp://127.0.0.1:{_closed_port()}"
+    sweep = load_sweep(SCENARIOS / "iter_azimuth_type1.toml")
+    start_s = time.perf_counter()
+    with pytest.raises(SchedulerError) as info:
+        run_sweep(sweep, execution=Execution(scheduler=address, connect_timeout_s=1.0))
+    assert time.perf_counter() - start_s < 10.0  # a hang would be caught here
+    assert info.value.address == address
+    assert str(info.value).startswith(f"no Dask scheduler at {address} within 1 s")
+
+
+def test_a_server_that_never_answers_is_not_a_hang():
+    # Accepts the connection and says nothing: Client(timeout=...) alone would wait forever.
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+        address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+        start_s = time.perf_counter()
+        with pytest.raises(SchedulerError, match="timed out"):
+            run_sweep(load_sweep(SCENARIOS / "iter_azimuth_type1.toml"),
+                      execution=Execution(scheduler=address, connect_timeout_s=1.0))
+        assert time.perf_counter() - start_s < 10.0
+
+
+@pytest.mark.parametrize(("kwargs", "field"), [
+    ({"scheduler": "localhost"}, "scheduler"),
+    ({"scheduler": "tcp://host:port"}, "scheduler"),
+    ({"serial": True, "workers": 2}, "serial"),
+    ({"scheduler": "tcp://h:8786", "workers": 2}, "workers"),
+    ({"workers": 0}, "workers"),
+    ({"chunk_size": 0}, "chunk_size"),
+])
+def test_bad_execution_options(kwargs, field):
+    with pytest.raises(SweepInputError) as info:
+        Execution(**kwargs)
+    assert (info.value.source, info.value.field) == ("options", field)
+
+
+def test_results_file_layout(tmp_path):
+    output = tmp_path / "days.h5"
+    run_sweep(load_sweep(SCENARIOS / "iter_days_azimuths.toml"), output_h5=output,
+              execution=SERIAL)
+    with h5py.File(output, "r") as f:
+        assert f.attrs["n_cases"] == 150
+        assert '"sets": 30' in f.attrs["sweep_json"]
+        assert f.attrs["created_utc"].endswith("Z")
+        assert f.attrs["generator"].startswith("iter, tapp ")
+        assert list(f["inputs"]) == ["launch_day", "azimuth_deg"]
+        assert f["inputs/azimuth_deg"].attrs["units"] == "deg"
+        assert f["outputs/delta_v_km_s"].attrs["units"] == "km/s"
+        assert f["inputs/launch_day"][77] == 5745.0
+        assert f["inputs/azimuth_deg"][77] == 102.0
+        assert f["case"][-1] == 149
+        assert set(f["status"][()]) == {0}

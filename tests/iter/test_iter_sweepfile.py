@@ -1,0 +1,124 @@
+"""Sweep files: the seed's scenarios load to the right cases; bad input names file and field."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from iter import CallableBody, ProgramBody, SweepInputError, load_sweep, parse_sweep
+
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+
+
+def test_five_azimuth_scenarios_type_1_and_type_2_give_the_same_cases():
+    type_1 = load_sweep(SCENARIOS / "iter_azimuth_type1.toml")
+    type_2 = load_sweep(SCENARIOS / "iter_azimuth_type2.toml")
+    assert [loop.type for loop in type_1.loops] == [1]
+    assert [loop.type for loop in type_2.loops] == [2]
+    # Seed VI, CASE 1: 96, 99, 102, 105 and 108 deg.
+    expected = [(96.0,), (99.0,), (102.0,), (105.0,), (108.0,)]
+    assert [c.values for c in type_1.cases()] == expected
+    assert type_1.cases() == type_2.cases()
+    assert type_1.body == type_2.body
+
+
+def test_days_azimuths_scenario_has_the_seed_150_cases_in_order():
+    sweep = load_sweep(SCENARIOS / "iter_days_azimuths.toml")
+    cases = sweep.cases()
+    assert sweep.names == ("launch_day", "azimuth_deg")
+    assert len(cases) == sweep.n_cases == 150
+    # Hand-computed from the seed's VARY/DELTA cards: case k = (5730 + k // 5, 96 + 3 (k % 5)).
+    assert cases[0].kwargs() == {"launch_day": 5730.0, "azimuth_deg": 96.0}
+    assert cases[77].kwargs() == {"launch_day": 5745.0, "azimuth_deg": 102.0}
+    assert cases[149].kwargs() == {"launch_day": 5759.0, "azimuth_deg": 108.0}
+
+
+def _document(**loop_overrides):
+    loop = {"type": 1, "names": ["azimuth_deg"], "sets": 2, "vary": [96.0, 99.0]}
+    loop.update(loop_overrides)
+    loop = {k: v for k, v in loop.items() if v is not None}
+    return {"body": {"callable": "iter.examples:launch_azimuth_case"}, "loop": [loop]}
+
+
+@pytest.mark.parametrize(("overrides", "field", "fragment"), [
+    ({"vary": [96.0, 99.0, 102.0]}, "loop[0].vary", "2 x 1 = 2 values"),
+    ({"type": 3}, "loop[0].type", "1 (table) or 2"),
+    ({"type": 2, "vary": [96.0]}, "loop[0].delta", "increments for type 2"),
+    ({"sets": None}, "loop[0].sets", "a sets key"),
+    ({"n": 2}, "loop[0].n", "len(names) = 1"),
+    ({"start": [96.0]}, "loop[0].start", "one of the keys"),
+])
+def test_bad_loop_fields_name_file_and_field(overrides, field, fragment):
+    with pytest.raises(SweepInputError) as info:
+        parse_sweep(_document(**overrides), source="bad.toml")
+    assert (info.value.source, info.value.field) == ("bad.toml", field)
+    assert fragment in info.value.expected
+    assert str(info.value).startswith(f"bad.toml: {field}: expected ")
+
+
+@pytest.mark.parametrize(("target", "fragment"), [
+    ("no_such_module_xyz:f", "an importable module"),
+    ("iter.examples:no_such_function", "a function 'no_such_function'"),
+    ("iter.examples", '"module:function"'),
+    ("iter.examples:GM_EARTH_km3_s2", "a callable"),
+])
+def test_unknown_body_callable_is_bad_input(target, fragment):
+    document = _document()
+    document["body"]["callable"] = target
+    with pytest.raises(SweepInputError) as info:
+        parse_sweep(document, source="bad.toml")
+    assert info.value.field == "body.callable"
+    assert fragment in info.value.expected
+
+
+def test_unknown_program_is_bad_input():
+    document = _document()
+    document["body"] = {"program": ["no-such-program-xyz", "run"]}
+    with pytest.raises(SweepInputError, match="bad.toml: body.program"):
+        parse_sweep(document, source="bad.toml")
+
+
+def test_body_fields_are_checked():
+    document = _document()
+    document["body"] = {"callable": "iter.examples:launch_azimuth_case", "program": ["x"]}
+    with pytest.raises(SweepInputError, match="exactly one of callable or program"):
+        parse_sweep(document)
+    document["body"] = {"callable": "iter.examples:launch_azimuth_case", "json": True}
+    with pytest.raises(SweepInputError, match="body.json"):
+        parse_sweep(document)
+    document["body"] = {"callable": "iter.examples:launch_azimuth_case",
+                        "constants": {"azimuth_deg": 1.0}}
+    with pytest.raises(SweepInputError, match=r"loop\[0\]\.names.*not also body.constants"):
+        parse_sweep(document)
+
+
+def test_program_body_is_read_with_its_options():
+    document = _document()
+    document["body"] = {"program": ["tapp", "propagate"], "dashes": True, "timeout_s": 60,
+                        "constants": {"step_s": 10.0}}
+    sweep = parse_sweep(document, check_body=False)
+    assert sweep.body == ProgramBody(argv=("tapp", "propagate"), constants={"step_s": 10.0},
+                                     json_option=True, dashes=True, timeout_s=60.0)
+
+
+def test_file_errors_name_the_file(tmp_path):
+    missing = tmp_path / "missing.toml"
+    with pytest.raises(SweepInputError, match="missing.toml: file: expected a readable"):
+        load_sweep(missing)
+    broken = tmp_path / "broken.toml"
+    broken.write_text("[body\n")
+    with pytest.raises(SweepInputError, match="broken.toml: file: expected valid TOML"):
+        load_sweep(broken)
+
+
+def test_loaded_sweep_keeps_the_file_contents(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text('[sweep]\ndescription = "d"\n[body]\ncallable = "iter.examples:'
+                    'launch_azimuth_case"\n[[loop]]\nnames = ["azimuth_deg"]\nsets = 1\n'
+                    "vary = [96.0]\n")
+    sweep = load_sweep(path)
+    assert sweep.loops[0].type == 1  # the seed's canned TYPE
+    assert sweep.body == CallableBody(target="iter.examples:launch_azimuth_case")
+    assert '"description": "d"' in sweep.contents_json()
+    assert "description" not in sweep.definition_json()
