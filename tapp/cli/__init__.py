@@ -12,6 +12,7 @@ from tapp.cli import od as _od  # noqa: F401
 from tapp.cli import propagate as _propagate  # noqa: F401
 from tapp.cli import search_cmd as _search_cmd  # noqa: F401
 from tapp.cli import sweep as _sweep  # noqa: F401
+from tapp.cli import tracking_cmd as _tracking_cmd  # noqa: F401
 from tapp.cli.common import app
 
 

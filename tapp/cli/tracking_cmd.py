@@ -1,0 +1,158 @@
+"""``tapp simulate`` (TAPP I: scenario -> T13 tape) and ``tapp tape info`` (any tape).
+
+Bad input (scenario file or field, an unreadable tape) is one line on stderr naming the file
+and the field or dataset, exit code 2 (1 for other failures); no tape is left behind: tapes
+are written to a temporary file and renamed once complete.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from tapp.cli.common import app, print_json, run_guarded
+from tapp.errors import InputError
+from tapp.tape import describe, write_t13
+from tapp.tracking.oem import format_oem, write_oem
+from tapp.tracking.scenario import read_scenario
+from tapp.tracking.simulate import Simulation
+from tapp.tracking.simulate import simulate as run_simulation
+
+tape_app = typer.Typer(name="tape", help="Inspect tapes (T13, T32).", no_args_is_help=True,
+                       add_completion=False)
+app.add_typer(tape_app, name="tape")
+
+JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
+
+
+def _simulate_with_bar(path: Path, raw: bool, quiet: bool) -> tuple[Simulation, float]:
+    scenario = read_scenario(path)
+    start = time.perf_counter()
+    columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
+        "{task.completed}/{task.total}"), TimeElapsedColumn())
+    with Progress(*columns, console=Console(stderr=True), disable=quiet,
+                  transient=True) as bar:
+        task = bar.add_task("TAPP I", total=None)
+
+        def progress(stage: str, done: int, total: int) -> None:
+            bar.update(task, description=stage, completed=done, total=total)
+
+        sim = run_simulation(scenario, raw=raw, progress=progress)
+    return sim, time.perf_counter() - start
+
+
+def _write(output: Path, sim: Simulation, oem: Path | None, oem_text: str | None) -> None:
+    try:
+        if oem is not None:
+            write_oem(oem, oem_text)
+        write_t13(output, sim.tape)
+    except OSError as exc:
+        raise InputError(str(exc.filename or output), "output", "a writable path",
+                         exc.strerror) from None
+
+
+@app.command()
+def simulate(
+    scenario: Annotated[Path, typer.Argument(help="Scenario file (TOML).")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="T13 tape to write "
+                                         "(RUN.t13.h5).")],
+    raw: Annotated[bool, typer.Option("--raw", help="Also store every observation's partial "
+                                      "row, weight and real-world noise (raw/ group).")] = False,
+    oem: Annotated[Path | None, typer.Option("--oem", help="Also write the trajectory as a "
+                                             "CCSDS OEM 2.0 (KVN) file.")] = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """TAPP I: simulate the tracking of a scenario and write its T13 tape."""
+
+    def body() -> None:
+        sim, wall_s = _simulate_with_bar(scenario, raw, quiet=json_out)
+        tape = sim.tape
+        oem_text = None
+        if oem is not None:
+            oem_text = format_oem(tape.epoch, sim.t_s, sim.states, object_name=tape.iden,
+                                  object_id=tape.iden,
+                                  comments=(f"TAPP I trajectory of {scenario.name}",))
+        _write(output, sim, oem, oem_text)
+        out = {"tape": str(output), "bytes": output.stat().st_size, "iden": tape.iden,
+               "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
+               "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
+               "passes": int(tape.passes.station.size),
+               "observations": int(tape.pairs.n_obs.sum()), "raw": raw,
+               "oem": None if oem is None else str(oem), "wall_s": wall_s}
+        if json_out:
+            print_json(out)
+            return
+        console = Console(width=100)
+        console.print(f"T13 tape {output} ({out['bytes'] / 1e6:.2f} MB) written in "
+                      f"{wall_s:.2f} s: n_o = {tape.n_o}, n_p = {tape.n_p}, n_m = {tape.n_m}, "
+                      f"n_ts = {tape.n_ts}, n_it = {tape.n_it}; {out['observations']} "
+                      f"observations in {out['passes']} passes")
+        if oem is not None:
+            console.print(f"OEM {oem} ({sim.t_s.size} states)")
+
+    run_guarded(body)
+
+
+def _print_t13(info: dict) -> None:
+    console = Console(width=110)
+    dims = info["dimensions"]
+    console.print(f"[bold]T13[/bold] v{info['version']}  iden {info['iden']}  epoch "
+                  f"{info['epoch_utc']} UTC  span {info['span_s'][1]:.0f} s")
+    console.print("  ".join(f"{k} = {v}" for k, v in dims.items() if v is not None))
+    table = Table(title="Parameters x = \\[p; q]")
+    for col in ("#", "name", "unit", "kind"):
+        table.add_column(col)
+    for i, p in enumerate(info["parameters"], start=1):
+        table.add_row(str(i), p["name"], p["unit"], p["kind"])
+    console.print(table)
+    table = Table(title="Stations")
+    for col in ("s", "name", "observables", "lat (deg)", "lon (deg)", "h (km)", "passes",
+                "observations"):
+        table.add_column(col, justify="right")
+    for s in info["stations"]:
+        table.add_row(str(s["id"]), s["name"], s["observables"], f"{s['lat_deg']:.4f}",
+                      f"{s['lon_deg']:.4f}", f"{s['h_km']:.3f}", str(s["passes"]),
+                      str(s["observations"]))
+    console.print(table)
+    table = Table(title="Epoch times")
+    for col in ("index", "t (s)", "UTC"):
+        table.add_column(col, justify="right")
+    for e in info["epochs"]:
+        table.add_row(str(e["index"]), f"{e['t_s']:.3f}", e["utc"])
+    console.print(table)
+    miss = info["miss"]
+    console.print(f"miss ({miss['kind']}, t = {miss['t_s']:.3f} s): " + ", ".join(
+        f"{n} = {v:.6g}" for n, v in zip(miss["names"], miss["nominal"], strict=True)))
+    prov = info["provenance"]
+    console.print(f"{info['observations']} observations, {info['input_times']} input times; "
+                  f"written by tapp {prov.get('tapp_version', '?')} on "
+                  f"{prov.get('created_utc', '?')} from {prov.get('scenario_source', '?')}")
+
+
+@tape_app.command("info")
+def tape_info(
+    path: Annotated[Path, typer.Argument(help="Tape file (HDF5).")],
+    json_out: JsonOpt = False,
+) -> None:
+    """Summarise a tape: dimensions, parameters, stations, passes, observations, epochs."""
+
+    def body() -> None:
+        info = describe(path)
+        if json_out:
+            print_json(info)
+        elif info["format"] == "T13":
+            _print_t13(info)
+        else:
+            console = Console(width=110)
+            console.print(f"format {info['format']}: "
+                          + ", ".join(f"{k} = {v}" for k, v in info["attributes"].items()))
+            for name, d in info["datasets"].items():
+                console.print(f"  {name}  {tuple(d['shape'])}  {d['dtype']}")
+
+    run_guarded(body)

@@ -1,0 +1,124 @@
+"""Packed storage of symmetric matrices: the upper triangle by rows ("TR", seed TAPP III §3.1).
+
+A symmetric n x n matrix M is stored as the vector of its n (n + 1) / 2 upper-triangle entries
+taken row by row:
+
+.. math::
+
+    (M_{11}, M_{12}, \\dots, M_{1n}, M_{22}, M_{23}, \\dots, M_{2n}, \\dots, M_{nn}),
+
+so that entry (i, j), 0-based with i <= j, sits at position i n - i (i - 1) / 2 + (j - i).
+Arrays are time-major: a stack of N matrices (N, n, n) packs to (N, n (n + 1) / 2). The T13
+tape stores its normal matrices ΔJ, ΔJ̃ this way; the T32 tape uses the same helpers.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+
+import numpy as np
+
+from tapp.errors import InputError
+
+
+def tr_size(n: int) -> int:
+    """Return the packed length n (n + 1) / 2 of a symmetric n x n matrix (n >= 0)."""
+    if n < 0:
+        raise InputError("packing", "n", "an order n >= 0", n)
+    return n * (n + 1) // 2
+
+
+def tr_order(length: int) -> int:
+    """Return the order n of a symmetric matrix whose TR-packed length is ``length``.
+
+    Raises
+    ------
+    InputError
+        If ``length`` is not a triangular number n (n + 1) / 2.
+    """
+    n = (math.isqrt(8 * length + 1) - 1) // 2 if length >= 0 else -1
+    if n < 0 or tr_size(n) != length:
+        raise InputError("packing", "length", "a triangular number n (n + 1) / 2", length)
+    return n
+
+
+@cache
+def _upper(n: int) -> tuple[np.ndarray, np.ndarray]:
+    rows, cols = np.triu_indices(n)  # row-major order: exactly the TR sequence
+    rows.setflags(write=False)
+    cols.setflags(write=False)
+    return rows, cols
+
+
+def tr_index(i: int, j: int, n: int) -> int:
+    """Return the position of entry (i, j) (0-based, either order) in the TR vector of order n."""
+    if not (0 <= i < n and 0 <= j < n):
+        raise InputError("packing", "index", f"0 <= i, j < {n}", (i, j))
+    i, j = min(i, j), max(i, j)
+    return i * n - i * (i - 1) // 2 + (j - i)
+
+
+def pack_tr(matrix) -> np.ndarray:
+    """Return the TR vector(s) of symmetric matrices, shape (..., n (n + 1) / 2).
+
+    Parameters
+    ----------
+    matrix : array_like, shape (..., n, n)
+        Symmetric matrices; only the upper triangle is read (the caller owns symmetry; see
+        :func:`symmetry_defect` to measure it).
+
+    Examples
+    --------
+    >>> pack_tr([[1.0, 2.0, 3.0], [2.0, 4.0, 5.0], [3.0, 5.0, 6.0]])
+    array([1., 2., 3., 4., 5., 6.])
+    """
+    m = np.asarray(matrix, dtype=float)
+    if m.ndim < 2 or m.shape[-1] != m.shape[-2]:
+        raise InputError("packing", "matrix", "an array of shape (..., n, n)", m.shape)
+    rows, cols = _upper(m.shape[-1])
+    return m[..., rows, cols]
+
+
+def unpack_tr(packed, n: int | None = None) -> np.ndarray:
+    """Return the full symmetric matrices of TR vectors, shape (..., n, n).
+
+    Parameters
+    ----------
+    packed : array_like, shape (..., n (n + 1) / 2)
+        TR vectors.
+    n : int, optional
+        Expected order; derived from the length when omitted.
+
+    Raises
+    ------
+    InputError
+        If the length is not triangular or does not match ``n``.
+    """
+    v = np.asarray(packed, dtype=float)
+    order = tr_order(v.shape[-1]) if v.ndim else -1
+    if n is not None and order != n:
+        raise InputError("packing", "length", f"{tr_size(n)} entries (order {n})",
+                         v.shape[-1] if v.ndim else v.shape)
+    rows, cols = _upper(order)
+    out = np.empty(v.shape[:-1] + (order, order))
+    out[..., rows, cols] = v
+    out[..., cols, rows] = v
+    return out
+
+
+def symmetry_defect(matrix) -> np.ndarray:
+    r"""Return the relative asymmetry of each matrix, shape (...).
+
+    .. math:: \max_{ij} \frac{|M_{ij} - M_{ji}|}{\sqrt{|M_{ii} M_{jj}|}}
+
+    The scale is that of a normal (or covariance) matrix, |M_ij| <= sqrt(M_ii M_jj), so the
+    measure does not depend on the parameters' units; an asymmetric pair whose scale is zero
+    gives inf.
+    """
+    m = np.asarray(matrix, dtype=float)
+    d = np.sqrt(np.abs(np.diagonal(m, axis1=-2, axis2=-1)))
+    scale = d[..., :, None] * d[..., None, :]
+    diff = np.abs(m - np.swapaxes(m, -1, -2))
+    ratio = np.divide(diff, scale, out=np.where(diff > 0, np.inf, 0.0), where=scale > 0)
+    return np.max(ratio, axis=(-2, -1))

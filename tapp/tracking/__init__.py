@@ -1,0 +1,15 @@
+"""TAPP I: tracking simulation from a scenario to the T13 tape (and a CCSDS OEM trajectory).
+
+- :mod:`tapp.tracking.scenario`: TOML scenario -> frozen dataclasses;
+- :mod:`tapp.tracking.noise`: fit-world and real-world noise, per-pass AᵀWA and AᵀWMWA;
+- :mod:`tapp.tracking.simulate`: trajectory, partials, records, miss partials -> :class:`T13`;
+- :mod:`tapp.tracking.oem`: CCSDS OEM 2.0 (KVN) writer.
+"""
+
+from tapp.tracking.noise import FitNoise, RealNoise, covariance_block, normal_matrices
+from tapp.tracking.scenario import Parameter, Scenario, parse_scenario, read_scenario
+from tapp.tracking.simulate import Simulation, equinoctial_elements, miss_partials, simulate
+
+__all__ = ["FitNoise", "Parameter", "RealNoise", "Scenario", "Simulation", "covariance_block",
+           "equinoctial_elements", "miss_partials", "normal_matrices", "parse_scenario",
+           "read_scenario", "simulate"]

@@ -1,0 +1,555 @@
+"""TAPP I: trajectory, observation partials and noise models -> the records of a T13 tape.
+
+What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, ΔJ̃ of the seed):
+
+1. **Trajectory and transition.** The injection state is propagated with the scenario's state
+   model; Φ and the parameter sensitivities S come from its variational model (the truncated
+   variational equations when the two differ). The integration restarts at every epoch time
+   t̂_i from the state reached there, with Φ(t̂_i, t̂_i) = I and S = 0, so that every
+   partial is *referred to its own epoch* directly: over (t̂_i, t̂_{i+1}]
+
+   .. math::
+
+       \\Psi(t, \\hat t_i) = \\frac{\\partial x(t)}{\\partial x(\\hat t_i)} =
+       \\begin{pmatrix} \\Phi(t, \\hat t_i) & S_i(t) & 0 \\\\ 0 & I & 0 \\\\ 0 & 0 & I
+       \\end{pmatrix},\\qquad x = [p; q_{dyn}; q_{stations}]
+
+   (n_o x n_o, the parameter block of Φ extended by the sensitivities). Composing through t_0
+   instead, Φ(t, t̂_i) = Φ(t, t_0) Φ(t̂_i, t_0)⁻¹, loses every digit after a lunar swing-by
+   (cond Φ ~ 1e17 over 30 days): the restart keeps the full precision of the integrator.
+   U of record k is the top n_p rows of Ψ(t_k, t_j).
+
+2. **Observations.** Samples fall on the schedule's grid; a station observes where the
+   spacecraft is above its mask (geometric elevation) and outside its blackouts; runs of
+   samples form passes (:func:`tapp.measurements.find_passes`, split at gaps), filtered by
+   the pass limits. Observables and their partials come from
+   :class:`tapp.measurements.MeasurementModel` (state, station location, biases; light time
+   optional, with the bounce state from the integrated trajectory). One row of A per scalar
+   observation, referred to the epoch t_j of its record:
+
+   .. math::
+
+       A = \\Big[\\, H\\,\\Phi(t, t_j),\\; H\\,S_j(t),\\; \\partial h/\\partial(\\text{location}),
+       \\; \\partial h/\\partial(\\text{bias}) \\,\\Big].
+
+3. **Normal matrices.** Per (record k, station s): ΔJ = AᵀWA and ΔJ̃ = AᵀWMWA over the
+   observations in (t_{k-1}, t_k] (:func:`tapp.tracking.noise.normal_matrices`, exact for
+   the correlated real world, O(n) per pass). The real world's M is block-diagonal over
+   (station, observable kind, pass) *and record*: a pass that straddles a T13 time is split
+   there, since the tape has no place for the cross terms of two records (and TAPP III
+   treats the noise of new data as uncorrelated with what came before).
+
+4. **Miss parameters.** m at the miss time from the state propagated from t_0 (B-plane of the
+   osculating target-relative hyperbola, or orbit elements), and
+
+   .. math:: B = \\frac{\\partial m}{\\partial x(t_0)} = G\\,[\\Phi(t_m, t_0),\\ S(t_m),\\ 0]
+             + \\frac{\\partial m}{\\partial q}\\Big|_{\\text{direct}}
+
+   with G = ∂m/∂x(t_m) by central differences of the closed-form m (steps 1e-6 of |r|,
+   |v| of the state the formulas take, target-relative for a B-plane, and of GM: truncation
+   ~1e-12, rounding ~1e-10 relative) and the direct term for the GM the
+   formulas use (the target's GM for a B-plane, the Earth's for elements).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from tapp.bplane import b_plane
+from tapp.dynamics import Propagator, Trajectory
+from tapp.dynamics.forces import default_parameters
+from tapp.errors import InputError
+from tapp.frames.elements import cartesian_to_elements
+from tapp.measurements import (
+    BIAS_NAMES,
+    STATION_PARAMETER_NAMES,
+    LightTime,
+    MeasurementModel,
+    find_passes,
+    is_visible,
+    wrap_angle_rad,
+)
+from tapp.tape.t13 import (
+    T13,
+    TapeMiss,
+    TapePairs,
+    TapeParameters,
+    TapePasses,
+    TapeRaw,
+    TapeRecords,
+    TapeStations,
+)
+from tapp.targeting import BPlaneProgram
+from tapp.tracking.noise import normal_matrices
+from tapp.tracking.scenario import (
+    BIAS_KINDS,
+    KINDS,
+    MISS_QUANTITIES,
+    Scenario,
+    TrackingStation,
+)
+
+#: progress(stage, step, total): called as work advances (the CLI draws a bar with it).
+ProgressCallback = Callable[[str, int, int], None]
+
+#: Relative step of the central differences of the miss function (module docstring).
+MISS_STEP = 1e-6
+#: Classical elements are refused as miss parameters below this e or inclination (rad):
+#: their angles are singular there (use equinoctial elements).
+CLASSICAL_MIN_E = 1e-4
+CLASSICAL_MIN_I_rad = 1e-4
+#: Passes split where consecutive samples are more than this many data intervals apart.
+_GAP_INTERVALS = 1.5
+
+
+@dataclass(frozen=True, slots=True)
+class Simulation:
+    """What :func:`simulate` returns: the T13 tape and the trajectory it was built on.
+
+    Attributes
+    ----------
+    tape : T13
+    t_s : (N,) trajectory times, s from the epoch (t_0 = 0, the samples and T13 times).
+    states : (N, 6) states, km and km/s, EME2000, Earth-centred.
+    """
+
+    tape: T13
+    t_s: np.ndarray
+    states: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class _Arc:
+    """Trajectory on the output times, partials referred to each time's epoch."""
+
+    t_s: np.ndarray
+    states: np.ndarray
+    phi: np.ndarray
+    sens: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class _StationData:
+    """Samples of one station: rows A (n, m, n_o), values, records, passes, segments."""
+
+    t_s: np.ndarray
+    values: np.ndarray
+    a: np.ndarray
+    record: np.ndarray
+    segment: np.ndarray
+    passes: list[tuple[float, float, int]]
+
+
+def equinoctial_elements(state, mu_km3_s2: float) -> np.ndarray:
+    """Return equinoctial elements (a_km, ex, ey, hx, hy, lambda_m_rad), shape (..., 6).
+
+    .. math::
+
+        e_x + i e_y = e\\,e^{i(\\omega + \\Omega)},\\quad
+        h_x + i h_y = \\tan(i/2)\\,e^{i\\Omega},\\quad \\lambda_M = M + \\omega + \\Omega
+
+    Non-singular for circular and equatorial orbits (elliptic, prograde). Computed from the
+    eccentricity vector and the equinoctial frame f, g (Broucke & Cefola 1972, Celest. Mech.
+    5, 303; names as in Orekit's ``EquinoctialOrbit``): e_x = e·f, e_y = e·g, then the
+    eccentric longitude F from the position in (f, g) and Kepler's equation
+    λ_M = F + e_y cos F - e_x sin F.
+
+    Parameters
+    ----------
+    state : array_like, shape (..., 6)
+        km, km/s, inertial.
+    mu_km3_s2 : float
+        Gravitational parameter.
+    """
+    x = np.asarray(state, dtype=float)
+    r, v = x[..., :3], x[..., 3:]
+    r_norm = np.linalg.norm(r, axis=-1)
+    v2 = np.sum(v * v, axis=-1)
+    a = 1.0 / (2.0 / r_norm - v2 / mu_km3_s2)
+    e_vec = ((v2 - mu_km3_s2 / r_norm)[..., None] * r
+             - np.sum(r * v, axis=-1)[..., None] * v) / mu_km3_s2
+    w = np.cross(r, v)
+    w = w / np.linalg.norm(w, axis=-1)[..., None]
+    hx = -w[..., 1] / (1.0 + w[..., 2])
+    hy = w[..., 0] / (1.0 + w[..., 2])
+    scale = 1.0 + hx * hx + hy * hy
+    f = np.stack([1.0 - hy * hy + hx * hx, 2.0 * hx * hy, -2.0 * hy], axis=-1) / scale[..., None]
+    g = np.stack([2.0 * hx * hy, 1.0 + hy * hy - hx * hx, 2.0 * hx], axis=-1) / scale[..., None]
+    ex, ey = np.sum(e_vec * f, axis=-1), np.sum(e_vec * g, axis=-1)
+    x1, y1 = np.sum(r * f, axis=-1) / a, np.sum(r * g, axis=-1) / a
+    beta = 1.0 / (1.0 + np.sqrt(1.0 - ex * ex - ey * ey))
+    # [1 - ey² β, ex ey β; ex ey β, 1 - ex² β] (cos F, sin F) = (x1 + ex, y1 + ey)
+    m11, m12, m22 = 1.0 - ey * ey * beta, ex * ey * beta, 1.0 - ex * ex * beta
+    det = m11 * m22 - m12 * m12
+    cos_f = (m22 * (x1 + ex) - m12 * (y1 + ey)) / det
+    sin_f = (m11 * (y1 + ey) - m12 * (x1 + ex)) / det
+    big_f = np.arctan2(sin_f, cos_f)
+    lam = np.mod(big_f + ey * np.cos(big_f) - ex * np.sin(big_f), 2.0 * np.pi)
+    return np.stack([a, ex, ey, hx, hy, lam], axis=-1)
+
+
+# ---------------------------------------------------------------------------------------------
+# Trajectory
+# ---------------------------------------------------------------------------------------------
+
+
+def _grid(scenario: Scenario, last_s: float) -> np.ndarray:
+    """Sample times start + i Δt in (0, min(end, last T13 time)], s."""
+    sch = scenario.schedule
+    end = min(sch.end_s, last_s)
+    n = int(math.floor((end - sch.start_s) / sch.data_interval_s * (1 + 1e-14))) + 1
+    t = sch.start_s + sch.data_interval_s * np.arange(max(n, 0))
+    return t[(t > 0) & (t <= end)]
+
+
+def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.ndarray,
+         grid: np.ndarray, progress: Callable[[str], None]) -> _Arc:
+    """Propagate segment by segment from each epoch time (module docstring, item 1)."""
+    epochs = t13[is_epoch]
+    ends = np.append(epochs[1:], t13[-1])
+    x_start = np.asarray(scenario.x0, dtype=float)
+    values = dict(scenario.dynamic_values)
+    parts: list[Trajectory] = []
+    for a, b in zip(epochs, ends, strict=True):
+        out = np.unique(np.concatenate([grid[(grid > a) & (grid <= b)],
+                                        t13[(t13 > a) & (t13 <= b)]]))
+        traj = prop.propagate(x_start, out, t0_s=float(a), stm=True, param_values=values,
+                              theta0_rad=scenario.epoch.gmst_rad(),
+                              epoch_jd_utc=scenario.epoch.jd)
+        parts.append(traj)
+        x_start = traj.states[-1]
+        progress("propagation")
+    return _Arc(np.concatenate([p.t_s for p in parts]),
+                np.concatenate([p.states for p in parts]),
+                np.concatenate([p.stm for p in parts]),
+                np.concatenate([p.sensitivity for p in parts]))
+
+
+# ---------------------------------------------------------------------------------------------
+# Observations
+# ---------------------------------------------------------------------------------------------
+
+
+def _passes(ts: TrackingStation, scenario: Scenario, t: np.ndarray, states: np.ndarray
+            ) -> list[tuple[int, int]]:
+    """Index ranges [start, stop) into the grid of the station's passes after the limits."""
+    sch = scenario.schedule
+    geometric = MeasurementModel(ts.station, scenario.epoch.gmst_rad(), ("elevation",))
+    visible = is_visible(geometric.elevation_rad(t, states), ts.station.elev_mask_rad)
+    for start, end in ts.blackouts_s:
+        visible &= ~((t >= start) & (t <= end))
+    out = []
+    for start, stop in find_passes(visible, t, _GAP_INTERVALS * sch.data_interval_s):
+        stop = start + int(np.count_nonzero(t[start:stop] - t[start] <= sch.max_pass_s))
+        if t[stop - 1] - t[start] >= sch.min_pass_s:
+            out.append((int(start), int(stop)))
+    return out
+
+
+def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
+                       ) -> MeasurementModel:
+    light_time = None
+    if scenario.schedule.light_time != "none":
+        values = dict(scenario.dynamic_values)
+
+        def state_at(t_s: np.ndarray) -> np.ndarray:
+            return prop.propagate(scenario.x0, t_s, stm=False, param_values=values,
+                                  theta0_rad=scenario.epoch.gmst_rad(),
+                                  epoch_jd_utc=scenario.epoch.jd).states
+
+        light_time = LightTime(two_way=scenario.schedule.light_time == "two_way",
+                               state_at=state_at)
+    return MeasurementModel(ts.station, scenario.epoch.gmst_rad(), ts.kinds, light_time,
+                            ts.range_bias_km, ts.range_rate_bias_km_s)
+
+
+def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc: _Arc,
+                  grid: np.ndarray, t13: np.ndarray, columns: dict[str, int]
+                  ) -> _StationData | None:
+    """Rows of A for one station (module docstring, item 2), or None without samples."""
+    pos = np.searchsorted(arc.t_s, grid)
+    passes = _passes(ts, scenario, grid, arc.states[pos])
+    if not passes:
+        return None
+    take = np.concatenate([np.arange(a, b) for a, b in passes])
+    label = np.concatenate([np.full(b - a, i) for i, (a, b) in enumerate(passes)])
+    t, p = grid[take], pos[take]
+    x, phi, sens = arc.states[p], arc.phi[p], arc.sens[p]
+    model = _measurement_model(ts, scenario, prop)
+    h = model.state_partials(t, x)
+    a = np.zeros(h.shape[:2] + (len(columns),))
+    n_dyn = sens.shape[-1]
+    a[..., :6] = h @ phi
+    a[..., 6:6 + n_dyn] = h @ sens
+    name = ts.station.name
+    if ts.location != "none":
+        first = columns[f"{name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
+        a[..., first:first + 3] = model.station_partials(t, x, ts.location)
+    bias = model.bias_partials(t)
+    for kind in ts.biases:
+        i = BIAS_KINDS.index(kind)
+        a[..., columns[f"{name}.{BIAS_NAMES[i]}"]] = bias[..., i]
+    record = np.searchsorted(t13, t, side="left")
+    change = np.ones(t.size, dtype=bool)
+    change[1:] = (label[1:] != label[:-1]) | (record[1:] != record[:-1])
+    m = len(ts.kinds)
+    pass_rows = [(float(grid[a_]), float(grid[b_ - 1]), (b_ - a_) * m) for a_, b_ in passes]
+    return _StationData(t, model.compute(t, x), a, record, np.cumsum(change) - 1, pass_rows)
+
+
+def _accumulate(ts: TrackingStation, data: _StationData, n_o: int
+                ) -> dict[int, list]:
+    """Per record k: [ΔJ, ΔJ̃, n_obs] of the station (module docstring, item 3)."""
+    out: dict[int, list] = {}
+    bounds = np.flatnonzero(np.diff(data.segment, prepend=-1, append=data.segment[-1] + 1))
+    for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
+        k = int(data.record[start])
+        acc = out.setdefault(k, [np.zeros((n_o, n_o)), np.zeros((n_o, n_o)), 0])
+        t = data.t_s[start:stop]
+        for c, (fit, real) in enumerate(zip(ts.fit, ts.real, strict=True)):
+            weights = np.full(t.size, fit.weight)
+            j_fit, j_real = normal_matrices(data.a[start:stop, c, :], t, weights, real)
+            acc[0] += j_fit
+            acc[1] += j_real
+            acc[2] += t.size
+    return out
+
+
+def _raw(stations: tuple[TrackingStation, ...], data: list[_StationData | None], n_o: int
+         ) -> TapeRaw:
+    """One row per scalar observation, time-ordered within each station."""
+    cols: dict[str, list[np.ndarray]] = {}
+    segment_offset = 0
+    for ts, d in zip(stations, data, strict=True):
+        if d is None:
+            continue
+        n, m = d.values.shape
+        kind_code = np.array([KINDS.index(k) for k in ts.kinds])
+        rows = {
+            "t_s": np.repeat(d.t_s, m),
+            "station": np.full(n * m, ts.number),
+            "kind": np.tile(kind_code, n),
+            "record": np.repeat(d.record, m),
+            "segment": segment_offset + (d.segment[:, None] * m + np.arange(m)).ravel(),
+            "value": d.values.ravel(),
+            "A": d.a.reshape(n * m, n_o),
+            "weight": np.tile([f.weight for f in ts.fit], n),
+            "m_white_var": np.tile([r.sigma_white**2 for r in ts.real], n),
+            "m_bias_var": np.tile([r.sigma_pass_bias**2 for r in ts.real], n),
+            "m_corr_var": np.tile([r.sigma_correlated**2 for r in ts.real], n),
+            "m_tau_s": np.tile([r.tau_s for r in ts.real], n),
+        }
+        segment_offset += (int(d.segment[-1]) + 1) * m
+        for key, value in rows.items():
+            cols.setdefault(key, []).append(value)
+    joined = {key: np.concatenate(value) for key, value in cols.items()}
+    return TapeRaw(KINDS, **joined)
+
+
+# ---------------------------------------------------------------------------------------------
+# Miss parameters
+# ---------------------------------------------------------------------------------------------
+
+
+def _miss_function(scenario: Scenario, gm_values: dict[str, float]
+                   ) -> tuple[Callable[[np.ndarray, float], np.ndarray], str, float, np.ndarray]:
+    """Return (m(state at t_m, gm), name of the GM it uses directly, that GM's value, the
+    state the differencing steps scale with: relative to the target for a B-plane)."""
+    miss = scenario.miss
+    names = [n for n, _ in MISS_QUANTITIES[miss.kind]]
+    index = [names.index(q) for q in miss.quantities]
+    if miss.kind == "bplane":
+        program = BPlaneProgram(scenario.epoch, scenario.x0[:3],
+                                Propagator(scenario.state_model), target=miss.body,
+                                reference=miss.reference)
+        body = program.target_state(np.array([miss.t_s]))[0][0]
+
+        def bplane(x: np.ndarray, gm: float) -> np.ndarray:
+            z = x - body
+            bp = b_plane(z[:3], z[3:], gm, reference=miss.reference)
+            all_values = (bp.b_dot_r_km, bp.b_dot_t_km, bp.ltof_s,
+                          miss.t_s + bp.time_to_periapsis_s)
+            return np.array([float(all_values[i]) for i in index])
+
+        name = f"GM_{miss.body}"
+        return bplane, name, gm_values[name], -body
+
+    def elements(x: np.ndarray, gm: float) -> np.ndarray:
+        if miss.kind == "equinoctial":
+            return equinoctial_elements(x, gm)[index]
+        return np.asarray(cartesian_to_elements(x, gm), dtype=float)[index]
+
+    return elements, "GM", gm_values["GM"], np.zeros(6)
+
+
+def _difference(f: Callable[[np.ndarray], np.ndarray], x: np.ndarray, steps: np.ndarray,
+                angles: np.ndarray) -> np.ndarray:
+    """Central differences of f at x with per-component steps; angle rows wrapped."""
+    cols = []
+    for i, h in enumerate(steps):
+        e = np.zeros_like(x)
+        e[i] = h
+        diff = f(x + e) - f(x - e)
+        diff[angles] = wrap_angle_rad(diff[angles])
+        cols.append(diff / (2.0 * h))
+    return np.stack(cols, axis=-1)
+
+
+def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """Return the nominal miss parameters (n_m,) and B = ∂m/∂x(t_0) (n_m, n_o).
+
+    Equations in the module docstring (item 4).
+
+    Raises
+    ------
+    InputError
+        Classical elements asked of a near-circular or near-equatorial orbit.
+    NotHyperbolicError
+        A B-plane asked of a state that is not hyperbolic relative to the target.
+    """
+    miss = scenario.miss
+    values = dict(scenario.dynamic_values)
+    traj = scenario.propagator().propagate(
+        scenario.x0, np.array([miss.t_s]), stm=True, param_values=values,
+        theta0_rad=scenario.epoch.gmst_rad(), epoch_jd_utc=scenario.epoch.jd)
+    x, phi, sens = traj.states[0], traj.stm[0], traj.sensitivity[0]
+    body_gm = f"GM_{miss.body}" if miss.kind == "bplane" else "GM"
+    gm_values = default_parameters(scenario.state_model, (body_gm,))
+    gm_values.update(values)
+    f, gm_name, gm, offset = _miss_function(scenario, gm_values)
+    nominal = f(x, gm)
+    if miss.kind == "classical":
+        elements = np.asarray(cartesian_to_elements(x, gm), dtype=float)
+        e, i = elements[1], min(elements[2], np.pi - elements[2])
+        if e < CLASSICAL_MIN_E or i < CLASSICAL_MIN_I_rad:
+            raise InputError(scenario.source, "miss.kind",
+                             "equinoctial elements for a near-circular or near-equatorial "
+                             "orbit (classical angles are singular there)",
+                             f"e = {e:.3g}, i = {i:.3g} rad at the miss time")
+    angles = np.array([u == "rad" for u in miss.units])
+    # Steps scale with the state the formulas see (target-relative for a B-plane: |z| of a
+    # flyby is 1e-2 of the Earth-centred |x|, and G's position block needs the finer step).
+    rel = x + offset
+    steps = MISS_STEP * np.repeat([np.linalg.norm(rel[:3]), np.linalg.norm(rel[3:])], 3)
+    g = _difference(lambda s: f(s, gm), x, steps, angles)
+    big_b = np.zeros((len(nominal), scenario.n_o))
+    big_b[:, :6] = g @ phi
+    big_b[:, 6:6 + sens.shape[-1]] = g @ sens
+    if gm_name in scenario.dynamic:
+        column = 6 + scenario.dynamic.index(gm_name)
+        big_b[:, column] += _difference(lambda q: f(x, float(q[0])), np.array([gm]),
+                                        np.array([MISS_STEP * gm]), angles)[:, 0]
+    return nominal, big_b
+
+
+# ---------------------------------------------------------------------------------------------
+# The simulator
+# ---------------------------------------------------------------------------------------------
+
+
+def simulate(scenario: Scenario, *, raw: bool = False,
+             progress: ProgressCallback | None = None) -> Simulation:
+    """Run TAPP I on a scenario: return the T13 tape and the trajectory.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    raw : also keep the per-observation rows (``tape.raw``) for validation.
+    progress : called with (stage, step, total) as the work advances.
+
+    Raises
+    ------
+    InputError
+        A schedule that yields no observation (naming the scenario file and ``tracking``);
+        classical miss elements at a singular orbit.
+    PropagationError, NotHyperbolicError, DivergenceError
+        From the integrator, the B-plane and the light-time iteration.
+    """
+    times = scenario.times
+    t13, is_epoch, is_input = times.t13_s, times.is_epoch, times.is_input
+    n_it = t13.size - 1
+    params = scenario.parameters
+    n_o, n_p = len(params), scenario.n_p
+    columns = {par.name: i for i, par in enumerate(params)}
+    prop = scenario.propagator()
+    n_seg = int(np.count_nonzero(is_epoch))
+    total = n_seg + 2 * len(scenario.stations) + 1
+    step = iter(range(1, total + 1))
+
+    def tick(stage: str) -> None:
+        done = next(step)
+        if progress is not None:
+            progress(stage, done, total)
+
+    grid = _grid(scenario, float(t13[-1]))
+    arc = _arc(scenario, prop, t13, is_epoch, grid, tick)
+
+    data: list[_StationData | None] = []
+    for ts in scenario.stations:
+        data.append(_station_data(ts, scenario, prop, arc, grid, t13, columns))
+        tick(f"observations {ts.station.name}")
+    if all(d is None for d in data):
+        raise InputError(scenario.source, "tracking",
+                         "a schedule that yields at least one observation (check the stations, "
+                         "their masks and blackouts, start/end, data_interval_s, min_pass_s)",
+                         f"0 observations from {len(grid)} sample times")
+
+    pair_rows = []
+    for ts, d in zip(scenario.stations, data, strict=True):
+        if d is not None:
+            for k, (dj, djt, count) in sorted(_accumulate(ts, d, n_o).items()):
+                pair_rows.append((k, ts.number, count, dj, djt))
+        tick(f"normal matrices {ts.station.name}")
+    pair_rows.sort(key=lambda row: (row[0], row[1]))
+
+    nominal, big_b = miss_partials(scenario)
+    tick("miss partials")
+
+    at_k = np.searchsorted(arc.t_s, t13[1:])
+    u = np.zeros((n_it, n_p, n_o))
+    u[:, :, :6] = arc.phi[at_k]
+    u[:, :, 6:6 + arc.sens.shape[-1]] = arc.sens[at_k]
+    j = np.maximum.accumulate(np.where(is_epoch[:-1], np.arange(n_it), 0))
+    stations = scenario.stations
+    tape = T13(
+        iden=scenario.iden,
+        epoch=scenario.epoch,
+        n_p=n_p,
+        parameters=TapeParameters(tuple(p.name for p in params), tuple(p.unit for p in params),
+                                  tuple(p.kind for p in params),
+                                  np.array([p.station for p in params]),
+                                  np.array([p.nominal for p in params])),
+        stations=TapeStations(
+            np.array([s.number for s in stations]), tuple(s.station.name for s in stations),
+            tuple(",".join(s.kinds) for s in stations),
+            np.degrees([s.station.lat_rad for s in stations]),
+            np.degrees([s.station.lon_rad for s in stations]),
+            np.array([s.station.h_km for s in stations]),
+            np.degrees([s.station.elev_mask_rad for s in stations])),
+        miss=TapeMiss(scenario.miss.kind, scenario.miss.t_s, scenario.miss.quantities,
+                      scenario.miss.units, nominal, big_b),
+        records=TapeRecords(t13, is_epoch, is_input, j, np.arange(1, n_it + 1),
+                            arc.states[at_k], u),
+        pairs=TapePairs(np.array([r[0] for r in pair_rows]), np.array([r[1] for r in pair_rows]),
+                        np.array([r[2] for r in pair_rows]),
+                        np.array([r[3] for r in pair_rows]), np.array([r[4] for r in pair_rows])),
+        passes=_pass_table(stations, data),
+        raw=_raw(stations, data, n_o) if raw else None,
+        provenance={"scenario": scenario.document_json, "scenario_source": scenario.source},
+    )
+    t_out = np.concatenate([[0.0], arc.t_s])
+    states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])
+    return Simulation(tape, t_out, states)
+
+
+def _pass_table(stations: tuple[TrackingStation, ...], data: list[_StationData | None]
+                ) -> TapePasses:
+    rows = [(ts.number, *p) for ts, d in zip(stations, data, strict=True) if d is not None
+            for p in d.passes]
+    rows.sort(key=lambda r: (r[1], r[0]))
+    return TapePasses(np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+                      np.array([r[2] for r in rows]), np.array([r[3] for r in rows]))

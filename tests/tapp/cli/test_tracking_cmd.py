@@ -1,0 +1,101 @@
+"""``tapp simulate`` and ``tapp tape info`` end to end through the typer app."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+import tapp.cli.tracking_cmd  # noqa: F401  (registers the commands until tapp.cli imports it)
+from tapp.cli.common import app
+from tapp.tape import read_t13
+
+SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+LEO = SCENARIOS / "leo_equatorial.toml"
+runner = CliRunner()
+
+
+def _edited(tmp_path: Path, old: str, new: str, source: Path = LEO) -> Path:
+    text = source.read_text()
+    assert old in text, old
+    path = tmp_path / "edited.toml"
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+def test_leo_scenario_to_tape_with_raw_rows_and_oem(tmp_path: Path) -> None:
+    out, oem = tmp_path / "leo.t13.h5", tmp_path / "leo.oem"
+    res = runner.invoke(app, ["simulate", str(LEO), "-o", str(out), "--raw", "--oem", str(oem),
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    info = json.loads(res.stdout)
+    assert (info["n_o"], info["n_p"], info["n_m"], info["n_ts"], info["n_it"]) == (
+        38, 6, 6, 6, 8)
+    assert info["bytes"] == out.stat().st_size and info["observations"] > 500
+    tape = read_t13(out)
+    assert tape.raw is not None and tape.raw.t_s.size == info["observations"]
+    lines = oem.read_text().splitlines()
+    assert lines[0] == "CCSDS_OEM_VERS = 2.0" and "REF_FRAME = EME2000" in lines
+    data = lines[lines.index("META_STOP") + 2:]
+    assert len(data) == 2881  # t = 0 and every 30 s over 24 h
+    assert data[0].startswith("2026-01-01T00:00:00.000000 6550.524000000")
+
+
+def test_deep_space_scenario_through_the_cli(tmp_path: Path) -> None:
+    out = tmp_path / "deep.t13.h5"
+    res = runner.invoke(app, ["simulate", str(SCENARIOS / "deep_space.toml"), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "n_o = 23" in res.stdout and "n_ts = 3" in res.stdout
+    info = runner.invoke(app, ["tape", "info", str(out), "--json"])
+    summary = json.loads(info.stdout)
+    assert [s["name"] for s in summary["stations"]] == ["GOLDSTONE", "CANBERRA", "MADRID"]
+    assert all(s["passes"] >= 25 and s["observations"] > 20000 for s in summary["stations"])
+    assert [e["utc"] for e in summary["epochs"]] == [
+        "2026-03-10T12:00:00.000", "2026-03-14T02:05:58.384", "2026-03-25T12:00:00.000"]
+    assert summary["miss"]["names"] == ["b_dot_r_km", "b_dot_t_km", "flight_time_s"]
+
+
+def test_tape_info_text(tmp_path: Path) -> None:
+    out = tmp_path / "leo.t13.h5"
+    assert runner.invoke(app, ["simulate", str(LEO), "-o", str(out)]).exit_code == 0
+    res = runner.invoke(app, ["tape", "info", str(out)])
+    assert res.exit_code == 0, res.output
+    for text in ("T13", "KWAJALEIN.range_rate_bias_km_s", "Stations", "Epoch times",
+                 "2026-01-01T12:00:00.000", "lambda_m_rad"):
+        assert text in res.stdout, text
+
+
+@pytest.mark.parametrize(("old", "new", "field"), [
+    ('stations = ["QUITO", "KOUROU"', 'stations = ["QUITO", "NOWHERE"', "tracking.stations"),
+    ('observables = ["range", "range_rate"]', 'observables = ["range", "doppler"]',
+     "tracking.observables"),
+    ('dynamic = ["GM", "J2"]', 'dynamic = ["GM", "J9"]', "parameters.dynamic"),
+    ("sigma_range_m = 15.0", "sigma_range_m = 0.0", "noise.fit.sigma_range_m"),
+    ("epochs = [43200.0]", "epochs = [43200.0, 21600.0]", "times.epochs"),
+    ("blackouts = []", "blackouts = [[0.0, 90000.0]]", "tracking"),
+])
+def test_bad_input_is_one_line_naming_file_and_field_and_no_tape(
+        tmp_path: Path, old: str, new: str, field: str) -> None:
+    path = _edited(tmp_path, old, new)
+    out = tmp_path / "bad.t13.h5"
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(out)])
+    assert res.exit_code == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {path}: {field}: expected"), lines
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["edited.toml"]
+
+
+def test_unreadable_tapes(tmp_path: Path) -> None:
+    out = tmp_path / "leo.t13.h5"
+    assert runner.invoke(app, ["simulate", str(LEO), "-o", str(out)]).exit_code == 0
+    os.truncate(out, out.stat().st_size // 3)
+    res = runner.invoke(app, ["tape", "info", str(out)])
+    assert res.exit_code == 1
+    assert res.stderr.strip().startswith(f"error: {out}: file: expected a readable HDF5")
+    missing = runner.invoke(app, ["tape", "info", str(tmp_path / "none.h5")])
+    assert missing.exit_code == 2 and "none.h5: file: expected an existing" in missing.stderr
+    scenario = runner.invoke(app, ["simulate", str(tmp_path / "none.toml"), "-o", str(out)])
+    assert scenario.exit_code == 2 and "none.toml: file:" in scenario.stderr

@@ -1,0 +1,155 @@
+"""Scenario files: what they parse to, and one clear error naming file and field otherwise."""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tapp.errors import InputError
+from tapp.tracking.scenario import parse_scenario, read_scenario
+from tapp.tracking.simulate import simulate
+from tests.tapp.tracking.helpers import SOURCE, leo_document, leo_scenario
+
+SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+
+
+def test_the_base_scenario_parses_to_named_parameters_with_units() -> None:
+    sc = leo_scenario()
+    names = [p.name for p in sc.parameters]
+    assert names[:8] == ["x_km", "y_km", "z_km", "vx_km_s", "vy_km_s", "vz_km_s", "GM_km3_s2",
+                         "J2"]
+    assert names[8:13] == ["QUITO.spin_radius_km", "QUITO.lon_rad", "QUITO.z_km",
+                           "QUITO.range_bias_km", "QUITO.range_rate_bias_km_s"]
+    assert names[13:16] == ["KOUROU.x_km", "KOUROU.y_km", "KOUROU.z_km"]  # per-station ecef
+    units = {p.name: p.unit for p in sc.parameters}
+    assert units["GM_km3_s2"] == "km^3/s^2" and units["QUITO.lon_rad"] == "rad"
+    assert units["QUITO.range_rate_bias_km_s"] == "km/s" and units["J2"] == "1"
+    fit = sc.stations[0].fit
+    assert [f.kind for f in fit] == ["range", "range_rate"]
+    assert fit[0].sigma == pytest.approx(0.015) and fit[1].sigma == pytest.approx(20e-6)
+    real = sc.stations[0].real[1]
+    assert (real.sigma_white, real.sigma_correlated, real.tau_s) == pytest.approx(
+        (15e-6, 10e-6, 90.0))
+    np.testing.assert_array_equal(sc.times.t13_s, [0.0, 3600.0, 7200.0, 10800.0])
+
+
+def test_times_as_utc_text_or_toml_dates_equal_seconds() -> None:
+    sc = leo_scenario(times={"input": ["2026-01-01T01:00:00", dt.datetime(2026, 1, 1, 2)],
+                             "input_step_s": None, "end": None,
+                             "epochs": ["2026-01-01T00:30:00Z"]})
+    assert sc.times.input_s == (3600.0, 7200.0)
+    assert sc.times.epochs_s == (0.0, 1800.0)
+
+
+def test_both_shipped_scenarios_parse() -> None:
+    leo = read_scenario(SCENARIOS / "leo_equatorial.toml")
+    assert leo.n_o == 38 and leo.var_model.gravity.name == "J2"
+    assert leo.state_model.gravity.name == "5x5"
+    deep = read_scenario(SCENARIOS / "deep_space.toml")
+    assert deep.n_o == 23 >= 20
+    assert [s.station.name for s in deep.stations] == ["GOLDSTONE", "CANBERRA", "MADRID"]
+    assert deep.miss.quantities == ("b_dot_r_km", "b_dot_t_km", "flight_time_s")
+    assert deep.schedule.end_s == pytest.approx(30 * 86400.0)
+
+
+def _with(path: tuple[str, ...], value) -> dict:
+    doc = leo_document()
+    table = doc
+    for key in path[:-1]:
+        table = table.setdefault(key, {})
+    if value is None:
+        table.pop(path[-1], None)
+    else:
+        table[path[-1]] = value
+    return doc
+
+
+@pytest.mark.parametrize(("path", "value", "field"), [
+    (("tracking", "stations"), ["QUITO", "NOWHERE"], "tracking.stations"),
+    (("tracking", "observables"), ["range", "doppler"], "tracking.observables"),
+    (("tracking", "station", "KOUROU", "observables"), ["angle"],
+     "tracking.station.KOUROU.observables"),
+    (("tracking", "station", "NOWHERE"), {}, "tracking.station.NOWHERE"),
+    (("tracking", "light_time"), "three_way", "tracking.light_time"),
+    (("tracking", "data_interval_s"), 0.0, "tracking.data_interval_s"),
+    (("parameters", "dynamic"), ["GM", "J9"], "parameters.dynamic"),
+    (("parameters", "dynamic"), ["GM_mars"], "parameters.dynamic"),
+    (("parameters", "values"), {"GM_moon": 4902.8}, "parameters.values.GM_moon"),
+    (("parameters", "station_location"), "polar", "parameters.station_location"),
+    (("parameters", "station_biases"), ["azimuth"], "parameters.station_biases"),
+    (("noise", "fit", "sigma_range_m"), 0.0, "noise.fit.sigma_range_m"),
+    (("noise", "fit", "sigma_range_rate_mm_s"), -1.0, "noise.fit.sigma_range_rate_mm_s"),
+    (("noise", "fit", "sigma_range_rate_mm_s"), None, "noise.fit.sigma_range_rate_mm_s"),
+    (("noise", "real", "sigma_range_m"), -2.0, "noise.real.sigma_range_m"),
+    (("noise", "real", "tau_range_rate_s"), None, "noise.real.tau_range_rate_s"),
+    (("noise", "real", "bias_doppler_m"), 1.0, "noise.real.bias_doppler_m"),
+    (("times", "epochs"), [7200.0, 3600.0], "times.epochs"),
+    (("times", "epochs"), [0.0], "times.epochs"),
+    (("times", "epochs"), [20000.0], "times.epochs"),
+    (("times", "input_step_s"), -60.0, "times.input_step_s"),
+    (("times", "end"), "2026-13-01", "times.end"),
+    (("miss", "body"), "moon", "miss.body"),
+    (("miss", "kind"), "delaunay", "miss.kind"),
+    (("miss", "quantities"), ["a_km", "b_dot_t_km"], "miss.quantities"),
+    (("epoch",), "yesterday", "epoch"),
+    (("injection", "r_km"), [1000.0, 0.0, 0.0], "injection"),
+    (("injection", "v_km_s"), [1.0, "fast", 0.0], "injection.v_km_s"),
+    (("model", "gravity"), "J42", "model.gravity"),
+    (("model", "var_third_bodies"), ["pluto"], "model.var_third_bodies"),
+    (("schedule",), {}, "schedule"),
+])
+def test_bad_input_names_file_and_field(path: tuple, value, field: str) -> None:
+    with pytest.raises(InputError) as err:
+        parse_scenario(_with(path, value), SOURCE)
+    assert (err.value.source, err.value.field) == (SOURCE, field)
+    assert str(err.value).startswith(f"{SOURCE}: {field}: expected")
+
+
+def test_input_times_not_ascending() -> None:
+    doc = leo_document(times={"input": [7200.0, 3600.0], "input_step_s": None, "end": None})
+    with pytest.raises(InputError, match="times.input: expected times in strictly ascending"):
+        parse_scenario(doc, SOURCE)
+
+
+def test_bias_of_an_observable_the_station_does_not_measure() -> None:
+    doc = leo_document(tracking={"station": {"QUITO": {"observables": ["range"]}}})
+    with pytest.raises(InputError) as err:
+        parse_scenario(doc, SOURCE)
+    assert err.value.field == "parameters.station_biases" and err.value.got == "range_rate"
+
+
+def test_a_schedule_that_yields_no_observation_is_an_input_error() -> None:
+    sc = leo_scenario(tracking={"blackouts": [[0.0, 20000.0]]})
+    with pytest.raises(InputError) as err:
+        simulate(sc)
+    assert (err.value.source, err.value.field) == (SOURCE, "tracking")
+    assert "0 observations" in str(err.value)
+
+
+def test_classical_miss_elements_of_a_circular_orbit_are_refused() -> None:
+    # Two-body motion keeps e = 0 (with J2 the osculating e reaches 1e-3 and is accepted).
+    sc = leo_scenario(miss={"kind": "classical"}, model={"gravity": "J0", "var_gravity": "J0"},
+                      parameters={"dynamic": ["GM"]})
+    with pytest.raises(InputError, match="miss.kind: expected equinoctial"):
+        simulate(sc)
+
+
+def test_files_that_cannot_be_read(tmp_path: Path) -> None:
+    with pytest.raises(InputError, match="none.toml: file: expected an existing"):
+        read_scenario(tmp_path / "none.toml")
+    broken = tmp_path / "broken.toml"
+    broken.write_text("title = \n")
+    with pytest.raises(InputError, match="broken.toml: TOML: expected valid TOML"):
+        read_scenario(broken)
+
+
+def test_default_real_world_is_white_noise_of_the_fit_sigma() -> None:
+    sc = leo_scenario(noise={"real": None})
+    for st in sc.stations:
+        for fit, real in zip(st.fit, st.real, strict=True):
+            assert (real.sigma_white, real.sigma_pass_bias, real.sigma_correlated) == (
+                fit.sigma, 0.0, 0.0) and math.isinf(real.tau_s)
