@@ -2,6 +2,9 @@
 
 1. The propagation demo (foundation): SATORB2 with (J2,J2) and (J2,J0), 24 h.
 2. The approximate-STM study: every run of the brief -> results/approx_stm/report.md.
+3. SEARCH: the lunar B-plane targeting of scenarios/search_bplane.toml -> results/search/.
+4. ITER: the seed's examples (five azimuths, type 1 and 2; 30 days x 5 azimuths) and the
+   departure-day sweep with SEARCH as the body, on a local Dask cluster -> results/iter/.
 """
 
 from __future__ import annotations
@@ -11,10 +14,14 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from iter import CaseStatus, Execution, load_sweep, run_sweep
 from tapp.od.study import planned_cases, run_study
 from tapp.report.approx_stm import write_report
+from tapp.report.markdown import table
+from tapp.report.sweeps import plot_departure_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results"
@@ -42,9 +49,55 @@ def approx_stm_study() -> None:
     print(f"approximate-STM study -> {report}")
 
 
+def _tapp(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "tapp.cli", *args], capture_output=True,
+                          text=True, check=False)
+
+
+def search_targeting() -> None:
+    out = RESULTS / "search"
+    out.mkdir(parents=True, exist_ok=True)
+    for mode, extra in (("differenced", ()), ("analytic", ("--analytic-partials",))):
+        proc = _tapp("search", str(ROOT / "scenarios" / "search_bplane.toml"), *extra)
+        (out / f"report_{mode}.txt").write_text(proc.stdout)
+        if proc.returncode != 0:
+            raise SystemExit(f"tapp search ({mode}) exited {proc.returncode}: {proc.stderr}")
+    print(f"SEARCH lunar B-plane targeting -> {out}")
+
+
+def sweeps() -> None:
+    out = RESULTS / "iter"
+    out.mkdir(parents=True, exist_ok=True)
+    lines = ["# ITER sweeps\n"]
+    for name in ("iter_azimuth_type1", "iter_azimuth_type2", "iter_days_azimuths",
+                 "iter_lunar_departure"):
+        sweep = load_sweep(ROOT / "scenarios" / f"{name}.toml")
+        h5 = out / f"{name}.h5"
+        h5.unlink(missing_ok=True)  # a fresh run, not a resume
+        res = run_sweep(sweep, output_h5=h5, output_csv=out / f"{name}.csv",
+                        execution=Execution(workers=2), progress=True)
+        lines.append(f"- `{name}`: {res.summary.n_cases} cases, {res.summary.n_succeeded} "
+                     f"succeeded, {res.summary.n_failed} failed -> `{name}.csv`")
+    tab = res.table
+    day = np.asarray(tab.column("departure_day"), dtype=float)
+    ok = tab.column("status") == int(CaseStatus.OK)
+    dv = np.asarray(tab.column("dv_km_s"), dtype=float)
+    tof = np.asarray(tab.column("flight_time_s"), dtype=float)
+    plot_departure_sweep(day, dv, tof, ok, out / "lunar_departure.png")
+    rows = [[f"{d:g}", f"{v * 1e3:.1f}" if k else "failed", f"{t / 86400:.3f}" if k else "—"]
+            for d, v, t, k in zip(day, dv, tof, ok, strict=True)]
+    lines += ["", "## Departure-day sweep (SEARCH as the body)", "",
+              table(["day", "ΔV (m/s)", "flight time (d)"], rows),
+              "![ΔV per day](lunar_departure.png)", ""]
+    (out / "report.md").write_text("\n".join(lines))
+    print(f"ITER sweeps -> {out / 'report.md'}")
+
+
 def main() -> None:
     propagation_demo()
     approx_stm_study()
+    search_targeting()
+    sweeps()
 
 
 if __name__ == "__main__":
