@@ -3,7 +3,9 @@
 1. The propagation demo (foundation): SATORB2 with (J2,J2) and (J2,J0), 24 h.
 2. The approximate-STM study: every run of the brief -> results/approx_stm/report.md.
 3. SEARCH: the lunar B-plane targeting of scenarios/search_bplane.toml -> results/search/.
-4. ITER: the seed's examples (five azimuths, type 1 and 2; 30 days x 5 azimuths) and the
+4. TAPP I: tracking simulations of leo_equatorial.toml and deep_space.toml -> T13 tapes,
+   their summaries and trajectories (CCSDS OEM) in results/tapp1/.
+5. ITER: the seed's examples (five azimuths, type 1 and 2; 30 days x 5 azimuths) and the
    departure-day sweep with SEARCH as the body, on a local Dask cluster -> results/iter/.
 """
 
@@ -65,6 +67,20 @@ def search_targeting() -> None:
     print(f"SEARCH lunar B-plane targeting -> {out}")
 
 
+def tracking_simulations() -> None:
+    out = RESULTS / "tapp1"
+    out.mkdir(parents=True, exist_ok=True)
+    for name in ("leo_equatorial", "deep_space"):
+        tape = out / f"{name}.t13.h5"
+        proc = _tapp("simulate", str(ROOT / "scenarios" / f"{name}.toml"), "-o", str(tape),
+                     "--oem", str(out / f"{name}.oem"))
+        if proc.returncode != 0:
+            raise SystemExit(f"tapp simulate {name} exited {proc.returncode}: {proc.stderr}")
+        info = _tapp("tape", "info", str(tape))
+        (out / f"{name}.info.txt").write_text(info.stdout)
+    print(f"TAPP I tapes -> {out}")
+
+
 def sweeps() -> None:
     out = RESULTS / "iter"
     out.mkdir(parents=True, exist_ok=True)
@@ -97,6 +113,7 @@ def main() -> None:
     propagation_demo()
     approx_stm_study()
     search_targeting()
+    tracking_simulations()
     sweeps()
 
 
