@@ -16,9 +16,10 @@ from pathlib import Path
 if __package__ in (None, ""):  # run as a script: make the repository importable
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
-from tests.bench import common, od, propagation, targeting, tracking  # noqa: E402
+from tests.bench import common, od, propagation, sweeps, targeting, tracking  # noqa: E402
 
-SECTIONS = {module.NAME: module for module in (propagation, tracking, od, targeting)}
+SECTIONS = {module.NAME: module
+            for module in (propagation, tracking, od, targeting, sweeps)}
 
 
 def main(argv: list[str] | None = None) -> int:
