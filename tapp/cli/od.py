@@ -49,6 +49,12 @@ def parse_arc_s(text: str, option: str = "--arc") -> float:
     return float(m.group(1)) * _UNIT_S[m.group(2)]
 
 
+def _model_pair(truth: str, stm: str) -> Propagator:
+    """The estimator's (state model, variational model) pair from the CLI options."""
+    return Propagator(earth_model(truth, source="--truth", field="model"),
+                      earth_model(stm, source="--stm", field="model"))
+
+
 def _observations(x_true: np.ndarray, truth: str, stations: str | None, obs_file: Path | None,
                   scenario: Path, seed: int | None) -> Observations:
     if obs_file is not None:
@@ -86,8 +92,7 @@ def dc(
     def body() -> None:
         arc_s = parse_arc_s(arc)
         x_true = setup.true_orbit(orbit, scenario)
-        prop = Propagator(earth_model(truth, source="--truth", field="model"),
-                          earth_model(stm, source="--stm", field="model"))
+        prop = _model_pair(truth, stm)
         data = _observations(x_true, truth, stations, obs, scenario, seed)
         if save_obs is not None:
             write_observations(save_obs, data)
@@ -162,8 +167,7 @@ def ekf(
     def body() -> None:
         arc_s = parse_arc_s(arc)
         x_true = setup.true_orbit(orbit, scenario)
-        prop = Propagator(earth_model(truth, source="--truth", field="model"),
-                          earth_model(stm, source="--stm", field="model"))
+        prop = _model_pair(truth, stm)
         p0 = _apriori(apriori, scenario)
         data = _observations(x_true, truth, stations, obs, scenario, seed).window(arc_s)
         x_start = setup.initial_estimate(x_true, setup.offset(scenario))
@@ -206,8 +210,7 @@ def rsig(
             if not (math.isfinite(value) and value > 0):
                 raise InputError(name, "value", "a finite number > 0", value)
         x_true = setup.true_orbit(orbit, scenario)
-        prop = Propagator(earth_model(truth, source="--truth", field="model"),
-                          earth_model(stm, source="--stm", field="model"))
+        prop = _model_pair(truth, stm)
         t = np.arange(0.0, hours * 3600.0 + 0.5 * step, step)
         sig = r_signature(prop, x_true, t, setup.tracking(scenario).theta0_rad)
         if json_out:

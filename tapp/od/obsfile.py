@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import csv
 import math
-import os
-import tempfile
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -22,6 +20,7 @@ import h5py
 import numpy as np
 
 from tapp import __version__
+from tapp.atomic import atomic_write
 from tapp.errors import InputError
 from tapp.measurements.stations import Station
 from tapp.od.observations import Observations
@@ -30,18 +29,6 @@ _COLUMNS = {"range": "range_km", "range_rate": "range_rate_km_s", "azimuth": "az
             "elevation": "elevation_rad"}
 FORMAT = "tapp-observations"
 VERSION = 1
-
-
-def _atomic(path: Path, write) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def write_observations(path: Path, obs: Observations) -> None:
@@ -73,7 +60,7 @@ def write_observations(path: Path, obs: Observations) -> None:
                 g["lon_deg"] = [math.degrees(s.lon_rad) for s in obs.stations]
                 g["h_km"] = [s.h_km for s in obs.stations]
                 g["elev_mask_deg"] = [math.degrees(s.elev_mask_rad) for s in obs.stations]
-    _atomic(path, write)
+    atomic_write(path, write)
 
 
 def read_observations(path: Path, stations: dict[str, Station] | None = None,

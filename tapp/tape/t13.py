@@ -61,9 +61,7 @@ index, with a :class:`~tapp.errors.TapeError` naming the file and the dataset.
 from __future__ import annotations
 
 import math
-import os
 import subprocess
-import tempfile
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -72,6 +70,7 @@ import h5py
 import numpy as np
 
 from tapp import __version__
+from tapp.atomic import atomic_write
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError, TapeError
 from tapp.frames.time import Epoch
@@ -89,8 +88,6 @@ SYMMETRY_TOL = 1e-12
 INFO_COLUMNS = ("x_km", "y_km", "z_km", "vx_km_s", "vy_km_s", "vz_km_s")
 UNITS_NOTE = ("km, km/s, s, rad; normal matrices in 1/(u_a u_b), partials in (row unit)/"
               "(column unit), with u the units of parameters/unit and miss/unit")
-#: Permissions of a written tape (rw-r--r--).
-FILE_MODE = 0o644
 _COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
 
 
@@ -544,18 +541,12 @@ def write_t13(path: Path | str, tape: T13, *, packing: str = "TR") -> Path:
         raise InputError("write_t13", "packing", f"one of {', '.join(PACKINGS)}", packing)
     path = Path(path)
     validate(tape, str(path))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
+
+    def write(tmp: Path) -> None:
         with h5py.File(tmp, "w") as f:
             _write(f, tape, packing)
-        os.chmod(tmp, FILE_MODE)  # mkstemp creates 0600
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
+
+    return atomic_write(path, write)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -10,19 +10,16 @@ The file is written to a temporary name and renamed.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
 
+from tapp.atomic import atomic_write
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
 from tapp.frames.time import Epoch
 
-#: Permissions of a written file (rw-r--r--).
-FILE_MODE = 0o644
 #: Digits of the seconds of the epochs (1 us).
 EPOCH_DECIMALS = 6
 
@@ -88,15 +85,4 @@ def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
 
 def write_oem(path: Path | str, text: str) -> Path:
     """Write OEM text to ``path`` atomically (temporary file in the same folder, rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.chmod(tmp, FILE_MODE)  # mkstemp creates 0600
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
+    return atomic_write(path, lambda tmp: tmp.write_text(text))
