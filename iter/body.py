@@ -250,6 +250,17 @@ class ProgramBody:
 
 Body = CallableBody | ProgramBody
 
+#: Prefix given to an output whose name is a varied name or a reserved column.
+CLASH_PREFIX = "output."
+
+
+def rename_clashes(outputs: dict[str, object], names: Sequence[str]) -> dict[str, object]:
+    """Return ``outputs`` with names that clash with a varied name or a reserved column
+    (``case``, ``status``, ``error``, ``elapsed_s``) prefixed by ``output.``: a program's own
+    ``status`` field is kept as ``output.status`` beside the sweep's status column."""
+    taken = {*names, *RESERVED_COLUMNS}
+    return {(CLASH_PREFIX + k if k in taken else k): v for k, v in outputs.items()}
+
 
 def run_case(body: Body, case: Case) -> CaseResult:
     """Run ``body`` for ``case`` and return its row; a failure becomes a FAILED row.
@@ -259,11 +270,7 @@ def run_case(body: Body, case: Case) -> CaseResult:
     """
     start_s = time.perf_counter()
     try:
-        outputs = flatten_outputs(body(case))
-        clash = sorted(set(outputs) & {*case.names, *RESERVED_COLUMNS})
-        if clash:
-            raise CaseFailure(f"output names {clash} clash with varied names or the "
-                              f"columns {list(RESERVED_COLUMNS)}")
+        outputs = rename_clashes(flatten_outputs(body(case)), case.names)
     except Exception as exc:  # noqa: BLE001 - recorded in the row; see docstring
         return CaseResult(index=case.index, values=case.values, outputs={},
                           status=CaseStatus.FAILED, error=f"{type(exc).__name__}: {exc}",

@@ -249,3 +249,11 @@ def test_results_file_layout(tmp_path):
         assert f["inputs/azimuth_deg"][77] == 102.0
         assert f["case"][-1] == 149
         assert set(f["status"][()]) == {0}
+
+
+def test_outputs_named_like_reserved_columns_are_prefixed() -> None:
+    from iter.body import rename_clashes
+
+    out = rename_clashes({"status": "converged", "case": 3, "arc": 1.0, "rms": 2.0}, ("arc",))
+    assert out == {"output.status": "converged", "output.case": 3, "output.arc": 1.0,
+                   "rms": 2.0}
