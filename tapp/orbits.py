@@ -14,7 +14,6 @@ All states are EME2000 inertial, centred on the Earth, with the EGM96 GM.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -23,6 +22,7 @@ import numpy as np
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.errors import InputError
 from tapp.frames.elements import elements_to_cartesian, true_to_mean_anomaly
+from tapp.tomlfile import read_toml
 
 _ELEMENT_KEYS = ("a", "e", "i", "raan", "argp")
 _CART_KEYS = ("x", "y", "z", "vx", "vy", "vz")
@@ -77,13 +77,7 @@ def _from_mapping(values: Mapping[str, float], source: str, field: str) -> np.nd
 
 def named_orbits(path: Path) -> dict[str, np.ndarray]:
     """Return the states of every ``[orbits.NAME]`` table of a scenario file."""
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(str(path), "file", "an existing scenario file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), "TOML", f"valid TOML ({exc})") from None
-    orbits = data.get("orbits", {})
+    orbits = read_toml(path).get("orbits", {})
     out = {}
     for name, table in orbits.items():
         renamed = {k.removesuffix("_km_s").removesuffix("_km").removesuffix("_deg"): v

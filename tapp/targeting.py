@@ -97,6 +97,7 @@ from tapp.dynamics import BODIES, PropagationError, Propagator, earth_model
 from tapp.ephemeris import position_km, utc_to_tdb_jd
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.tomlfile import finite_number
 
 #: Names of the independent variables x (injection velocity, EME2000) and dependent ones y.
 X_NAMES = ("vx_km_s", "vy_km_s", "vz_km_s")
@@ -553,20 +554,6 @@ def _table(data: Mapping, key: str, source: str, allowed: set[str], required: bo
     return value
 
 
-def _number(table: Mapping, key: str, source: str, where: str, *, default: float | None = None,
-            positive: bool = False, nonzero: bool = False) -> float:
-    value = table.get(key, default)
-    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-    if ok and positive:
-        ok = value > 0
-    if ok and nonzero:
-        ok = value != 0
-    if not ok:
-        what = "a finite number" + (" > 0" if positive else "") + (" != 0" if nonzero else "")
-        raise InputError(source, where, what, value)
-    return float(value)
-
-
 def _vector3(table: Mapping, key: str, source: str, where: str) -> np.ndarray:
     value = table.get(key)
     if (not isinstance(value, list) or len(value) != 3 or not all(
@@ -589,7 +576,7 @@ def _named(table: Mapping, key: str, names: tuple[str, ...], source: str, *,
         raise InputError(source, f"{where}.{unknown[0]}", f"one of {', '.join(names)}",
                          unknown[0])
     default = None if required else 0.0
-    return np.array([_number(sub, name, source, f"{where}.{name}", default=default,
+    return np.array([finite_number(sub, name, source, f"{where}.{name}", default=default,
                              positive=positive, nonzero=nonzero) for name in names])
 
 
@@ -670,9 +657,9 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     state_model = earth_model(gravity, bodies, source=source, field="model.gravity")
     var_model = earth_model(stm_gravity, stm_bodies, source=source, field="model.stm_gravity")
     propagator = Propagator(state_model, var_model,
-                            rtol=_number(mod, "rtol", source, "model.rtol", default=1e-13,
+                            rtol=finite_number(mod, "rtol", source, "model.rtol", default=1e-13,
                                          positive=True),
-                            atol=_number(mod, "atol", source, "model.atol", default=1e-13,
+                            atol=finite_number(mod, "atol", source, "model.atol", default=1e-13,
                                          positive=True))
 
     tgt = _table(data, "target", source, _TARGET_KEYS)
@@ -684,9 +671,9 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     if reference not in REFERENCE_POLES:
         raise InputError(source, "target.reference", f"one of {', '.join(REFERENCE_POLES)}",
                          reference)
-    horizon = _number(tgt, "max_flight_time_s", source, "target.max_flight_time_s",
+    horizon = finite_number(tgt, "max_flight_time_s", source, "target.max_flight_time_s",
                       default=8.0 * SECONDS_PER_DAY, positive=True)
-    scan = _number(tgt, "scan_step_s", source, "target.scan_step_s", default=600.0,
+    scan = finite_number(tgt, "scan_step_s", source, "target.scan_step_s", default=600.0,
                    positive=True)
     if scan >= horizon:
         raise InputError(source, "target.scan_step_s",
@@ -694,7 +681,7 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     program = BPlaneProgram(
         epoch=epoch, r0_km=r0, propagator=propagator, target=body, reference=reference,
         max_flight_time_s=horizon, scan_step_s=scan,
-        periapsis_time_tol_s=_number(tgt, "periapsis_time_tol_s", source,
+        periapsis_time_tol_s=finite_number(tgt, "periapsis_time_tol_s", source,
                                      "target.periapsis_time_tol_s", default=1e-3,
                                      positive=True))
 

@@ -11,7 +11,6 @@ failed case or any other error) and 2 (bad input, one line on stderr naming file
 from __future__ import annotations
 
 import time
-import tomllib
 from pathlib import Path
 from typing import Annotated
 
@@ -20,7 +19,6 @@ import typer
 from search import EXIT_FLAG, format_report
 from tapp.cli.common import app, print_json, run_guarded
 from tapp.constants import SECONDS_PER_DAY, RADIUS_km
-from tapp.errors import InputError
 from tapp.frames.time import Epoch
 from tapp.targeting import (
     X_NAMES,
@@ -30,6 +28,7 @@ from tapp.targeting import (
     run_search,
     scenario_search,
 )
+from tapp.tomlfile import read_toml
 
 #: Exit code of each SEARCH exit: 0 converged, the seed's FLAG + 1 otherwise.
 EXIT_CODE = {status: 0 if status == "converged" else flag + 1
@@ -42,15 +41,7 @@ _Y_LABELS = ("B.R (KM)", "B.T (KM)", "TF (S)")
 
 def read_scenario(path: Path) -> BPlaneSearch:
     """Read and validate a B-plane search scenario (TOML); errors name the file and field."""
-    try:
-        text = Path(path).read_text()
-    except FileNotFoundError:
-        raise InputError(str(path), "file", "an existing scenario file") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), "TOML", f"valid TOML ({exc})") from None
-    return scenario_search(data, str(path))
+    return scenario_search(read_toml(path), str(path))
 
 
 def _periapsis_utc(problem: BPlaneSearch, t_s: float) -> str:

@@ -9,7 +9,6 @@ the same data.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
@@ -26,6 +25,7 @@ from tapp.measurements.stations import Station
 from tapp.od.observations import Observations, simulate
 from tapp.orbits import DEFAULT_SCENARIO, named_orbits, parse_orbit
 from tapp.stations_file import load_network
+from tapp.tomlfile import finite_number, read_toml
 
 
 @dataclass(frozen=True, slots=True)
@@ -50,38 +50,28 @@ class Offset:
     di_rad: float
 
 
-def _number(table: Mapping, key: str, source: str, section: str, positive: bool = True) -> float:
-    value = table.get(key)
-    if not isinstance(value, int | float) or not math.isfinite(value) or (
-            positive and value <= 0):
-        raise InputError(source, f"{section}.{key}",
-                         "a finite number" + (" > 0" if positive else ""), value)
-    return float(value)
+def _positive(table: Mapping, key: str, source: str) -> float:
+    return finite_number(table, key, source, f"tracking.{key}", positive=True)
 
 
 @cache
 def load_study(path: Path = DEFAULT_SCENARIO) -> dict:
     """Return the parsed scenario TOML (cached); errors name the file."""
-    try:
-        return tomllib.loads(Path(path).read_text())
-    except FileNotFoundError:
-        raise InputError(str(path), "file", "an existing scenario file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), "TOML", f"valid TOML ({exc})") from None
+    return read_toml(path)
 
 
 def tracking(path: Path = DEFAULT_SCENARIO) -> Tracking:
     """Return the ``[tracking]`` settings."""
     table = load_study(path).get("tracking", {})
     src = str(path)
-    sigma = np.array([_number(table, "sigma_range_m", src, "tracking") * 1e-3,
-                      _number(table, "sigma_range_rate_mm_s", src, "tracking") * 1e-6])
+    sigma = np.array([_positive(table, "sigma_range_m", src) * 1e-3,
+                      _positive(table, "sigma_range_rate_mm_s", src) * 1e-6])
     seed = table.get("seed", 0)
     if not isinstance(seed, int) or seed < 0:
         raise InputError(src, "tracking.seed", "an integer >= 0", seed)
-    return Tracking(_number(table, "data_interval_s", src, "tracking"),
-                    _number(table, "span_days", src, "tracking") * 86400.0, sigma, seed,
-                    math.radians(_number(table, "equatorial_below_deg", src, "tracking")),
+    return Tracking(_positive(table, "data_interval_s", src),
+                    _positive(table, "span_days", src) * 86400.0, sigma, seed,
+                    math.radians(_positive(table, "equatorial_below_deg", src)),
                     parse_epoch(str(load_study(path).get("epoch", "")), source=src).gmst_rad())
 
 
@@ -89,9 +79,9 @@ def offset(path: Path = DEFAULT_SCENARIO) -> Offset:
     """Return the ``[initial_offset]`` of the brief."""
     table = load_study(path).get("initial_offset", {})
     src = str(path)
-    return Offset(_number(table, "da_m", src, "initial_offset", positive=False) * 1e-3,
-                  _number(table, "e", src, "initial_offset", positive=False),
-                  math.radians(_number(table, "di_deg", src, "initial_offset", positive=False)))
+    return Offset(finite_number(table, "da_m", src, "initial_offset.da_m") * 1e-3,
+                  finite_number(table, "e", src, "initial_offset.e"),
+                  math.radians(finite_number(table, "di_deg", src, "initial_offset.di_deg")))
 
 
 def initial_estimate(x_true: np.ndarray, off: Offset) -> np.ndarray:

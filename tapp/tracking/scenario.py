@@ -45,7 +45,6 @@ from __future__ import annotations
 import datetime as dt
 import json
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -63,6 +62,7 @@ from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.stations import Station
 from tapp.orbits import state_from_elements
 from tapp.stations_file import load_stations
+from tapp.tomlfile import read_toml
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
 #: Observable kinds, in the order of ``tapp.measurements.Observable``.
@@ -657,15 +657,4 @@ def parse_scenario(data: Mapping, source: str) -> Scenario:
 
 def read_scenario(path: Path | str) -> Scenario:
     """Read and validate a scenario file (TOML); errors name the file and the field."""
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise InputError(str(path), "file", "an existing scenario file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(str(path), "file", f"a readable text file ({exc})") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), "TOML", f"valid TOML ({exc})") from None
-    return parse_scenario(data, str(path))
+    return parse_scenario(read_toml(path), str(Path(path)))
