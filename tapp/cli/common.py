@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 from collections.abc import Callable
 from typing import Annotated, TypeVar
@@ -46,6 +47,13 @@ def _root(
     ] = False,
 ) -> None:
     """Tracking accuracy prediction and orbit-determination analysis."""
+
+
+def positive_option(name: str, value: float) -> float:
+    """Return ``value`` if finite and > 0, else raise InputError naming the option."""
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(name, "value", "a finite number > 0", value)
+    return value
 
 
 def run_guarded(fn: Callable[[], T]) -> T:

@@ -12,7 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from tapp.cli.common import app, print_json, run_guarded
+from tapp.cli.common import app, positive_option, print_json, run_guarded
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator, earth_model
 from tapp.errors import InputError
@@ -206,12 +206,11 @@ def rsig(
     """The error-growth signature R(t) = sqrt(Σ_{i<=3, j<=6} φ_ij²)."""
 
     def body() -> None:
-        for name, value in (("--hours", hours), ("--step", step)):
-            if not (math.isfinite(value) and value > 0):
-                raise InputError(name, "value", "a finite number > 0", value)
+        span_s = positive_option("--hours", hours) * 3600.0
+        dt = positive_option("--step", step)
         x_true = setup.true_orbit(orbit, scenario)
         prop = _model_pair(truth, stm)
-        t = np.arange(0.0, hours * 3600.0 + 0.5 * step, step)
+        t = np.arange(0.0, span_s + 0.5 * dt, dt)
         sig = r_signature(prop, x_true, t, setup.tracking(scenario).theta0_rad)
         if json_out:
             print_json({"t_s": sig.t_s, "R": sig.r})

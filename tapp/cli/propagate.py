@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from pathlib import Path
 from typing import Annotated
@@ -12,17 +11,10 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from tapp.cli.common import app, print_json, run_guarded
+from tapp.cli.common import app, positive_option, print_json, run_guarded
 from tapp.dynamics import Propagator, earth_model
-from tapp.errors import InputError
 from tapp.frames.time import parse_epoch
 from tapp.orbits import parse_orbit
-
-
-def _positive(name: str, value: float) -> float:
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(name, "value", "a finite number > 0", value)
-    return value
 
 
 @app.command()
@@ -46,12 +38,12 @@ def propagate(
 
     def body() -> None:
         x0 = parse_orbit(orbit, scenario=scenario)
-        arc_s = _positive("--hours", hours) * 3600.0
-        dt = _positive("--step", step)
+        arc_s = positive_option("--hours", hours) * 3600.0
+        dt = positive_option("--step", step)
         bodies = tuple(third_body or ())
         prop = Propagator(earth_model(truth, bodies, source="--truth", field="model"),
                           earth_model(stm, bodies, source="--stm", field="model"),
-                          rtol=_positive("--tol", tol), atol=tol)
+                          rtol=positive_option("--tol", tol), atol=tol)
         ep = parse_epoch(epoch, source="--epoch")
         t = np.append(np.arange(0.0, arc_s, dt), arc_s)
         start = time.perf_counter()

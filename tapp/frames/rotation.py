@@ -97,6 +97,16 @@ def ecef_to_eci_matrix_dot(theta_rad, omega_rad_s: float = OMEGA_EARTH_rad_s):
     return np.swapaxes(eci_to_ecef_matrix_dot(theta_rad, omega_rad_s), -1, -2)
 
 
+def _rotate_state(state, t_mat, t_dot):
+    """Return [T r, T v + Ṫ r] for states (..., 6) and rotations T, Ṫ (..., 3, 3)."""
+    x = np.asarray(state, dtype=float)
+    r = np.einsum("...ij,...j->...i", t_mat, x[..., :3])
+    v = np.einsum("...ij,...j->...i", t_mat, x[..., 3:]) + np.einsum(
+        "...ij,...j->...i", t_dot, x[..., :3]
+    )
+    return np.concatenate([r, v], axis=-1)
+
+
 def eci_to_ecef_state(state_eci, theta_rad, omega_rad_s: float = OMEGA_EARTH_rad_s):
     """Return the Earth-fixed state [r, v] (km, km/s), shape (..., 6).
 
@@ -111,14 +121,8 @@ def eci_to_ecef_state(state_eci, theta_rad, omega_rad_s: float = OMEGA_EARTH_rad
     omega_rad_s : float
         Earth rotation rate, rad/s.
     """
-    x = np.asarray(state_eci, dtype=float)
-    t_mat = eci_to_ecef_matrix(theta_rad)
-    t_dot = eci_to_ecef_matrix_dot(theta_rad, omega_rad_s)
-    r_f = np.einsum("...ij,...j->...i", t_mat, x[..., :3])
-    v_f = np.einsum("...ij,...j->...i", t_mat, x[..., 3:]) + np.einsum(
-        "...ij,...j->...i", t_dot, x[..., :3]
-    )
-    return np.concatenate([r_f, v_f], axis=-1)
+    return _rotate_state(state_eci, eci_to_ecef_matrix(theta_rad),
+                         eci_to_ecef_matrix_dot(theta_rad, omega_rad_s))
 
 
 def ecef_to_eci_state(state_ecef, theta_rad, omega_rad_s: float = OMEGA_EARTH_rad_s):
@@ -135,11 +139,5 @@ def ecef_to_eci_state(state_ecef, theta_rad, omega_rad_s: float = OMEGA_EARTH_ra
     omega_rad_s : float
         Earth rotation rate, rad/s.
     """
-    x = np.asarray(state_ecef, dtype=float)
-    t_mat = ecef_to_eci_matrix(theta_rad)
-    t_dot = ecef_to_eci_matrix_dot(theta_rad, omega_rad_s)
-    r = np.einsum("...ij,...j->...i", t_mat, x[..., :3])
-    v = np.einsum("...ij,...j->...i", t_mat, x[..., 3:]) + np.einsum(
-        "...ij,...j->...i", t_dot, x[..., :3]
-    )
-    return np.concatenate([r, v], axis=-1)
+    return _rotate_state(state_ecef, ecef_to_eci_matrix(theta_rad),
+                         ecef_to_eci_matrix_dot(theta_rad, omega_rad_s))
