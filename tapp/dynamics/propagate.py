@@ -15,7 +15,12 @@ from functools import cache
 
 import numpy as np
 
-from tapp.dynamics.compiled import STATUS, CompiledPropagator, compiled_propagator
+from tapp.dynamics.compiled import (
+    STATUS,
+    CompiledPropagator,
+    EphemerisTable,
+    compiled_propagator,
+)
 from tapp.dynamics.equations import Equations, build_equations, initial_augmented, split_augmented
 from tapp.dynamics.forces import default_parameters
 from tapp.dynamics.spec import ForceModel
@@ -155,9 +160,7 @@ class Propagator:
         return Trajectory(t_s, states, phi, sens, self.params, int(stats[0]), int(stats[2]))
 
     def _ephemeris(self, bodies: tuple[str, ...], epoch_jd_utc: float | None, t0_s: float,
-                   t_s: np.ndarray):
-        from tapp.dynamics.compiled import EphemerisTable
-
+                   t_s: np.ndarray) -> EphemerisTable:
         if not bodies:
             return EphemerisTable.empty()
         if epoch_jd_utc is None:
