@@ -13,6 +13,7 @@ piecewise Chebyshev series (:func:`chebyshev_table`), evaluated inside the C dri
 from __future__ import annotations
 
 import importlib.util
+import math
 from functools import cache
 from pathlib import Path
 
@@ -22,6 +23,7 @@ from jplephem.spk import SPK
 from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics.compiled import EphemerisTable
 from tapp.errors import InputError
+from tapp.frames.time import Epoch
 
 #: TAI − UTC (s) from the given UTC Julian date on (IERS Bulletin C; 37 s since 2017-01-01).
 LEAP_SECONDS = (
@@ -79,6 +81,37 @@ def _kernel() -> SPK:
     return SPK.open(str(de421_path()))
 
 
+def coverage_jd_tdb() -> tuple[float, float]:
+    """Return the first and last TDB Julian dates every segment of DE421 covers, days."""
+    segments = _kernel().segments
+    return (max(seg.start_jd for seg in segments), min(seg.end_jd for seg in segments))
+
+
+def _iso_tdb(jd_tdb: float) -> str:
+    whole = math.floor(jd_tdb - 0.5) + 0.5 if math.isfinite(jd_tdb) else jd_tdb
+    if not math.isfinite(whole):
+        return str(jd_tdb)
+    return Epoch(whole, jd_tdb - whole).iso(0) + " TDB"
+
+
+def check_coverage(jd_tdb: float | np.ndarray, jd_tdb2: float | np.ndarray = 0.0,
+                   source: str = "DE421 ephemeris", field: str = "epoch") -> None:
+    """Raise InputError unless every TDB date ``jd_tdb + jd_tdb2`` lies within DE421.
+
+    The message names the first date outside and DE421's coverage; ``source`` and ``field``
+    say where the date came from (an option such as ``--epoch``, or a scenario file field).
+    """
+    jd = np.asarray(jd_tdb, dtype=float) + np.asarray(jd_tdb2, dtype=float)
+    if jd.size == 0:
+        return
+    first, last = coverage_jd_tdb()
+    outside = ~((jd >= first) & (jd <= last))
+    if np.any(outside):
+        bad = float(jd.ravel()[np.argmax(outside.ravel())])
+        raise InputError(source, field, f"a date within DE421's coverage {_iso_tdb(first)} .. "
+                         f"{_iso_tdb(last)}", _iso_tdb(bad))
+
+
 def _barycentric_km(body: str, jd: np.ndarray, jd2: np.ndarray) -> np.ndarray:
     kernel = _kernel()
     total = np.zeros((3, jd.size))
@@ -97,6 +130,7 @@ def position_km(body: str, center: str, jd_tdb: float | np.ndarray,
     """
     jd, jd2 = np.broadcast_arrays(np.atleast_1d(np.asarray(jd_tdb, dtype=float)),
                                   np.atleast_1d(np.asarray(jd_tdb2, dtype=float)))
+    check_coverage(jd, jd2)
     if body == "moon" and center == "earth":  # avoid the barycentric round trip
         kernel = _kernel()
         return (kernel[3, 301].compute(jd, jd2) - kernel[3, 399].compute(jd, jd2)).T

@@ -1,21 +1,96 @@
-"""Shared pieces of the CLI: the app object, error handling, JSON output."""
+"""Shared pieces of the CLI: the app object, the exit-code contract, error handling, JSON.
+
+Exit codes (every command keeps this contract)
+-----------------------------------------------
+0
+    Success.
+2
+    Bad input of any kind, found before any output is written: an option (unparseable, out
+    of range, a size beyond the limits below), an input file (missing, not TOML, a field
+    missing, misspelt, of the wrong type or out of range, a truncated or corrupt tape or
+    results file, a checksum that does not match), an output path that is an input or
+    another output (symbolic links and relative paths resolved) or cannot be written, an
+    epoch outside the ephemeris' coverage. The message is one line on stderr,
+    ``error: SOURCE: FIELD: expected WHAT (got VALUE)``, where SOURCE is the option as typed
+    (``--process-noise``, ``-o/--output``) when an option is at fault, and the file when a
+    file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).
+3, 4
+    A numerical outcome, with its output still printed: ``tapp dc`` did not converge (3);
+    ``tapp search`` diverged (3) or met a singular matrix (4).
+1
+    Anything else: a computation that could not be completed (``tapp search``: a trajectory
+    that misses the target's sphere of influence), or an internal failure (a bug; out of
+    memory). Also one line on stderr.
+130
+    Interrupted (Ctrl-C).
+
+Limits checked before allocating: output grids of at most :data:`MAX_GRID_SAMPLES` samples
+(``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases, local Dask
+clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (none with
+``--scheduler``); each message gives the size that would be needed and the option to change.
+
+What is left on disk: nothing new when a command fails. Outputs are written to hidden
+temporaries beside their targets and renamed over them only once all are complete
+(:class:`tapp.outputs.OutputSet`); on any failure the old outputs are left untouched.
+A killed run leaves the old outputs or the new ones, each complete, and possibly hidden
+``.NAME.*.tmp`` temporaries, which the next write of the same output removes. ``tapp iter``
+checkpoints its results file (each time atomically) as cases complete, so that a killed or
+interrupted sweep can be resumed.
+"""
 
 from __future__ import annotations
 
 import json
 import math
 import sys
-from collections.abc import Callable
-from typing import Annotated, TypeVar
+from collections.abc import Callable, Sequence
+from typing import Annotated, Any, TypeVar
 
 import numpy as np
 import typer
+from typer.core import TyperGroup
 
 from tapp import __version__
-from tapp.errors import InputError, TappError
+from tapp.errors import InputError, TapeError, TappError
+
+# click's base exception, whether typer vendors click (typer >= 0.23) or uses the package.
+_ClickException = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
+
+
+class _OneLineErrors(TyperGroup):
+    """The root group: a usage error (a bad or missing option) is one line, exit 2."""
+
+    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,
+             complete_var: str | None = None, standalone_mode: bool = True,
+             **extra: Any) -> Any:
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        try:
+            code = super().main(args, prog_name, complete_var, False, **extra)
+        except _ClickException as exc:
+            if type(exc).__name__ == "NoArgsIsHelpError":  # `tapp` alone: the help
+                exc.show()
+                sys.exit(exc.exit_code)
+            typer.echo(f"error: {_usage_message(exc)}", err=True)
+            sys.exit(exc.exit_code)
+        except typer.Abort:
+            typer.echo("error: aborted", err=True)
+            sys.exit(EXIT_FAILURE)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+def _usage_message(exc: Exception) -> str:
+    """One line: the option as typed and what is wrong with it."""
+    message = " ".join(exc.format_message().split())
+    opts = getattr(getattr(exc, "param", None), "opts", None) or ()
+    if opts and not any(opt in message for opt in opts):
+        return f"{'/'.join(opts)}: {message}"
+    return message
+
 
 app = typer.Typer(
     name="tapp",
+    cls=_OneLineErrors,
     help="Tracking accuracy prediction: trajectories, tracking, matrix processing, guidance, "
     "targeting and sweeps.",
     rich_markup_mode="rich",
@@ -26,10 +101,12 @@ app = typer.Typer(
 
 T = TypeVar("T")
 
-#: Exit code for bad input (typer's own usage errors also exit 2).
+#: Exit code for bad input: options, files, fields, corrupt tapes (click's usage errors too).
 EXIT_INPUT = 2
-#: Exit code for any other TappError.
+#: Exit code for any other failure: a computation that could not be completed, or a bug.
 EXIT_FAILURE = 1
+#: Largest output grid (samples of a trajectory, with its STM) a command allocates.
+MAX_GRID_SAMPLES = 1_000_000
 
 
 def _version_callback(value: bool) -> None:
@@ -56,16 +133,78 @@ def positive_option(name: str, value: float) -> float:
     return value
 
 
+def nonnegative_option(name: str, value: float) -> float:
+    """Return ``value`` if finite and >= 0, else raise InputError naming the option."""
+    if not (math.isfinite(value) and value >= 0):
+        raise InputError(name, "value", "a finite number >= 0", value)
+    return value
+
+
+def seed_option(name: str, value: int | None) -> int | None:
+    """Return a noise seed (None for the scenario's) if it is >= 0, else raise InputError."""
+    if value is not None and value < 0:
+        raise InputError(name, "value", "a whole number >= 0 (a seed for numpy's "
+                         "SeedSequence)", value)
+    return value
+
+
+def check_grid_size(option: str, n: float, limit: int = MAX_GRID_SAMPLES,
+                    what: str = "output samples") -> int:
+    """Return ``n`` as an int if it is at most ``limit``, else raise InputError naming
+    ``option`` with the size that would be needed.
+
+    Call it before allocating anything of size ``n`` (``n`` may be inf or NaN, from huge
+    or tiny option values).
+
+    >>> check_grid_size("--step", 1441.0)
+    1441
+    >>> check_grid_size("--step", 8.6e13)
+    Traceback (most recent call last):
+    ...
+    tapp.errors.InputError: --step: value: expected a value giving at most 1,000,000 \
+output samples (got 'it would need 8.6e+13')
+    """
+    if not (math.isfinite(n) and n <= limit):
+        raise InputError(option, "value", f"a value giving at most {limit:,} {what}",
+                         f"it would need {n:.3g}")
+    return int(n)
+
+
+def grid_samples(span_s: float, step_s: float) -> float:
+    """Return the number of samples of a grid 0, step, ..., span (float: may be inf)."""
+    ratio = span_s / step_s
+    return float(math.floor(ratio)) + 2.0 if math.isfinite(ratio) else math.inf
+
+
 def run_guarded(fn: Callable[[], T]) -> T:
-    """Run ``fn``; a TappError becomes one line on stderr and a non-zero exit."""
+    """Run ``fn`` under the exit-code contract of the module docstring.
+
+    Bad input (:class:`~tapp.errors.InputError`, :class:`~tapp.errors.TapeError`, a file
+    that cannot be read) is one line on stderr and exit 2; any other
+    :class:`~tapp.errors.TappError`, and running out of memory, one line and exit 1.
+    """
     try:
         return fn()
-    except InputError as exc:
-        typer.echo(f"error: {exc}", err=True)
+    except (InputError, TapeError) as exc:
+        typer.echo(f"error: {_one_line(exc)}", err=True)
         raise typer.Exit(EXIT_INPUT) from None
     except TappError as exc:
-        typer.echo(f"error: {exc}", err=True)
+        typer.echo(f"error: {_one_line(exc)}", err=True)
         raise typer.Exit(EXIT_FAILURE) from None
+    except OSError as exc:
+        if exc.filename is None:
+            raise
+        typer.echo(f"error: {exc.filename}: file: expected a readable file "
+                   f"(got {exc.strerror or type(exc).__name__!r})", err=True)
+        raise typer.Exit(EXIT_INPUT) from None
+    except MemoryError:
+        typer.echo("error: out of memory (an input asks for more than this machine has)",
+                   err=True)
+        raise typer.Exit(EXIT_FAILURE) from None
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
 
 
 def _to_jsonable(obj: object) -> object:

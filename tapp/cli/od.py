@@ -12,7 +12,16 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from tapp.cli.common import app, positive_option, print_json, run_guarded
+from tapp.cli.common import (
+    app,
+    check_grid_size,
+    grid_samples,
+    nonnegative_option,
+    positive_option,
+    print_json,
+    run_guarded,
+    seed_option,
+)
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator, earth_model
 from tapp.errors import InputError
@@ -21,9 +30,10 @@ from tapp.od import setup
 from tapp.od.batch import DCSettings, differential_correction
 from tapp.od.ekf import extended_kalman_filter
 from tapp.od.observations import Observations
-from tapp.od.obsfile import read_observations, write_observations
+from tapp.od.obsfile import observations_file_writer, read_observations
 from tapp.od.rsig import r_signature
 from tapp.orbits import DEFAULT_SCENARIO
+from tapp.outputs import OutputSet, check_paths
 from tapp.stations_file import load_stations
 
 _ARC = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([smhd]?)\s*$")
@@ -90,12 +100,18 @@ def dc(
     """Batch differential correction from the brief's offset initial estimate."""
 
     def body() -> None:
+        check_paths({"--obs": obs, "--scenario": scenario}, {"--save-obs": save_obs})
         arc_s = parse_arc_s(arc)
+        if max_iter < 1:
+            raise InputError("--max-iter", "value", "a whole number >= 1", max_iter)
         x_true = setup.true_orbit(orbit, scenario)
         prop = _model_pair(truth, stm)
-        data = _observations(x_true, truth, stations, obs, scenario, seed)
+        data = _observations(x_true, truth, stations, obs, scenario,
+                             seed_option("--seed", seed))
         if save_obs is not None:
-            write_observations(save_obs, data)
+            outputs = OutputSet()
+            outputs.add("--save-obs", save_obs, observations_file_writer(save_obs, data))
+            outputs.commit()
         x_start = setup.initial_estimate(x_true, setup.offset(scenario))
         result = differential_correction(data.window(arc_s), prop, x_start,
                                          theta0_rad=setup.tracking(scenario).theta0_rad,
@@ -169,11 +185,13 @@ def ekf(
         x_true = setup.true_orbit(orbit, scenario)
         prop = _model_pair(truth, stm)
         p0 = _apriori(apriori, scenario)
-        data = _observations(x_true, truth, stations, obs, scenario, seed).window(arc_s)
+        q_km2_s3 = nonnegative_option("--process-noise", process_noise)
+        data = _observations(x_true, truth, stations, obs, scenario,
+                             seed_option("--seed", seed)).window(arc_s)
         x_start = setup.initial_estimate(x_true, setup.offset(scenario))
         result = extended_kalman_filter(data, prop, x_start, p0,
                                         theta0_rad=setup.tracking(scenario).theta0_rad,
-                                        q_km2_s3=process_noise)
+                                        q_km2_s3=q_km2_s3)
         per_pass = [{"range_m": p.max_abs[0] * 1e3, "range_rate_mm_s": p.max_abs[1] * 1e6}
                     for p in result.passes]
         if json_out:
@@ -208,6 +226,7 @@ def rsig(
     def body() -> None:
         span_s = positive_option("--hours", hours) * 3600.0
         dt = positive_option("--step", step)
+        check_grid_size("--hours/--step", grid_samples(span_s, dt))
         x_true = setup.true_orbit(orbit, scenario)
         prop = _model_pair(truth, stm)
         t = np.arange(0.0, span_s + 0.5 * dt, dt)

@@ -11,8 +11,17 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from tapp.cli.common import app, positive_option, print_json, run_guarded
+from tapp.cli.common import (
+    app,
+    check_grid_size,
+    grid_samples,
+    positive_option,
+    print_json,
+    run_guarded,
+)
+from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics import Propagator, earth_model
+from tapp.ephemeris import check_coverage, utc_to_tdb_jd
 from tapp.frames.time import parse_epoch
 from tapp.orbits import parse_orbit
 
@@ -40,11 +49,15 @@ def propagate(
         x0 = parse_orbit(orbit, scenario=scenario)
         arc_s = positive_option("--hours", hours) * 3600.0
         dt = positive_option("--step", step)
+        check_grid_size("--hours/--step", grid_samples(arc_s, dt))
         bodies = tuple(third_body or ())
         prop = Propagator(earth_model(truth, bodies, source="--truth", field="model"),
                           earth_model(stm, bodies, source="--stm", field="model"),
                           rtol=positive_option("--tol", tol), atol=tol)
         ep = parse_epoch(epoch, source="--epoch")
+        if bodies:
+            check_coverage(utc_to_tdb_jd(ep.jd), np.array([0.0, arc_s]) / SECONDS_PER_DAY,
+                           source="--epoch/--hours", field="arc")
         t = np.append(np.arange(0.0, arc_s, dt), arc_s)
         start = time.perf_counter()
         traj = prop.propagate(x0, t, theta0_rad=ep.gmst_rad(), epoch_jd_utc=ep.jd)

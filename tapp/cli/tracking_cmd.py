@@ -1,8 +1,9 @@
 """``tapp simulate`` (TAPP I: scenario -> T13 tape) and ``tapp tape info`` (any tape).
 
-Bad input (scenario file or field, an unreadable tape) is one line on stderr naming the file
-and the field or dataset, exit code 2 (1 for other failures); no tape is left behind: tapes
-are written to a temporary file and renamed once complete.
+Bad input (scenario file or field, an unreadable or corrupt tape, an output path that is the
+scenario or the other output) is one line on stderr naming the file and the field or dataset,
+or the option, exit code 2 (1 for other failures; see :mod:`tapp.cli.common`). The tape and
+the OEM are written together or not at all (:class:`tapp.outputs.OutputSet`).
 """
 
 from __future__ import annotations
@@ -17,9 +18,9 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from tapp.cli.common import app, print_json, run_guarded
-from tapp.errors import InputError
+from tapp.outputs import OutputSet, check_paths
 from tapp.tape import describe, write_t13
-from tapp.tracking.oem import format_oem, write_oem
+from tapp.tracking.oem import format_oem
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import Simulation
 from tapp.tracking.simulate import simulate as run_simulation
@@ -47,14 +48,14 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool) -> tuple[Simulation, 
     return sim, time.perf_counter() - start
 
 
-def _write(output: Path, sim: Simulation, oem: Path | None, oem_text: str | None) -> None:
-    try:
-        if oem is not None:
-            write_oem(oem, oem_text)
-        write_t13(output, sim.tape)
-    except OSError as exc:
-        raise InputError(str(exc.filename or output), "output", "a writable path",
-                         exc.strerror) from None
+def _outputs(output: Path, sim: Simulation, oem: Path | None,
+             oem_text: str | None) -> OutputSet:
+    """The tape and the OEM, to be written together or not at all."""
+    outputs = OutputSet()
+    outputs.add("-o/--output", output, lambda tmp: write_t13(tmp, sim.tape))
+    if oem is not None:
+        outputs.add("--oem", oem, lambda tmp: tmp.write_text(oem_text, encoding="utf-8"))
+    return outputs
 
 
 @app.command()
@@ -71,6 +72,7 @@ def simulate(
     """TAPP I: simulate the tracking of a scenario and write its T13 tape."""
 
     def body() -> None:
+        check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem})
         sim, wall_s = _simulate_with_bar(scenario, raw, quiet=json_out)
         tape = sim.tape
         oem_text = None
@@ -78,7 +80,7 @@ def simulate(
             oem_text = format_oem(tape.epoch, sim.t_s, sim.states, object_name=tape.iden,
                                   object_id=tape.iden,
                                   comments=(f"TAPP I trajectory of {scenario.name}",))
-        _write(output, sim, oem, oem_text)
+        _outputs(output, sim, oem, oem_text).commit()
         out = {"tape": str(output), "bytes": output.stat().st_size, "iden": tape.iden,
                "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -31,8 +32,10 @@ FORMAT = "tapp-observations"
 VERSION = 1
 
 
-def write_observations(path: Path, obs: Observations) -> None:
-    """Write ``obs`` to ``path`` (.h5/.hdf5 as HDF5, .csv as CSV), atomically."""
+def observations_file_writer(path: Path, obs: Observations) -> Callable[[Path], None]:
+    """Return ``write(at)``, which writes ``obs`` as a complete file at ``at`` in the format
+    ``path``'s suffix asks for (.csv as CSV, otherwise HDF5); for
+    :class:`tapp.outputs.OutputSet`, which passes a temporary beside ``path``."""
     path = Path(path)
     kinds = [str(k) for k in obs.kinds]
     if path.suffix == ".csv":
@@ -60,7 +63,12 @@ def write_observations(path: Path, obs: Observations) -> None:
                 g["lon_deg"] = [math.degrees(s.lon_rad) for s in obs.stations]
                 g["h_km"] = [s.h_km for s in obs.stations]
                 g["elev_mask_deg"] = [math.degrees(s.elev_mask_rad) for s in obs.stations]
-    atomic_write(path, write)
+    return write
+
+
+def write_observations(path: Path, obs: Observations) -> None:
+    """Write ``obs`` to ``path`` (.h5/.hdf5 as HDF5, .csv as CSV), atomically."""
+    atomic_write(path, observations_file_writer(path, obs))
 
 
 def read_observations(path: Path, stations: dict[str, Station] | None = None,
