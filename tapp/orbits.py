@@ -6,9 +6,16 @@ Grammar of an orbit spec (the ``--orbit`` option):
   (M is the mean anomaly; ``nu=`` may replace it with the true anomaly);
 - ``x=..,y=..,z=..,vx=..,vy=..,vz=..``: Cartesian position (km) and velocity (km/s);
 - ``NAME``: an orbit of the ``[orbits.NAME]`` tables of a scenario file, whose keys are
-  ``a_km, e, i_deg, raan_deg, argp_deg, M_deg`` or ``x_km, ..., vz_km_s``.
+  ``a_km, e, i_deg, raan_deg, argp_deg, M_deg`` (or ``nu_deg``) or ``x_km, ..., vz_km_s``,
+  and optionally ``allow_subsurface = true`` (schema: :class:`OrbitTable`).
 
 All states are EME2000 inertial, centred on the Earth, with the EGM96 GM.
+
+An orbit that would pass below the Earth's surface is refused (:func:`check_perigee`): its
+perigee radius is below the equatorial radius ``R_EARTH_km`` and it reaches that perigee (an
+ellipse always does; a hyperbola or parabola only while inbound), or it starts below the
+surface. ``allow_subsurface = true`` in the orbit's table, or ``--allow-subsurface`` on the
+command line, says the user means it.
 """
 
 from __future__ import annotations
@@ -18,16 +25,57 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
+from pydantic import model_validator
 
-from tapp.constants import GM_EARTH_km3_s2
+from tapp.constants import GM_EARTH_km3_s2, R_EARTH_km
 from tapp.errors import InputError
 from tapp.frames.elements import elements_to_cartesian, true_to_mean_anomaly
+from tapp.schema import Invalid, Schema, validate
 from tapp.tomlfile import read_toml
 
 _ELEMENT_KEYS = ("a", "e", "i", "raan", "argp")
 _CART_KEYS = ("x", "y", "z", "vx", "vy", "vz")
 #: The study's scenario file, found beside the package in a source checkout.
 DEFAULT_SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "approx_stm.toml"
+
+
+def perigee_radius_km(x: np.ndarray, mu_km3_s2: float = GM_EARTH_km3_s2) -> float:
+    """Return the osculating perigee radius (km) of a state (6,) km, km/s.
+
+    .. math:: r_p = \\frac{h^2}{\\mu (1 + e)}
+
+    (any conic; 0 for a rectilinear orbit).
+    """
+    r, v = np.asarray(x[:3], dtype=float), np.asarray(x[3:], dtype=float)
+    h = np.cross(r, v)
+    e_vec = np.cross(v, h) / mu_km3_s2 - r / np.linalg.norm(r)
+    return float(h @ h / (mu_km3_s2 * (1.0 + np.linalg.norm(e_vec))))
+
+
+def check_perigee(x: np.ndarray, source: str, field: str, *, allow_subsurface: bool = False,
+                  how_to_allow: str = "--allow-subsurface") -> np.ndarray:
+    """Return ``x`` (6,) unless its orbit passes below the Earth's surface (module docstring).
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and ``field``, with the perigee radius and altitude, the limit
+        (``R_EARTH_km``) and ``how_to_allow`` (the key or option that lifts the check).
+    """
+    if allow_subsurface:
+        return x
+    r_km = float(np.linalg.norm(x[:3]))
+    rp_km = perigee_radius_km(x)
+    energy = 0.5 * float(x[3:] @ x[3:]) - GM_EARTH_km3_s2 / r_km
+    inbound = float(x[:3] @ x[3:]) < 0
+    if r_km < R_EARTH_km:
+        raise InputError(source, field, f"a start radius |r| >= {R_EARTH_km} km, the Earth's "
+                         f"equatorial radius ({how_to_allow} if you mean it)", round(r_km, 3))
+    if rp_km < R_EARTH_km and (energy < 0 or inbound):
+        raise InputError(source, field, f"a perigee radius r_p >= {R_EARTH_km} km, the Earth's "
+                         f"equatorial radius (this orbit's perigee is {R_EARTH_km - rp_km:.1f} km "
+                         f"below it; {how_to_allow} if you mean it)", round(rp_km, 3))
+    return x
 
 
 def _parse_pairs(text: str, source: str, field: str) -> dict[str, float]:
@@ -75,25 +123,89 @@ def _from_mapping(values: Mapping[str, float], source: str, field: str) -> np.nd
                      ",".join(sorted(keys)))
 
 
-def named_orbits(path: Path) -> dict[str, np.ndarray]:
-    """Return the states of every ``[orbits.NAME]`` table of a scenario file."""
-    orbits = read_toml(path).get("orbits", {})
-    out = {}
-    for name, table in orbits.items():
+class OrbitTable(Schema):
+    """Schema of an ``[orbits.NAME]`` table: classical elements (km, deg) or a Cartesian state.
+
+    Exactly one form: ``a_km, e, i_deg, raan_deg, argp_deg`` with one of ``M_deg``,
+    ``nu_deg``; or ``x_km, y_km, z_km, vx_km_s, vy_km_s, vz_km_s``. ``allow_subsurface``
+    lifts the perigee check (module docstring).
+    """
+
+    a_km: float | None = None
+    e: float | None = None
+    i_deg: float | None = None
+    raan_deg: float | None = None
+    argp_deg: float | None = None
+    M_deg: float | None = None
+    nu_deg: float | None = None
+    x_km: float | None = None
+    y_km: float | None = None
+    z_km: float | None = None
+    vx_km_s: float | None = None
+    vy_km_s: float | None = None
+    vz_km_s: float | None = None
+    allow_subsurface: bool = False
+
+    @model_validator(mode="after")
+    def _one_form(self) -> OrbitTable:
+        given = {k for k, v in self.values().items() if v is not None}
+        cart = {f"{k}_km" for k in _CART_KEYS[:3]} | {f"{k}_km_s" for k in _CART_KEYS[3:]}
+        elements = {"a_km", "e", "i_deg", "raan_deg", "argp_deg"}
+        if given == cart:
+            return self
+        anomaly = given & {"M_deg", "nu_deg"}
+        if given - anomaly == elements and len(anomaly) == 1:
+            return self
+        raise Invalid("a_km, e, i_deg, raan_deg, argp_deg and M_deg (or nu_deg), or x_km, "
+                      "y_km, z_km, vx_km_s, vy_km_s, vz_km_s", ",".join(sorted(given)))
+
+    def values(self) -> dict[str, float | None]:
+        """The orbit's keys and values (None: not given), without ``allow_subsurface``."""
+        return {k: getattr(self, k) for k in type(self).model_fields if k != "allow_subsurface"}
+
+    def state(self, source: str, field: str, *, allow_subsurface: bool = False) -> np.ndarray:
+        """Return the Cartesian state (6,) km, km/s, perigee-checked (module docstring)."""
         renamed = {k.removesuffix("_km_s").removesuffix("_km").removesuffix("_deg"): v
-                   for k, v in table.items()}
-        out[name] = _from_mapping(renamed, str(path), f"orbits.{name}")
-    return out
+                   for k, v in self.values().items() if v is not None}
+        x = _from_mapping(renamed, source, field)
+        return check_perigee(x, source, field,
+                             allow_subsurface=allow_subsurface or self.allow_subsurface,
+                             how_to_allow=f"{field}.allow_subsurface = true or "
+                             "--allow-subsurface")
 
 
-def parse_orbit(text: str, *, scenario: Path | None = None, source: str = "--orbit"
-                ) -> np.ndarray:
-    """Return the initial state (6,) of an orbit spec (module docstring grammar)."""
+class _OrbitsSection(Schema):
+    orbits: dict[str, OrbitTable] = {}
+
+
+def named_orbits(path: Path, *, allow_subsurface: bool = False) -> dict[str, np.ndarray]:
+    """Return the states of every ``[orbits.NAME]`` table of a scenario file.
+
+    Raises
+    ------
+    InputError
+        A table breaks :class:`OrbitTable`, or an orbit passes below the surface without
+        ``allow_subsurface`` (here or in its table).
+    """
+    data = read_toml(path)
+    section = validate(_OrbitsSection, {"orbits": data.get("orbits", {})}, str(path))
+    return {name: table.state(str(path), f"orbits.{name}", allow_subsurface=allow_subsurface)
+            for name, table in section.orbits.items()}
+
+
+def parse_orbit(text: str, *, scenario: Path | None = None, source: str = "--orbit",
+                allow_subsurface: bool = False) -> np.ndarray:
+    """Return the initial state (6,) of an orbit spec (module docstring grammar).
+
+    ``allow_subsurface`` (``--allow-subsurface``) accepts an orbit whose perigee is below
+    the Earth's surface; otherwise it is refused with its perigee radius and the limit.
+    """
     text = text.strip()
     if "=" in text:
-        return _from_mapping(_parse_pairs(text, source, "orbit"), source, "orbit")
+        x = _from_mapping(_parse_pairs(text, source, "orbit"), source, "orbit")
+        return check_perigee(x, source, "orbit", allow_subsurface=allow_subsurface)
     path = scenario or DEFAULT_SCENARIO
-    orbits = named_orbits(path)
+    orbits = named_orbits(path, allow_subsurface=allow_subsurface)
     if text not in orbits:
         raise InputError(source, "orbit", f"elements, a Cartesian state or an orbit named in "
                          f"{path} ({', '.join(orbits) or 'none'})", text)

@@ -11,61 +11,89 @@
     [networks]
     equatorial = ["QUITO", "KOUROU", ...]
 
-Angles are geodetic (WGS84) degrees, east longitude; every error names the file and table.
+Angles are geodetic (WGS84) degrees, east longitude; the height is above the WGS84 ellipsoid
+and must be that of a ground station (``tapp.measurements.stations.HEIGHT_RANGE_km``).
+The tables are validated by the schemas :class:`StationTable` and :class:`StationsSection`
+(``tapp.schema``); every error names the file and the table.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
+from typing import Annotated
+
+from pydantic import Field, model_validator
 
 from tapp.errors import InputError
 from tapp.measurements.stations import Station
+from tapp.schema import Invalid, Schema, validate
 
-_KEYS = ("lat_deg", "lon_deg", "h_km")
+#: Station fields (radians, as the kernel names them) and the scenario keys they come from.
+_EDGE_KEYS = {"lat_rad": "lat_deg", "lon_rad": "lon_deg", "h_km": "h_km",
+              "elev_mask_rad": "elev_mask_deg"}
+
+
+class StationTable(Schema):
+    """Schema of one ``[stations.NAME]`` table (degrees and km, geodetic WGS84).
+
+    The kernel's own checks (:class:`tapp.measurements.stations.Station`: the height band)
+    run here too, so they are reported with the file and the key.
+    """
+
+    lat_deg: Annotated[float, Field(ge=-90.0, le=90.0)]
+    lon_deg: float
+    h_km: float
+    elev_mask_deg: Annotated[float, Field(ge=0.0, lt=90.0)] = 0.0
+
+    @model_validator(mode="after")
+    def _a_station(self) -> StationTable:
+        self.station("station")
+        return self
+
+    def station(self, name: str) -> Station:
+        """The :class:`Station` of this table, named ``name``."""
+        try:
+            return Station.from_degrees(name, self.lat_deg, self.lon_deg, self.h_km,
+                                        self.elev_mask_deg)
+        except InputError as exc:
+            raise Invalid(exc.expected, exc.got, _EDGE_KEYS.get(exc.field, exc.field)) from None
+
+
+class StationsSection(Schema):
+    """Schema of the ``[stations.*]`` tables and ``[networks]`` of a file (other keys apart)."""
+
+    stations: dict[str, StationTable] = {}
+    networks: dict[str, list[str]] = {}
+
+    @model_validator(mode="after")
+    def _networks_name_stations(self) -> StationsSection:
+        for network, names in self.networks.items():
+            for i, name in enumerate(names):
+                if name not in self.stations:
+                    raise Invalid(f"names of [stations.*] tables ({', '.join(self.stations)})",
+                                  name, f"networks.{network}[{i}]")
+        return self
+
+
+def _section(data: Mapping, source: str) -> StationsSection:
+    part = {k: data[k] for k in ("stations", "networks") if k in data}
+    return validate(StationsSection, part, source)
 
 
 def load_stations(data: Mapping, source: str) -> dict[str, Station]:
     """Return the ``[stations.*]`` tables of parsed TOML ``data`` as Stations by name."""
-    out = {}
-    for name, table in data.get("stations", {}).items():
-        field = f"stations.{name}"
-        if not isinstance(table, Mapping):
-            raise InputError(source, field, "a table with lat_deg, lon_deg, h_km")
-        unknown = set(table) - {*_KEYS, "elev_mask_deg"}
-        if unknown:
-            raise InputError(source, f"{field}.{sorted(unknown)[0]}",
-                             "only lat_deg, lon_deg, h_km, elev_mask_deg")
-        values = {}
-        for key in (*_KEYS, "elev_mask_deg"):
-            value = table.get(key, 0.0 if key == "elev_mask_deg" else None)
-            if not isinstance(value, int | float) or not math.isfinite(value):
-                raise InputError(source, f"{field}.{key}", "a finite number", value)
-            values[key] = float(value)
-        if not -90.0 <= values["lat_deg"] <= 90.0:
-            raise InputError(source, f"{field}.lat_deg", "a latitude in [-90, 90]",
-                             values["lat_deg"])
-        if not 0.0 <= values["elev_mask_deg"] < 90.0:
-            raise InputError(source, f"{field}.elev_mask_deg", "a mask in [0, 90)",
-                             values["elev_mask_deg"])
-        out[name] = Station.from_degrees(name, values["lat_deg"], values["lon_deg"],
-                                         values["h_km"], values["elev_mask_deg"])
-    return out
+    return {name: table.station(name) for name, table in _section(data, source).stations.items()}
 
 
 def load_network(data: Mapping, source: str, network: str) -> tuple[Station, ...]:
     """Return the stations of ``[networks].<network>``, or the single station so named."""
-    stations = load_stations(data, source)
-    networks = data.get("networks", {})
-    if network in networks:
-        names = networks[network]
-    elif network in stations:
+    section = _section(data, source)
+    if network in section.networks:
+        names = section.networks[network]
+    elif network in section.stations:
         names = [network]
     else:
         raise InputError(source, "networks", f"a network or station name among "
-                         f"{', '.join([*networks, *stations]) or 'none'}", network)
-    missing = [n for n in names if n not in stations]
-    if missing:
-        raise InputError(source, f"networks.{network}", "names of [stations.*] tables",
-                         missing[0])
-    return tuple(stations[n] for n in names)
+                         f"{', '.join([*section.networks, *section.stations]) or 'none'}",
+                         network)
+    return tuple(section.stations[n].station(n) for n in names)

@@ -84,6 +84,27 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
     return values
 
 
+def check_parameter_value(name: str, value: float, source: str = "model",
+                          field: str = "parameters") -> float:
+    """Return a model parameter's value as a float: finite, and > 0 for a GM.
+
+    A gravitational parameter GM (``GM``, ``GM_<body>``, km^3/s^2) <= 0 would make the body
+    repel or vanish: it is refused with the value and the limit.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and ``field``.
+    """
+    gm = name == "GM" or name.startswith("GM_")
+    ok = (isinstance(value, int | float) and not isinstance(value, bool)
+          and math.isfinite(value) and (value > 0 or not gm))
+    if not ok:
+        raise InputError(source, field, f"a finite GM > 0 km^3/s^2 for {name}" if gm
+                         else f"a finite value of {name}", value)
+    return float(value)
+
+
 def _in_field(model: ForceModel, n: int, m: int) -> bool:
     return model.center == "earth" and 2 <= n <= model.gravity.degree and m <= min(
         n, model.gravity.order)

@@ -22,13 +22,39 @@ from tapp.dynamics.compiled import (
     compiled_propagator,
 )
 from tapp.dynamics.equations import Equations, build_equations, initial_augmented, split_augmented
-from tapp.dynamics.forces import default_parameters
+from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError, TappError
 
 
 class PropagationError(TappError):
     """The integrator stopped early; the message gives the status and the time reached."""
+
+
+#: Accepted integrator tolerances (rtol and atol, km and km/s), inclusive. Above 1e-6 the
+#: answer is no longer an orbit: a day of a 7000 km, e = 0.01 two-body orbit drifts 0.7 km at
+#: 1e-6, 11 km at 1e-5 and 2.4e6 km at 1 (against 1e-14). Below 1e-15 the request is under
+#: five units in the last place of a double (2.2e-16) and cannot be met by step control.
+TOLERANCE_RANGE = (1e-15, 1e-6)
+
+
+def check_tolerance(value: float, source: str = "propagator", field: str = "rtol") -> float:
+    """Return ``value`` as a float if it lies in :data:`TOLERANCE_RANGE`, else raise.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and ``field``, the value and the range (a non-number, NaN or
+        infinity included).
+    """
+    lo, hi = TOLERANCE_RANGE
+    ok = (isinstance(value, int | float | np.floating) and not isinstance(value, bool)
+          and lo <= value <= hi)
+    if not ok:
+        raise InputError(source, field, f"an integrator tolerance in [{lo:g}, {hi:g}] (looser "
+                         "than 1e-6 drifts by km per day; tighter than 1e-15 is below double "
+                         "precision)", value)
+    return float(value)
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,7 +97,8 @@ class Propagator:
         ``var_model`` defaults to ``state_model`` (exact variational equations).
     params : names of the model parameters whose sensitivities are wanted (see
         :mod:`tapp.dynamics.forces`).
-    rtol, atol : relative and absolute (km, km/s) local error tolerances, > 0. The default
+    rtol, atol : relative and absolute (km, km/s) local error tolerances, each within
+        :data:`TOLERANCE_RANGE` = [1e-15, 1e-6]. The default
         1e-13 keeps a day of an e = 0.3 orbit within 1 mm of the Kepler solution (1e-12
         gives 8 mm there; a tolerance is no proof of accuracy, see the tests).
     error_control : ``"state"`` controls the step on the 6 state components only;
@@ -92,9 +119,7 @@ class Propagator:
         if self.var_model is None:
             object.__setattr__(self, "var_model", self.state_model)
         for name in ("rtol", "atol"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise InputError("propagator", name, "a finite tolerance > 0", value)
+            check_tolerance(getattr(self, name), "propagator", name)
         if self.error_control not in ("state", "all"):
             raise InputError("propagator", "error_control", "'state' or 'all'",
                              self.error_control)
@@ -121,7 +146,8 @@ class Propagator:
         Raises
         ------
         InputError
-            Non-finite x0 or times, times not monotonic, unknown parameter names.
+            Non-finite x0 or times, times not monotonic, unknown parameter names, a
+            non-finite parameter value or a GM <= 0.
         PropagationError
             The integrator stopped early (see ``tapp.dynamics.compiled.STATUS``).
         """
@@ -139,7 +165,8 @@ class Propagator:
         for name, value in (param_values or {}).items():
             if name not in values:
                 raise InputError("propagate", "param_values", f"one of {self.params}", name)
-            values[name] = float(value)
+            values[name] = check_parameter_value(name, value, "propagate",
+                                                 f"param_values.{name}")
         q = np.array([values[name] for name in self.params])
         eph = self._ephemeris(eqs.bodies, epoch_jd_utc, t0_s, t_s)
         if stm:

@@ -75,7 +75,8 @@ class ForceModel:
     center : str
         Central body of the integration frame (EME2000 axes), one of ``BODIES``.
     third_bodies : tuple of str
-        Point-mass perturbers, from DE421, with the indirect term of a non-inertial centre.
+        Point-mass perturbers, from DE421, with the indirect term of a non-inertial centre;
+        each at most once (a repeated body would add its pull twice).
     """
 
     gravity: GravitySpec
@@ -93,6 +94,11 @@ class ForceModel:
             if body not in BODIES or body == self.center:
                 raise InputError("model", "third_bodies",
                                  f"bodies among {', '.join(BODIES)} other than the centre", body)
+        for i, body in enumerate(self.third_bodies):
+            if body in self.third_bodies[:i]:
+                raise InputError("model", "third_bodies", f"each body once ({body} given "
+                                 f"{self.third_bodies.count(body)} times would multiply its "
+                                 "pull)", list(self.third_bodies))
 
     @property
     def gm_center_km3_s2(self) -> float:

@@ -40,6 +40,12 @@ STATION_PARAMETER_NAMES = {
 }
 
 
+#: Plausible heights of a ground station above the WGS84 ellipsoid, km, inclusive: the lowest
+#: land (Dead Sea shore, -0.43 km) to above the highest summit (Everest, 8.85 km). A height
+#: outside is a unit slip (m for km) or a typo, and would silently see nothing (or everything).
+HEIGHT_RANGE_km = (-0.5, 10.0)
+
+
 def station_state_eci(r_ecef_km, theta_rad, omega_rad_s: float = OMEGA_EARTH_rad_s):
     """Return the inertial state [r km, v km/s] of an Earth-fixed point, shape (..., 6).
 
@@ -130,7 +136,7 @@ class Station:
     lat_rad, lon_rad : float
         Geodetic latitude and east longitude, rad.
     h_km : float
-        Height above the WGS84 ellipsoid, km.
+        Height above the WGS84 ellipsoid, km, within :data:`HEIGHT_RANGE_km` (-0.5 to 10 km).
     elev_mask_rad : float
         Elevation mask: the station sees a spacecraft strictly above it, rad.
     r_ecef_km : numpy.ndarray, shape (3,)
@@ -153,6 +159,13 @@ class Station:
     def __post_init__(self) -> None:
         if not -0.5 * np.pi <= self.lat_rad <= 0.5 * np.pi:
             raise InputError(f"station {self.name}", "lat_rad", "[-pi/2, pi/2]", self.lat_rad)
+        lo, hi = HEIGHT_RANGE_km
+        if not lo <= self.h_km <= hi:
+            raise InputError(f"station {self.name}", "h_km", f"a ground-station height in "
+                             f"[{lo:g}, {hi:g}] km above the WGS84 ellipsoid", self.h_km)
+        if not np.isfinite(self.lon_rad):
+            raise InputError(f"station {self.name}", "lon_rad", "a finite longitude",
+                             self.lon_rad)
         r = geodetic_to_ecef(self.lat_rad, self.lon_rad, self.h_km)
         r.setflags(write=False)
         object.__setattr__(self, "r_ecef_km", r)

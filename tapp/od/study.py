@@ -1,7 +1,8 @@
 """The approximate-STM study end to end: every run of the brief, as data.
 
 The runs are read from the study's scenario file (``[[dc]]``, ``[ekf]``, ``[rsig]``; see
-``scenarios/approx_stm.toml``); each DC run uses the brief's offset initial estimate and the
+``scenarios/approx_stm.toml``, validated by :class:`tapp.od.setup.StudyFile`); each DC run
+uses the brief's offset initial estimate and the
 5-day simulated observation file of its orbit and truth model, cut to the run's arc. The
 results are plain dataclasses; :mod:`tapp.report.approx_stm` turns them into the report.
 """
@@ -15,7 +16,6 @@ from pathlib import Path
 import numpy as np
 
 from tapp.dynamics import Propagator, earth_model
-from tapp.errors import InputError
 from tapp.od import setup
 from tapp.od.batch import DCResult, DCSettings, differential_correction
 from tapp.od.ekf import EKFResult, extended_kalman_filter
@@ -71,31 +71,21 @@ class StudyResults:
     network: dict[str, tuple[str, ...]]
 
 
-def _dc_settings(data: dict, source: str) -> DCSettings:
-    table = data.get("dc_settings", {})
-    unknown = set(table) - {"max_iterations", "rms_rel_tol", "divergence_ratio", "rms_floor",
-                            "rms_fit_limit"}
-    if unknown:
-        raise InputError(source, f"dc_settings.{sorted(unknown)[0]}", "a DCSettings field")
-    return DCSettings(**table)
-
-
 def planned_cases(path: Path = DEFAULT_SCENARIO) -> int:
     """Number of runs the study will make (for a progress bar)."""
-    data = setup.load_study(path)
-    n = sum(len(b["orbits"]) * len(b["stm"]) * len(b["arcs_h"]) for b in data.get("dc", []))
-    ekf = data.get("ekf")
-    if ekf:
-        n += len(ekf["stm"]) * len(ekf["apriori"])
-    return n + len(data.get("rsig", {}).get("cases", []))
+    study = setup.study_file(path)
+    n = sum(len(b.orbits) * len(b.stm) * len(b.arcs_h) for b in study.dc)
+    if study.ekf:
+        n += len(study.ekf.stm) * len(study.ekf.apriori)
+    return n + (len(study.rsig.cases) if study.rsig else 0)
 
 
 def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = lambda _: None
               ) -> StudyResults:
     """Run every case of the study; ``advance(label)`` is called after each case."""
-    data = setup.load_study(path)
+    study = setup.study_file(path)
     src = str(path)
-    settings = _dc_settings(data, src)
+    settings = DCSettings(**study.dc_settings.model_dump())
     theta0 = setup.tracking(path).theta0_rad
     off = setup.offset(path)
     network: dict[str, tuple[str, ...]] = {}
@@ -110,18 +100,18 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
         return obs_cache[orbit, truth]
 
     dc_runs, blocks = [], []
-    for block in data.get("dc", []):
-        title = str(block.get("title", f"block {len(blocks) + 1}"))
+    for block in study.dc:
+        title = block.title if block.title is not None else f"block {len(blocks) + 1}"
         blocks.append(title)
-        for orbit in block["orbits"]:
+        for orbit in block.orbits:
             x_true = setup.true_orbit(orbit, path)
             x_start = setup.initial_estimate(x_true, off)
-            truth = block["truth"]
+            truth = block.truth
             obs = observations(orbit, truth)
-            for stm in block["stm"]:
+            for stm in block.stm:
                 prop = Propagator(earth_model(truth, source=src, field="dc.truth"),
                                   earth_model(stm, source=src, field="dc.stm"))
-                for arc_h in block["arcs_h"]:
+                for arc_h in block.arcs_h:
                     res = differential_correction(obs.window(arc_h * 3600.0), prop, x_start,
                                                   theta0_rad=theta0, settings=settings)
                     err = float(np.linalg.norm(res.x0[:3] - x_true[:3]))
@@ -129,33 +119,32 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
                     advance(f"DC {orbit} ({truth},{stm}) {arc_h:g} h")
 
     ekf_runs = []
-    ekf = data.get("ekf")
+    ekf = study.ekf
     if ekf:
-        orbit, truth = ekf["orbit"], ekf["truth"]
+        orbit, truth = ekf.orbit, ekf.truth
         x_true = setup.true_orbit(orbit, path)
         x_start = setup.initial_estimate(x_true, off)
-        obs = observations(orbit, truth).window(float(ekf["arc_h"]) * 3600.0)
-        for stm in ekf["stm"]:
+        obs = observations(orbit, truth).window(ekf.arc_h * 3600.0)
+        for stm in ekf.stm:
             prop = Propagator(earth_model(truth, source=src, field="ekf.truth"),
                               earth_model(stm, source=src, field="ekf.stm"))
-            for label, sig in ekf["apriori"].items():
+            for label, sig in ekf.apriori.items():
                 p0 = np.diag(np.square(np.asarray(sig, dtype=float)))
                 res = extended_kalman_filter(obs, prop, x_start, p0, theta0_rad=theta0)
                 ekf_runs.append(EKFRun(orbit, truth, stm, label, res))
                 advance(f"EKF ({truth},{stm}) a priori {label}")
 
     r_runs = []
-    rs = data.get("rsig")
+    rs = study.rsig
     if rs:
-        x_true = setup.true_orbit(rs["orbit"], path)
-        t = np.arange(0.0, rs["hours"] * 3600.0 + 0.5 * rs["step_s"], rs["step_s"])
-        for truth, stm in rs["cases"]:
+        x_true = setup.true_orbit(rs.orbit, path)
+        t = np.arange(0.0, rs.hours * 3600.0 + 0.5 * rs.step_s, rs.step_s)
+        for truth, stm in rs.cases:
             prop = Propagator(earth_model(truth, source=src, field="rsig.cases"),
                               earth_model(stm, source=src, field="rsig.cases"))
-            r_runs.append(RRun(rs["orbit"], truth, stm, r_signature(prop, x_true, t, theta0)))
+            r_runs.append(RRun(rs.orbit, truth, stm, r_signature(prop, x_true, t, theta0)))
             advance(f"R(t) ({truth},{stm})")
 
     return StudyResults(tuple(dc_runs), tuple(blocks), tuple(ekf_runs),
-                        str(ekf.get("title", "EKF")) if ekf else "",
-                        int(ekf.get("last_passes", 6)) if ekf else 0, tuple(r_runs),
+                        ekf.title if ekf else "", ekf.last_passes if ekf else 0, tuple(r_runs),
                         setup.tracking(path).sigma, network)
