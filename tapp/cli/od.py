@@ -48,6 +48,8 @@ TruthOpt = Annotated[str, typer.Option(help="State model of the data and the est
 StmOpt = Annotated[str, typer.Option(help="Variational model of the estimator.")]
 ScenarioOpt = Annotated[Path, typer.Option(help="Study scenario file.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
+SubsurfaceOpt = Annotated[bool, typer.Option(
+    "--allow-subsurface", help="Accept an orbit whose perigee is below the Earth's surface.")]
 
 
 def parse_arc_s(text: str, option: str = "--arc") -> float:
@@ -95,6 +97,7 @@ def dc(
                                              "of simulated data.")] = None,
     save_obs: Annotated[Path | None, typer.Option(help="Write the observations used.")] = None,
     scenario: ScenarioOpt = DEFAULT_SCENARIO,
+    allow_subsurface: SubsurfaceOpt = False,
     json_out: JsonOpt = False,
 ) -> None:
     """Batch differential correction from the brief's offset initial estimate."""
@@ -104,7 +107,7 @@ def dc(
         arc_s = parse_arc_s(arc)
         if max_iter < 1:
             raise InputError("--max-iter", "value", "a whole number >= 1", max_iter)
-        x_true = setup.true_orbit(orbit, scenario)
+        x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm)
         data = _observations(x_true, truth, stations, obs, scenario,
                              seed_option("--seed", seed))
@@ -176,13 +179,14 @@ def ekf(
     seed: Annotated[int | None, typer.Option(help="Noise seed.")] = None,
     obs: Annotated[Path | None, typer.Option(help="Observation file (.h5 or .csv).")] = None,
     scenario: ScenarioOpt = DEFAULT_SCENARIO,
+    allow_subsurface: SubsurfaceOpt = False,
     json_out: JsonOpt = False,
 ) -> None:
     """Extended Kalman filter from the brief's offset state; largest |O-C| per pass."""
 
     def body() -> None:
         arc_s = parse_arc_s(arc)
-        x_true = setup.true_orbit(orbit, scenario)
+        x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm)
         p0 = _apriori(apriori, scenario)
         q_km2_s3 = nonnegative_option("--process-noise", process_noise)
@@ -219,6 +223,7 @@ def rsig(
     hours: Annotated[float, typer.Option(help="Span, hours (> 0).")] = 48.0,
     step: Annotated[float, typer.Option(help="Output step, s (> 0).")] = 300.0,
     scenario: ScenarioOpt = DEFAULT_SCENARIO,
+    allow_subsurface: SubsurfaceOpt = False,
     json_out: JsonOpt = False,
 ) -> None:
     """The error-growth signature R(t) = sqrt(Σ_{i<=3, j<=6} φ_ij²)."""
@@ -227,7 +232,7 @@ def rsig(
         span_s = positive_option("--hours", hours) * 3600.0
         dt = positive_option("--step", step)
         check_grid_size("--hours/--step", grid_samples(span_s, dt))
-        x_true = setup.true_orbit(orbit, scenario)
+        x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm)
         t = np.arange(0.0, span_s + 0.5 * dt, dt)
         sig = r_signature(prop, x_true, t, setup.tracking(scenario).theta0_rad)

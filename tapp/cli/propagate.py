@@ -21,6 +21,7 @@ from tapp.cli.common import (
 )
 from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics import Propagator, earth_model
+from tapp.dynamics.propagate import check_tolerance
 from tapp.ephemeris import check_coverage, utc_to_tdb_jd
 from tapp.frames.time import parse_epoch
 from tapp.orbits import parse_orbit
@@ -38,22 +39,26 @@ def propagate(
         "--third-body", help="Third body from DE421 (repeatable): sun, moon, ...")] = None,
     epoch: Annotated[str, typer.Option(help="UTC epoch of t = 0 (ISO 8601).")]
     = "2026-01-01T00:00:00",
-    tol: Annotated[float, typer.Option(help="Relative and absolute tolerance (> 0).")] = 1e-13,
+    tol: Annotated[float, typer.Option(help="Relative and absolute tolerance, in [1e-15, "
+                                       "1e-6].")] = 1e-13,
     scenario: Annotated[Path | None, typer.Option(help="Scenario file with named orbits.")]
     = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    allow_subsurface: Annotated[bool, typer.Option(
+        "--allow-subsurface", help="Accept an orbit whose perigee is below the Earth's "
+        "surface.")] = False,
 ) -> None:
     """Propagate an Earth orbit with its state transition matrix (EME2000, km, km/s)."""
 
     def body() -> None:
-        x0 = parse_orbit(orbit, scenario=scenario)
+        x0 = parse_orbit(orbit, scenario=scenario, allow_subsurface=allow_subsurface)
         arc_s = positive_option("--hours", hours) * 3600.0
         dt = positive_option("--step", step)
         check_grid_size("--hours/--step", grid_samples(arc_s, dt))
         bodies = tuple(third_body or ())
         prop = Propagator(earth_model(truth, bodies, source="--truth", field="model"),
                           earth_model(stm, bodies, source="--stm", field="model"),
-                          rtol=positive_option("--tol", tol), atol=tol)
+                          rtol=check_tolerance(tol, "--tol", "value"), atol=tol)
         ep = parse_epoch(epoch, source="--epoch")
         if bodies:
             check_coverage(utc_to_tdb_jd(ep.jd), np.array([0.0, arc_s]) / SECONDS_PER_DAY,
