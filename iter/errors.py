@@ -1,8 +1,9 @@
 """The typed failures of ``iter``; every message names where the problem is and the numbers.
 
 ``iter`` knows nothing of ``tapp`` (an import-linter contract forbids it), so it has its own
-small hierarchy. The ``tapp iter`` command maps :class:`SweepInputError` onto
-``tapp.errors.InputError`` field for field, and the others onto ``tapp.errors.TappError``.
+small hierarchy. The ``tapp iter`` command maps :class:`SweepInputError`,
+:class:`ResultFileError` and :class:`SchedulerError` onto ``tapp.errors.InputError`` (exit 2)
+field for field, and the others onto ``tapp.errors.TappError``.
 
 A failing *case* (the body raises, or the program exits non-zero) is not an exception at this
 level: it is recorded in the results table with its message, and the sweep goes on.
@@ -63,9 +64,24 @@ class SchedulerError(IterError):
 
 
 class ResultFileError(IterError):
-    """A results file cannot be read or written; names the file and the reason."""
+    """A results file cannot be read or written, or is not a valid results file.
 
-    def __init__(self, path: str, reason: str):
+    Parameters
+    ----------
+    path : str
+        The results file (the requested path, never a temporary).
+    field : str
+        What is at fault: ``"file"``, an attribute or a dataset (``"status"``).
+    expected : str
+        What a valid file has there.
+    got : object, optional
+        What was found; omitted from the message when None.
+    """
+
+    def __init__(self, path: str, field: str, expected: str, got: object = None):
         self.path = path
-        self.reason = reason
-        super().__init__(f"{path}: {reason}")
+        self.field = field
+        self.expected = expected
+        self.got = got
+        detail = "" if got is None else f" (got {got!r})"
+        super().__init__(f"{path}: {field}: expected {expected}{detail}")

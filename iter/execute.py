@@ -59,6 +59,9 @@ CHUNKS_PER_SLOT = 4
 MAX_CHUNK_CASES = 256
 #: Source named in errors about execution settings.
 OPTIONS_SOURCE = "options"
+#: Most local-cluster worker processes per available core (more only thrash, and starting
+#: thousands takes minutes); a running cluster (``scheduler``) has no such limit.
+MAX_WORKERS_PER_CORE = 4
 #: Address schemes accepted for ``scheduler``.
 SCHEDULER_SCHEMES = ("tcp", "tls")
 
@@ -82,7 +85,8 @@ class Execution:
         ``tcp://HOST:PORT`` of a running dask.distributed scheduler; None starts a local
         cluster.
     workers : int or None
-        Worker processes of the local cluster (one thread each); None for one per core.
+        Worker processes of the local cluster (one thread each), at most
+        :data:`MAX_WORKERS_PER_CORE` per available core; None for one per core.
     chunk_size : int or None
         Cases per Dask task; None chooses about :data:`CHUNKS_PER_SLOT` chunks per worker
         (serial runs use 1, which only sets the checkpoint granularity).
@@ -118,6 +122,12 @@ class Execution:
             if value is not None and (isinstance(value, bool) or not isinstance(value, int)
                                       or value < 1):
                 raise SweepInputError(OPTIONS_SOURCE, name, "a whole number >= 1", value)
+        max_workers = MAX_WORKERS_PER_CORE * available_cores()
+        if self.workers is not None and self.workers > max_workers:
+            raise SweepInputError(OPTIONS_SOURCE, "workers",
+                                  f"at most {max_workers} local workers ({MAX_WORKERS_PER_CORE}"
+                                  f" per core, {available_cores()} cores; give --scheduler to "
+                                  "use a larger cluster)", self.workers)
         if self.scheduler is not None:
             parts = urlsplit(self.scheduler)
             if (parts.scheme not in SCHEDULER_SCHEMES or not parts.hostname

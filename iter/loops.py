@@ -35,6 +35,9 @@ from .errors import SweepInputError
 #: ``source`` of the errors raised while building a loop in code; the sweep-file reader
 #: re-raises them with the file name and the loop's position.
 LOOP_SOURCE = "loop"
+#: Most cases a sweep may have (each case is a row held in memory and in the results file);
+#: checked before any case is generated.
+MAX_CASES = 1_000_000
 
 
 def _as_numbers(field: str, values: Sequence[object]) -> tuple[float, ...]:
@@ -99,6 +102,9 @@ class Loop:
             raise SweepInputError(LOOP_SOURCE, "names", "distinct names", list(self.names))
         if isinstance(self.sets, bool) or not isinstance(self.sets, int) or self.sets < 1:
             raise SweepInputError(LOOP_SOURCE, "sets", "a whole number of cases >= 1",
+                                  self.sets)
+        if self.sets > MAX_CASES:
+            raise SweepInputError(LOOP_SOURCE, "sets", f"at most {MAX_CASES:,} cases",
                                   self.sets)
         n = len(self.names)
         vary = _as_numbers("vary", self.vary)
@@ -188,6 +194,22 @@ def case_count(loops: Sequence[Loop]) -> int:
     return math.prod(loop.sets for loop in loops)
 
 
+def check_case_count(loops: Sequence[Loop], source: str = LOOP_SOURCE) -> int:
+    """Return the number of cases of the nest if at most :data:`MAX_CASES`, else raise.
+
+    Raises
+    ------
+    SweepInputError
+        Field ``loop``: the message gives the number of cases the loops would make.
+    """
+    n = case_count(loops)
+    if n > MAX_CASES:
+        sets = " x ".join(str(loop.sets) for loop in loops)
+        raise SweepInputError(source, "loop", f"at most {MAX_CASES:,} cases in all (lower "
+                              "the sets of a loop)", f"{sets} = {n:,} cases")
+    return n
+
+
 def generate_cases(loops: Sequence[Loop]) -> tuple[Case, ...]:
     """Return every case of nested ITER loops, outer-major (the seed's nesting order).
 
@@ -217,6 +239,7 @@ def generate_cases(loops: Sequence[Loop]) -> tuple[Case, ...]:
     if len(loops) == 0:
         raise SweepInputError(LOOP_SOURCE, "loop", "at least one loop", [])
     names = varied_names(loops)
+    check_case_count(loops)
     tables = [loop.table() for loop in loops]
     cases = []
     for index, rows in enumerate(itertools.product(*(range(loop.sets) for loop in loops))):

@@ -18,8 +18,12 @@ HDF5 layout (one row per case, sorted by case index)::
 Every dataset has a ``units`` attribute, read from the name's suffix (``azimuth_deg`` ->
 ``deg``; see :data:`UNIT_SUFFIXES`), empty when the name carries no recognised unit. The
 file may hold fewer rows than ``n_cases`` while a sweep runs: it is rewritten as cases
-complete, each time to a temporary file renamed over the old one, so it is never half
-written.
+complete, each time to a hidden temporary ``.NAME.<random>.tmp`` beside it, renamed over the
+old one, so it is never half written; temporaries left by a killed run are removed on the next
+write (the same convention as ``tapp.outputs``, which ``iter`` may not import). Reading checks
+the layout (every dataset present, one row per case, status codes, case numbers unique and
+within the sweep), so a tampered or truncated file is a :class:`ResultFileError`, not a
+traceback.
 
 CSV: a header line with the table's columns (:attr:`iter.table.ResultTable.columns`), then
 one line per case; ``status`` is written as its name (``ok``, ``failed``).
@@ -32,6 +36,8 @@ import importlib.metadata
 import json
 import math
 import os
+import re
+import secrets
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -91,16 +97,32 @@ class StoredResults:
     n_cases: int
 
 
+#: Random part of a temporary's name (``secrets.token_hex(8)``, or older styles).
+_RANDOM = r"(?:[0-9a-f]{16}|[A-Za-z0-9_]{8}|tmp[0-9]+)"
+
+
+def stale_temporaries(path: Path) -> list[Path]:
+    """Return the temporaries of ``path`` left in its folder by a killed run."""
+    folder = path.parent
+    if not folder.is_dir():
+        return []
+    pattern = re.compile(rf"^\.{re.escape(path.name)}\.(?:{_RANDOM}\.tmp|tmp[0-9]+)$")
+    return sorted(p for p in folder.iterdir() if pattern.match(p.name))
+
+
 @contextmanager
 def _atomic_path(path: Path) -> Iterator[Path]:
     """Yield a temporary path beside ``path`` (parents created); rename it over ``path``."""
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    tmp = path.with_name(f".{path.name}.{secrets.token_hex(8)}.tmp")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
+        for stale in stale_temporaries(path):
+            stale.unlink(missing_ok=True)
         yield tmp
         os.replace(tmp, path)
     except OSError as exc:
-        raise ResultFileError(str(path), f"cannot write: {exc}") from None
+        raise ResultFileError(str(path), "file", "a writable file",
+                              exc.strerror or type(exc).__name__) from None
     finally:
         if tmp.exists():  # False, not an error, when the directory is unusable
             tmp.unlink()
@@ -153,29 +175,44 @@ def _dataset(group: h5py.Group, name: str, data: np.ndarray, units: str) -> h5py
 
 
 def read_hdf5(path: str | Path) -> StoredResults:
-    """Return the results stored in the HDF5 file ``path``.
+    """Return the results stored in the HDF5 file ``path``, checking its layout.
 
     Raises
     ------
     ResultFileError
-        The file cannot be opened or is not an ``iter`` results file.
+        The file cannot be opened, is not an ``iter`` results file, or its layout is broken
+        (a dataset missing or of the wrong type or length, an unknown status code, case
+        numbers repeated or outside the sweep); the message names the dataset.
     """
+    source = str(path)
     try:
         with h5py.File(path, "r") as f:
             if f.attrs.get("format") != FORMAT_NAME:
-                raise ResultFileError(str(path), f"not an {FORMAT_NAME} file (no format "
-                                      f"attribute {FORMAT_NAME!r})")
-            names = tuple(f["inputs"])
-            indices = f["case"][()]
-            values = np.column_stack([f["inputs"][n][()] for n in names])
-            outputs = {n: _read_column(f["outputs"][n]) for n in f["outputs"]}
-            status = f["status"][()]
-            errors = f["error"].asstr()[()]
-            elapsed_s = f["elapsed_s"][()]
-            attrs = {k: f.attrs[k] for k in ("sweep_json", "definition_json", "created_utc",
-                                             "n_cases")}
-    except (OSError, KeyError) as exc:
-        raise ResultFileError(str(path), f"cannot read results: {exc}") from None
+                raise ResultFileError(source, "format", f"an {FORMAT_NAME} file (attribute "
+                                      f"format = {FORMAT_NAME!r})", f.attrs.get("format"))
+            attrs = {k: _text_attr(f, source, k) for k in ("sweep_json", "definition_json",
+                                                            "created_utc")}
+            n_cases = _count_attr(f, source)
+            indices = _column(f, source, "case", "i")
+            n_rows = indices.size
+            names = tuple(_group(f, source, "inputs"))
+            values = np.column_stack([_column(f, source, f"inputs/{n}", "f", n_rows)
+                                      for n in names]) if names else np.empty((n_rows, 0))
+            outputs = {n: _read_column(f, source, f"outputs/{n}", n_rows)
+                       for n in _group(f, source, "outputs")}
+            status = _column(f, source, "status", "i", n_rows)
+            errors = _text_column(f, source, "error", n_rows)
+            elapsed_s = _column(f, source, "elapsed_s", "f", n_rows)
+    except OSError as exc:
+        raise ResultFileError(source, "file", "a readable HDF5 results file (truncated or "
+                              "corrupt?)", str(exc)) from None
+    codes = {int(s) for s in CaseStatus}
+    if not set(np.unique(status).tolist()) <= codes:
+        raise ResultFileError(source, "status", f"codes {sorted(codes)}",
+                              sorted(set(np.unique(status).tolist()) - codes))
+    if np.unique(indices).size != n_rows or (n_rows and (indices.min() < 0
+                                                          or indices.max() >= n_cases)):
+        raise ResultFileError(source, "case", f"distinct case numbers 0 .. {n_cases - 1}")
     rows = []
     for k, index in enumerate(indices):
         case_status = CaseStatus(int(status[k]))
@@ -187,15 +224,74 @@ def read_hdf5(path: str | Path) -> StoredResults:
                                outputs=row_outputs, status=case_status, error=str(errors[k]),
                                elapsed_s=float(elapsed_s[k])))
     return StoredResults(table=ResultTable(names=names, rows=tuple(rows)),
-                         sweep_json=str(attrs["sweep_json"]),
-                         definition_json=str(attrs["definition_json"]),
-                         created_utc=str(attrs["created_utc"]), n_cases=int(attrs["n_cases"]))
+                         sweep_json=attrs["sweep_json"],
+                         definition_json=attrs["definition_json"],
+                         created_utc=attrs["created_utc"], n_cases=n_cases)
 
 
-def _read_column(dataset: h5py.Dataset) -> list[OutputValue]:
+def _text_attr(f: h5py.File, source: str, key: str) -> str:
+    value = f.attrs.get(key)
+    if isinstance(value, bytes):
+        try:
+            value = value.decode("utf-8")
+        except UnicodeDecodeError:
+            value = None
+    if not isinstance(value, str):
+        raise ResultFileError(source, key, "a text attribute", type(value).__name__)
+    return value
+
+
+def _count_attr(f: h5py.File, source: str) -> int:
+    value = f.attrs.get("n_cases")
+    if not isinstance(value, int | np.integer) or isinstance(value, bool) or value < 0:
+        raise ResultFileError(source, "n_cases", "a whole number >= 0", value)
+    return int(value)
+
+
+def _group(f: h5py.File, source: str, name: str) -> h5py.Group:
+    group = f.get(name)
+    if not isinstance(group, h5py.Group):
+        raise ResultFileError(source, name, "a group", "nothing" if group is None else
+                              type(group).__name__)
+    return group
+
+
+def _checked_dataset(f: h5py.File, source: str, name: str,
+                     n_rows: int | None) -> h5py.Dataset:
+    dataset = f.get(name)
+    if not isinstance(dataset, h5py.Dataset) or dataset.ndim != 1:
+        raise ResultFileError(source, name, "a one-dimensional dataset",
+                              "nothing" if dataset is None else getattr(dataset, "shape", None))
+    if n_rows is not None and dataset.shape[0] != n_rows:
+        raise ResultFileError(source, name, f"{n_rows} rows (as many as /case)",
+                              dataset.shape[0])
+    return dataset
+
+
+def _column(f: h5py.File, source: str, name: str, kind: str,
+            n_rows: int | None = None) -> np.ndarray:
+    dataset = _checked_dataset(f, source, name, n_rows)
+    if dataset.dtype.kind not in (kind, "u" if kind == "i" else kind):
+        raise ResultFileError(source, name, "integers" if kind == "i" else "floats",
+                              str(dataset.dtype))
+    return dataset[()]
+
+
+def _text_column(f: h5py.File, source: str, name: str, n_rows: int) -> list[str]:
+    dataset = _checked_dataset(f, source, name, n_rows)
+    if h5py.check_string_dtype(dataset.dtype) is None:
+        raise ResultFileError(source, name, "UTF-8 text", str(dataset.dtype))
+    try:
+        return [str(v) for v in dataset.asstr()[()]]
+    except UnicodeDecodeError:
+        raise ResultFileError(source, name, "UTF-8 text", "undecodable bytes") from None
+
+
+def _read_column(f: h5py.File, source: str, name: str, n_rows: int) -> list[OutputValue]:
+    dataset = _checked_dataset(f, source, name, n_rows)
     if dataset.dtype.kind == "f":
         return [float(v) for v in dataset[()]]
-    return [str(v) for v in dataset.asstr()[()]]
+    return list(_text_column(f, source, name, n_rows))
 
 
 def _is_missing(value: OutputValue) -> bool:

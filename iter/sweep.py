@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 from .body import Body
 from .errors import SweepInputError
-from .loops import Case, Loop, case_count, generate_cases, varied_names
+from .loops import Case, Loop, case_count, check_case_count, generate_cases, varied_names
 from .table import RESERVED_COLUMNS
 
 
@@ -31,8 +31,9 @@ class Sweep:
     Raises
     ------
     SweepInputError
-        No loop, a name varied twice, a varied name that is also a constant, or a name
-        taken by a table column (``case``, ``status``, ``error``, ``elapsed_s``).
+        No loop, a name varied twice, a varied name that is also a constant, a name
+        taken by a table column (``case``, ``status``, ``error``, ``elapsed_s``), or more
+        than :data:`iter.loops.MAX_CASES` cases.
     """
 
     loops: tuple[Loop, ...]
@@ -56,6 +57,7 @@ class Sweep:
                 if name in RESERVED_COLUMNS:
                     raise SweepInputError(self.source, f"loop[{i}].names",
                                           f"a name other than {list(RESERVED_COLUMNS)}", name)
+        check_case_count(self.loops, self.source)
 
     @property
     def names(self) -> tuple[str, ...]:

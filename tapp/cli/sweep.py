@@ -1,8 +1,12 @@
 """``tapp iter``: run an ITER sweep file, locally on Dask, on a cluster, or serially.
 
 The engine is the ``iter`` package; this module only turns options into an
-:class:`iter.Execution`, maps ``iter``'s errors onto tapp's (so bad input is one line on
-stderr and exit code 2) and prints the summary.
+:class:`iter.Execution`, maps ``iter``'s errors onto tapp's (so bad input, including a results
+file that is corrupt or cannot be written, is one line on stderr and exit code 2) and prints
+the summary. Before anything runs, the results file and the CSV must be distinct from the sweep
+file and from each other (:func:`tapp.outputs.check_paths`). The results file is a checkpoint,
+rewritten atomically as cases complete so that a killed sweep resumes; the CSV is written
+atomically at the end.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from rich.table import Table
 from iter import (
     Execution,
     IterError,
+    ResultFileError,
     SchedulerError,
     SweepInputError,
     SweepResult,
@@ -26,6 +31,7 @@ from iter import (
 from iter.table import CaseStatus
 from tapp.cli.common import app, print_json, run_guarded
 from tapp.errors import InputError, TappError
+from tapp.outputs import check_paths
 
 #: Failed cases listed under the summary table (the rest are in the results file).
 MAX_FAILURES_SHOWN = 10
@@ -72,6 +78,7 @@ def iter_command(
     h5_path = output if output is not None else Path(sweep_file.stem + ".h5")
 
     def run() -> SweepResult:
+        check_paths({"SWEEP_FILE": sweep_file}, {"-o/--output": h5_path, "--csv": csv})
         try:
             execution = Execution(serial=serial, scheduler=scheduler, workers=workers,
                                   chunk_size=chunk_size, connect_timeout_s=connect_timeout_s)
@@ -86,6 +93,8 @@ def iter_command(
             raise InputError("command line", "--scheduler",
                              f"a Dask scheduler answering within {exc.timeout_s:g} s "
                              f"({exc.reason})", exc.address) from exc
+        except ResultFileError as exc:
+            raise InputError(exc.path, exc.field, exc.expected, exc.got) from exc
         except IterError as exc:
             raise TappError(str(exc)) from exc
 

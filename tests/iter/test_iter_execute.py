@@ -122,7 +122,7 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path, bodies):
     with pytest.raises(KeyboardInterrupt):
         run_sweep(sweep, output_h5=output, execution=SERIAL)
     assert [row.index for row in read_hdf5(output).table.rows] == [0, 1, 2]
-    assert list(tmp_path.glob(".out.h5.tmp*")) == []
+    assert list(tmp_path.glob(".out.h5.*")) == []
 
     (calls_dir / "interrupt").unlink()
     result = run_sweep(sweep, output_h5=output, execution=SERIAL)

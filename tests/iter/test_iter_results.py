@@ -88,14 +88,14 @@ def test_units_come_from_the_name(name, units):
 def test_unwritable_and_foreign_files_are_typed_errors(tmp_path):
     write_csv(tmp_path / "new_dir" / "r.csv", TABLE)  # parents are created
     (tmp_path / "a_file").touch()
-    with pytest.raises(ResultFileError, match="cannot write"):
+    with pytest.raises(ResultFileError, match="expected a writable file"):
         write_csv(tmp_path / "a_file" / "r.csv", TABLE)
     foreign = tmp_path / "foreign.h5"
     with h5py.File(foreign, "w") as f:
         f["x"] = 1
-    with pytest.raises(ResultFileError, match="not an iter-results file"):
+    with pytest.raises(ResultFileError, match="format: expected an iter-results file"):
         read_hdf5(foreign)
     text = tmp_path / "text.h5"
     text.write_text("not hdf5")
-    with pytest.raises(ResultFileError, match="cannot read results"):
+    with pytest.raises(ResultFileError, match="expected a readable HDF5 results file"):
         read_hdf5(text)
