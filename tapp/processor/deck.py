@@ -1,0 +1,578 @@
+"""The TAPP III deck (TOML, one file per run) and its binding to a T13 tape.
+
+The deck holds the manual inputs I₃ of the seed (§1 a–i, Appendix A.1). Parameters are named
+as on the tape (``"GM_moon_km3_s2"``, ``"GOLDSTONE.rho_km"``) or given by their 1-based
+position as in the seed; times are T13 time indices (TOML integers, as the seed's POT/RET),
+seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 times. Layout::
+
+    title = "..."
+    [tape]                      # optional expectations checked against the tape
+    iden = "DSN-LUNAR-2026-03-10"
+    n_o = 23
+    [times]
+    print = [1, 86400.0, "2026-03-14T02:05:58.384"]   # print output times (k = 0 always)
+    recycle = [2, 3]            # recycle (midcourse) times
+    print_output = true         # δ_PM
+    recycle_print = true        # δ_P
+    recycle_tape = true         # δ_T
+    [commands]
+    print = ["cov real orbit@current", "I; 0,-,pk; 1,2,fp"]   # either notation
+    recycle = "standard"        # Table B-5's ROC, or a list
+    [[stations_off]]            # time-station flags: no data from the station in the window
+    station = "MADRID"          # name or number
+    start = 86400.0             # optional, default the first T13 time
+    end = 172800.0              # optional, default the last
+    [common]                    # common system: permutation P_c, n_c1, constraints K_c
+    eliminated = ["..."]        # readable: these go last and are fixed in both worlds
+    # permutation = [[10, 14], [12, "GM_km3_s2"]]   # seed coding: u(a) = v(b), a 1-based
+    # n_c1 = 18
+    constraints = [["a", "b", 0.5]]                 # x(a) <- x(a) - e x(b)
+    [fit]                       # fit system: P_f (an extension), n_f1, K_f, a priori
+    fixed = ["GM_moon_km3_s2"]  # readable; or permutation/n_f1 as the seed
+    constraints = []
+    [fit.apriori]
+    sigma = { x_km = 1.0, "GM_moon_km3_s2" = 0.0 }  # σ = 0: held fixed; inf: no information
+    # sigma = [1.0, 1.0, ...]   # positional over f1 (seed coding), or
+    # normal = [[...], ...]     # the n_f1 x n_f1 normal matrix S₀
+    [real]                      # real system: P_r, n_r1, K_r, a priori
+    certain = []
+    [real.apriori]
+    sigma = { x_km = 1.0, "GM_moon_km3_s2" = 1e-4 }  # σ = 0: certain
+    correlation = [["x_km", "y_km", 0.3]]
+    # covariance = [[...]]      # the n_r1 x n_r1 covariance Λ₀
+    [miss]
+    partitions = { m1 = [0, 2], m2 = ["b_dot_t_km", "flight_time_s"] }  # [t, h] or names
+    [budget]
+    enabled = true
+    groups = { "station locations" = ["GOLDSTONE.rho_km", "..."] }
+    [plots]
+    partition = "p@current"     # σ against time of this set
+
+In the sigma-table form every parameter of the tape needs a σ in the fit world (a parameter
+with σ = 0 is fixed, i.e. constrained) and in the real world (σ = 0: certain); the fit and
+real permutations that put the fitted/uncertain parameters first are then built by keeping the
+tape's order (stable). Fit normal matrices and real covariances given as matrices are checked
+symmetric; a real-world covariance must be positive semi-definite.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from tapp.constants import SECONDS_PER_DAY
+from tapp.errors import InputError
+from tapp.frames.time import parse_epoch
+from tapp.processor.commands import ROC, Command, Side, parse_command
+from tapp.processor.links import Constraint, Permutation
+from tapp.processor.plan import Plan, StationOff
+from tapp.processor.representations import ISOLATED_SETS, Systems
+from tapp.schema import InfFloat, Schema, load
+
+Ref = int | str
+TimeRef = int | float | str
+#: Time coincidence with a T13 time, s (tape times are stored to the microsecond).
+TIME_MATCH_S = 1e-3
+#: Largest negative eigenvalue of a real-world correlation matrix taken as rounding.
+PSD_TOL = 1e-10
+#: The seed's nominal optional miss partitions (Appendix A.1), (tail, head).
+NOMINAL_MISS = {"m1": (0, 6), "m2": (0, 3), "m3": (3, 6), "m4": (6, 12), "m5": (12, 18)}
+
+
+class TapeExpect(Schema):
+    iden: str | None = None
+    n_o: int | None = None
+
+
+class Times(Schema):
+    print: list[TimeRef] = []
+    recycle: list[TimeRef] = []
+    print_output: bool = True
+    recycle_print: bool = True
+    recycle_tape: bool = True
+
+
+class Commands(Schema):
+    print: list[str] = []
+    recycle: list[str] | Literal["standard"] = "standard"
+
+
+class StationsOff(Schema):
+    station: Ref
+    start: TimeRef | None = None
+    end: TimeRef | None = None
+
+
+class Common(Schema):
+    n_c1: int | None = None
+    permutation: list[list[Ref]] = []
+    eliminated: list[Ref] = []
+    constraints: list[list[Ref | float]] = []
+
+
+class FitApriori(Schema):
+    sigma: dict[str, InfFloat] | list[InfFloat] | None = None
+    normal: list[list[float]] | None = None
+
+
+class Fit(Schema):
+    n_f1: int | None = None
+    permutation: list[list[Ref]] = []
+    fixed: list[Ref] = []
+    constraints: list[list[Ref | float]] = []
+    apriori: FitApriori = FitApriori()
+
+
+class RealApriori(Schema):
+    sigma: dict[str, float] | list[float] | None = None
+    correlation: list[list[Ref | float]] = []
+    covariance: list[list[float]] | None = None
+
+
+class Real(Schema):
+    n_r1: int | None = None
+    permutation: list[list[Ref]] = []
+    certain: list[Ref] = []
+    constraints: list[list[Ref | float]] = []
+    apriori: RealApriori = RealApriori()
+
+
+class Miss(Schema):
+    partitions: dict[str, list[Ref]] = {}
+
+
+class BudgetTable(Schema):
+    enabled: bool = True
+    groups: dict[str, list[Ref]] = {}
+
+
+class Plots(Schema):
+    partition: str = "p@current"
+
+
+class Deck(Schema):
+    """The deck file (module docstring); validated strictly, unknown keys are errors."""
+
+    title: str = ""
+    tape: TapeExpect = TapeExpect()
+    times: Times = Times()
+    commands: Commands = Commands()
+    stations_off: list[StationsOff] = []
+    common: Common = Common()
+    fit: Fit
+    real: Real
+    miss: Miss = Miss()
+    budget: BudgetTable = BudgetTable()
+    plots: Plots = Plots()
+
+
+def read_deck(path: Path | str) -> Deck:
+    """Read and validate a deck file (errors name the file and the field)."""
+    return load(Deck, path)
+
+
+# ---------------------------------------------------------------------------------------------
+# Binding to a tape
+# ---------------------------------------------------------------------------------------------
+
+
+class _Binder:
+    """Resolves the deck's names, positions and times against a T13 header."""
+
+    def __init__(self, deck: Deck, header, source: str):
+        self.deck, self.h, self.source = deck, header, source
+        self.names = tuple(header.parameters.name)
+        self.n_o, self.n_p = len(self.names), int(header.n_p)
+        self.times = np.asarray(header.records.times_s, dtype=float)
+
+    def fail(self, field: str, expected: str, got: object = None) -> InputError:
+        return InputError(self.source, field, expected, got)
+
+    # --- references --------------------------------------------------------------------------
+
+    def position(self, ref: object, order: list[str], field: str) -> int:
+        """0-based position of a parameter in ``order`` (a name) or a 1-based index."""
+        if isinstance(ref, bool) or not isinstance(ref, int | str):
+            raise self.fail(field, "a parameter name or 1-based position", ref)
+        if isinstance(ref, str) and ref.isdigit():
+            ref = int(ref)
+        if isinstance(ref, int):
+            if not 1 <= ref <= self.n_o:
+                raise self.fail(field, f"a position 1..{self.n_o}", ref)
+            return ref - 1
+        bare = [n.rstrip("'") for n in order]
+        if ref not in bare:
+            raise self.fail(field, "a parameter name of the tape (" + ", ".join(self.names)
+                            + ")", ref)
+        return bare.index(ref)
+
+    def time_index(self, value: object, field: str) -> int:
+        """T13 time index of an index (int), seconds (float) or UTC date (string)."""
+        if isinstance(value, bool):
+            raise self.fail(field, "a T13 index, seconds or a UTC date", value)
+        if isinstance(value, int):
+            if not 0 <= value < self.times.size:
+                raise self.fail(field, f"a T13 time index 0..{self.times.size - 1}", value)
+            return value
+        if isinstance(value, str):
+            try:
+                when = parse_epoch(value, self.source)
+            except InputError as exc:
+                raise self.fail(field, exc.expected, value) from None
+            epoch = self.h.epoch
+            t = ((when.jd_whole - epoch.jd_whole) + (when.jd_fraction - epoch.jd_fraction)) \
+                * SECONDS_PER_DAY
+        else:
+            t = float(value)
+        i = int(np.argmin(np.abs(self.times - t)))
+        if abs(self.times[i] - t) > TIME_MATCH_S:
+            near = ", ".join(f"{self.times[j]:.3f}" for j in
+                             range(max(0, i - 1), min(self.times.size, i + 2)))
+            raise self.fail(field, f"a T13 time of the tape (nearest: {near} s)", value)
+        return i
+
+    def time_list(self, values: list, field: str, *, first: int) -> tuple[int, ...]:
+        out = sorted({self.time_index(v, f"{field}[{i}]") for i, v in enumerate(values)})
+        if out and out[0] < first:
+            raise self.fail(field, f"times after the injection (index >= {first})", out[0])
+        return tuple(out)
+
+    # --- systems ------------------------------------------------------------------------------
+
+    def _permutation(self, pairs: list, order: list[str], field: str, lo: int, hi: int
+                     ) -> Permutation | None:
+        if not pairs:
+            return None
+        out = []
+        for i, pair in enumerate(pairs):
+            if len(pair) != 2 or not isinstance(pair[0], int) or isinstance(pair[0], bool):
+                raise self.fail(f"{field}[{i}]", "a pair [a, b]: position a (1-based), "
+                                "parameter b (name or position)", pair)
+            out.append((pair[0] - 1, self.position(pair[1], order, f"{field}[{i}]")))
+        link = Permutation.from_pairs(out, self.n_o, self.n_p, f"{self.source}: {field}")
+        moved = set(link.target.tolist())
+        if moved and (min(moved) < lo or max(moved) >= hi):
+            raise self.fail(field, f"positions within {lo + 1}..{hi}",
+                            sorted(m + 1 for m in moved))
+        return link
+
+    def _partition_last(self, refs: list, order: list[str], field: str, lo: int, hi: int
+                        ) -> Permutation | None:
+        """Permutation moving ``refs`` to the end of rows lo..hi-1, others keeping order."""
+        moved = [self.position(r, order, f"{field}[{i}]") for i, r in enumerate(refs)]
+        for m, r in zip(moved, refs, strict=True):
+            if not lo <= m < hi:
+                raise self.fail(field, f"parameters at positions {lo + 1}..{hi} (constants "
+                                "of this set; the orbit is never fixed)", r)
+        if len(set(moved)) != len(moved):
+            raise self.fail(field, "each parameter once", refs)
+        keep = [i for i in range(lo, hi) if i not in moved]
+        new = keep + moved
+        pairs = [(lo + a, b) for a, b in enumerate(new) if lo + a != b]
+        return Permutation.from_pairs(pairs, self.n_o, self.n_p, field) if pairs else None
+
+    def _constraints(self, triples: list, order: list[str], field: str) -> Constraint | None:
+        if not triples:
+            return None
+        out = []
+        for i, tr in enumerate(triples):
+            where = f"{field}[{i}]"
+            if len(tr) != 3 or isinstance(tr[2], bool) or not isinstance(tr[2], int | float):
+                raise self.fail(where, "a triple [a, b, e]: x(a) <- x(a) - e x(b)", tr)
+            out.append((self.position(tr[0], order, where), self.position(tr[1], order, where),
+                        float(tr[2])))
+        return Constraint.from_triples(out, self.n_o, self.n_p, f"{self.source}: {field}")
+
+    def _count(self, given: int | None, derived: int, lo: int, hi: int, field: str) -> int:
+        n = derived if given is None else given
+        if given is not None and given != derived and derived != hi:
+            raise self.fail(field, f"{derived} (as the list of fixed parameters gives)", given)
+        if not lo <= n <= hi:
+            raise self.fail(field, f"a number in {lo}..{hi}", n)
+        return n
+
+    def systems(self) -> tuple[Systems, np.ndarray, np.ndarray]:
+        d = self.deck
+        names = list(self.names)
+        com = d.common
+        if com.permutation and com.eliminated:
+            raise self.fail("common", "either permutation (with n_c1) or eliminated")
+        p_c = (self._permutation(com.permutation, names, "common.permutation", self.n_p,
+                                 self.n_o)
+               or self._partition_last(com.eliminated, names, "common.eliminated", self.n_p,
+                                       self.n_o))
+        n_c1 = self._count(com.n_c1, self.n_o - len(com.eliminated), self.n_p, self.n_o,
+                           "common.n_c1")
+        order_c = p_c.move(names) if p_c else names
+        k_c = self._constraints(com.constraints, order_c, "common.constraints")
+        fit_sigma_fixed = self._sigma_zero(d.fit.apriori.sigma, order_c, n_c1, "fit.apriori")
+        p_f, n_f1 = self._world(d.fit.permutation, d.fit.fixed, fit_sigma_fixed, d.fit.n_f1,
+                                order_c, n_c1, "fit", "fixed", "n_f1")
+        order_f = p_f.move(order_c) if p_f else order_c
+        k_f = self._constraints(d.fit.constraints, order_f, "fit.constraints")
+        real_sigma_certain = self._sigma_zero(d.real.apriori.sigma, order_c, n_c1,
+                                              "real.apriori")
+        p_r, n_r1 = self._world(d.real.permutation, d.real.certain, real_sigma_certain,
+                                d.real.n_r1, order_c, n_c1, "real", "certain", "n_r1")
+        order_r = p_r.move(order_c) if p_r else order_c
+        k_r = self._constraints(d.real.constraints, order_r, "real.constraints")
+        miss = self.miss_partitions()
+        sy = Systems(self.n_o, self.n_p, n_c1, n_f1, n_r1, self.names, len(self.h.miss.name),
+                     p_c, k_c, p_f, k_f, p_r, k_r, miss)
+        return sy, self.fit_normal(order_f, n_f1), self.real_covariance(order_r, n_r1)
+
+    def _world(self, perm: list, listed: list, from_sigma: list, n_given: int | None,
+               order: list[str], n_c1: int, world: str, key: str, count: str
+               ) -> tuple[Permutation | None, int]:
+        if perm and (listed or from_sigma):
+            raise self.fail(world, f"either permutation (with {count}) or {key} / σ = 0")
+        if listed and from_sigma and sorted(map(str, listed)) != sorted(map(str, from_sigma)):
+            raise self.fail(f"{world}.{key}", f"the parameters with σ = 0 in {world}.apriori",
+                            listed)
+        refs = listed or from_sigma
+        if perm:
+            return (self._permutation(perm, order, f"{world}.permutation", self.n_p, n_c1),
+                    self._count(n_given, n_c1, self.n_p, n_c1, f"{world}.{count}"))
+        link = self._partition_last(refs, order, f"{world}.{key}", self.n_p, n_c1)
+        return link, self._count(n_given, n_c1 - len(refs), self.n_p, n_c1, f"{world}.{count}")
+
+    # --- a priori -----------------------------------------------------------------------------
+
+    def _key(self, key: str) -> str:
+        """A σ-table key: a name, or a 1-based position on the tape (the standard order)."""
+        return self.names[int(key) - 1] if key.isdigit() and 1 <= int(key) <= self.n_o else key
+
+    def _sigma_zero(self, sigma, order: list[str], n_c1: int, field: str) -> list[str]:
+        """Names with σ = 0 in a σ table that covers the common parameters (readable form)."""
+        if not isinstance(sigma, dict):
+            return []
+        zero = []
+        for key, value in sigma.items():
+            pos = self.position(self._key(key), order, f"{field}.sigma.{key}")
+            if value == 0 and pos < n_c1:
+                zero.append(order[pos].rstrip("'"))
+        return zero
+
+    def _sigmas(self, sigma, order: list[str], n1: int, field: str) -> np.ndarray:
+        """σ of the first n1 parameters of ``order`` from a list or a table."""
+        if isinstance(sigma, list):
+            if len(sigma) != n1:
+                raise self.fail(f"{field}.sigma", f"{n1} values (one per parameter of the set, "
+                                "in system order)", len(sigma))
+            out = np.array(sigma, dtype=float)
+        else:
+            out = np.full(n1, np.nan)
+            for key, value in sigma.items():
+                pos = self.position(self._key(key), order, f"{field}.sigma.{key}")
+                if pos < n1:
+                    out[pos] = value
+                elif value != 0:
+                    raise self.fail(f"{field}.sigma.{key}", "σ = 0 (the parameter is not in the "
+                                    "estimated set of this world)", value)
+            missing = [order[i] for i in range(n1) if np.isnan(out[i])]
+            if missing:
+                raise self.fail(f"{field}.sigma", "a σ for every parameter (missing: "
+                                + ", ".join(missing) + ")")
+        bad = np.flatnonzero(~(out > 0))
+        if bad.size:
+            raise self.fail(f"{field}.sigma", "σ > 0 for the estimated parameters (σ = 0 "
+                            "moves a parameter to the fixed set in the table form)",
+                            {order[i]: float(out[i]) for i in bad})
+        return out
+
+    def _matrix(self, rows: list[list[float]], n: int, field: str) -> np.ndarray:
+        m = np.array(rows, dtype=float) if rows and all(len(r) == len(rows) for r in rows) \
+            else None
+        if m is None or m.shape != (n, n):
+            raise self.fail(field, f"a {n} x {n} matrix", None if m is None else m.shape)
+        if not np.allclose(m, m.T, rtol=0, atol=1e-12 * np.max(np.abs(m))):
+            raise self.fail(field, "a symmetric matrix")
+        return 0.5 * (m + m.T)
+
+    def fit_normal(self, order: list[str], n_f1: int) -> np.ndarray:
+        ap = self.deck.fit.apriori
+        if (ap.sigma is None) == (ap.normal is None):
+            raise self.fail("fit.apriori", "exactly one of sigma or normal")
+        if ap.normal is not None:
+            s0 = self._matrix(ap.normal, n_f1, "fit.apriori.normal")
+            if np.min(np.linalg.eigvalsh(s0)) < -PSD_TOL * max(1.0, np.max(np.diag(s0))):
+                raise self.fail("fit.apriori.normal", "a positive semi-definite normal matrix")
+            return s0
+        sigma = self._sigmas(ap.sigma, order, n_f1, "fit.apriori")
+        return np.diag(1.0 / sigma**2)
+
+    def real_covariance(self, order: list[str], n_r1: int) -> np.ndarray:
+        ap = self.deck.real.apriori
+        if (ap.sigma is None) == (ap.covariance is None):
+            raise self.fail("real.apriori", "exactly one of sigma or covariance")
+        if ap.covariance is not None:
+            if ap.correlation:
+                raise self.fail("real.apriori.correlation", "no correlations with a covariance")
+            lam = self._matrix(ap.covariance, n_r1, "real.apriori.covariance")
+            d = np.sqrt(np.abs(np.diag(lam)))
+            corr = lam / np.where(np.outer(d, d) > 0, np.outer(d, d), 1.0)
+        else:
+            sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori")
+            if np.any(~np.isfinite(sigma)):
+                raise self.fail("real.apriori.sigma", "finite σ's")
+            corr = np.eye(n_r1)
+            for i, tr in enumerate(ap.correlation):
+                where = f"real.apriori.correlation[{i}]"
+                if len(tr) != 3 or isinstance(tr[2], bool) or not isinstance(tr[2], int | float):
+                    raise self.fail(where, "a triple [a, b, ρ]", tr)
+                a, b = (self.position(r, order, where) for r in tr[:2])
+                if a >= n_r1 or b >= n_r1 or a == b or not -1 <= tr[2] <= 1:
+                    raise self.fail(where, "two different uncertain parameters and -1 <= ρ <= 1",
+                                    tr)
+                corr[a, b] = corr[b, a] = float(tr[2])
+            lam = corr * np.outer(sigma, sigma)
+        w = np.linalg.eigvalsh(corr)
+        if w[0] < -PSD_TOL:
+            field = "covariance" if ap.covariance is not None else "correlation"
+            raise self.fail(f"real.apriori.{field}", "a positive semi-definite real-world "
+                            "covariance", f"smallest eigenvalue {w[0]:.3g} of its correlation "
+                            "matrix")
+        return lam
+
+    # --- the rest -----------------------------------------------------------------------------
+
+    def miss_partitions(self) -> dict[str, tuple[int, int]]:
+        names = list(self.h.miss.name)
+        n_m = len(names)
+        out = {k: v for k, v in NOMINAL_MISS.items() if v[1] <= n_m}
+        out.setdefault("m1", (0, min(6, n_m)))
+        for key, value in self.deck.miss.partitions.items():
+            field = f"miss.partitions.{key}"
+            if key not in {f"m{i}" for i in range(1, 10)}:
+                raise self.fail(field, "a partition name m1..m9", key)
+            if len(value) != 2:
+                raise self.fail(field, "[tail, head] (rows tail+1..head, as the seed's t, h) or "
+                                "[first name, last name]", value)
+            if all(isinstance(v, str) for v in value):
+                missing = [v for v in value if v not in names]
+                if missing:
+                    raise self.fail(field, "miss parameter names of the tape ("
+                                    + ", ".join(names) + ")", missing)
+                t, h = names.index(value[0]), names.index(value[1]) + 1
+            elif all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+                t, h = value
+            else:
+                raise self.fail(field, "two integers or two names", value)
+            if not 0 <= t < h <= n_m:
+                raise self.fail(field, f"0 <= tail < head <= n_m = {n_m}", value)
+            out[key] = (t, h)
+        return out
+
+    def command(self, text: str, field: str, systems: Systems) -> Command:
+        try:
+            cmd = parse_command(text)
+            for side in (cmd.rows, cmd.cols):
+                systems.bounds(side.rho)
+                if side.tau in (4, 5) and systems.n_m < (side.tau - 2) * systems.n_p:
+                    raise InputError("", "", f"an orbit set available on this tape (τ = "
+                                     f"{side.tau} needs {(side.tau - 2) * systems.n_p} miss "
+                                     f"parameters; the tape has {systems.n_m})", text)
+        except InputError as exc:
+            raise self.fail(field, exc.expected, exc.got if exc.got is not None else text) \
+                from None
+        return cmd
+
+    def stations_off(self) -> tuple[StationOff, ...]:
+        st = self.h.stations
+        out = []
+        last = self.times.size - 1
+        for i, off in enumerate(self.deck.stations_off):
+            field = f"stations_off[{i}]"
+            if isinstance(off.station, str):
+                if off.station not in st.name:
+                    raise self.fail(f"{field}.station", "a station of the tape ("
+                                    + ", ".join(st.name) + ")", off.station)
+                number = int(st.id[list(st.name).index(off.station)])
+            else:
+                if off.station not in set(int(s) for s in st.id):
+                    raise self.fail(f"{field}.station", "a station number of the tape "
+                                    f"(1..{len(st.name)})", off.station)
+                number = off.station
+            start = 0 if off.start is None else self.time_index(off.start, f"{field}.start")
+            end = last if off.end is None else self.time_index(off.end, f"{field}.end")
+            if end <= start:
+                raise self.fail(field, "start before end", (off.start, off.end))
+            out.append(StationOff(number, start + 1, end))
+        return tuple(out)
+
+    def budget_groups(self, systems: Systems) -> tuple[tuple[str, tuple[int, ...]], ...]:
+        order = systems.system_names(6)
+        out, seen = [], set()
+        for name, refs in self.deck.budget.groups.items():
+            field = f"budget.groups.{name}"
+            idx = tuple(self.position(r, order, field) for r in refs)
+            bad = [order[i] for i in idx if not systems.n_p <= i < systems.n_r1]
+            if bad or not idx:
+                raise self.fail(field, "uncertain constants of the real world (rq)", bad or refs)
+            if seen & set(idx):
+                raise self.fail(field, "groups with no parameter in common")
+            seen |= set(idx)
+            out.append((name, idx))
+        return tuple(out)
+
+    def history(self) -> Side:
+        text = self.deck.plots.partition
+        try:
+            cmd = parse_command(f"cov-real {text}")
+        except InputError as exc:
+            raise self.fail("plots.partition", exc.expected, text) from None
+        return cmd.rows
+
+    def plan(self) -> Plan:
+        d = self.deck
+        if d.tape.iden is not None and d.tape.iden != self.h.iden:
+            raise self.fail("tape.iden", f"the tape's iden {self.h.iden!r}", d.tape.iden)
+        if d.tape.n_o is not None and d.tape.n_o != self.n_o:
+            raise self.fail("tape.n_o", f"the tape's n_o = {self.n_o}", d.tape.n_o)
+        systems, s0, lam0 = self.systems()
+        prints = (0, *self.time_list(d.times.print, "times.print", first=0))
+        recycles = self.time_list(d.times.recycle, "times.recycle", first=1)
+        poc = tuple(self.command(c, f"commands.print[{i}]", systems)
+                    for i, c in enumerate(d.commands.print))
+        roc = ROC if d.commands.recycle == "standard" else tuple(
+            self.command(c, f"commands.recycle[{i}]", systems)
+            for i, c in enumerate(d.commands.recycle))
+        if d.commands.recycle == "standard":
+            for cmd in roc:
+                for side in (cmd.rows, cmd.cols):
+                    systems.bounds(side.rho)
+        hist = self.history()
+        systems.bounds(hist.rho)
+        return Plan(systems, s0, lam0, tuple(sorted(set(prints))), recycles,
+                    d.times.print_output, d.times.recycle_print, d.times.recycle_tape, poc, roc,
+                    self.stations_off(), d.budget.enabled, self.budget_groups(systems), hist)
+
+
+def bind(deck: Deck, header, source: str) -> Plan:
+    """Return the :class:`~tapp.processor.plan.Plan` of a deck on a tape.
+
+    Parameters
+    ----------
+    deck : a validated deck (:func:`read_deck`).
+    header : the tape's T13 header (parameters, stations, miss, records, epoch, iden, n_p).
+    source : the deck file, named in errors.
+
+    Raises
+    ------
+    InputError
+        Names, positions, dimensions or times that do not fit the tape; a permutation that is
+        not one; a real-world covariance that is not positive semi-definite; commands with an
+        unknown partition or a parity without meaning (naming the deck file and the field).
+    """
+    return _Binder(deck, header, source).plan()
+
+
+def deck_json(deck: Deck) -> str:
+    """The deck as JSON (provenance on the T32 tape)."""
+    return json.dumps(deck.model_dump(mode="json"), sort_keys=True)
+
+
+__all__ = ["Deck", "ISOLATED_SETS", "bind", "deck_json", "read_deck"]
