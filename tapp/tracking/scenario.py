@@ -48,20 +48,23 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NoReturn
+from typing import Annotated, Literal, NoReturn
 
 import numpy as np
+from pydantic import AfterValidator, Field, PlainValidator, model_validator
 
 from tapp.bplane import REFERENCE_POLES
-from tapp.constants import SECONDS_PER_DAY, RADIUS_km
-from tapp.dynamics import BODIES, ForceModel, Propagator, earth_model
-from tapp.dynamics.forces import default_parameters
+from tapp.constants import SECONDS_PER_DAY
+from tapp.dynamics import BODIES, ForceModel, Propagator, earth_model, parse_gravity
+from tapp.dynamics.forces import check_parameter_value, default_parameters
+from tapp.dynamics.propagate import check_tolerance
 from tapp.errors import InputError
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.stations import Station
-from tapp.orbits import state_from_elements
-from tapp.stations_file import load_stations
+from tapp.orbits import check_perigee, state_from_elements
+from tapp.schema import Invalid, Schema, validate
+from tapp.stations_file import StationTable
 from tapp.tomlfile import read_toml
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
@@ -84,8 +87,6 @@ MISS_QUANTITIES = {
                   ("argp_rad", "rad"), ("M_rad", "rad")),
 }
 
-_TOP = {"title", "iden", "epoch", "injection", "model", "parameters", "stations", "networks",
-        "tracking", "noise", "times", "miss"}
 _ELEMENTS = ("a_km", "e", "i_deg", "raan_deg", "argp_deg")
 
 
@@ -286,12 +287,216 @@ def _unit_of(name: str) -> str:
 
 
 # ---------------------------------------------------------------------------------------------
-# Parsing
+# Schema: the file's tables and keys, their types and bounds (tapp.schema)
+# ---------------------------------------------------------------------------------------------
+
+
+def _time_value(value: object) -> object:
+    ok = (isinstance(value, int | float) and not isinstance(value, bool)
+          and math.isfinite(value)) or isinstance(value, str | dt.date)
+    if not ok:
+        raise Invalid("a time: s from the epoch (a finite number) or a UTC date (ISO string "
+                      "or TOML date)", value)
+    return value
+
+
+def _epoch_value(value: object) -> object:
+    if not isinstance(value, str | dt.datetime):
+        raise Invalid("a UTC date (ISO 8601 string or TOML date-time)", value)
+    return value
+
+
+def _tolerance(value: float) -> float:
+    try:
+        return check_tolerance(value)
+    except InputError as exc:
+        raise Invalid(exc.expected, value) from None
+
+
+def _gravity(spec: str) -> str:
+    try:
+        parse_gravity(spec)
+    except InputError as exc:
+        raise Invalid(exc.expected, spec) from None
+    return spec
+
+
+def _once(names: list) -> list:
+    for i, name in enumerate(names):
+        if name in names[:i]:
+            raise Invalid("each name once", names)
+    return names
+
+
+#: A time: seconds from the epoch, or a UTC date (ISO string or TOML date).
+Time = Annotated[object, PlainValidator(_time_value)]
+Window = Annotated[list[Time], Field(min_length=2, max_length=2)]
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+Tolerance = Annotated[float, AfterValidator(_tolerance)]
+GravityName = Annotated[str, AfterValidator(_gravity)]
+ThirdBody = Literal[tuple(b for b in BODIES if b != "earth")]  # type: ignore[valid-type]
+Kind = Literal[KINDS]  # type: ignore[valid-type]
+BiasKind = Literal[BIAS_KINDS]  # type: ignore[valid-type]
+LocationMode = Literal[LOCATION_MODES]  # type: ignore[valid-type]
+
+
+class InjectionTable(Schema):
+    """``[injection]``: r_km and v_km_s, or classical elements with M_deg or nu_deg."""
+
+    r_km: Annotated[list[float], Field(min_length=3, max_length=3)] | None = None
+    v_km_s: Annotated[list[float], Field(min_length=3, max_length=3)] | None = None
+    a_km: float | None = None
+    e: float | None = None
+    i_deg: float | None = None
+    raan_deg: float | None = None
+    argp_deg: float | None = None
+    M_deg: float | None = None
+    nu_deg: float | None = None
+    allow_subsurface: bool = False
+
+    @model_validator(mode="after")
+    def _one_form(self) -> InjectionTable:
+        given = {k for k in type(self).model_fields
+                 if k != "allow_subsurface" and getattr(self, k) is not None}
+        if given & {"r_km", "v_km_s"}:
+            if given != {"r_km", "v_km_s"}:
+                raise Invalid("either r_km and v_km_s or classical elements", sorted(given))
+        elif not (given - {"M_deg", "nu_deg"} == set(_ELEMENTS)
+                  and len(given & {"M_deg", "nu_deg"}) == 1):
+            raise Invalid("elements a_km, e, i_deg, raan_deg, argp_deg with exactly one of "
+                          "M_deg, nu_deg (or r_km and v_km_s)", sorted(given))
+        return self
+
+
+class ModelTable(Schema):
+    """``[model]``: state and variational force models, integrator tolerances."""
+
+    gravity: GravityName
+    third_bodies: Annotated[list[ThirdBody], AfterValidator(_once)] = []
+    var_gravity: GravityName | None = None
+    var_third_bodies: Annotated[list[ThirdBody], AfterValidator(_once)] | None = None
+    rtol: Tolerance = 1e-13
+    atol: Tolerance = 1e-13
+
+
+class ParametersTable(Schema):
+    """``[parameters]``: dynamic parameters in q, station location and bias modes."""
+
+    dynamic: Annotated[list[str], AfterValidator(_once)] = []
+    station_location: LocationMode = "none"
+    station_biases: Annotated[list[BiasKind], AfterValidator(_once)] = []
+    values: dict[str, float] = {}
+
+
+class FitTable(Schema):
+    """``[noise.fit]``: white-noise σ of each kind (edge units: m, mm/s, deg)."""
+
+    sigma_range_m: Positive | None = None
+    sigma_range_rate_mm_s: Positive | None = None
+    sigma_azimuth_deg: Positive | None = None
+    sigma_elevation_deg: Positive | None = None
+
+
+class RealTable(Schema):
+    """``[noise.real]``: white σ, per-pass bias σ, correlated σ with its τ, for each kind."""
+
+    sigma_range_m: NonNegative | None = None
+    sigma_range_rate_mm_s: NonNegative | None = None
+    sigma_azimuth_deg: NonNegative | None = None
+    sigma_elevation_deg: NonNegative | None = None
+    bias_range_m: NonNegative | None = None
+    bias_range_rate_mm_s: NonNegative | None = None
+    bias_azimuth_deg: NonNegative | None = None
+    bias_elevation_deg: NonNegative | None = None
+    correlated_range_m: NonNegative | None = None
+    correlated_range_rate_mm_s: NonNegative | None = None
+    correlated_azimuth_deg: NonNegative | None = None
+    correlated_elevation_deg: NonNegative | None = None
+    tau_range_s: Positive | None = None
+    tau_range_rate_s: Positive | None = None
+    tau_azimuth_s: Positive | None = None
+    tau_elevation_s: Positive | None = None
+
+
+class NoiseTable(Schema):
+    """``[noise]``: the fit world (required) and the real world."""
+
+    fit: FitTable
+    real: RealTable = RealTable()
+
+
+class StationTracking(Schema):
+    """``[tracking.station.NAME]``: what one station measures and how, overriding defaults."""
+
+    observables: Annotated[list[Kind], Field(min_length=1), AfterValidator(_once)] | None = None
+    location: LocationMode | None = None
+    biases: Annotated[list[BiasKind], AfterValidator(_once)] | None = None
+    range_bias_m: float = 0.0
+    range_rate_bias_mm_s: float = 0.0
+    blackouts: list[Window] = []
+    fit: FitTable = FitTable()
+    real: RealTable = RealTable()
+
+
+class TrackingTable(Schema):
+    """``[tracking]``: stations, observables, light time and the sampling schedule."""
+
+    stations: Annotated[list[str], Field(min_length=1), AfterValidator(_once)]
+    observables: Annotated[list[Kind], AfterValidator(_once)] = ["range", "range_rate"]
+    light_time: Literal[LIGHT_TIME_MODES] = "none"  # type: ignore[valid-type]
+    data_interval_s: Positive
+    start: Time = 0.0
+    end: Time | None = None
+    min_pass_s: NonNegative = 0.0
+    max_pass_s: Positive | None = None
+    blackouts: list[Window] = []
+    station: dict[str, StationTracking] = {}
+
+
+class TimesTable(Schema):
+    """``[times]``: input times (a list, or input_step_s with end) and epoch times."""
+
+    input: list[Time] | None = None
+    input_step_s: Positive | None = None
+    end: Time | None = None
+    epochs: list[Time] = []
+
+
+class MissTable(Schema):
+    """``[miss]``: the miss parameters' kind, time, quantities (and B-plane body, plane)."""
+
+    kind: Literal[tuple(MISS_QUANTITIES)]  # type: ignore[valid-type]
+    time: Time | None = None
+    quantities: Annotated[list[str], Field(min_length=1), AfterValidator(_once)] | None = None
+    body: str | None = None
+    reference: Literal[tuple(REFERENCE_POLES)] | None = None  # type: ignore[valid-type]
+
+
+class ScenarioFile(Schema):
+    """Schema of a TAPP I tracking scenario (module docstring for the tables)."""
+
+    title: str = ""
+    iden: str | None = None
+    epoch: Annotated[object, PlainValidator(_epoch_value)]
+    injection: InjectionTable
+    model: ModelTable
+    parameters: ParametersTable = ParametersTable()
+    stations: dict[str, StationTable] = {}
+    networks: dict[str, list[str]] = {}
+    tracking: TrackingTable
+    noise: NoiseTable
+    times: TimesTable
+    miss: MissTable
+
+
+# ---------------------------------------------------------------------------------------------
+# Building the scenario from the validated tables
 # ---------------------------------------------------------------------------------------------
 
 
 class _Parser:
-    """Validating accessors that name the file and the dotted field on failure."""
+    """Conversions that need the epoch, and failures that name the file and the field."""
 
     def __init__(self, source: str, epoch: Epoch | None = None):
         self.source = source
@@ -300,87 +505,30 @@ class _Parser:
     def fail(self, field: str, expected: str, got: object = None) -> NoReturn:
         raise InputError(self.source, field, expected, got)
 
-    def table(self, data: Mapping, key: str, where: str, allowed: set[str], *,
-              required: bool = True) -> Mapping:
-        value = data.get(key)
-        if value is None and not required:
-            return {}
-        if not isinstance(value, Mapping):
-            self.fail(where, "a table", value)
-        unknown = sorted(set(value) - allowed)
-        if unknown:
-            self.fail(f"{where}.{unknown[0]}", f"one of {', '.join(sorted(allowed))}",
-                      unknown[0])
-        return value
-
-    def number(self, table: Mapping, key: str, where: str, *, default: float | None = None,
-               minimum: float | None = None, strict: bool = False) -> float:
-        value = table.get(key, default)
-        ok = (isinstance(value, int | float) and not isinstance(value, bool)
-              and math.isfinite(value))
-        if ok and minimum is not None:
-            ok = value > minimum if strict else value >= minimum
-        if not ok:
-            bound = "" if minimum is None else f" {'>' if strict else '>='} {minimum:g}"
-            self.fail(f"{where}.{key}" if where else key, f"a finite number{bound}", value)
-        return float(value)
-
-    def strings(self, table: Mapping, key: str, where: str, choices: tuple[str, ...] | None,
-                default: list | None = None) -> tuple[str, ...]:
-        value = table.get(key, default)
-        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-            self.fail(f"{where}.{key}", "a list of names", value)
-        for v in value:
-            if choices is not None and v not in choices:
-                self.fail(f"{where}.{key}", f"names among {', '.join(choices)}", v)
-        if len(set(value)) != len(value):
-            self.fail(f"{where}.{key}", "each name once", value)
-        return tuple(value)
-
-    def choice(self, table: Mapping, key: str, where: str, choices: tuple[str, ...],
-               default: str) -> str:
-        value = table.get(key, default)
-        if value not in choices:
-            self.fail(f"{where}.{key}", f"one of {', '.join(choices)}", value)
-        return value
-
     def time_s(self, value: object, field: str) -> float:
         """A time: seconds from the epoch (number) or a UTC date (ISO string, TOML date)."""
         if isinstance(value, int | float) and not isinstance(value, bool):
-            if not math.isfinite(value):
-                self.fail(field, "a finite time (s from the epoch) or a UTC date", value)
             return float(value)
         if isinstance(value, dt.datetime) and value.tzinfo not in (None, dt.UTC):
             self.fail(field, "a UTC date", value)
-        if isinstance(value, dt.datetime | dt.date):
+        if isinstance(value, dt.date):
             value = value.isoformat().removesuffix("+00:00")
-        if not isinstance(value, str):
-            self.fail(field, "a time in s from the epoch or a UTC date string", value)
         try:
-            when = parse_epoch(value, self.source)
+            when = parse_epoch(str(value), self.source)
         except InputError as exc:
             raise InputError(self.source, field, exc.expected, value) from None
         days = (when.jd_whole - self.epoch.jd_whole) + (when.jd_fraction - self.epoch.jd_fraction)
         return days * SECONDS_PER_DAY
 
-    def times(self, table: Mapping, key: str, where: str) -> tuple[float, ...]:
-        value = table.get(key, [])
-        if not isinstance(value, list):
-            self.fail(f"{where}.{key}", "a list of times", value)
-        out = tuple(self.time_s(v, f"{where}.{key}[{i}]") for i, v in enumerate(value))
+    def times(self, values: list, field: str) -> tuple[float, ...]:
+        out = tuple(self.time_s(v, f"{field}[{i}]") for i, v in enumerate(values))
         if any(b <= a for a, b in zip(out, out[1:], strict=False)):
-            self.fail(f"{where}.{key}", "times in strictly ascending order", list(out))
+            self.fail(field, "times in strictly ascending order", list(out))
         return out
 
-    def windows(self, table: Mapping, key: str, where: str) -> tuple[tuple[float, float], ...]:
-        value = table.get(key, [])
-        field = f"{where}.{key}"
-        if not isinstance(value, list):
-            self.fail(field, "a list of [start, end] windows", value)
+    def windows(self, values: list, field: str) -> tuple[tuple[float, float], ...]:
         out = []
-        for i, w in enumerate(value):
-            if not isinstance(w, list) or len(w) != 2:
-                self.fail(f"{field}[{i}]", "a [start, end] pair", w)
+        for i, w in enumerate(values):
             start, end = (self.time_s(v, f"{field}[{i}]") for v in w)
             if end <= start:
                 self.fail(f"{field}[{i}]", "start < end", w)
@@ -388,177 +536,139 @@ class _Parser:
         return tuple(out)
 
 
-def _epoch(p: _Parser, data: Mapping) -> Epoch:
-    text = data.get("epoch")
-    if isinstance(text, dt.datetime):
-        text = text.isoformat().removesuffix("+00:00")
-    if not isinstance(text, str):
-        p.fail("epoch", "a UTC date (ISO 8601 string)", text)
-    return parse_epoch(text, p.source)
+def _epoch(p: _Parser, value: object) -> Epoch:
+    if isinstance(value, dt.datetime):
+        if value.tzinfo not in (None, dt.UTC):
+            p.fail("epoch", "a UTC date", value)
+        value = value.isoformat().removesuffix("+00:00")
+    try:
+        return parse_epoch(str(value), p.source)
+    except InputError as exc:
+        raise InputError(p.source, "epoch", exc.expected, value) from None
 
 
-def _injection(p: _Parser, data: Mapping) -> np.ndarray:
-    inj = p.table(data, "injection", "injection",
-                  {"r_km", "v_km_s", *_ELEMENTS, "M_deg", "nu_deg"})
-    if "r_km" in inj or "v_km_s" in inj:
-        if set(inj) != {"r_km", "v_km_s"}:
-            p.fail("injection", "either r_km and v_km_s or classical elements", sorted(inj))
-        vectors = []
-        for key in ("r_km", "v_km_s"):
-            value = inj[key]
-            if (not isinstance(value, list) or len(value) != 3 or not all(
-                    isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-                    for v in value)):
-                p.fail(f"injection.{key}", "a list of 3 finite numbers", value)
-            vectors.extend(float(v) for v in value)
-        x0 = np.array(vectors)
+def _injection(p: _Parser, inj: InjectionTable) -> np.ndarray:
+    if inj.r_km is not None:
+        x0 = np.array([*inj.r_km, *inj.v_km_s], dtype=float)
     else:
-        anomaly = {"M_deg", "nu_deg"} & set(inj)
-        if len(anomaly) != 1:
-            p.fail("injection", "elements with exactly one of M_deg, nu_deg", sorted(inj))
-        which = anomaly.pop()
-        values = [p.number(inj, k, "injection") for k in (*_ELEMENTS, which)]
-        x0 = state_from_elements(*values, true_anomaly=which == "nu_deg", source=p.source,
+        anomaly = "M_deg" if inj.M_deg is not None else "nu_deg"
+        values = [getattr(inj, k) for k in (*_ELEMENTS, anomaly)]
+        x0 = state_from_elements(*values, true_anomaly=anomaly == "nu_deg", source=p.source,
                                  field="injection")
-    if np.linalg.norm(x0[:3]) <= RADIUS_km["earth"]:
-        p.fail("injection", "a position above the Earth's surface", x0[:3].tolist())
-    return x0
+    return check_perigee(x0, p.source, "injection", allow_subsurface=inj.allow_subsurface,
+                         how_to_allow="injection.allow_subsurface = true")
 
 
-def _models(p: _Parser, data: Mapping) -> tuple[ForceModel, ForceModel, float, float]:
-    mod = p.table(data, "model", "model", {"gravity", "third_bodies", "var_gravity",
-                                           "var_third_bodies", "rtol", "atol"})
-    bodies_allowed = tuple(b for b in BODIES if b != "earth")
-    gravity = mod.get("gravity")
-    if not isinstance(gravity, str):
-        p.fail("model.gravity", "a gravity model J0, Jn or NxM", gravity)
-    bodies = p.strings(mod, "third_bodies", "model", bodies_allowed, [])
-    var_gravity = mod.get("var_gravity", gravity)
-    if not isinstance(var_gravity, str):
-        p.fail("model.var_gravity", "a gravity model J0, Jn or NxM", var_gravity)
-    var_bodies = p.strings(mod, "var_third_bodies", "model", bodies_allowed, list(bodies))
-    state = earth_model(gravity, bodies, source=p.source, field="model.gravity")
-    var = earth_model(var_gravity, var_bodies, source=p.source, field="model.var_gravity")
-    rtol = p.number(mod, "rtol", "model", default=1e-13, minimum=0.0, strict=True)
-    atol = p.number(mod, "atol", "model", default=1e-13, minimum=0.0, strict=True)
-    return state, var, rtol, atol
+def _models(p: _Parser, mod: ModelTable) -> tuple[ForceModel, ForceModel, float, float]:
+    var_gravity = mod.gravity if mod.var_gravity is None else mod.var_gravity
+    var_bodies = mod.third_bodies if mod.var_third_bodies is None else mod.var_third_bodies
+    state = earth_model(mod.gravity, tuple(mod.third_bodies), source=p.source,
+                        field="model.gravity")
+    var = earth_model(var_gravity, tuple(var_bodies), source=p.source,
+                      field="model.var_gravity")
+    return state, var, mod.rtol, mod.atol
 
 
-def _dynamic(p: _Parser, data: Mapping, state_model: ForceModel
-             ) -> tuple[tuple[str, ...], tuple[tuple[str, float], ...], str, tuple[str, ...]]:
-    par = p.table(data, "parameters", "parameters",
-                  {"dynamic", "station_location", "station_biases", "values"}, required=False)
-    dynamic = p.strings(par, "dynamic", "parameters", None, [])
-    for name in dynamic:
+def _dynamic(p: _Parser, par: ParametersTable, state_model: ForceModel
+             ) -> tuple[tuple[str, ...], tuple[tuple[str, float], ...]]:
+    for i, name in enumerate(par.dynamic):
         try:
             default_parameters(state_model, (name,))
         except InputError as exc:
-            raise InputError(p.source, "parameters.dynamic", exc.expected, name) from None
-    values = p.table(par, "values", "parameters.values", set(dynamic), required=False)
-    chosen = tuple((name, p.number(values, name, "parameters.values")) for name in values)
-    location = p.choice(par, "station_location", "parameters", LOCATION_MODES, "none")
-    biases = p.strings(par, "station_biases", "parameters", BIAS_KINDS, [])
-    return dynamic, chosen, location, biases
+            raise InputError(p.source, f"parameters.dynamic[{i}]", exc.expected, name) from None
+    chosen = []
+    for name, value in par.values.items():
+        if name not in par.dynamic:
+            p.fail(f"parameters.values.{name}",
+                   f"a name of parameters.dynamic ({', '.join(par.dynamic) or 'none'})", name)
+        chosen.append((name, check_parameter_value(name, value, p.source,
+                                                   f"parameters.values.{name}")))
+    return tuple(par.dynamic), tuple(chosen)
 
 
 def _noise_key(prefix: str, kind: str) -> str:
     return f"{prefix}_{kind}_{EDGE_UNITS[kind][0]}"
 
 
-def _noise(p: _Parser, kind: str, name: str, fit: Mapping, fit_own: Mapping, real: Mapping,
-           real_own: Mapping) -> tuple[FitNoise, RealNoise]:
+def _noise(p: _Parser, kind: str, name: str, noise: NoiseTable, own: StationTracking
+           ) -> tuple[FitNoise, RealNoise]:
     """Fit and real noise of one kind at one station: station tables override the globals."""
     factor = EDGE_UNITS[kind][1]
     key = _noise_key("sigma", kind)
-    own = f"tracking.station.{name}"
-    if key in fit_own:
-        sigma = p.number(fit_own, key, f"{own}.fit", minimum=0.0, strict=True)
-    elif key in fit:
-        sigma = p.number(fit, key, "noise.fit", minimum=0.0, strict=True)
-    else:
+    sigma = getattr(own.fit, key)
+    if sigma is None:
+        sigma = getattr(noise.fit, key)
+    if sigma is None:
         p.fail(f"noise.fit.{key}", f"the fit σ of every observable tracked ({kind} at {name})")
+
+    def real(key: str) -> tuple[float | None, str]:
+        value = getattr(own.real, key)
+        if value is not None:
+            return value, f"tracking.station.{name}.real"
+        return getattr(noise.real, key), "noise.real"
+
     values = {}
     for prefix, default in (("sigma", sigma), ("bias", 0.0), ("correlated", 0.0)):
-        k = _noise_key(prefix, kind)
-        table, where = (real_own, f"{own}.real") if k in real_own else (real, "noise.real")
-        values[prefix] = p.number(table, k, where, default=default, minimum=0.0)
-    tau_key = f"tau_{kind}_s"
-    table, where = (real_own, f"{own}.real") if tau_key in real_own else (real, "noise.real")
-    tau = math.inf
-    if values["correlated"] > 0 or tau_key in table:
-        tau = p.number(table, tau_key, where, minimum=0.0, strict=True)
+        value, _ = real(_noise_key(prefix, kind))
+        values[prefix] = default if value is None else value
+    tau, where = real(f"tau_{kind}_s")
+    if values["correlated"] > 0 and tau is None:
+        p.fail(f"{where}.tau_{kind}_s", f"the time constant of the correlated {kind} noise "
+               "(a finite number > 0)")
     return (FitNoise(kind, sigma * factor),
             RealNoise(kind, values["sigma"] * factor, values["bias"] * factor,
-                      values["correlated"] * factor, tau))
+                      values["correlated"] * factor, math.inf if tau is None else tau))
 
 
-def _noise_keys() -> tuple[set[str], set[str]]:
-    fit = {_noise_key("sigma", k) for k in KINDS}
-    real = fit | {_noise_key(pre, k) for pre in ("bias", "correlated") for k in KINDS}
-    return fit, real | {f"tau_{k}_s" for k in KINDS}
-
-
-def _stations(p: _Parser, data: Mapping, location: str, biases: tuple[str, ...]
-              ) -> tuple[tuple[TrackingStation, ...], Mapping]:
-    known = load_stations(data, p.source)
-    trk = p.table(data, "tracking", "tracking",
-                  {"stations", "observables", "light_time", "data_interval_s", "start", "end",
-                   "min_pass_s", "max_pass_s", "blackouts", "station"})
-    names = p.strings(trk, "stations", "tracking", None)
-    if not names:
-        p.fail("tracking.stations", "at least one station")
-    for name in names:
+def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
+              ) -> tuple[TrackingStation, ...]:
+    trk = doc.tracking
+    known = {name: table.station(name) for name, table in doc.stations.items()}
+    for i, name in enumerate(trk.stations):
         if name not in known:
-            p.fail("tracking.stations", "names of [stations.*] tables "
+            p.fail(f"tracking.stations[{i}]", "names of [stations.*] tables "
                    f"({', '.join(known) or 'none defined'})", name)
-    kinds = p.strings(trk, "observables", "tracking", KINDS, ["range", "range_rate"])
-    blackouts = p.windows(trk, "blackouts", "tracking")
-    fit_keys, real_keys = _noise_keys()
-    noise = p.table(data, "noise", "noise", {"fit", "real"})
-    fit = p.table(noise, "fit", "noise.fit", fit_keys)
-    real = p.table(noise, "real", "noise.real", real_keys, required=False)
-    own_all = p.table(trk, "station", "tracking.station", set(names), required=False)
+    for name in trk.station:
+        if name not in trk.stations:
+            p.fail(f"tracking.station.{name}",
+                   f"a station of tracking.stations ({', '.join(trk.stations)})", name)
+    blackouts = p.windows(trk.blackouts, "tracking.blackouts")
     out = []
-    for number, name in enumerate(names, start=1):
+    for number, name in enumerate(trk.stations, start=1):
         where = f"tracking.station.{name}"
-        own = p.table(own_all, name, where,
-                      {"observables", "location", "biases", "range_bias_m",
-                       "range_rate_bias_mm_s", "blackouts", "fit", "real"}, required=False)
-        st_kinds = p.strings(own, "observables", where, KINDS, list(kinds))
-        if not st_kinds:
-            p.fail(f"{where}.observables", "at least one observable")
-        st_location = p.choice(own, "location", where, LOCATION_MODES, location)
-        st_biases = p.strings(own, "biases", where, BIAS_KINDS, list(biases))
-        for kind in st_biases:
-            if kind not in st_kinds:
-                p.fail(f"{where}.biases" if "biases" in own else "parameters.station_biases",
-                       f"biases of observables that {name} measures ({', '.join(st_kinds)})",
+        own = trk.station.get(name, StationTracking())
+        kinds = tuple(trk.observables if own.observables is None else own.observables)
+        if not kinds:
+            p.fail("tracking.observables", "at least one observable")
+        location = par.station_location if own.location is None else own.location
+        biases = tuple(par.station_biases if own.biases is None else own.biases)
+        for kind in biases:
+            if kind not in kinds:
+                p.fail(f"{where}.biases" if own.biases is not None
+                       else "parameters.station_biases",
+                       f"biases of observables that {name} measures ({', '.join(kinds)})",
                        kind)
-        fit_own = p.table(own, "fit", f"{where}.fit", fit_keys, required=False)
-        real_own = p.table(own, "real", f"{where}.real", real_keys, required=False)
-        pairs = [_noise(p, kind, name, fit, fit_own, real, real_own) for kind in st_kinds]
+        pairs = [_noise(p, kind, name, doc.noise, own) for kind in kinds]
         out.append(TrackingStation(
-            number=number, station=known[name], kinds=st_kinds,
+            number=number, station=known[name], kinds=kinds,
             fit=tuple(f for f, _ in pairs), real=tuple(r for _, r in pairs),
-            location=st_location, biases=st_biases,
-            range_bias_km=p.number(own, "range_bias_m", where, default=0.0) * 1e-3,
-            range_rate_bias_km_s=p.number(own, "range_rate_bias_mm_s", where,
-                                          default=0.0) * 1e-6,
-            blackouts_s=blackouts + p.windows(own, "blackouts", where)))
-    return tuple(out), trk
+            location=location, biases=biases,
+            range_bias_km=own.range_bias_m * 1e-3,
+            range_rate_bias_km_s=own.range_rate_bias_mm_s * 1e-6,
+            blackouts_s=blackouts + p.windows(own.blackouts, f"{where}.blackouts")))
+    return tuple(out)
 
 
-def _times(p: _Parser, data: Mapping) -> TapeTimes:
-    tim = p.table(data, "times", "times", {"input", "input_step_s", "end", "epochs"})
-    if "input" in tim:
-        if "input_step_s" in tim:
+def _times(p: _Parser, tim: TimesTable) -> TapeTimes:
+    if tim.input is not None:
+        if tim.input_step_s is not None:
             p.fail("times", "either input or input_step_s (with end), not both")
-        inputs = p.times(tim, "input", "times")
-    elif "input_step_s" in tim:
-        step = p.number(tim, "input_step_s", "times", minimum=0.0, strict=True)
-        if "end" not in tim:
+        inputs = p.times(tim.input, "times.input")
+    elif tim.input_step_s is not None:
+        step = tim.input_step_s
+        if tim.end is None:
             p.fail("times.end", "the last input time with input_step_s")
-        end = p.time_s(tim["end"], "times.end")
+        end = p.time_s(tim.end, "times.end")
         if end <= 0:
             p.fail("times.end", "a time after the injection (> 0 s)", end)
         grid = step * np.arange(1, int(math.floor(end / step * (1 + 1e-15))) + 1)
@@ -570,7 +680,7 @@ def _times(p: _Parser, data: Mapping) -> TapeTimes:
         p.fail("times.input", "at least one input time")
     if inputs[0] <= 0:
         p.fail("times.input", "input times after the injection (> 0 s)", inputs[0])
-    epochs = p.times(tim, "epochs", "times")
+    epochs = p.times(tim.epochs, "times.epochs")
     if epochs and epochs[0] <= 0:
         p.fail("times.epochs", "epoch times after the injection (> 0 s; t_0 = 0 is implicit)",
                epochs[0])
@@ -580,79 +690,72 @@ def _times(p: _Parser, data: Mapping) -> TapeTimes:
     return TapeTimes(inputs, (0.0, *epochs))
 
 
-def _schedule(p: _Parser, trk: Mapping, last_s: float) -> Schedule:
-    interval = p.number(trk, "data_interval_s", "tracking", minimum=0.0, strict=True)
-    start = p.time_s(trk.get("start", 0.0), "tracking.start")
-    end = p.time_s(trk.get("end", last_s), "tracking.end")
+def _schedule(p: _Parser, trk: TrackingTable, last_s: float) -> Schedule:
+    start = p.time_s(trk.start, "tracking.start")
+    end = p.time_s(last_s if trk.end is None else trk.end, "tracking.end")
     if start < 0:
         p.fail("tracking.start", "a time at or after the injection (>= 0 s)", start)
     if end <= start:
         p.fail("tracking.end", f"a time after tracking.start = {start:g} s", end)
-    light_time = p.choice(trk, "light_time", "tracking", LIGHT_TIME_MODES, "none")
-    max_pass = math.inf
-    if "max_pass_s" in trk:
-        max_pass = p.number(trk, "max_pass_s", "tracking", minimum=0.0, strict=True)
-    return Schedule(interval, start, end,
-                    p.number(trk, "min_pass_s", "tracking", default=0.0, minimum=0.0),
-                    max_pass, light_time)
+    max_pass = math.inf if trk.max_pass_s is None else trk.max_pass_s
+    return Schedule(trk.data_interval_s, start, end, trk.min_pass_s, max_pass, trk.light_time)
 
 
-def _miss(p: _Parser, data: Mapping, state_model: ForceModel, last_s: float) -> MissSpec:
-    miss = p.table(data, "miss", "miss", {"kind", "time", "quantities", "body", "reference"})
-    kind = p.choice(miss, "kind", "miss", tuple(MISS_QUANTITIES), "")
+def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -> MissSpec:
+    kind = miss.kind
     names = tuple(n for n, _ in MISS_QUANTITIES[kind])
-    default = [n for n in names if n != "flight_time_s"]
-    quantities = p.strings(miss, "quantities", "miss", names, default)
-    if not quantities:
-        p.fail("miss.quantities", "at least one miss quantity")
-    t_s = p.time_s(miss.get("time", last_s), "miss.time")
+    quantities = tuple(n for n in names if n != "flight_time_s")
+    if miss.quantities is not None:
+        for i, q in enumerate(miss.quantities):
+            if q not in names:
+                p.fail(f"miss.quantities[{i}]", f"names among {', '.join(names)}", q)
+        quantities = tuple(miss.quantities)
+    t_s = p.time_s(last_s if miss.time is None else miss.time, "miss.time")
     if t_s <= 0:
         p.fail("miss.time", "a time after the injection (> 0 s)", t_s)
     if kind != "bplane":
         for key in ("body", "reference"):
-            if key in miss:
-                p.fail(f"miss.{key}", "no body or reference for orbit elements", miss[key])
+            if getattr(miss, key) is not None:
+                p.fail(f"miss.{key}", "no body or reference for orbit elements",
+                       getattr(miss, key))
         return MissSpec(kind, t_s, quantities)
-    body = miss.get("body")
-    if body not in state_model.third_bodies:
+    if miss.body not in state_model.third_bodies:
         p.fail("miss.body", f"one of model.third_bodies {list(state_model.third_bodies)}",
-               body)
-    reference = p.choice(miss, "reference", "miss", tuple(REFERENCE_POLES), "earth_equator")
-    return MissSpec(kind, t_s, quantities, body, reference)
+               miss.body)
+    reference = "earth_equator" if miss.reference is None else miss.reference
+    return MissSpec(kind, t_s, quantities, miss.body, reference)
 
 
 def parse_scenario(data: Mapping, source: str) -> Scenario:
     """Build a :class:`Scenario` from parsed TOML tables, validating everything.
 
+    The tables are first validated against :class:`ScenarioFile` (types, bounds, unknown
+    keys); then the cross-table rules and the physics are checked while the scenario is built.
+
     Raises
     ------
     InputError
         Naming ``source`` and the dotted field for any missing, unknown or invalid entry
-        (unknown station, observable or parameter, σ <= 0, times not ascending, ...).
+        (unknown station, observable or parameter, σ <= 0, times not ascending, an orbit
+        below the surface, a tolerance outside its range, a station height out of its band).
     """
+    doc = validate(ScenarioFile, data, source)
     p = _Parser(source)
-    unknown = sorted(set(data) - _TOP)
-    if unknown:
-        p.fail(unknown[0], f"one of {', '.join(sorted(_TOP))}", unknown[0])
-    epoch = _epoch(p, data)
+    epoch = _epoch(p, doc.epoch)
     p = _Parser(source, epoch)
-    title = data.get("title", "")
-    iden = data.get("iden", Path(source).name.split(".")[0])
-    for key, value in (("title", title), ("iden", iden)):
-        if not isinstance(value, str):
-            p.fail(key, "text", value)
-    x0 = _injection(p, data)
-    state_model, var_model, rtol, atol = _models(p, data)
-    dynamic, values, location, biases = _dynamic(p, data, state_model)
-    stations, trk = _stations(p, data, location, biases)
-    times = _times(p, data)
+    iden = Path(source).name.split(".")[0] if doc.iden is None else doc.iden
+    x0 = _injection(p, doc.injection)
+    state_model, var_model, rtol, atol = _models(p, doc.model)
+    dynamic, values = _dynamic(p, doc.parameters, state_model)
+    stations = _stations(p, doc, doc.parameters)
+    times = _times(p, doc.times)
     last_s = float(times.t13_s[-1])
-    schedule = _schedule(p, trk, last_s)
-    miss = _miss(p, data, state_model, last_s)
+    schedule = _schedule(p, doc.tracking, last_s)
+    miss = _miss(p, doc.miss, state_model, last_s)
     document = json.dumps(data, default=str, sort_keys=True)
     x0.setflags(write=False)
-    return Scenario(source, title, iden, epoch, x0, state_model, var_model, rtol, atol, dynamic,
-                    values, stations, schedule, times, miss, document)
+    return Scenario(source, doc.title, iden, epoch, x0, state_model, var_model, rtol, atol,
+                    dynamic, values, stations, schedule, times, miss, document)
 
 
 def read_scenario(path: Path | str) -> Scenario:

@@ -69,18 +69,18 @@ def _with(path: tuple[str, ...], value) -> dict:
 
 
 @pytest.mark.parametrize(("path", "value", "field"), [
-    (("tracking", "stations"), ["QUITO", "NOWHERE"], "tracking.stations"),
-    (("tracking", "observables"), ["range", "doppler"], "tracking.observables"),
+    (("tracking", "stations"), ["QUITO", "NOWHERE"], "tracking.stations[1]"),
+    (("tracking", "observables"), ["range", "doppler"], "tracking.observables[1]"),
     (("tracking", "station", "KOUROU", "observables"), ["angle"],
-     "tracking.station.KOUROU.observables"),
+     "tracking.station.KOUROU.observables[0]"),
     (("tracking", "station", "NOWHERE"), {}, "tracking.station.NOWHERE"),
     (("tracking", "light_time"), "three_way", "tracking.light_time"),
     (("tracking", "data_interval_s"), 0.0, "tracking.data_interval_s"),
-    (("parameters", "dynamic"), ["GM", "J9"], "parameters.dynamic"),
-    (("parameters", "dynamic"), ["GM_mars"], "parameters.dynamic"),
+    (("parameters", "dynamic"), ["GM", "J9"], "parameters.dynamic[1]"),
+    (("parameters", "dynamic"), ["GM_mars"], "parameters.dynamic[0]"),
     (("parameters", "values"), {"GM_moon": 4902.8}, "parameters.values.GM_moon"),
     (("parameters", "station_location"), "polar", "parameters.station_location"),
-    (("parameters", "station_biases"), ["azimuth"], "parameters.station_biases"),
+    (("parameters", "station_biases"), ["azimuth"], "parameters.station_biases[0]"),
     (("noise", "fit", "sigma_range_m"), 0.0, "noise.fit.sigma_range_m"),
     (("noise", "fit", "sigma_range_rate_mm_s"), -1.0, "noise.fit.sigma_range_rate_mm_s"),
     (("noise", "fit", "sigma_range_rate_mm_s"), None, "noise.fit.sigma_range_rate_mm_s"),
@@ -94,12 +94,12 @@ def _with(path: tuple[str, ...], value) -> dict:
     (("times", "end"), "2026-13-01", "times.end"),
     (("miss", "body"), "moon", "miss.body"),
     (("miss", "kind"), "delaunay", "miss.kind"),
-    (("miss", "quantities"), ["a_km", "b_dot_t_km"], "miss.quantities"),
+    (("miss", "quantities"), ["a_km", "b_dot_t_km"], "miss.quantities[1]"),
     (("epoch",), "yesterday", "epoch"),
     (("injection", "r_km"), [1000.0, 0.0, 0.0], "injection"),
-    (("injection", "v_km_s"), [1.0, "fast", 0.0], "injection.v_km_s"),
+    (("injection", "v_km_s"), [1.0, "fast", 0.0], "injection.v_km_s[1]"),
     (("model", "gravity"), "J42", "model.gravity"),
-    (("model", "var_third_bodies"), ["pluto"], "model.var_third_bodies"),
+    (("model", "var_third_bodies"), ["pluto"], "model.var_third_bodies[0]"),
     (("schedule",), {}, "schedule"),
 ])
 def test_bad_input_names_file_and_field(path: tuple, value, field: str) -> None:
@@ -153,3 +153,71 @@ def test_default_real_world_is_white_noise_of_the_fit_sigma() -> None:
         for fit, real in zip(st.fit, st.real, strict=True):
             assert (real.sigma_white, real.sigma_pass_bias, real.sigma_correlated) == (
                 fit.sigma, 0.0, 0.0) and math.isinf(real.tau_s)
+
+
+# --- issue 10, class 5: one declared schema; class 4: physically impossible scenarios -----------
+
+
+def _message(doc: dict) -> str:
+    with pytest.raises(InputError) as err:
+        parse_scenario(doc, SOURCE)
+    text = str(err.value)
+    assert "\n" not in text and text.startswith(f"{SOURCE}: ")
+    return text
+
+
+def test_booleans_are_not_numbers_in_a_scenario() -> None:
+    doc = _with(("stations", "QUITO", "lat_deg"), True)
+    assert _message(doc) == f"{SOURCE}: stations.QUITO.lat_deg: expected a number (got True)"
+
+
+def test_a_string_where_a_number_belongs_is_one_line_not_a_traceback() -> None:
+    doc = _with(("tracking", "data_interval_s"), "30")
+    assert _message(doc) == f"{SOURCE}: tracking.data_interval_s: expected a number (got '30')"
+    doc = _with(("injection", "r_km"), "6550.524, 0, 0")
+    assert "injection.r_km: expected a list" in _message(doc)
+
+
+def test_a_misspelled_key_is_named_with_the_allowed_keys() -> None:
+    doc = _with(("tracking", "data_intervl_s"), 30.0)
+    text = _message(doc)
+    assert text.startswith(f"{SOURCE}: tracking.data_intervl_s: expected no such key (allowed: "
+                           "stations, observables, light_time, data_interval_s, ")
+    assert _message(_with(("noise", "extra"), {})).startswith(
+        f"{SOURCE}: noise.extra: expected no such key (allowed: fit, real)")
+
+
+def test_an_orbit_below_the_surface_is_refused_unless_the_file_says_it_means_it() -> None:
+    elements = {"r_km": None, "v_km_s": None, "a_km": 7000.0, "e": 0.2, "i_deg": 2.0,
+                "raan_deg": 0.0, "argp_deg": 0.0, "M_deg": 180.0}
+    text = _message(leo_document(injection=elements))
+    assert text.startswith(f"{SOURCE}: injection: expected a perigee radius r_p >= 6378.1363 km")
+    assert "injection.allow_subsurface = true" in text and text.endswith("(got 5600.0)")
+    sc = leo_scenario(injection={**elements, "allow_subsurface": True})
+    assert np.linalg.norm(sc.x0[:3]) == pytest.approx(8400.0)
+
+
+def test_tolerances_outside_the_documented_range_are_refused() -> None:
+    assert _message(leo_document(model={"rtol": 1.0})) == (
+        f"{SOURCE}: model.rtol: expected an integrator tolerance in [1e-15, 1e-06] (looser than "
+        "1e-6 drifts by km per day; tighter than 1e-15 is below double precision) (got 1.0)")
+    assert "model.atol: expected an integrator tolerance" in _message(
+        leo_document(model={"atol": 1e-18}))
+
+
+def test_a_third_body_listed_twice_is_refused() -> None:
+    text = _message(leo_document(model={"third_bodies": ["sun", "moon", "sun"]}))
+    assert text == f"{SOURCE}: model.third_bodies: expected each name once (got ['sun', 'moon', " \
+        "'sun'])"
+
+
+def test_a_station_height_outside_the_ground_band_is_refused() -> None:
+    text = _message(_with(("stations", "QUITO", "h_km"), 1e9))
+    assert text == (f"{SOURCE}: stations.QUITO.h_km: expected a ground-station height in "
+                    "[-0.5, 10] km above the WGS84 ellipsoid (got 1000000000.0)")
+
+
+def test_a_non_positive_gm_is_refused() -> None:
+    text = _message(leo_document(parameters={"values": {"GM": -398600.0}}))
+    assert text == (f"{SOURCE}: parameters.values.GM: expected a finite GM > 0 km^3/s^2 for GM "
+                    "(got -398600.0)")
