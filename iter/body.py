@@ -17,6 +17,12 @@ become floats, ``null`` becomes NaN, text stays text; anything else fails the ca
 :func:`run_case` turns whatever the body does into a :class:`~iter.table.CaseResult`: a body
 that raises, a program that exits non-zero or times out, or outputs that are not named scalars
 give a FAILED row carrying the message, and the sweep goes on.
+
+Hangs: every program body runs under a wall-time limit, ``timeout_s`` or
+:data:`DEFAULT_PROGRAM_TIMEOUT_S`. A callable body runs in-process unless it has a
+``timeout_s``; then each case runs in a child process (``python -m iter._child``) that is
+killed, with everything it started, when the limit is reached. A case that times out is a
+FAILED row with its elapsed time.
 """
 
 from __future__ import annotations
@@ -26,7 +32,9 @@ import importlib
 import json
 import math
 import os
+import pickle
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -42,10 +50,66 @@ from .table import RESERVED_COLUMNS, CaseResult, CaseStatus, OutputValue
 
 #: Characters of a failing program's stderr kept in the error message (its tail).
 STDERR_TAIL_CHARS = 400
+#: Wall-time limit of a program body's case when the sweep file gives none, s (one hour).
+DEFAULT_PROGRAM_TIMEOUT_S = 3600.0
 
 
 class CaseFailure(IterError):
     """A body ran but its case failed: non-zero exit, timeout, or unusable outputs."""
+
+
+class CaseTimeout(CaseFailure):
+    """A case ran longer than its body's ``timeout_s`` and was stopped."""
+
+
+class ChildFailure(CaseFailure):
+    """A callable body raised in its child process; keeps the exception's type name."""
+
+    def __init__(self, type_name: str, message: str):
+        self.type_name = type_name
+        super().__init__(message)
+
+
+def run_bounded(command: Sequence[str], stdin: bytes, timeout_s: float,
+                what: str) -> subprocess.CompletedProcess[bytes]:
+    """Run ``command`` with ``stdin``; kill it and its children after ``timeout_s`` seconds.
+
+    The command runs in a session of its own, so that a timeout kills whatever it started
+    too (a program that runs another one would otherwise keep the pipes open).
+
+    Raises
+    ------
+    CaseTimeout
+        The command ran longer than ``timeout_s``.
+    """
+    with subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, start_new_session=True) as proc:
+        finished = False
+        try:
+            stdout, stderr = proc.communicate(stdin, timeout=timeout_s)
+            finished = True
+        except subprocess.TimeoutExpired:
+            _kill_session(proc)
+            proc.communicate()
+            raise CaseTimeout(f"{what} timed out after {timeout_s:g} s") from None
+        finally:
+            if not finished:  # a timeout, Ctrl-C or a worker shutdown: leave nothing running
+                _kill_session(proc)
+    return subprocess.CompletedProcess(command, proc.returncode, stdout, stderr)
+
+
+def _kill_session(proc: subprocess.Popen[bytes]) -> None:
+    if hasattr(os, "killpg"):
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    else:  # pragma: no cover - Windows
+        proc.kill()
+
+
+def _tail(stderr: bytes) -> str:
+    return stderr.decode("utf-8", "replace").strip()[-STDERR_TAIL_CHARS:] or "(no stderr)"
 
 
 def resolve_callable(target: str, source: str = "body") -> Callable[..., object]:
@@ -145,10 +209,16 @@ class CallableBody:
         Dask worker).
     constants : mapping of str to object
         Keyword arguments passed unchanged to every case.
+    timeout_s : float or None
+        Wall-time limit per case, s. None (the default) runs each case in this process, with
+        no limit; a number runs each case in a child process, killed at the limit (the
+        constants and outputs must then be picklable, and each case pays for starting a
+        Python process).
     """
 
     target: str
     constants: Mapping[str, object] = field(default_factory=dict)
+    timeout_s: float | None = None
 
     def check(self, source: str) -> None:
         """Raise SweepInputError (field ``body.callable``) unless the target resolves."""
@@ -156,12 +226,35 @@ class CallableBody:
 
     def definition(self) -> dict[str, object]:
         """Return the body as the ``[body]`` table of a sweep file."""
-        return {"callable": self.target, "constants": dict(self.constants)}
+        table: dict[str, object] = {"callable": self.target, "constants": dict(self.constants)}
+        if self.timeout_s is not None:
+            table["timeout_s"] = self.timeout_s
+        return table
 
     def __call__(self, case: Case) -> object:
-        """Run the function for ``case``; return what it returns (outputs, unchecked)."""
-        function = _cached_callable(self.target)
-        return function(**self.constants, **case.kwargs())
+        """Run the function for ``case``; return what it returns (outputs, unchecked).
+
+        Raises
+        ------
+        CaseTimeout
+            The case ran longer than ``timeout_s`` (its child process was killed).
+        ChildFailure
+            The function raised in its child process (``timeout_s`` set).
+        """
+        kwargs = {**self.constants, **case.kwargs()}
+        if self.timeout_s is None:
+            return _cached_callable(self.target)(**kwargs)
+        payload = pickle.dumps(([p for p in sys.path if p], self.target, kwargs))
+        proc = run_bounded([sys.executable, "-m", "iter._child"], payload, self.timeout_s,
+                           self.target)
+        try:
+            answer = pickle.loads(proc.stdout)
+        except (pickle.UnpicklingError, EOFError, ValueError):
+            raise CaseFailure(f"{self.target}: its process exited with status "
+                              f"{proc.returncode}: {_tail(proc.stderr)}") from None
+        if answer[0] == "error":
+            raise ChildFailure(answer[1], answer[2])
+        return answer[1]
 
 
 @dataclass(frozen=True, slots=True)
@@ -182,7 +275,7 @@ class ProgramBody:
         Spell options with dashes, ``--azimuth-deg`` for ``azimuth_deg``, as typer/click
         programs (``tapp``) expect.
     timeout_s : float or None
-        Wall-time limit per case, s; None for no limit.
+        Wall-time limit per case, s; None for :data:`DEFAULT_PROGRAM_TIMEOUT_S`.
     """
 
     argv: tuple[str, ...]
@@ -228,20 +321,17 @@ class ProgramBody:
         CaseFailure
             Non-zero exit (with the tail of stderr), timeout, or stdout not one JSON object.
         """
-        try:
-            proc = subprocess.run(self.command(case), capture_output=True, text=True,
-                                  stdin=subprocess.DEVNULL, timeout=self.timeout_s,
-                                  check=False)
-        except subprocess.TimeoutExpired:
-            raise CaseFailure(f"{self.argv[0]} timed out after {self.timeout_s:g} s") from None
+        timeout_s = DEFAULT_PROGRAM_TIMEOUT_S if self.timeout_s is None else self.timeout_s
+        proc = run_bounded(self.command(case), b"", timeout_s, self.argv[0])
         if proc.returncode != 0:
-            tail = proc.stderr.strip()[-STDERR_TAIL_CHARS:] or "(no stderr)"
-            raise CaseFailure(f"{self.argv[0]} exited with status {proc.returncode}: {tail}")
+            raise CaseFailure(f"{self.argv[0]} exited with status {proc.returncode}: "
+                              f"{_tail(proc.stderr)}")
+        stdout = proc.stdout.decode("utf-8", "replace")
         try:
-            outputs = json.loads(proc.stdout)
+            outputs = json.loads(stdout)
         except json.JSONDecodeError as exc:
             raise CaseFailure(f"{self.argv[0]} stdout is not one JSON object: {exc} "
-                              f"(stdout starts {proc.stdout[:80]!r})") from None
+                              f"(stdout starts {stdout[:80]!r})") from None
         if not isinstance(outputs, dict):
             raise CaseFailure(f"{self.argv[0]} printed JSON {type(outputs).__name__}, "
                               "expected one object")
@@ -272,8 +362,9 @@ def run_case(body: Body, case: Case) -> CaseResult:
     try:
         outputs = rename_clashes(flatten_outputs(body(case)), case.names)
     except Exception as exc:  # noqa: BLE001 - recorded in the row; see docstring
+        name = exc.type_name if isinstance(exc, ChildFailure) else type(exc).__name__
         return CaseResult(index=case.index, values=case.values, outputs={},
-                          status=CaseStatus.FAILED, error=f"{type(exc).__name__}: {exc}",
+                          status=CaseStatus.FAILED, error=f"{name}: {exc}",
                           elapsed_s=time.perf_counter() - start_s)
     return CaseResult(index=case.index, values=case.values, outputs=outputs,
                       status=CaseStatus.OK, elapsed_s=time.perf_counter() - start_s)

@@ -12,7 +12,8 @@ Format
     # program = ["tapp", "propagate"]                # argv of a command-line program
     # json = true          # program only: append --json (default true)
     # dashes = false       # program only: --azimuth-deg instead of --azimuth_deg (default false)
-    # timeout_s = 600.0    # program only: wall-time limit per case, s (default none)
+    # timeout_s = 600.0    # wall-time limit per case, s: program default 3600; a callable
+    #                      # with a limit runs each case in a child process (default: none)
 
     [body.constants]             # optional: passed unchanged to every case
     latitude_deg = 28.5
@@ -52,7 +53,7 @@ from .sweep import Sweep
 
 _TOP_KEYS = frozenset({"sweep", "body", "loop"})
 _BODY_KEYS = frozenset({"callable", "program", "json", "dashes", "timeout_s", "constants"})
-_PROGRAM_ONLY_KEYS = ("json", "dashes", "timeout_s")
+_PROGRAM_ONLY_KEYS = ("json", "dashes")
 _LOOP_KEYS = frozenset({"type", "names", "n", "sets", "vary", "delta"})
 
 
@@ -144,7 +145,8 @@ def _parse_body(source: str, table: object) -> Body:
         target = table["callable"]
         if not isinstance(target, str):
             raise SweepInputError(source, "body.callable", '"module:function"', target)
-        return CallableBody(target=target, constants=dict(constants))
+        return CallableBody(target=target, constants=dict(constants),
+                            timeout_s=_timeout_s(source, table))
     return _parse_program(source, table, dict(constants))
 
 
@@ -165,14 +167,18 @@ def _parse_program(source: str, table: Mapping[str, object],
         if not isinstance(value, bool):
             raise SweepInputError(source, f"body.{key}", "true or false", value)
         flags[key] = value
+    return ProgramBody(argv=tuple(argv), constants=constants, json_option=flags["json"],
+                       dashes=flags["dashes"], timeout_s=_timeout_s(source, table))
+
+
+def _timeout_s(source: str, table: Mapping[str, object]) -> float | None:
     timeout_s = table.get("timeout_s")
     if timeout_s is not None and (isinstance(timeout_s, bool)
-                                  or not isinstance(timeout_s, int | float) or timeout_s <= 0):
-        raise SweepInputError(source, "body.timeout_s", "a positive number of seconds",
+                                  or not isinstance(timeout_s, int | float)
+                                  or not 0 < timeout_s < float("inf")):
+        raise SweepInputError(source, "body.timeout_s", "a positive, finite number of seconds",
                               timeout_s)
-    return ProgramBody(argv=tuple(argv), constants=constants, json_option=flags["json"],
-                       dashes=flags["dashes"],
-                       timeout_s=None if timeout_s is None else float(timeout_s))
+    return None if timeout_s is None else float(timeout_s)
 
 
 def _parse_loop(source: str, i: int, table: object) -> Loop:

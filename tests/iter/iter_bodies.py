@@ -46,3 +46,18 @@ def interrupting_body(azimuth_deg: float, calls_dir: str) -> dict[str, float]:
 def not_a_mapping(azimuth_deg: float) -> list[float]:
     """Return a list, which is not a valid set of outputs."""
     return [azimuth_deg]
+
+
+def hanging_body(azimuth_deg: float, hang_at_deg: float) -> dict[str, float]:
+    """Return twice the azimuth; never return at ``hang_at_deg`` (sleeps an hour)."""
+    if azimuth_deg == hang_at_deg:
+        import time
+
+        time.sleep(3600.0)
+    print("printed by the body, not an output")
+    return {"double_deg": 2.0 * azimuth_deg}
+
+
+def raising_body(azimuth_deg: float) -> dict[str, float]:
+    """Raise ValueError for every case."""
+    raise ValueError(f"cannot fly at {azimuth_deg} deg")

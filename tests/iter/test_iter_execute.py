@@ -257,3 +257,31 @@ def test_outputs_named_like_reserved_columns_are_prefixed() -> None:
     out = rename_clashes({"status": "converged", "case": 3, "arc": 1.0, "rms": 2.0}, ("arc",))
     assert out == {"output.status": "converged", "output.case": 3, "output.arc": 1.0,
                    "rms": 2.0}
+
+
+def test_a_callable_that_never_returns_is_stopped_at_its_timeout(bodies):
+    """Issue 10, class 7: a hanging callable fails its case (with its time); others run."""
+    body = CallableBody("iter_bodies:hanging_body", {"hang_at_deg": 99.0}, timeout_s=3.0)
+    loop = Loop(type=1, names=("azimuth_deg",), sets=2, vary=(96.0, 99.0))
+    start = time.perf_counter()
+    rows = run_sweep(Sweep(loops=(loop,), body=body), execution=SERIAL).table.rows
+    assert time.perf_counter() - start < 20.0
+    assert rows[0].status is CaseStatus.OK and rows[0].outputs == {"double_deg": 192.0}
+    assert rows[1].status is CaseStatus.FAILED
+    assert rows[1].error == "CaseTimeout: iter_bodies:hanging_body timed out after 3 s"
+    assert 3.0 <= rows[1].elapsed_s < 15.0
+
+
+def test_a_callable_with_a_timeout_fails_as_it_would_in_process(bodies):
+    loop = Loop(type=1, names=("azimuth_deg",), sets=1, vary=(96.0,))
+    for timeout_s in (None, 30.0):
+        body = CallableBody("iter_bodies:raising_body", timeout_s=timeout_s)
+        row = run_sweep(Sweep(loops=(loop,), body=body), execution=SERIAL).table.rows[0]
+        assert row.error == "ValueError: cannot fly at 96.0 deg", timeout_s
+
+
+def test_program_bodies_have_a_default_timeout():
+    from iter.body import DEFAULT_PROGRAM_TIMEOUT_S
+
+    assert DEFAULT_PROGRAM_TIMEOUT_S == 3600.0
+    assert "timeout_s" not in ProgramBody(argv=("tapp",)).definition()  # resumes old files
