@@ -149,8 +149,14 @@ def _print_dc(result, title: str, err_km: float) -> None:
 
 def _apriori(text: str, scenario: Path) -> np.ndarray:
     table = setup.load_study(scenario).get("ekf", {}).get("apriori", {})
-    if text in table:
-        sig = np.asarray(table[text], dtype=float)
+    if text in table:  # the scenario's a priori: a bad one is the file's fault, not --apriori
+        try:
+            sig = np.asarray(table[text], dtype=float)
+        except (TypeError, ValueError):
+            sig = np.empty(0)
+        if sig.shape != (6,) or not np.all(np.isfinite(sig)) or np.any(sig <= 0):
+            raise InputError(str(scenario), f"ekf.apriori.{text}",
+                             "six standard deviations > 0 (km, km/s)", table[text])
     else:
         pairs = dict(item.partition("=")[::2] for item in text.split(","))
         if set(pairs) != set(_APRIORI_KEYS):
