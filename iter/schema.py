@@ -40,7 +40,7 @@ from pydantic_core import PydanticCustomError
 
 from .errors import SweepInputError
 
-__all__ = ["AllowInf", "InfFloat", "Invalid", "Schema", "validate"]
+__all__ = ["AllowInf", "InfFloat", "Invalid", "Schema", "Unique", "validate"]
 
 M = TypeVar("M", bound="Schema")
 
@@ -64,6 +64,13 @@ AllowInf = _AllowInf()
 InfFloat = Annotated[float, AllowInf]
 
 
+def _unique(values: list) -> list:
+    for i, value in enumerate(values):
+        if value in values[:i]:
+            raise Invalid(f"each item once ({value!r} is repeated)", values)
+    return values
+
+
 class Invalid(ValueError):
     """A failed check in a schema validator: what was expected, the value, and where.
 
@@ -79,6 +86,10 @@ class Invalid(ValueError):
         self.got = got
         self.field = field
         super().__init__(expected)
+
+
+#: Use as ``Annotated[list[X], Unique]`` for a list whose items must not repeat.
+Unique = AfterValidator(_unique)
 
 
 class Schema(pydantic.BaseModel):

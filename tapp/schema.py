@@ -9,7 +9,9 @@ that is strict and closed:
   an integer is accepted where a float is declared (``1`` for ``1.0``);
 - floats must be finite; a field that may be infinite says so with :data:`AllowInf`
   (``x: Annotated[float, AllowInf]``; NaN stays an error);
-- instances are frozen.
+- instances are frozen;
+- a list whose items must not repeat says so with :data:`Unique`
+  (``Annotated[list[str], Unique]``).
 
 :func:`validate` turns the first validation error into one :class:`tapp.errors.InputError`
 ``(source, "dotted.field[2].path", expected, got)`` with a plain-English ``expected``
@@ -43,12 +45,12 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TypeVar
 
-from iter.schema import AllowInf, InfFloat, Invalid, Schema
+from iter.schema import AllowInf, InfFloat, Invalid, Schema, Unique
 from iter.schema import validate as _validate
 from tapp.errors import InputError
 from tapp.tomlfile import read_toml
 
-__all__ = ["AllowInf", "InfFloat", "Invalid", "Schema", "load", "validate"]
+__all__ = ["AllowInf", "InfFloat", "Invalid", "Schema", "Unique", "load", "validate"]
 
 M = TypeVar("M", bound=Schema)
 

@@ -83,21 +83,25 @@ R. H. Battin, *An Introduction to the Mathematics and Methods of Astrodynamics*,
 
 from __future__ import annotations
 
+import datetime as dt
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Annotated, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
+from pydantic import AfterValidator, Field, PlainValidator
 
 from search import SearchResult, solve
 from tapp.bplane import REFERENCE_POLES, BPlane, b_plane
 from tapp.constants import SECONDS_PER_DAY, GM_km3_s2, RADIUS_km
 from tapp.dynamics import BODIES, PropagationError, Propagator, earth_model
+from tapp.dynamics.propagate import check_tolerance
 from tapp.ephemeris import position_km, utc_to_tdb_jd
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.time import Epoch, parse_epoch
-from tapp.tomlfile import finite_number
+from tapp.schema import Invalid, Schema, Unique, validate
 
 #: Names of the independent variables x (injection velocity, EME2000) and dependent ones y.
 X_NAMES = ("vx_km_s", "vy_km_s", "vz_km_s")
@@ -531,90 +535,133 @@ def run_search(problem: BPlaneSearch, *, analytic_partials: bool | None = None) 
 
 # --- scenario tables ----------------------------------------------------------------------
 
-_TOP_KEYS = {"title", "epoch", "injection", "model", "target", "search"}
-_INJECTION_KEYS = {"r_km", "v_km_s"}
-_MODEL_KEYS = {"gravity", "third_bodies", "stm_gravity", "stm_third_bodies", "rtol", "atol"}
-_TARGET_KEYS = {"body", "reference", "max_flight_time_s", "scan_step_s", "periapsis_time_tol_s"}
-_SEARCH_KEYS = {"targets", "target_increments", "tolerances", "increments",
-                "iterations_per_partials", "partial_sets", "analytic_partials", "broyden",
-                "step_halving"}
 
-
-def _table(data: Mapping, key: str, source: str, allowed: set[str], required: bool = True
-           ) -> Mapping:
-    value = data.get(key)
-    if value is None and not required:
-        return {}
-    if not isinstance(value, Mapping):
-        raise InputError(source, key, "a table", value)
-    unknown = sorted(set(value) - allowed)
-    if unknown:
-        raise InputError(source, f"{key}.{unknown[0]}", f"one of {', '.join(sorted(allowed))}",
-                         unknown[0])
+def _nonzero(value: float) -> float:
+    if value == 0:
+        raise Invalid("a finite number != 0", value)
     return value
 
 
-def _vector3(table: Mapping, key: str, source: str, where: str) -> np.ndarray:
-    value = table.get(key)
-    if (not isinstance(value, list) or len(value) != 3 or not all(
-            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-            for v in value)):
-        raise InputError(source, where, "a list of 3 finite numbers", value)
-    return np.array(value, dtype=np.float64)
+def _tolerance(value: float) -> float:
+    try:
+        return check_tolerance(value)
+    except InputError as exc:
+        raise Invalid(exc.expected, value) from None
 
 
-def _named(table: Mapping, key: str, names: tuple[str, ...], source: str, *,
-           required: bool = True, positive: bool = False, nonzero: bool = False) -> np.ndarray:
-    where = f"search.{key}"
-    sub = table.get(key)
-    if sub is None and not required:
-        return np.zeros(len(names))
-    if not isinstance(sub, Mapping):
-        raise InputError(source, where, f"a table with keys {', '.join(names)}", sub)
-    unknown = sorted(set(sub) - set(names))
-    if unknown:
-        raise InputError(source, f"{where}.{unknown[0]}", f"one of {', '.join(names)}",
-                         unknown[0])
-    default = None if required else 0.0
-    return np.array([finite_number(sub, name, source, f"{where}.{name}", default=default,
-                             positive=positive, nonzero=nonzero) for name in names])
-
-
-def _count(table: Mapping, key: str, source: str, default: int) -> int:
-    value = table.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise InputError(source, f"search.{key}", "an integer >= 1", value)
+def _epoch_text(value: object) -> object:
+    if not isinstance(value, str | dt.datetime):
+        raise Invalid("a UTC date (ISO 8601 string or TOML date-time)", value)
     return value
 
 
-def _flag(table: Mapping, key: str, source: str) -> bool:
-    value = table.get(key, False)
-    if not isinstance(value, bool):
-        raise InputError(source, f"search.{key}", "true or false", value)
-    return value
+_Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+_Positive = Annotated[float, Field(gt=0)]
+_Count = Annotated[int, Field(ge=1)]
+_ThirdBodies = Annotated[list[Literal[tuple(b for b in BODIES if b != "earth")]],  # type: ignore[misc]
+                         Unique]
 
 
-def _bodies(table: Mapping, key: str, source: str, default: list) -> tuple[str, ...]:
-    value = table.get(key, default)
-    allowed = [b for b in BODIES if b != "earth"]  # the integration is Earth-centred
-    if not isinstance(value, list) or not all(isinstance(b, str) and b in allowed
-                                              for b in value):
-        raise InputError(source, f"model.{key}",
-                         f"a list of third bodies among {', '.join(allowed)}", value)
-    return tuple(value)
+class SearchInjection(Schema):
+    """``[injection]``: position and first-guess velocity, EME2000, Earth-centred."""
+
+    r_km: _Vector3
+    v_km_s: _Vector3
+
+
+class SearchModel(Schema):
+    """``[model]``: state and variational models (Earth-centred), integrator tolerances."""
+
+    gravity: str
+    third_bodies: _ThirdBodies = []
+    stm_gravity: str | None = None
+    stm_third_bodies: _ThirdBodies | None = None
+    rtol: Annotated[float, AfterValidator(_tolerance)] = 1e-13
+    atol: Annotated[float, AfterValidator(_tolerance)] = 1e-13
+
+
+class SearchTarget(Schema):
+    """``[target]``: the target body, B-plane reference and the closest-approach scan."""
+
+    body: str = "moon"
+    reference: Literal[tuple(REFERENCE_POLES)] = "earth_equator"  # type: ignore[valid-type]
+    max_flight_time_s: _Positive = 8.0 * SECONDS_PER_DAY
+    scan_step_s: _Positive = 600.0
+    periapsis_time_tol_s: _Positive = 1e-3
+
+
+class YValues(Schema):
+    """Values of the dependent variables (B·R km, B·T km, flight time s)."""
+
+    b_dot_r_km: float
+    b_dot_t_km: float
+    flight_time_s: float
+
+
+class YIncrements(Schema):
+    """theta: target increments of the dependent variables (each default 0)."""
+
+    b_dot_r_km: float = 0.0
+    b_dot_t_km: float = 0.0
+    flight_time_s: float = 0.0
+
+
+class YTolerances(Schema):
+    """Convergence tolerances of the dependent variables, > 0."""
+
+    b_dot_r_km: _Positive
+    b_dot_t_km: _Positive
+    flight_time_s: _Positive
+
+
+class XIncrements(Schema):
+    """Difference increments of the injection velocity, km/s, != 0."""
+
+    vx_km_s: Annotated[float, AfterValidator(_nonzero)]
+    vy_km_s: Annotated[float, AfterValidator(_nonzero)]
+    vz_km_s: Annotated[float, AfterValidator(_nonzero)]
+
+
+class SearchTable(Schema):
+    """``[search]``: targets, tolerances, increments and SEARCH's iteration control."""
+
+    targets: YValues
+    target_increments: YIncrements = YIncrements()
+    tolerances: YTolerances
+    increments: XIncrements
+    iterations_per_partials: _Count = 3
+    partial_sets: _Count = 3
+    analytic_partials: bool = False
+    broyden: bool = False
+    step_halving: bool = False
+
+
+class SearchFile(Schema):
+    """Schema of a SEARCH scenario (:func:`scenario_search` for the tables)."""
+
+    title: str = ""
+    epoch: Annotated[object, PlainValidator(_epoch_text)]
+    injection: SearchInjection
+    model: SearchModel
+    target: SearchTarget = SearchTarget()
+    search: SearchTable
+
+
+def _values(table: Schema, names: tuple[str, ...]) -> np.ndarray:
+    return _frozen([getattr(table, name) for name in names])
 
 
 def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     """Build a :class:`BPlaneSearch` from a parsed scenario table (TOML), validating it all.
 
     Tables and keys (units in the names; the file ``scenarios/search_bplane.toml`` is the
-    commented example):
+    commented example; the schema is :class:`SearchFile`):
 
     - ``epoch``: UTC date of the injection (t = 0); ``title``: free text (optional).
     - ``[injection]``: ``r_km`` (3), ``v_km_s`` (3, the first guess x0), EME2000, Earth-centred.
     - ``[model]``: ``gravity`` (J0, Jn, NxM), ``third_bodies`` (list), optional
       ``stm_gravity``/``stm_third_bodies`` (variational model, default the state model),
-      ``rtol``/``atol`` (default 1e-13).
+      ``rtol``/``atol`` (default 1e-13, within ``tapp.dynamics.propagate.TOLERANCE_RANGE``).
     - ``[target]``: ``body`` (default moon), ``reference`` (earth_equator | ecliptic),
       ``max_flight_time_s``, ``scan_step_s``, ``periapsis_time_tol_s`` (optional).
     - ``[search]``: ``targets``, ``tolerances`` (tables keyed b_dot_r_km, b_dot_t_km,
@@ -628,75 +675,53 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
         Naming ``source`` and the field (dotted path) for any missing, unknown or invalid
         entry.
     """
-    unknown = sorted(set(data) - _TOP_KEYS)
-    if unknown:
-        raise InputError(source, unknown[0], f"one of {', '.join(sorted(_TOP_KEYS))}",
-                         unknown[0])
-    epoch_text = data.get("epoch")
-    if not isinstance(epoch_text, str):
-        raise InputError(source, "epoch", "an ISO 8601 UTC date string", epoch_text)
-    epoch = parse_epoch(epoch_text, source=source)
+    doc = validate(SearchFile, data, source)
+    epoch_text = doc.epoch
+    if isinstance(epoch_text, dt.datetime):
+        epoch_text = epoch_text.isoformat().removesuffix("+00:00")
+    try:
+        epoch = parse_epoch(str(epoch_text), source=source)
+    except InputError as exc:
+        raise InputError(source, "epoch", exc.expected, epoch_text) from None
 
-    inj = _table(data, "injection", source, _INJECTION_KEYS)
-    r0 = _vector3(inj, "r_km", source, "injection.r_km")
+    r0 = np.array(doc.injection.r_km, dtype=np.float64)
     if np.linalg.norm(r0) <= RADIUS_km["earth"]:
         raise InputError(source, "injection.r_km", "a position above the Earth's surface",
                          r0.tolist())
-    v0 = _vector3(inj, "v_km_s", source, "injection.v_km_s")
+    v0 = np.array(doc.injection.v_km_s, dtype=np.float64)
 
-    mod = _table(data, "model", source, _MODEL_KEYS)
-    gravity = mod.get("gravity")
-    if not isinstance(gravity, str):
-        raise InputError(source, "model.gravity", "a gravity model J0, Jn or NxM", gravity)
-    bodies = _bodies(mod, "third_bodies", source, [])
-    stm_gravity = mod.get("stm_gravity", gravity)
-    if not isinstance(stm_gravity, str):
-        raise InputError(source, "model.stm_gravity", "a gravity model J0, Jn or NxM",
-                         stm_gravity)
-    stm_bodies = _bodies(mod, "stm_third_bodies", source, list(bodies))
-    state_model = earth_model(gravity, bodies, source=source, field="model.gravity")
+    mod = doc.model
+    bodies = tuple(mod.third_bodies)
+    stm_gravity = mod.gravity if mod.stm_gravity is None else mod.stm_gravity
+    stm_bodies = bodies if mod.stm_third_bodies is None else tuple(mod.stm_third_bodies)
+    state_model = earth_model(mod.gravity, bodies, source=source, field="model.gravity")
     var_model = earth_model(stm_gravity, stm_bodies, source=source, field="model.stm_gravity")
-    propagator = Propagator(state_model, var_model,
-                            rtol=finite_number(mod, "rtol", source, "model.rtol", default=1e-13,
-                                         positive=True),
-                            atol=finite_number(mod, "atol", source, "model.atol", default=1e-13,
-                                         positive=True))
+    propagator = Propagator(state_model, var_model, rtol=mod.rtol, atol=mod.atol)
 
-    tgt = _table(data, "target", source, _TARGET_KEYS)
-    body = tgt.get("body", "moon")
-    if body not in bodies:
+    tgt = doc.target
+    if tgt.body not in bodies:
         raise InputError(source, "target.body", f"one of model.third_bodies {list(bodies)}",
-                         body)
-    reference = tgt.get("reference", "earth_equator")
-    if reference not in REFERENCE_POLES:
-        raise InputError(source, "target.reference", f"one of {', '.join(REFERENCE_POLES)}",
-                         reference)
-    horizon = finite_number(tgt, "max_flight_time_s", source, "target.max_flight_time_s",
-                      default=8.0 * SECONDS_PER_DAY, positive=True)
-    scan = finite_number(tgt, "scan_step_s", source, "target.scan_step_s", default=600.0,
-                   positive=True)
-    if scan >= horizon:
+                         tgt.body)
+    if tgt.scan_step_s >= tgt.max_flight_time_s:
         raise InputError(source, "target.scan_step_s",
-                         f"a step shorter than target.max_flight_time_s = {horizon:g} s", scan)
+                         f"a step shorter than target.max_flight_time_s = "
+                         f"{tgt.max_flight_time_s:g} s", tgt.scan_step_s)
     program = BPlaneProgram(
-        epoch=epoch, r0_km=r0, propagator=propagator, target=body, reference=reference,
-        max_flight_time_s=horizon, scan_step_s=scan,
-        periapsis_time_tol_s=finite_number(tgt, "periapsis_time_tol_s", source,
-                                     "target.periapsis_time_tol_s", default=1e-3,
-                                     positive=True))
+        epoch=epoch, r0_km=r0, propagator=propagator, target=tgt.body, reference=tgt.reference,
+        max_flight_time_s=tgt.max_flight_time_s, scan_step_s=tgt.scan_step_s,
+        periapsis_time_tol_s=tgt.periapsis_time_tol_s)
 
-    srch = _table(data, "search", source, _SEARCH_KEYS)
+    srch = doc.search
     return BPlaneSearch(
         program=program,
         v0_km_s=_frozen(v0),
-        targets=_frozen(_named(srch, "targets", Y_NAMES, source)),
-        target_increments=_frozen(_named(srch, "target_increments", Y_NAMES, source,
-                                         required=False)),
-        tolerances=_frozen(_named(srch, "tolerances", Y_NAMES, source, positive=True)),
-        increments=_frozen(_named(srch, "increments", X_NAMES, source, nonzero=True)),
-        iterations_per_partials=_count(srch, "iterations_per_partials", source, 3),
-        partial_sets=_count(srch, "partial_sets", source, 3),
-        analytic_partials=_flag(srch, "analytic_partials", source),
-        broyden=_flag(srch, "broyden", source),
-        step_halving=_flag(srch, "step_halving", source),
+        targets=_values(srch.targets, Y_NAMES),
+        target_increments=_values(srch.target_increments, Y_NAMES),
+        tolerances=_values(srch.tolerances, Y_NAMES),
+        increments=_values(srch.increments, X_NAMES),
+        iterations_per_partials=srch.iterations_per_partials,
+        partial_sets=srch.partial_sets,
+        analytic_partials=srch.analytic_partials,
+        broyden=srch.broyden,
+        step_halving=srch.step_halving,
     )

@@ -63,7 +63,7 @@ from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.stations import Station
 from tapp.orbits import check_perigee, state_from_elements
-from tapp.schema import Invalid, Schema, validate
+from tapp.schema import Invalid, Schema, Unique, validate
 from tapp.stations_file import StationTable
 from tapp.tomlfile import read_toml
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
@@ -321,13 +321,6 @@ def _gravity(spec: str) -> str:
     return spec
 
 
-def _once(names: list) -> list:
-    for i, name in enumerate(names):
-        if name in names[:i]:
-            raise Invalid("each name once", names)
-    return names
-
-
 #: A time: seconds from the epoch, or a UTC date (ISO string or TOML date).
 Time = Annotated[object, PlainValidator(_time_value)]
 Window = Annotated[list[Time], Field(min_length=2, max_length=2)]
@@ -373,9 +366,9 @@ class ModelTable(Schema):
     """``[model]``: state and variational force models, integrator tolerances."""
 
     gravity: GravityName
-    third_bodies: Annotated[list[ThirdBody], AfterValidator(_once)] = []
+    third_bodies: Annotated[list[ThirdBody], Unique] = []
     var_gravity: GravityName | None = None
-    var_third_bodies: Annotated[list[ThirdBody], AfterValidator(_once)] | None = None
+    var_third_bodies: Annotated[list[ThirdBody], Unique] | None = None
     rtol: Tolerance = 1e-13
     atol: Tolerance = 1e-13
 
@@ -383,9 +376,9 @@ class ModelTable(Schema):
 class ParametersTable(Schema):
     """``[parameters]``: dynamic parameters in q, station location and bias modes."""
 
-    dynamic: Annotated[list[str], AfterValidator(_once)] = []
+    dynamic: Annotated[list[str], Unique] = []
     station_location: LocationMode = "none"
-    station_biases: Annotated[list[BiasKind], AfterValidator(_once)] = []
+    station_biases: Annotated[list[BiasKind], Unique] = []
     values: dict[str, float] = {}
 
 
@@ -429,9 +422,9 @@ class NoiseTable(Schema):
 class StationTracking(Schema):
     """``[tracking.station.NAME]``: what one station measures and how, overriding defaults."""
 
-    observables: Annotated[list[Kind], Field(min_length=1), AfterValidator(_once)] | None = None
+    observables: Annotated[list[Kind], Field(min_length=1), Unique] | None = None
     location: LocationMode | None = None
-    biases: Annotated[list[BiasKind], AfterValidator(_once)] | None = None
+    biases: Annotated[list[BiasKind], Unique] | None = None
     range_bias_m: float = 0.0
     range_rate_bias_mm_s: float = 0.0
     blackouts: list[Window] = []
@@ -442,8 +435,8 @@ class StationTracking(Schema):
 class TrackingTable(Schema):
     """``[tracking]``: stations, observables, light time and the sampling schedule."""
 
-    stations: Annotated[list[str], Field(min_length=1), AfterValidator(_once)]
-    observables: Annotated[list[Kind], AfterValidator(_once)] = ["range", "range_rate"]
+    stations: Annotated[list[str], Field(min_length=1), Unique]
+    observables: Annotated[list[Kind], Unique] = ["range", "range_rate"]
     light_time: Literal[LIGHT_TIME_MODES] = "none"  # type: ignore[valid-type]
     data_interval_s: Positive
     start: Time = 0.0
@@ -468,7 +461,7 @@ class MissTable(Schema):
 
     kind: Literal[tuple(MISS_QUANTITIES)]  # type: ignore[valid-type]
     time: Time | None = None
-    quantities: Annotated[list[str], Field(min_length=1), AfterValidator(_once)] | None = None
+    quantities: Annotated[list[str], Field(min_length=1), Unique] | None = None
     body: str | None = None
     reference: Literal[tuple(REFERENCE_POLES)] | None = None  # type: ignore[valid-type]
 

@@ -135,3 +135,15 @@ def test_load_reads_and_validates_a_file(tmp_path: Path) -> None:
     path.write_text("seed = [\n")
     with pytest.raises(InputError, match=rf"^{path}: TOML: expected valid TOML"):
         load(Study, path)
+
+
+def test_unique_lists_name_the_repeated_item() -> None:
+    from tapp.schema import Unique
+
+    class Bodies(Schema):
+        third_bodies: Annotated[list[str], Unique] = []
+
+    with pytest.raises(InputError) as info:
+        validate(Bodies, {"third_bodies": ["sun", "moon", "sun"]}, "m.toml")
+    assert str(info.value) == ("m.toml: third_bodies: expected each item once ('sun' is "
+                               "repeated) (got ['sun', 'moon', 'sun'])")

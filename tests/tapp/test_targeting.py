@@ -185,10 +185,15 @@ def test_failed_case_stops_the_search_naming_the_case(problem) -> None:
 
 @pytest.mark.parametrize(("table", "values", "field"), [
     ("injection", {"r_km": [1.0, 2.0]}, "injection.r_km"),
-    ("injection", {"v_km_s": [1.0, "a", 2.0]}, "injection.v_km_s"),
+    ("injection", {"v_km_s": [1.0, "a", 2.0]}, "injection.v_km_s[1]"),
     ("injection", {"r_km": [100.0, 0.0, 0.0]}, "injection.r_km"),
     ("model", {"gravity": "J99"}, "model.gravity"),
-    ("model", {"third_bodies": ["sun", "pluto"]}, "model.third_bodies"),
+    ("model", {"third_bodies": ["sun", "pluto"]}, "model.third_bodies[1]"),
+    ("model", {"third_bodies": ["sun", "moon", "sun"]}, "model.third_bodies"),
+    ("model", {"rtol": 1.0}, "model.rtol"),
+    ("search", {"analytic_partials": 1}, "search.analytic_partials"),
+    ("search", {"partial_sets": True}, "search.partial_sets"),
+    ("target", {"scan_step_s": "600"}, "target.scan_step_s"),
     ("model", {"third_bodies": ["sun"]}, "target.body"),
     ("model", {"rtol": 0.0}, "model.rtol"),
     ("target", {"reference": "galactic"}, "target.reference"),
@@ -212,6 +217,18 @@ def test_scenario_fields_are_validated_by_name(table, values, field) -> None:
         scenario_search(_load(**{table: values}), "bad.toml")
     assert info.value.source == "bad.toml"
     assert info.value.field == field
+
+
+def test_scenario_unknown_top_level_keys_and_wrong_types_are_one_line() -> None:
+    data = _load()
+    data["titel"] = "typo"
+    with pytest.raises(InputError, match=r"^bad\.toml: titel: expected no such key \(allowed: "
+                       r"title, epoch, injection, model, target, search\) \(got 'typo'\)$"):
+        scenario_search(data, "bad.toml")
+    data = _load()
+    data["title"] = 3
+    with pytest.raises(InputError, match=r"^bad\.toml: title: expected text"):
+        scenario_search(data, "bad.toml")
 
 
 def test_scenario_epoch_is_validated() -> None:

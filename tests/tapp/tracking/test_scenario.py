@@ -207,8 +207,8 @@ def test_tolerances_outside_the_documented_range_are_refused() -> None:
 
 def test_a_third_body_listed_twice_is_refused() -> None:
     text = _message(leo_document(model={"third_bodies": ["sun", "moon", "sun"]}))
-    assert text == f"{SOURCE}: model.third_bodies: expected each name once (got ['sun', 'moon', " \
-        "'sun'])"
+    assert text == (f"{SOURCE}: model.third_bodies: expected each item once ('sun' is repeated) "
+                    "(got ['sun', 'moon', 'sun'])")
 
 
 def test_a_station_height_outside_the_ground_band_is_refused() -> None:
