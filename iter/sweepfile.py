@@ -6,6 +6,7 @@ Format
 
     [sweep]                      # optional, free text kept with the results
     description = "Five launch azimuths on each of 30 days (seed VI, CASE 2)"
+    # title = "..."
 
     [body]                       # exactly one of `callable` or `program`
     callable = "iter.examples:launch_azimuth_case"   # "module:function"
@@ -36,8 +37,10 @@ Inner loops restart for every case of the outer loop, so the cases come out oute
 ``30 x 5 = 150`` cases, the five azimuths of the first day first. A varied value reaches a
 callable body as a keyword argument (a float) and a program as ``--name value``.
 
-Unknown keys are errors (a typo must not silently fall back to a default). Errors name the
-file and the field, e.g. ``loop[1].vary``, where ``loop[0]`` is the first ``[[loop]]`` table.
+The file is validated against one declared schema, :class:`SweepFile` (``iter.schema``):
+unknown keys and tables are errors (a typo must not silently fall back to a default), and
+booleans are not numbers nor numbers strings. Errors name the file and the field, e.g.
+``loop[1].vary``, where ``loop[0]`` is the first ``[[loop]]`` table.
 """
 
 from __future__ import annotations
@@ -45,16 +48,80 @@ from __future__ import annotations
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Annotated, Any
+
+from pydantic import Field, model_validator
 
 from .body import Body, CallableBody, ProgramBody
 from .errors import SweepInputError
 from .loops import Loop
+from .schema import Invalid, Schema, validate
 from .sweep import Sweep
 
-_TOP_KEYS = frozenset({"sweep", "body", "loop"})
-_BODY_KEYS = frozenset({"callable", "program", "json", "dashes", "timeout_s", "constants"})
-_PROGRAM_ONLY_KEYS = ("json", "dashes")
-_LOOP_KEYS = frozenset({"type", "names", "n", "sets", "vary", "delta"})
+_Positive = Annotated[float, Field(gt=0)]
+_Scalar = str | int | float | bool
+
+
+class SweepMeta(Schema):
+    """``[sweep]``: free text kept with the results."""
+
+    title: str = ""
+    description: str = ""
+
+
+class BodyTable(Schema):
+    """``[body]``: exactly one of ``callable`` or ``program``, and their options."""
+
+    callable: str | None = None
+    program: Annotated[list[Annotated[str, Field(min_length=1)]], Field(min_length=1)] | None \
+        = None
+    json_option: bool | None = Field(None, alias="json")
+    dashes: bool | None = None
+    timeout_s: _Positive | None = None
+    constants: dict[str, Any] = {}
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> BodyTable:
+        for name in self.constants:
+            if not name.isidentifier():
+                raise Invalid("a Python identifier as the name", name, f"constants.{name}")
+        if (self.callable is None) == (self.program is None):
+            raise Invalid("exactly one of callable or program",
+                          "both" if self.callable is not None else "neither")
+        if self.callable is not None:
+            for key, attr in _PROGRAM_ONLY_KEYS.items():
+                if getattr(self, attr) is not None:
+                    raise Invalid("no such key for a callable body (program only)",
+                                  getattr(self, attr), key)
+        else:
+            for name, value in self.constants.items():
+                if not isinstance(value, _Scalar):
+                    raise Invalid("a string, number or boolean for a program body", value,
+                                  f"constants.{name}")
+        return self
+
+
+class LoopTable(Schema):
+    """One ``[[loop]]`` table (the seed's TYPE, N, SETS, VARY, DELTA)."""
+
+    type: int = 1
+    names: list[str]
+    n: int | None = None
+    sets: int
+    vary: list[float]
+    delta: list[float] | None = None
+
+
+class SweepFile(Schema):
+    """Schema of a sweep file (module docstring)."""
+
+    sweep: SweepMeta = SweepMeta()
+    body: BodyTable
+    loop: Annotated[list[LoopTable], Field(min_length=1)]
+
+
+#: Keys of a program body only, and their attributes.
+_PROGRAM_ONLY_KEYS = {"json": "json_option", "dashes": "dashes"}
 
 
 def load_sweep(path: str | Path, *, check_body: bool = True) -> Sweep:
@@ -91,109 +158,41 @@ def parse_sweep(document: Mapping[str, object], *, source: str = "<sweep>",
                 check_body: bool = True) -> Sweep:
     """Return the sweep described by a parsed sweep-file ``document`` (see module docstring).
 
+    The document is validated against :class:`SweepFile` (``iter.schema``: unknown keys are
+    errors, booleans are not numbers, ...), then the loops and the body are built.
+
     Raises
     ------
     SweepInputError
         A field is missing or invalid; ``source`` names the file in the message.
     """
-    _no_unknown_keys(source, "", document, _TOP_KEYS)
-    if "sweep" in document and not isinstance(document["sweep"], Mapping):
-        raise SweepInputError(source, "sweep", "a table of free-text metadata",
-                              document["sweep"])
-    body = _parse_body(source, document.get("body"))
-    loop_tables = document.get("loop")
-    if not isinstance(loop_tables, list) or not loop_tables:
-        raise SweepInputError(source, "loop", "at least one [[loop]] table", loop_tables)
-    loops = tuple(_parse_loop(source, i, table) for i, table in enumerate(loop_tables))
+    doc = validate(SweepFile, document, source)
+    body = _body(doc.body)
+    loops = tuple(_loop(source, i, table) for i, table in enumerate(doc.loop))
     sweep = Sweep(loops=loops, body=body, source=source, document=dict(document))
     if check_body:
         body.check(source)
     return sweep
 
 
-def _no_unknown_keys(source: str, prefix: str, table: Mapping[str, object],
-                     allowed: frozenset[str]) -> None:
-    for key in table:
-        if key not in allowed:
-            raise SweepInputError(source, f"{prefix}{key}",
-                                  f"one of the keys {sorted(allowed)}", "an unknown key")
+def _body(table: BodyTable) -> Body:
+    constants = dict(table.constants)
+    if table.callable is not None:
+        return CallableBody(target=table.callable, constants=constants,
+                            timeout_s=table.timeout_s)
+    return ProgramBody(argv=tuple(table.program), constants=constants,
+                       json_option=True if table.json_option is None else table.json_option,
+                       dashes=bool(table.dashes), timeout_s=table.timeout_s)
 
 
-def _parse_body(source: str, table: object) -> Body:
-    if not isinstance(table, Mapping):
-        raise SweepInputError(source, "body",
-                              'a [body] table with callable = "module:function" or '
-                              "program = [argv...]", table)
-    _no_unknown_keys(source, "body.", table, _BODY_KEYS)
-    constants = table.get("constants", {})
-    if not isinstance(constants, Mapping):
-        raise SweepInputError(source, "body.constants", "a table of name = value", constants)
-    for name in constants:
-        if not name.isidentifier():
-            raise SweepInputError(source, f"body.constants.{name}",
-                                  "a Python identifier as the name", name)
-    has_callable, has_program = "callable" in table, "program" in table
-    if has_callable == has_program:
-        raise SweepInputError(source, "body", "exactly one of callable or program",
-                              "both" if has_callable else "neither")
-    if has_callable:
-        for key in _PROGRAM_ONLY_KEYS:
-            if key in table:
-                raise SweepInputError(source, f"body.{key}",
-                                      "no such key for a callable body (program only)",
-                                      table[key])
-        target = table["callable"]
-        if not isinstance(target, str):
-            raise SweepInputError(source, "body.callable", '"module:function"', target)
-        return CallableBody(target=target, constants=dict(constants),
-                            timeout_s=_timeout_s(source, table))
-    return _parse_program(source, table, dict(constants))
-
-
-def _parse_program(source: str, table: Mapping[str, object],
-                   constants: dict[str, object]) -> ProgramBody:
-    argv = table["program"]
-    if (not isinstance(argv, list) or not argv
-            or not all(isinstance(a, str) and a for a in argv)):
-        raise SweepInputError(source, "body.program",
-                              'a non-empty list of strings, e.g. ["tapp", "propagate"]', argv)
-    for name, value in constants.items():
-        if not isinstance(value, str | int | float | bool):
-            raise SweepInputError(source, f"body.constants.{name}",
-                                  "a string, number or boolean for a program body", value)
-    flags = {}
-    for key in ("json", "dashes"):
-        value = table.get(key, key == "json")
-        if not isinstance(value, bool):
-            raise SweepInputError(source, f"body.{key}", "true or false", value)
-        flags[key] = value
-    return ProgramBody(argv=tuple(argv), constants=constants, json_option=flags["json"],
-                       dashes=flags["dashes"], timeout_s=_timeout_s(source, table))
-
-
-def _timeout_s(source: str, table: Mapping[str, object]) -> float | None:
-    timeout_s = table.get("timeout_s")
-    if timeout_s is not None and (isinstance(timeout_s, bool)
-                                  or not isinstance(timeout_s, int | float)
-                                  or not 0 < timeout_s < float("inf")):
-        raise SweepInputError(source, "body.timeout_s", "a positive, finite number of seconds",
-                              timeout_s)
-    return None if timeout_s is None else float(timeout_s)
-
-
-def _parse_loop(source: str, i: int, table: object) -> Loop:
+def _loop(source: str, i: int, table: LoopTable) -> Loop:
     where = f"loop[{i}]"
-    if not isinstance(table, Mapping):
-        raise SweepInputError(source, where, "a [[loop]] table", table)
-    _no_unknown_keys(source, f"{where}.", table, _LOOP_KEYS)
-    for key in ("names", "sets", "vary"):
-        if key not in table:
-            raise SweepInputError(source, f"{where}.{key}", f"a {key} key", "nothing")
     try:
-        loop = Loop(type=table.get("type", 1), names=table["names"], sets=table["sets"],
-                    vary=table["vary"], delta=table.get("delta"))
+        loop = Loop(type=table.type, names=tuple(table.names), sets=table.sets,
+                    vary=tuple(table.vary),
+                    delta=None if table.delta is None else tuple(table.delta))
     except SweepInputError as exc:
         raise SweepInputError(source, f"{where}.{exc.field}", exc.expected, exc.got) from None
-    if "n" in table and table["n"] != loop.n:
-        raise SweepInputError(source, f"{where}.n", f"len(names) = {loop.n}", table["n"])
+    if table.n is not None and table.n != loop.n:
+        raise SweepInputError(source, f"{where}.n", f"len(names) = {loop.n}", table.n)
     return loop

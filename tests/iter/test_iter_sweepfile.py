@@ -45,9 +45,16 @@ def _document(**loop_overrides):
     ({"vary": [96.0, 99.0, 102.0]}, "loop[0].vary", "2 x 1 = 2 values"),
     ({"type": 3}, "loop[0].type", "1 (table) or 2"),
     ({"type": 2, "vary": [96.0]}, "loop[0].delta", "increments for type 2"),
-    ({"sets": None}, "loop[0].sets", "a sets key"),
+    ({"sets": None}, "loop[0].sets", "the key is required"),
     ({"n": 2}, "loop[0].n", "len(names) = 1"),
-    ({"start": [96.0]}, "loop[0].start", "one of the keys"),
+    ({"start": [96.0]}, "loop[0].start",
+     "no such key (allowed: type, names, n, sets, vary, delta)"),
+    ({"sets": True}, "loop[0].sets", "an integer"),
+    ({"sets": 2.0}, "loop[0].sets", "an integer"),
+    ({"vary": [96.0, "99"]}, "loop[0].vary[1]", "a number"),
+    ({"vary": [96.0, True]}, "loop[0].vary[1]", "a number"),
+    ({"vary": [96.0, float("nan")]}, "loop[0].vary[1]", "a finite number"),
+    ({"type": "1"}, "loop[0].type", "an integer"),
 ])
 def test_bad_loop_fields_name_file_and_field(overrides, field, fragment):
     with pytest.raises(SweepInputError) as info:
@@ -91,6 +98,27 @@ def test_body_fields_are_checked():
                         "constants": {"azimuth_deg": 1.0}}
     with pytest.raises(SweepInputError, match=r"loop\[0\]\.names.*not also body.constants"):
         parse_sweep(document)
+
+
+def test_unknown_tables_and_body_keys_are_named_with_the_allowed_keys():
+    document = _document()
+    document["sweeps"] = {"description": "typo"}
+    with pytest.raises(SweepInputError, match=r"^bad\.toml: sweeps: expected no such key "
+                       r"\(allowed: sweep, body, loop\)"):
+        parse_sweep(document, source="bad.toml")
+    document = _document()
+    document["body"]["timeout"] = 5
+    with pytest.raises(SweepInputError, match=r"^bad\.toml: body\.timeout: expected no such key "
+                       r"\(allowed: callable, program, json, dashes, timeout_s, constants\)"):
+        parse_sweep(document, source="bad.toml")
+    document = _document()
+    document["body"]["timeout_s"] = True
+    with pytest.raises(SweepInputError, match=r"^bad\.toml: body\.timeout_s: expected a number"):
+        parse_sweep(document, source="bad.toml")
+    document = _document()
+    document["body"] = {"program": ["tapp", "propagate"], "json": 1}
+    with pytest.raises(SweepInputError, match=r"^bad\.toml: body\.json: expected true or false"):
+        parse_sweep(document, source="bad.toml", check_body=False)
 
 
 def test_program_body_is_read_with_its_options():
