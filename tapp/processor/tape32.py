@@ -1,0 +1,50 @@
+"""What a TAPP III run puts on the T32 tape (:mod:`tapp.tape.t32`) for TAPP II.
+
+The seed writes the recycle commands' outputs (Table B-5, "always ... under valid TAPP II
+assumptions: the fit-world constraints subtracted out of the consider parameters", §1); the
+tape here carries those entities and, per recycle, the current statistics and transitions in
+the representation of the recycle time, the system chains and the names of every partition.
+"""
+
+from __future__ import annotations
+
+from tapp.processor.plan import Plan
+from tapp.processor.representations import ISOLATED_SETS, SYSTEM_PARTITIONS, SYSTEMS
+from tapp.processor.sequencing import Run
+from tapp.tape.t32 import T32, T32Entity, T32Partition, T32Recycle
+
+_SYSTEM = {1: "standard", 3: "common", 4: "fit", 6: "real"}
+
+
+def _partitions(plan: Plan, miss_names: tuple[str, ...]) -> tuple[T32Partition, ...]:
+    sy = plan.systems
+    out = []
+    for rho, (chi, _, _) in SYSTEM_PARTITIONS.items():
+        _, t, h = sy.bounds(rho)
+        names = sy.system_names(chi)
+        out.append(T32Partition(rho, _SYSTEM[chi], t, h, tuple(names[t:h])))
+    for rho in ("m", *sorted(sy.miss_partitions)):
+        _, t, h = sy.bounds(rho)
+        out.append(T32Partition(rho, "miss", t, h, tuple(miss_names[t:h])))
+    return tuple(out)
+
+
+def build_t32(run: Run, plan: Plan, header, provenance: dict[str, str]) -> T32:
+    """Return the T32 tape of a run (module docstring)."""
+    sy = plan.systems
+    miss_names = tuple(header.miss.name)
+    recycles = tuple(
+        T32Recycle(r.number, r.k, r.l, r.j, r.t_s, r.t_l_s, r.info, r.S_fit, r.Lambda_fit,
+                   r.Lambda_real, r.L, r.Sigma, r.J, r.Jt, r.B, r.transition,
+                   tuple(T32Entity(e.omega, e.command.seed(), e.command.alias(), e.rows,
+                                   e.cols, e.matrix) for e in r.entities))
+        for r in run.recycles)
+    return T32(header.iden, header.epoch, sy.n_p, header.parameters, miss_names,
+               tuple(header.miss.unit),
+               {SYSTEMS[c]: sy.chain_matrix(c) for c in (3, 4, 6)},
+               {SYSTEMS[c]: tuple(sy.system_names(c)) for c in (3, 4, 6)},
+               _partitions(plan, miss_names), run.S0_fit, run.Lambda0_real, recycles,
+               provenance)
+
+
+__all__ = ["ISOLATED_SETS", "build_t32"]
