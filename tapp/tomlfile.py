@@ -1,10 +1,12 @@
-"""Reading scenario files (TOML) and their numbers, with errors that name file and field."""
+"""Reading scenario files (TOML), with errors that name the file.
+
+Every file type is then validated against its declared schema (:mod:`tapp.schema`), which
+checks the numbers, the types and the keys, and names the field.
+"""
 
 from __future__ import annotations
 
-import math
 import tomllib
-from collections.abc import Mapping
 from pathlib import Path
 
 from tapp.errors import InputError
@@ -29,23 +31,3 @@ def read_toml(path: Path | str) -> dict:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(str(path), "TOML", f"valid TOML ({exc})") from None
-
-
-def finite_number(table: Mapping, key: str, source: str, where: str, *,
-                  default: float | None = None, positive: bool = False,
-                  nonzero: bool = False) -> float:
-    """Return ``table[key]`` (or ``default``) as a float, checked finite (and > 0, != 0).
-
-    ``where`` is the field named in the error (e.g. ``"tracking.data_interval_s"``); booleans
-    are not numbers here.
-    """
-    value = table.get(key, default)
-    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-    if ok and positive:
-        ok = value > 0
-    if ok and nonzero:
-        ok = value != 0
-    if not ok:
-        what = "a finite number" + (" > 0" if positive else "") + (" != 0" if nonzero else "")
-        raise InputError(source, where, what, value)
-    return float(value)

@@ -33,7 +33,7 @@ from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.frames.time import parse_epoch
 from tapp.measurements.stations import Station
 from tapp.od.observations import Observations, simulate
-from tapp.orbits import DEFAULT_SCENARIO, OrbitTable, named_orbits, parse_orbit
+from tapp.orbits import DEFAULT_SCENARIO, OrbitTable, parse_orbit
 from tapp.schema import Invalid, Schema, validate
 from tapp.stations_file import StationTable, load_network
 from tapp.tomlfile import read_toml
@@ -246,4 +246,4 @@ def simulated_observations(x_true: np.ndarray, truth_spec: str, stations: tuple[
 
 def named_orbit_names(path: Path = DEFAULT_SCENARIO) -> list[str]:
     """Names of the orbits of the scenario file."""
-    return list(named_orbits(path))
+    return list(study_file(path).orbits)

@@ -1,0 +1,90 @@
+"""The study file follows one declared schema (issue 10, class 5): a typo, an unknown section,
+a boolean or a string where a number belongs is one line naming the file and the field."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tapp.errors import InputError
+from tapp.od import setup
+from tapp.orbits import DEFAULT_SCENARIO
+
+SHIPPED = DEFAULT_SCENARIO.read_text()
+
+
+def _study(tmp_path: Path, old: str, new: str) -> Path:
+    assert old in SHIPPED
+    path = tmp_path / "study.toml"
+    path.write_text(SHIPPED.replace(old, new, 1))
+    return path
+
+
+def _error(path: Path) -> InputError:
+    with pytest.raises(InputError) as info:
+        setup.study_file(path)
+    text = str(info.value)
+    assert "\n" not in text and text.startswith(f"{path}: ")
+    return info.value
+
+
+def test_the_shipped_study_file_validates() -> None:
+    study = setup.study_file()
+    assert study.tracking.seed == 1969 and len(study.orbits) == 8
+    assert [b.truth for b in study.dc] == ["J2", "5x5", "J2", "J2"]
+    assert study.ekf.apriori["1"][0] == 0.68 and study.rsig.cases[0] == ["J0", "J0"]
+    assert setup.tracking().seed == 1969 and setup.load_study()["tracking"]["seed"] == 1969
+
+
+def test_a_misspelled_seed_is_named_with_the_allowed_keys(tmp_path: Path) -> None:
+    # The issue's example: `sed = 1969` silently used seed 0.
+    err = _error(_study(tmp_path, "seed = 1969", "sed = 1969"))
+    assert (err.field, err.got) == ("tracking.sed", 1969)
+    assert err.expected == ("no such key (allowed: data_interval_s, span_days, sigma_range_m, "
+                            "sigma_range_rate_mm_s, seed, equatorial_below_deg)")
+
+
+def test_an_unknown_section_is_refused(tmp_path: Path) -> None:
+    err = _error(_study(tmp_path, "[initial_offset]", "[extras]\nx = 1\n\n[initial_offset]"))
+    assert err.field == "extras" and err.expected.startswith("no such key (allowed: epoch, ")
+
+
+@pytest.mark.parametrize(("old", "new", "field", "expected"), [
+    ("seed = 1969", "seed = true", "tracking.seed", "an integer"),
+    ("seed = 1969", "seed = -1", "tracking.seed", "a finite number >= 0"),
+    ("span_days = 5.0", 'span_days = "5"', "tracking.span_days", "a number"),
+    ("span_days = 5.0", "span_days = nan", "tracking.span_days", "a finite number"),
+    ("data_interval_s = 30.0", "data_interval_s = 0.0", "tracking.data_interval_s",
+     "a finite number > 0"),
+    ("lat_deg = -0.6226", "lat_deg = true", "stations.QUITO.lat_deg", "a number"),
+    ("h_km = 3.55", "h_km = 1e9", "stations.QUITO.h_km", "a ground-station height in"),
+    ("da_m = 100.0", "da_m = inf", "initial_offset.da_m", "a finite number"),
+    ("max_iterations = 12", "max_iterations = 12.5", "dc_settings.max_iterations",
+     "an integer"),
+    ("rms_rel_tol = 1e-3", "rms_rel_tl = 1e-3", "dc_settings.rms_rel_tl", "no such key"),
+    ('truth = "J2"', 'truth = "J42"', "dc[0].truth", "degree <= 8"),
+    ('orbits = ["SATORB1"]', 'orbits = ["SATORB9"]', "dc[0].orbits[0]", "an orbit of"),
+    ("arcs_h = [24.0, 12.0, 6.0]", 'arcs_h = [24.0, "12", 6.0]', "dc[0].arcs_h[1]",
+     "a number"),
+    ("1 = [0.68, 1e-5, 1e-5, 1e-5, 0.87e-3, 0.27e-3]", "1 = [0.68, 1e-5]", "ekf.apriori.1",
+     "at least 6 items"),
+    ('cases = [["J0", "J0"],', 'cases = [["J0"],', "rsig.cases[0]", "at least 2 items"),
+    ('equatorial = ["QUITO",', 'equatorial = ["QUITOO",', "networks.equatorial[0]",
+     "names of [stations.*] tables"),
+    ('epoch = "2026-01-01T00:00:00"', "epoch = 2026", "epoch", "text (a quoted string)"),
+])
+def test_bad_entries_name_file_and_field(tmp_path: Path, old: str, new: str, field: str,
+                                         expected: str) -> None:
+    err = _error(_study(tmp_path, old, new))
+    assert err.field == field
+    assert err.expected.startswith(expected)
+
+
+def test_the_runner_and_the_commands_read_the_validated_file(tmp_path: Path) -> None:
+    path = _study(tmp_path, "seed = 1969", "sed = 1969")
+    for read in (setup.tracking, setup.offset, setup.named_orbit_names):
+        with pytest.raises(InputError, match=r"tracking\.sed: expected no such key"):
+            read(path)
+    with pytest.raises(InputError, match=r"tracking\.sed: expected no such key"):
+        setup.true_orbit("SATORB1", path)
