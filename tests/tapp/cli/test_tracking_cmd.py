@@ -69,10 +69,10 @@ def test_tape_info_text(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("old", "new", "field"), [
-    ('stations = ["QUITO", "KOUROU"', 'stations = ["QUITO", "NOWHERE"', "tracking.stations"),
+    ('stations = ["QUITO", "KOUROU"', 'stations = ["QUITO", "NOWHERE"', "tracking.stations[1]"),
     ('observables = ["range", "range_rate"]', 'observables = ["range", "doppler"]',
-     "tracking.observables"),
-    ('dynamic = ["GM", "J2"]', 'dynamic = ["GM", "J9"]', "parameters.dynamic"),
+     "tracking.observables[1]"),
+    ('dynamic = ["GM", "J2"]', 'dynamic = ["GM", "J9"]', "parameters.dynamic[1]"),
     ("sigma_range_m = 15.0", "sigma_range_m = 0.0", "noise.fit.sigma_range_m"),
     ("epochs = [43200.0]", "epochs = [43200.0, 21600.0]", "times.epochs"),
     ("blackouts = []", "blackouts = [[0.0, 90000.0]]", "tracking"),
