@@ -2,9 +2,9 @@
 
 The runs are read from the study's scenario file (``[[dc]]``, ``[ekf]``, ``[rsig]``; see
 ``scenarios/approx_stm.toml``, validated by :class:`tapp.od.setup.StudyFile`); each DC run
-uses the brief's offset initial estimate and the
-5-day simulated observation file of its orbit and truth model, cut to the run's arc. The
-results are plain dataclasses; :mod:`tapp.report.approx_stm` turns them into the report.
+uses the brief's offset initial estimate and the 5-day simulated observation file of its orbit
+and truth model, cut to the run's arc. The results are plain dataclasses;
+:mod:`tapp.report.approx_stm` turns them into the report.
 """
 
 from __future__ import annotations

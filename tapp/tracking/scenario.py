@@ -4,6 +4,9 @@ A scenario gives the trajectory (epoch, injection state, state and variational f
 the parameter vector x = [p; q], the tracking stations and schedule, the fit-world and
 real-world noise, the T13 times (input times and epoch times) and the miss parameters.
 ``scenarios/leo_equatorial.toml`` and ``scenarios/deep_space.toml`` are commented examples.
+The file is validated against one declared schema, :class:`ScenarioFile` (``tapp.schema``):
+unknown tables and keys are errors naming the allowed keys, booleans are not numbers, numbers
+are not strings; the rules between tables and the physics are checked while it is built.
 
 Tables and keys (units in the key names; times are seconds from the epoch, or UTC dates as
 ISO strings or TOML dates)::
@@ -11,15 +14,19 @@ ISO strings or TOML dates)::
     title = "..."                   iden = "..."  (tape identification, default: file stem)
     epoch = "2026-01-01T00:00:00"   UTC of the injection, t = 0
     [injection]        r_km = [3], v_km_s = [3]   (EME2000, Earth-centred), or classical
-                       elements a_km, e, i_deg, raan_deg, argp_deg and M_deg or nu_deg
-    [model]            gravity (J0 | Jn | NxM), third_bodies, var_gravity, var_third_bodies
-                       (the variational model: the seed's truncated variational equations;
-                       default the state model), rtol, atol
+                       elements a_km, e, i_deg, raan_deg, argp_deg and M_deg or nu_deg;
+                       allow_subsurface = true accepts an orbit whose perigee is below the
+                       Earth's surface (refused otherwise, ``tapp.orbits.check_perigee``)
+    [model]            gravity (J0 | Jn | NxM), third_bodies (each once), var_gravity,
+                       var_third_bodies (the variational model: the seed's truncated
+                       variational equations; default the state model), rtol, atol (within
+                       ``tapp.dynamics.propagate.TOLERANCE_RANGE``, 1e-15 to 1e-6)
     [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", ...] (tapp.dynamics.forces
                        names), station_location = "cylindrical" | "ecef" | "none",
                        station_biases = ["range", "range_rate"], [parameters.values] non-nominal
                        values of dynamic parameters
-    [stations.NAME]    lat_deg, lon_deg, h_km, elev_mask_deg (tapp.stations_file)
+    [stations.NAME]    lat_deg, lon_deg, h_km (-0.5 to 10 km), elev_mask_deg
+                       (tapp.stations_file)
     [tracking]         stations = [names], observables = ["range", "range_rate", "azimuth",
                        "elevation"], light_time = "none" | "one_way" | "two_way",
                        data_interval_s, start, end, min_pass_s, max_pass_s,

@@ -221,3 +221,14 @@ def test_a_non_positive_gm_is_refused() -> None:
     text = _message(leo_document(parameters={"values": {"GM": -398600.0}}))
     assert text == (f"{SOURCE}: parameters.values.GM: expected a finite GM > 0 km^3/s^2 for GM "
                     "(got -398600.0)")
+
+
+def test_the_noise_schema_declares_every_kind_in_its_edge_unit() -> None:
+    from tapp.tracking.noise import EDGE_UNITS
+    from tapp.tracking.scenario import KINDS, FitTable, RealTable
+
+    assert set(EDGE_UNITS) == set(KINDS)
+    fit = {f"sigma_{k}_{EDGE_UNITS[k][0]}" for k in KINDS}
+    real = fit | {f"{pre}_{k}_{EDGE_UNITS[k][0]}" for pre in ("bias", "correlated")
+                  for k in KINDS} | {f"tau_{k}_s" for k in KINDS}
+    assert set(FitTable.model_fields) == fit and set(RealTable.model_fields) == real
