@@ -35,6 +35,13 @@ from tapp.tomlfile import read_toml
 
 _ELEMENT_KEYS = ("a", "e", "i", "raan", "argp")
 _CART_KEYS = ("x", "y", "z", "vx", "vy", "vz")
+#: Largest Earth-centred distance of a state, km (6.7 au: beyond Jupiter; DE421 third bodies
+#: and an Earth-centred integration make no sense farther out, and squares stay finite).
+MAX_DISTANCE_km = 1e9
+#: Largest eccentricity of an orbit given by elements.
+MAX_ECCENTRICITY = 1e6
+#: Largest speed component, km/s (0.3 % of c; solar escape at 1 au is 42 km/s).
+MAX_SPEED_km_s = 1e3
 #: The study's scenario file, found beside the package in a source checkout.
 DEFAULT_SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "approx_stm.toml"
 
@@ -52,9 +59,31 @@ def perigee_radius_km(x: np.ndarray, mu_km3_s2: float = GM_EARTH_km3_s2) -> floa
     return float(h @ h / (mu_km3_s2 * (1.0 + np.linalg.norm(e_vec))))
 
 
+def check_state_bounds(x: np.ndarray, source: str, field: str) -> np.ndarray:
+    """Return ``x`` (6,) if each position component is within :data:`MAX_DISTANCE_km` and each
+    velocity component within :data:`MAX_SPEED_km_s` (an Earth-centred state), else raise.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and ``field``, the limit and the largest component.
+    """
+    x = np.asarray(x, dtype=float)
+    r_max, v_max = float(np.abs(x[:3]).max()), float(np.abs(x[3:]).max())
+    if not r_max <= MAX_DISTANCE_km:
+        raise InputError(source, field, f"position components within {MAX_DISTANCE_km:g} km of "
+                         "the Earth (an Earth-centred state)", r_max)
+    if not v_max <= MAX_SPEED_km_s:
+        raise InputError(source, field, f"velocity components within {MAX_SPEED_km_s:g} km/s",
+                         v_max)
+    return x
+
+
 def check_perigee(x: np.ndarray, source: str, field: str, *, allow_subsurface: bool = False,
                   how_to_allow: str = "--allow-subsurface") -> np.ndarray:
     """Return ``x`` (6,) unless its orbit passes below the Earth's surface (module docstring).
+
+    The state is first held to :func:`check_state_bounds` (even with ``allow_subsurface``).
 
     Raises
     ------
@@ -62,6 +91,7 @@ def check_perigee(x: np.ndarray, source: str, field: str, *, allow_subsurface: b
         Naming ``source`` and ``field``, with the perigee radius and altitude, the limit
         (``R_EARTH_km``) and ``how_to_allow`` (the key or option that lifts the check).
     """
+    check_state_bounds(x, source, field)
     if allow_subsurface:
         return x
     r_km = float(np.linalg.norm(x[:3]))
@@ -103,8 +133,21 @@ def state_from_elements(a_km: float, e: float, i_deg: float, raan_deg: float, ar
     if not e >= 0 or (e < 1 and a_km <= 0) or (e > 1 and a_km >= 0):
         raise InputError(source, field, "e >= 0 with a > 0 (ellipse) or a < 0 (hyperbola)",
                          f"a={a_km}, e={e}")
+    if not abs(a_km) <= MAX_DISTANCE_km:
+        raise InputError(source, field, f"|a| <= {MAX_DISTANCE_km:g} km (an Earth-centred "
+                         "orbit)", a_km)
+    if not e <= MAX_ECCENTRICITY:
+        raise InputError(source, field, f"e <= {MAX_ECCENTRICITY:g} (beyond, a hyperbola is a "
+                         "straight line to double precision)", e)
+    # Angles reduced to one turn first (1e300 deg is finite but has no meaningful position).
+    i_deg, raan_deg, argp_deg, anomaly_deg = (math.remainder(angle, 360.0) for angle in
+                                              (i_deg, raan_deg, argp_deg, anomaly_deg))
     anomaly = math.radians(anomaly_deg)
     if true_anomaly:
+        if e > 1 and not abs(anomaly) < math.acos(-1.0 / e):
+            raise InputError(source, field, "a true anomaly within the asymptotes of the "
+                             f"hyperbola, |nu| < acos(-1/e) = {math.degrees(math.acos(-1 / e)):.4f}"
+                             " deg", anomaly_deg)
         anomaly = float(true_to_mean_anomaly(anomaly, e))
     elems = np.array([a_km, e, *np.radians([i_deg, raan_deg, argp_deg]), anomaly])
     return np.asarray(elements_to_cartesian(elems, GM_EARTH_km3_s2), dtype=float)

@@ -101,6 +101,7 @@ from tapp.dynamics.propagate import check_tolerance
 from tapp.ephemeris import position_km, utc_to_tdb_jd
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.orbits import check_state_bounds
 from tapp.schema import Invalid, Schema, Unique, validate
 
 #: Names of the independent variables x (injection velocity, EME2000) and dependent ones y.
@@ -685,10 +686,11 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
         raise InputError(source, "epoch", exc.expected, epoch_text) from None
 
     r0 = np.array(doc.injection.r_km, dtype=np.float64)
+    v0 = np.array(doc.injection.v_km_s, dtype=np.float64)
+    check_state_bounds(np.concatenate([r0, v0]), source, "injection")
     if np.linalg.norm(r0) <= RADIUS_km["earth"]:
         raise InputError(source, "injection.r_km", "a position above the Earth's surface",
                          r0.tolist())
-    v0 = np.array(doc.injection.v_km_s, dtype=np.float64)
 
     mod = doc.model
     bodies = tuple(mod.third_bodies)

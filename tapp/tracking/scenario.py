@@ -80,6 +80,8 @@ KINDS = tuple(o.value for o in Observable)
 #: Kinds that can carry a station bias in q (names and units: ``BIAS_NAMES``).
 BIAS_KINDS = ("range", "range_rate")
 LOCATION_MODES = ("cylindrical", "ecef", "none")
+#: Most T13 input times a scenario may ask for (each is a tape record, held in memory).
+MAX_INPUT_TIMES = 100_000
 LIGHT_TIME_MODES = ("none", "one_way", "two_way")
 #: The p part of x: Cartesian state at the epoch, EME2000, Earth-centred.
 ORBIT_PARAMETERS = (("x_km", "km"), ("y_km", "km"), ("z_km", "km"), ("vx_km_s", "km/s"),
@@ -671,6 +673,10 @@ def _times(p: _Parser, tim: TimesTable) -> TapeTimes:
         end = p.time_s(tim.end, "times.end")
         if end <= 0:
             p.fail("times.end", "a time after the injection (> 0 s)", end)
+        if end / step > MAX_INPUT_TIMES:
+            p.fail("times.input_step_s", f"at most {MAX_INPUT_TIMES:,} input times (end / "
+                   f"input_step_s = {end / step:.3g}; a larger input_step_s or an earlier end)",
+                   step)
         grid = step * np.arange(1, int(math.floor(end / step * (1 + 1e-15))) + 1)
         inputs = tuple(float(t) for t in grid) + (() if grid.size and grid[-1] == end
                                                   else (end,))

@@ -105,3 +105,24 @@ def test_propagate_refuses_impossible_integration_settings(options: list, messag
                                  "--hours", "1", *options])
     assert result.exit_code == 2
     assert message in result.output and len(result.output.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(("spec", "expected"), [
+    ("x=1e300,y=0,z=0,vx=0,vy=1,vz=0", "position components within 1e+09 km"),
+    ("x=7000,y=0,z=0,vx=0,vy=1e5,vz=0", "velocity components within 1000 km/s"),
+    ("a=-1e300,e=2,i=0,raan=0,argp=0,M=0", "|a| <= 1e+09 km"),
+    ("a=-7000,e=1e300,i=0,raan=0,argp=0,M=0", "e <= 1e+06"),
+    ("a=-7000,e=3,i=0,raan=0,argp=0,nu=170", "a true anomaly within the asymptotes"),
+])
+def test_states_no_earth_orbit_can_have_are_refused_not_overflowed(spec: str,
+                                                                   expected: str) -> None:
+    with pytest.raises(InputError) as info:
+        parse_orbit(spec, allow_subsurface=True)
+    assert info.value.expected.startswith(expected)
+
+
+def test_angles_are_taken_modulo_one_turn() -> None:
+    a = parse_orbit("a=7000,e=0.01,i=30,raan=-30,argp=0,M=10")
+    b = parse_orbit("a=7000,e=0.01,i=390,raan=330,argp=720,M=370")
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-9)
+    assert np.all(np.isfinite(parse_orbit("a=7000,e=0.01,i=0,raan=0,argp=0,M=1e300")))
