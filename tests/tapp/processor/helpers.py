@@ -1,0 +1,65 @@
+"""Small tapes and decks for the TAPP III tests (the 3-hour LEO arc of the TAPP I tests)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from tapp.processor.deck import Deck, bind
+from tapp.processor.sequencing import Run, process
+from tapp.schema import validate
+from tapp.tape.t13 import T13, memory_pairs
+from tapp.tracking.simulate import simulate
+from tests.tapp.tracking.helpers import leo_scenario
+
+#: A priori σ by parameter kind (km, km/s, km³/s², 1, rad, km/s biases).
+SIGMA = {"x_km": 1.0, "y_km": 1.0, "z_km": 1.0, "vx_km_s": 1e-3, "vy_km_s": 1e-3,
+         "vz_km_s": 1e-3, "GM_km3_s2": 0.01, "J2": 1e-8}
+SIGMA_STATION = {"spin_radius_km": 0.005, "lon_rad": 1e-6, "z_km": 0.005, "x_km": 0.005,
+                 "y_km": 0.005, "range_bias_km": 0.005, "range_rate_bias_km_s": 1e-6}
+WHITE = {"sigma_range_m": 15.0, "sigma_range_rate_mm_s": 20.0}
+
+
+def leo_tape(**tables) -> T13:
+    """Simulate the LEO test scenario with :func:`leo_scenario` changes (raw rows kept)."""
+    return simulate(leo_scenario(**tables), raw=True).tape
+
+
+def sigmas(tape: T13, **overrides: float) -> dict[str, float]:
+    """A σ table over every parameter of the tape (:data:`SIGMA`), with overrides."""
+    out = {}
+    for name in tape.parameters.name:
+        key = name.split(".", 1)[1] if "." in name else name
+        out[name] = overrides.get(name, SIGMA.get(key, SIGMA_STATION.get(key)))
+    return out
+
+
+def deck(tape: T13, *, fit: Mapping | None = None, real: Mapping | None = None,
+         **tables) -> dict:
+    """A deck document: a priori σ tables (fit and real) plus other tables."""
+    doc = {"fit": {"apriori": {"sigma": dict(fit or sigmas(tape))}},
+           "real": {"apriori": {"sigma": dict(real or sigmas(tape))}}}
+    doc.update(tables)
+    return doc
+
+
+def run(tape: T13, doc: Mapping, source: str = "deck.toml") -> Run:
+    """Bind a deck document to a tape and process it."""
+    data = memory_pairs(tape)
+    plan = bind(validate(Deck, doc, source), data.header, source)
+    return process(data, plan, source=source)
+
+
+def final(run_: Run, alias: str) -> np.ndarray:
+    """The matrix of the entity ``alias`` in the last print block."""
+    block = [b for b in run_.blocks if b.kind == "print"][-1]
+    return next(e.matrix for e in block.entities if e.command.alias() == alias
+                or e.command.seed() == alias)
+
+
+def scaled_err(a: np.ndarray, b: np.ndarray) -> float:
+    """max |a_ij − b_ij| / √(b_ii b_jj): the natural scale of a covariance."""
+    d = np.sqrt(np.abs(np.diag(b)))
+    scale = np.outer(d, d)
+    return float(np.max(np.abs(a - b) / np.where(scale > 0, scale, 1.0)))
