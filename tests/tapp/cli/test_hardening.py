@@ -1,0 +1,213 @@
+"""Issue 10's examples, one test per class: outputs never clobber inputs (1), all outputs or none
+(2), no tracebacks or exhaustion (6), and one exit-code contract (8). Class 7 (hangs) is tested
+in tests/iter/test_iter_execute.py; the fuzz and kill tests are tests/test_fuzz.py and
+tests/test_kill.py."""
+
+from __future__ import annotations
+
+import hashlib
+import shutil
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tapp.cli import app
+from tapp.cli.common import EXIT_INPUT
+
+ROOT = Path(__file__).resolve().parents[3]
+SCENARIOS = ROOT / "scenarios"
+LEO = SCENARIOS / "leo_equatorial.toml"
+SWEEP = SCENARIOS / "iter_azimuth_type1.toml"
+runner = CliRunner()
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _refused(args: list[str], *, code: int = EXIT_INPUT, says: str = "") -> str:
+    """Run ``tapp ARGS``; assert exit ``code`` and one line on stderr; return that line."""
+    res = runner.invoke(app, args)
+    lines = res.stderr.strip().splitlines()
+    assert res.exit_code == code, (res.exit_code, res.output, res.exception)
+    assert len(lines) == 1 and lines[0].startswith("error: "), lines
+    assert "Traceback" not in res.output
+    assert says in lines[0], lines[0]
+    return lines[0]
+
+
+@pytest.fixture
+def scenario(tmp_path: Path) -> Path:
+    path = tmp_path / "S.toml"
+    shutil.copy(LEO, path)
+    return path
+
+
+@pytest.fixture
+def sweep(tmp_path: Path) -> Path:
+    path = tmp_path / "SWEEP.toml"
+    shutil.copy(SWEEP, path)
+    return path
+
+
+# --- class 1: outputs never clobber inputs ---------------------------------------------------
+
+
+@pytest.mark.parametrize("outputs", [
+    ["-o", "{s}"],                               # tapp simulate S.toml -o S.toml
+    ["-o", "{d}/run.t13.h5", "--oem", "{s}"],    # --oem equal to the scenario
+    ["-o", "{d}/run.t13.h5", "--oem", "{d}/run.t13.h5"],  # --oem equal to -o
+    ["-o", "{d}/link.toml"],                     # a symbolic link to the input
+    ["-o", "{d}/sub/../S.toml"],                 # another spelling of the input
+])
+def test_simulate_never_overwrites_its_scenario_or_its_other_output(
+        tmp_path: Path, scenario: Path, outputs: list[str]) -> None:
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "link.toml").symlink_to(scenario)
+    before = _digest(scenario)
+    args = [a.format(s=scenario, d=tmp_path) for a in outputs]
+    line = _refused(["simulate", str(scenario), *args], says="expected a file other than the")
+    assert ("SCENARIO" in line) or ("-o/--output" in line and line.startswith("error: --oem"))
+    assert _digest(scenario) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["S.toml", "link.toml", "sub"]
+
+
+@pytest.mark.parametrize(("outputs", "says"), [
+    (["--csv", "{w}"], "--csv: {w}: expected a file other than the input SWEEP_FILE"),
+    (["-o", "{w}"], "-o/--output: {w}: expected a file other than the input SWEEP_FILE"),
+    (["-o", "{d}/r.h5", "--csv", "{d}/r.h5"], "--csv: {d}/r.h5: expected a file other than "
+     "the output -o/--output"),
+])
+def test_iter_never_overwrites_its_sweep_file_or_its_results(
+        tmp_path: Path, sweep: Path, outputs: list[str], says: str) -> None:
+    before = _digest(sweep)
+    args = [a.format(w=sweep, d=tmp_path) for a in outputs]
+    _refused(["iter", str(sweep), *args, "--serial"],
+             says=says.format(w=sweep, d=tmp_path))
+    assert _digest(sweep) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["SWEEP.toml"]
+
+
+def test_dc_never_saves_observations_over_its_scenario(tmp_path: Path) -> None:
+    study = tmp_path / "study.toml"
+    shutil.copy(SCENARIOS / "approx_stm.toml", study)
+    before = _digest(study)
+    _refused(["dc", "--orbit", "SATORB1", "--scenario", str(study), "--save-obs", str(study)],
+             says="--save-obs")
+    assert _digest(study) == before
+
+
+# --- class 2: all of a command's outputs, or none ---------------------------------------------
+
+
+def test_a_failed_tape_write_leaves_the_old_oem_and_tape_and_no_temporary(
+        tmp_path: Path, monkeypatch) -> None:
+    tape, oem = tmp_path / "run.t13.h5", tmp_path / "run.oem"
+    tape.write_text("old tape")
+    oem.write_text("old oem")
+
+    def no_space(path, tape_obj) -> None:
+        Path(path).write_bytes(b"half a tape")
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr("tapp.cli.tracking_cmd.write_t13", no_space)
+    line = _refused(["simulate", str(LEO), "-o", str(tape), "--oem", str(oem)])
+    assert line == (f"error: -o/--output: {tape}: expected a writable file (got 'No space "
+                    "left on device')")
+    assert (tape.read_text(), oem.read_text()) == ("old tape", "old oem")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.oem", "run.t13.h5"]
+
+
+def test_temporaries_left_by_a_killed_run_are_removed_by_the_next(tmp_path: Path) -> None:
+    tape, oem = tmp_path / "run.t13.h5", tmp_path / "run.oem"
+    for stale in (".run.t13.h5.0123456789abcdef.tmp", ".run.oem.a1b2c3d4.tmp",
+                  "..run.t13.h5.0123456789abcdef.tmp.fedcba9876543210.tmp"):
+        (tmp_path / stale).write_text("left by a kill")
+    res = runner.invoke(app, ["simulate", str(LEO), "-o", str(tape), "--oem", str(oem)])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.oem", "run.t13.h5"]
+
+
+# --- class 6: tracebacks and exhaustion --------------------------------------------------------
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (["propagate", "--orbit", "SATORB1", "--hours", "1e308"], "--hours/--step"),
+    (["propagate", "--orbit", "SATORB1", "--step", "1e-9"], "it would need 8.64e+13"),
+    (["rsig", "--orbit", "SATORB1", "--hours", "1e308"], "at most 1,000,000 output samples"),
+    (["propagate", "--orbit", "SATORB1", "--third-body", "moon", "--epoch", "2060-01-01"],
+     "DE421's coverage 1899-07-29T00:00:00 TDB .. 2053-10-09T00:00:00 TDB"),
+    (["dc", "--orbit", "SATORB1", "--seed", "-1"], "error: --seed: value: expected a whole "),
+    (["ekf", "--orbit", "SATORB1", "--seed", "-5"], "error: --seed:"),
+    (["ekf", "--orbit", "SATORB1", "--process-noise", "-1"], "error: --process-noise:"),
+    (["ekf", "--orbit", "SATORB1", "--process-noise", "nan"], "error: --process-noise:"),
+    (["iter", str(SWEEP), "--workers", "1000000"], "--workers: expected at most"),
+    (["propagate", "--orbit", "SATORB1", "--hours", "abc"], "'--hours'"),
+    (["dc", "--orbit", "SATORB1", "--max-iter", "0"], "error: --max-iter:"),
+])
+def test_huge_sizes_and_bad_options_are_one_line_before_any_work(args: list[str],
+                                                                 says: str) -> None:
+    _refused(args, says=says)
+
+
+def test_an_unwritable_save_obs_is_one_line(tmp_path: Path) -> None:
+    (tmp_path / "a_file").write_text("")
+    _refused(["dc", "--orbit", "SATORB1", "--save-obs", str(tmp_path / "a_file" / "o.h5")],
+             says="error: --save-obs:")
+
+
+@pytest.mark.parametrize("sets", ["1000000000000", "1e12"])
+def test_a_sweep_of_1e12_cases_is_refused_before_generating_them(tmp_path: Path,
+                                                                 sets: str) -> None:
+    path = tmp_path / "big.toml"
+    path.write_text(SWEEP.read_text().replace("type = 1 ", "type = 2 ").replace(
+        "sets = 5 ", f"sets = {sets} ").replace("vary = [96.0, 99.0, 102.0, 105.0, 108.0]",
+                                               "vary = [96.0]\ndelta = [1.0]"))
+    _refused(["iter", str(path), "--serial", "-o", str(tmp_path / "big.h5")],
+             says=f"{path}: loop[0].sets")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["big.toml"]
+
+
+@pytest.mark.parametrize(("tamper", "says"), [
+    (lambda f: f["status"].__setitem__(0, 7), "status: expected codes [0, 1]"),
+    (lambda f: f.__delitem__("elapsed_s"), "elapsed_s: expected a one-dimensional dataset"),
+    (lambda f: f["case"].__setitem__(1, 0), "case: expected distinct case numbers"),
+    (lambda f: (f.__delitem__("error"), f.create_dataset("error", data=np.zeros(2))),
+     "error: expected"),
+    (lambda f: f.attrs.__setitem__("n_cases", "five"), "n_cases: expected a whole number"),
+])
+def test_a_tampered_results_file_is_one_line_exit_2_and_left_alone(tmp_path: Path, tamper,
+                                                                   says: str) -> None:
+    out = tmp_path / "r.h5"
+    assert runner.invoke(app, ["iter", str(SWEEP), "-o", str(out), "--serial"]).exit_code == 0
+    with h5py.File(out, "r+") as f:
+        tamper(f)
+    before = _digest(out)
+    _refused(["iter", str(SWEEP), "-o", str(out), "--serial"], says=says)
+    assert _digest(out) == before
+
+
+# --- class 8: one exit-code contract -----------------------------------------------------------
+
+
+def test_a_truncated_tape_is_bad_input_exit_2(tmp_path: Path) -> None:
+    out = tmp_path / "leo.t13.h5"
+    assert runner.invoke(app, ["simulate", str(LEO), "-o", str(out)]).exit_code == 0
+    with out.open("r+b") as stream:
+        stream.truncate(out.stat().st_size // 2)
+    _refused(["tape", "info", str(out)], says=f"error: {out}:")
+
+
+def test_usage_errors_are_one_line_exit_2() -> None:
+    _refused(["propagate"], says="Missing option '--orbit'")
+    _refused(["propagate", "--orbit", "SATORB1", "--no-such-option"], says="--no-such-option")
+    _refused(["dc", "--orbit", "SATORB1", "--max-iter", "1e5"], says="'--max-iter'")
+
+
+def test_numerical_outcomes_keep_their_codes() -> None:
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "24h", "--stm", "J0",
+                              "--json"])
+    assert res.exit_code == 3

@@ -1,0 +1,450 @@
+"""Property-based fuzzing of every command with bad input (issue 10, "tests that must be able
+to fail").
+
+Every shipped TOML file under scenarios/ is mutated (a key dropped or misspelt, a value of the
+wrong type, NaN, infinities, huge or negative numbers, an emptied table) and every numeric CLI
+option is given extreme values; each command runs in-process (typer's CliRunner). For every
+case: the exit code is 0, 2 or a documented numerical code; a refusal is at most one line on
+stderr, with no traceback; the input files are byte-identical afterwards; and the output
+folder holds nothing (after a refusal) or exactly the outputs (after a success), never a
+temporary. A misspelt key or a value of the wrong type must be refused (exit 2). Finally,
+flipping a byte in any dataset of a small T13 tape must make ``tapp tape info`` exit 2.
+
+The whole module is bounded to about a minute: each test has a fixed, modest number of
+examples, drawn deterministically (``derandomize``) so that CI runs are reproducible.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import functools
+import hashlib
+import json
+import math
+import re
+import tempfile
+import tomllib
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+from tapp.cli import app
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = ROOT / "scenarios"
+runner = CliRunner()
+
+#: Tables whose keys are names chosen by the user (stations, orbits, constants, ...), so a
+#: renamed key there is not a misspelling.
+FREE_FORM_TABLES = frozenset({"constants", "stations", "orbits", "networks", "apriori",
+                              "station"})
+#: Values passed through unchecked to a sweep body (a callable decides what it accepts).
+PASS_THROUGH_TABLES = frozenset({"constants"})
+EXTREME_NUMBERS = (math.nan, math.inf, -math.inf, 1e308, -1e308, 0.0, -1.0)
+
+
+def _fuzz_settings(n: int) -> settings:
+    return settings(max_examples=n, deadline=None, derandomize=True, database=None,
+                    suppress_health_check=[HealthCheck.too_slow,
+                                           HealthCheck.function_scoped_fixture])
+
+
+# --- a TOML writer (tomllib only reads): every table inline, which is equivalent ------------
+
+
+def _key(key: str) -> str:
+    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key)
+
+
+def _value(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, dt.datetime | dt.date | dt.time):
+        return value.isoformat()
+    if isinstance(value, list):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{_key(k)} = {_value(v)}" for k, v in value.items()) + "}"
+    raise TypeError(type(value).__name__)
+
+
+def dumps_toml(document: dict) -> str:
+    """Return ``document`` as TOML text (top-level keys, every table and array inline)."""
+    return "".join(f"{_key(k)} = {_value(v)}\n" for k, v in document.items())
+
+
+# --- mutations ----------------------------------------------------------------------------
+
+
+Path_ = tuple[str | int, ...]
+
+
+def _nodes(node: object, path: Path_ = ()) -> list[tuple[Path_, object]]:
+    out: list[tuple[Path_, object]] = []
+    items = (node.items() if isinstance(node, dict)
+             else enumerate(node) if isinstance(node, list) else ())
+    for key, child in items:
+        out.append(((*path, key), child))
+        out.extend(_nodes(child, (*path, key)))
+    return out
+
+
+def _parent(document: dict, path: Path_) -> dict | list:
+    node: object = document
+    for key in path[:-1]:
+        node = node[key]  # type: ignore[index]
+    return node  # type: ignore[return-value]
+
+
+def _copy(document: object) -> object:
+    if isinstance(document, dict):
+        return {k: _copy(v) for k, v in document.items()}
+    if isinstance(document, list):
+        return [_copy(v) for v in document]
+    return document
+
+
+@dataclass(frozen=True)
+class Mutation:
+    """A mutated document, what was done, and whether it must be refused (exit 2)."""
+
+    document: dict
+    what: str
+    must_refuse: bool
+
+
+def _wrong_type(value: object) -> object:
+    if isinstance(value, bool):
+        return 1.5
+    if isinstance(value, int | float):
+        return "abc"
+    if isinstance(value, str):
+        return 1.5
+    if isinstance(value, list):
+        return "abc"
+    return 1.5
+
+
+#: Mutations that must be refused (class 5: closed schemas, strict types) and those that may
+#: be valid but must never break the contract (classes 4 and 6: physics and sizes).
+KINDS = {"refused": ("misspell", "retype"), "extremes": ("drop", "number", "empty")}
+
+
+@st.composite
+def mutations(draw: st.DrawFn, document: dict, kinds: tuple[str, ...]) -> Mutation:
+    """Draw one mutation of ``document`` (a parsed TOML file), of one of ``kinds``."""
+    nodes = _nodes(document)
+    kind = draw(st.sampled_from(kinds))
+    doc = _copy(document)
+    if kind == "number":
+        candidates = [p for p, v in nodes if isinstance(v, int | float)
+                      and not isinstance(v, bool)]
+        path = draw(st.sampled_from(candidates))
+        value = draw(st.sampled_from(EXTREME_NUMBERS))
+        _parent(doc, path)[path[-1]] = value  # type: ignore[index]
+        return Mutation(doc, f"{path} = {value!r}", False)
+    if kind == "empty":
+        candidates = [p for p, v in nodes if isinstance(v, dict) and v]
+        if not candidates:
+            return Mutation(doc, "unchanged", False)
+        path = draw(st.sampled_from(candidates))
+        _parent(doc, path)[path[-1]] = {}  # type: ignore[index]
+        return Mutation(doc, f"{path} = {{}}", False)
+    if kind == "drop":
+        path = draw(st.sampled_from([p for p, _ in nodes]))
+        del _parent(doc, path)[path[-1]]  # type: ignore[arg-type]
+        return Mutation(doc, f"drop {path}", False)
+    if kind == "misspell":
+        candidates = [p for p, _ in nodes if isinstance(p[-1], str)
+                      and not (len(p) > 1 and p[-2] in FREE_FORM_TABLES)]
+        path = draw(st.sampled_from(candidates))
+        parent = _parent(doc, path)
+        assert isinstance(parent, dict)
+        typo = path[-1] + "x"
+        renamed = {(typo if k == path[-1] else k): v for k, v in parent.items()}
+        parent.clear()
+        parent.update(renamed)
+        return Mutation(doc, f"misspell {path} as {typo!r}", True)
+    candidates = [p for p, v in nodes if not isinstance(v, dict)
+                  and not PASS_THROUGH_TABLES & {k for k in p if isinstance(k, str)}]
+    path = draw(st.sampled_from(candidates))
+    parent = _parent(doc, path)
+    value = _wrong_type(parent[path[-1]])  # type: ignore[index]
+    parent[path[-1]] = value  # type: ignore[index]
+    return Mutation(doc, f"{path} = {value!r} (wrong type)", True)
+
+
+# --- running a command and checking the contract --------------------------------------------
+
+
+def _digests(paths: list[Path]) -> dict[Path, str]:
+    return {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in paths if p.is_file()}
+
+
+def check_contract(args: list[str], *, inputs: list[Path], out_dir: Path,
+                   outputs: tuple[str, ...], codes: frozenset[int], what: str,
+                   must_refuse: bool = False) -> int:
+    """Run ``tapp ARGS``; assert the exit-code contract; return the exit code."""
+    before = _digests(inputs)
+    res = runner.invoke(app, args)
+    context = f"{what}: tapp {' '.join(args)} -> {res.exit_code}: {res.output[-600:]}"
+    assert res.exception is None or isinstance(res.exception, SystemExit), (
+        f"{context}\n{res.exception!r}")
+    assert "Traceback" not in res.output, context
+    assert res.exit_code in {0, 2} | codes, context
+    if must_refuse:
+        assert res.exit_code == 2, context
+    if res.exit_code != 0:
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) <= 1, context
+    assert _digests(inputs) == before, f"{context}: an input changed"
+    left = sorted(p.name for p in out_dir.iterdir())
+    expected = sorted(outputs) if res.exit_code == 0 else []
+    if res.exit_code in codes:  # a numerical outcome: its outputs may have been written
+        assert not [n for n in left if n.startswith(".")], f"{context}: {left}"
+    else:
+        assert left == expected, f"{context}: left {left}"
+    return res.exit_code
+
+
+@dataclass(frozen=True)
+class FileCase:
+    """A shipped file, the command that reads it, and the outputs that command writes."""
+
+    name: str
+    command: Callable[[Path, Path], list[str]]
+    outputs: tuple[str, ...]
+    examples: int
+    codes: frozenset[int] = frozenset()
+    shrink: Callable[[dict], dict] = lambda document: document
+
+
+def _simulate(path: Path, out: Path) -> list[str]:
+    return ["simulate", str(path), "-o", str(out / "run.t13.h5"), "--oem", str(out / "run.oem"),
+            "--json"]
+
+
+def _dc(path: Path, out: Path) -> list[str]:
+    return ["dc", "--orbit", "SATORB1", "--arc", "2h", "--scenario", str(path), "--save-obs",
+            str(out / "obs.h5"), "--json"]
+
+
+def _search(path: Path, out: Path) -> list[str]:
+    return ["search", str(path), "--json"]
+
+
+def _iter(path: Path, out: Path) -> list[str]:
+    return ["iter", str(path), "-o", str(out / "r.h5"), "--csv", str(out / "r.csv"),
+            "--serial", "--json"]
+
+
+#: The scenario whose tape each TAPP III deck is written for.
+DECK_SCENARIOS = {"tapp3_deep_space.toml": "deep_space.toml",
+                  "tapp3_table_d1.toml": "tapp1_table_d1.toml"}
+
+
+@functools.cache
+def _tape_for(deck: str) -> Path:
+    """The T13 tape a TAPP III deck is written for, made once."""
+    path = Path(tempfile.mkdtemp()) / "run.t13.h5"
+    res = runner.invoke(app, ["simulate", str(SCENARIOS / DECK_SCENARIOS[deck]), "-o",
+                              str(path)])
+    assert res.exit_code == 0, res.output
+    return path
+
+
+def _process(path: Path, out: Path) -> list[str]:
+    return ["process", str(_tape_for(path.name)), str(path), "--print", str(out / "o3.txt"),
+            "--tape", str(out / "t32.h5")]
+
+
+def _two_days(document: dict) -> dict:
+    """The lunar-departure sweep on 2 days instead of 30 (the same file, faster to run)."""
+    document["loop"][0]["sets"] = 2
+    return document
+
+
+FILE_CASES = [
+    FileCase("leo_equatorial.toml", _simulate, ("run.oem", "run.t13.h5"), 30),
+    FileCase("deep_space.toml", _simulate, ("run.oem", "run.t13.h5"), 8),
+    FileCase("approx_stm.toml", _dc, ("obs.h5",), 30, frozenset({3})),
+    # SEARCH: 3 diverged, 4 singular, 1 a case that failed (missed the sphere of influence)
+    FileCase("search_bplane.toml", _search, (), 20, frozenset({1, 3, 4})),
+    FileCase("iter_azimuth_type1.toml", _iter, ("r.csv", "r.h5"), 15),
+    FileCase("iter_azimuth_type2.toml", _iter, ("r.csv", "r.h5"), 15),
+    FileCase("iter_days_azimuths.toml", _iter, ("r.csv", "r.h5"), 15),
+    FileCase("iter_lunar_departure.toml", _iter, ("r.csv", "r.h5"), 8, shrink=_two_days),
+    FileCase("tapp1_table_d1.toml", _simulate, ("run.oem", "run.t13.h5"), 20),
+    FileCase("tapp3_deep_space.toml", _process, ("o3.txt", "t32.h5"), 10),
+    FileCase("tapp3_table_d1.toml", _process, ("o3.txt", "t32.h5"), 10),
+]
+
+
+def _commands() -> set[str]:
+    return {c.name or c.callback.__name__ for c in app.registered_commands}
+
+
+def test_every_shipped_toml_file_is_fuzzed() -> None:
+    assert sorted(c.name for c in FILE_CASES) == sorted(
+        p.name for p in SCENARIOS.glob("*.toml"))
+
+
+#: (file, group of mutations) that fail today for want of classes 4/5 (owned by the other
+#: hardening engineer and, for TAPP III decks, the lead); xfail(strict=False) until they land.
+KNOWN_GAPS = {
+    ("search_bplane.toml", "extremes"): "class 4: the search scenario accepts an injection "
+    "position of 1e308 km (numpy overflows in the dynamics)",
+    ("tapp3_deep_space.toml", "extremes"): "class 4/5 (TAPP III deck, the lead's): an a "
+    "priori sigma of 1e308 overflows when squared",
+    ("tapp3_table_d1.toml", "extremes"): "class 5 (TAPP III deck, the lead's): an emptied "
+    "[common] table gives a ValueError traceback (zero-size array to reduction operation)",
+}
+
+
+def _file_params() -> list:
+    params = []
+    for case in FILE_CASES:
+        for group in KINDS:
+            marks = ()
+            if (case.name, group) in KNOWN_GAPS:
+                marks = pytest.mark.xfail(strict=False, reason=KNOWN_GAPS[case.name, group])
+            params.append(pytest.param(case, group, marks=marks, id=f"{case.name}-{group}"))
+    return params
+
+
+@pytest.mark.parametrize(("case", "group"), _file_params())
+def test_mutated_scenario_files_keep_the_contract(case: FileCase, group: str) -> None:
+    if case.command is _process and "process" not in _commands():
+        pytest.skip("tapp process (TAPP III) is not registered yet")
+    document = case.shrink(tomllib.loads((SCENARIOS / case.name).read_text()))
+
+    @_fuzz_settings(max(4, case.examples // 2))
+    @given(mutation=mutations(document, KINDS[group]))
+    def run(mutation: Mutation) -> None:
+        with tempfile.TemporaryDirectory() as folder:
+            folder_path = Path(folder)
+            path = folder_path / case.name
+            path.write_text(dumps_toml(mutation.document))
+            out = folder_path / "out"
+            out.mkdir()
+            inputs = [path, _tape_for(path.name)] if case.command is _process else [path]
+            check_contract(case.command(path, out), inputs=inputs, out_dir=out,
+                           outputs=case.outputs, codes=case.codes, what=mutation.what,
+                           must_refuse=mutation.must_refuse)
+
+    run()
+
+
+# --- numeric CLI options ---------------------------------------------------------------------
+
+#: Text given to numeric options: non-numbers, extremes, and values just out of range.
+OPTION_VALUES = ("nan", "inf", "-inf", "0", "-0.0", "-1", "1e-308", "1e308", "-1e308",
+                 "5e-324", str(2**63), str(-(2**63)), "1e30", "abc", "")
+
+#: (command, fast base arguments, numeric options, documented numerical codes)
+OPTION_CASES = [
+    (["propagate", "--orbit", "SATORB1", "--hours", "1", "--step", "600"],
+     ("--hours", "--step", "--tol"), frozenset()),
+    (["rsig", "--orbit", "SATORB1", "--hours", "2", "--step", "600"], ("--hours", "--step"),
+     frozenset()),
+    (["dc", "--orbit", "SATORB1", "--arc", "2h"], ("--max-iter", "--seed"), frozenset({3})),
+    (["ekf", "--orbit", "SATORB1", "--arc", "2h"], ("--process-noise", "--seed"), frozenset()),
+    # --workers alone (with --serial it is refused whatever its value); the others serially,
+    # so that no value starts a local Dask cluster
+    (["iter", str(SCENARIOS / "iter_azimuth_type1.toml")], ("--workers",), frozenset()),
+    (["iter", str(SCENARIOS / "iter_azimuth_type1.toml"), "--serial"],
+     ("--chunk-size", "--connect-timeout-s"), frozenset()),
+]
+
+
+@pytest.mark.parametrize(("base", "options", "codes"), OPTION_CASES,
+                         ids=[f"{c[0][0]}{'/'.join(c[1])}" for c in OPTION_CASES])
+def test_numeric_options_keep_the_contract(base: list[str], options: tuple[str, ...],
+                                           codes: frozenset[int]) -> None:
+    @_fuzz_settings(12)
+    @given(option=st.sampled_from(options), value=st.sampled_from(OPTION_VALUES))
+    def run(option: str, value: str) -> None:
+        with tempfile.TemporaryDirectory() as folder:
+            out = Path(folder)
+            args = [*base, option, value, "--json"]
+            outputs: tuple[str, ...] = ()
+            if base[0] == "iter":
+                args += ["-o", str(out / "r.h5")]
+                outputs = ("r.h5",)
+            check_contract(args, inputs=[], out_dir=out, outputs=outputs, codes=codes,
+                           what=f"{option} {value!r}")
+
+    run()
+
+
+# --- corrupt tapes ---------------------------------------------------------------------------
+
+
+def _data_offsets(path: Path) -> dict[str, tuple[int, int]]:
+    """Return, per dataset with stored data, the (offset, size) in bytes of its first chunk."""
+    found: dict[str, tuple[int, int]] = {}
+
+    def visit(name: str, obj: object) -> None:
+        if not isinstance(obj, h5py.Dataset) or obj.size == 0:
+            return
+        if obj.chunks is None:
+            offset = obj.id.get_offset()
+            if offset is not None:
+                found[name] = (offset, obj.id.get_storage_size())
+        elif obj.id.get_num_chunks() > 0:
+            info = obj.id.get_chunk_info(0)
+            found[name] = (info.byte_offset, info.size)
+
+    with h5py.File(path, "r") as f:
+        f.visititems(visit)
+    return found
+
+
+@pytest.fixture(scope="module")
+def small_tape(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("tape") / "leo.t13.h5"
+    res = runner.invoke(app, ["simulate", str(SCENARIOS / "leo_equatorial.toml"), "-o",
+                              str(path), "--raw"])
+    assert res.exit_code == 0, res.output
+    return path
+
+
+def test_a_flipped_byte_in_any_dataset_of_a_tape_is_refused(small_tape: Path) -> None:
+    offsets = _data_offsets(small_tape)
+    assert len(offsets) >= 10
+    with h5py.File(small_tape, "r") as f:
+        version = int(f.attrs.get("version", 1))
+    passed = []
+    for name, (offset, size) in sorted(offsets.items()):
+        with tempfile.TemporaryDirectory() as folder:
+            path = Path(folder) / "flipped.t13.h5"
+            data = bytearray(small_tape.read_bytes())
+            data[offset + size // 2] ^= 0xFF
+            path.write_bytes(bytes(data))
+            res = runner.invoke(app, ["tape", "info", str(path)])
+            assert res.exception is None or isinstance(res.exception, SystemExit), (
+                name, res.exception)
+            assert "Traceback" not in res.output, name
+            assert len(res.stderr.strip().splitlines()) <= 1, (name, res.stderr)
+            if res.exit_code != 2:
+                passed.append(name)
+    if passed and version < 2:
+        pytest.xfail(f"T13 version {version} carries no checksums (issue 10, class 3, owned "
+                     f"by the tape engineer): flips in {passed} read as data")
+    assert passed == [], f"flipped bytes read as data in {passed}"
