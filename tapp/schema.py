@@ -22,6 +22,15 @@ Checks that are not about types (physics limits, cross-field rules) are validato
 schema; they raise :class:`Invalid` with the plain-English expectation (and optionally a
 sub-field and the offending value), which :func:`validate` reports the same way.
 
+Field names are the TOML keys; a key that is not a Python identifier, or that clashes with a
+pydantic attribute (``json``, ``copy``, ...), is declared ``x: T = Field(default, alias="key")``
+(messages use the key). Validate one table of a larger file with ``prefix="table"``.
+
+The schemas: :class:`tapp.tracking.scenario.ScenarioFile` (tracking scenarios),
+:class:`tapp.od.setup.StudyFile` (the study file), :class:`tapp.targeting.SearchFile` (SEARCH
+scenarios), :class:`iter.sweepfile.SweepFile` (ITER sweep files), and the tables they share:
+:class:`tapp.orbits.OrbitTable`, :class:`tapp.stations_file.StationTable`.
+
 The mechanism itself is :mod:`iter.schema` (``iter`` may not import ``tapp``, and its sweep
 files are validated the same way, raising ``SweepInputError``); this module is its ``tapp``
 face, raising :class:`tapp.errors.InputError`.
