@@ -5,12 +5,16 @@
 3. SEARCH: the lunar B-plane targeting of scenarios/search_bplane.toml -> results/search/.
 4. TAPP I: tracking simulations of leo_equatorial.toml and deep_space.toml -> T13 tapes,
    their summaries and trajectories (CCSDS OEM) in results/tapp1/.
-5. ITER: the seed's examples (five azimuths, type 1 and 2; 30 days x 5 azimuths) and the
+5. TAPP III: each TAPP I tape through its deck (scenarios/tapp3_*.toml) -> O3 printouts, JSON,
+   plots, T32 tapes and results/tapp3/report.md (fit vs real σ of the miss at each recycle, the
+   error budget of the final miss covariance).
+6. ITER: the seed's examples (five azimuths, type 1 and 2; 30 days x 5 azimuths) and the
    departure-day sweep with SEARCH as the body, on a local Dask cluster -> results/iter/.
 """
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import time
@@ -81,6 +85,67 @@ def tracking_simulations() -> None:
     print(f"TAPP I tapes -> {out}")
 
 
+#: (TAPP I scenario, TAPP III deck) pairs of the matrix-processor reproduction.
+TAPP3_RUNS = (("leo_equatorial", "tapp3_leo_equatorial"), ("deep_space", "tapp3_deep_space"),
+              ("tapp1_table_d1", "tapp3_table_d1"))
+
+
+def _budget_section(name: str, content: dict) -> list[str]:
+    block = [b for b in content["blocks"] if b["kind"] == "print"][-1]
+    ent = next((e for e in block["entities"] if e.get("budget") and e["alias"] == "cov-real m"),
+               None)
+    if ent is None:
+        return []
+    b = ent["budget"]
+    rows = [[src, *(f"{v:.3g}" for v in sig)] for src, sig in zip(b["sources"], b["sigma"],
+                                                                 strict=True)]
+    rows.append(["**total**", *(f"{v:.3g}" for v in ent["sigma"])])
+    return [f"### {name}: error budget of the miss at t = {block['t_s'] / 86400:.2f} d "
+            f"(σ per source, signed; closure {b['closure']:.1g})", "",
+            table(["source", *ent["rows"]], rows)]
+
+
+def matrix_processor() -> None:
+    out = RESULTS / "tapp3"
+    out.mkdir(parents=True, exist_ok=True)
+    lines = ["# TAPP III: fit world vs real world\n",
+             "Each TAPP I tape of results/tapp1 (and the Table D-1 coding example) processed "
+             "with its deck from scenarios/: O3 printouts (`*.o3.txt`), JSON, T32 tapes and "
+             "plots (`plots/<name>/`).\n"]
+    budgets: list[str] = []
+    for scenario, deck in TAPP3_RUNS:
+        tape = RESULTS / "tapp1" / f"{scenario}.t13.h5"
+        if not tape.exists():
+            proc = _tapp("simulate", str(ROOT / "scenarios" / f"{scenario}.toml"), "-o",
+                         str(tape))
+            if proc.returncode != 0:
+                raise SystemExit(f"tapp simulate {scenario} exited {proc.returncode}: "
+                                 f"{proc.stderr}")
+        start = time.perf_counter()
+        proc = _tapp("process", str(tape), str(ROOT / "scenarios" / f"{deck}.toml"),
+                     "--print", str(out / f"{scenario}.o3.txt"), "--tape",
+                     str(out / f"{scenario}.t32.h5"), "--json", str(out / f"{scenario}.json"),
+                     "--plots", str(out / "plots" / scenario))
+        if proc.returncode != 0:
+            raise SystemExit(f"tapp process {scenario} exited {proc.returncode}: {proc.stderr}")
+        wall = time.perf_counter() - start
+        content = json.loads((out / f"{scenario}.json").read_text())
+        lines += [f"## {scenario} (deck `scenarios/{deck}.toml`, {wall:.1f} s)", "",
+                  f"Miss parameters {', '.join(content['history']['miss'])}; σ at each "
+                  "recycle (TAPP II's midcourse times), fit world vs real world:", ""]
+        miss = content["history"]["miss"]
+        rows = [[r["number"], r["k"], f"{r['t_s'] / 86400:.3f}",
+                 *(f"{f:.4g} / {g:.4g}" for f, g in zip(r["miss_sigma_fit"],
+                                                         r["miss_sigma_real"], strict=True))]
+                for r in content["recycles"]]
+        lines += [table(["recycle", "k", "t (d)", *(f"σ {m} fit / real" for m in miss)], rows)]
+        plots = sorted((out / "plots" / scenario).glob("*.png"))
+        lines += [f"![{p.stem}](plots/{scenario}/{p.name})" for p in plots] + [""]
+        budgets += _budget_section(scenario, content)
+    (out / "report.md").write_text("\n".join(lines + ["## Error budgets", ""] + budgets))
+    print(f"TAPP III -> {out / 'report.md'}")
+
+
 def sweeps() -> None:
     out = RESULTS / "iter"
     out.mkdir(parents=True, exist_ok=True)
@@ -114,6 +179,7 @@ def main() -> None:
     approx_stm_study()
     search_targeting()
     tracking_simulations()
+    matrix_processor()
     sweeps()
 
 
