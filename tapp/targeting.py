@@ -101,7 +101,7 @@ from tapp.dynamics.propagate import check_tolerance
 from tapp.ephemeris import position_km, utc_to_tdb_jd
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.time import Epoch, parse_epoch
-from tapp.orbits import check_state_bounds
+from tapp.orbits import check_perigee, check_state_bounds
 from tapp.schema import Invalid, Schema, Unique, validate
 
 #: Names of the independent variables x (injection velocity, EME2000) and dependent ones y.
@@ -568,6 +568,7 @@ class SearchInjection(Schema):
 
     r_km: _Vector3
     v_km_s: _Vector3
+    allow_subsurface: bool = False
 
 
 class SearchModel(Schema):
@@ -659,7 +660,9 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     commented example; the schema is :class:`SearchFile`):
 
     - ``epoch``: UTC date of the injection (t = 0); ``title``: free text (optional).
-    - ``[injection]``: ``r_km`` (3), ``v_km_s`` (3, the first guess x0), EME2000, Earth-centred.
+    - ``[injection]``: ``r_km`` (3), ``v_km_s`` (3, the first guess x0), EME2000, Earth-centred;
+      a first guess whose perigee is below the Earth's surface is refused unless
+      ``allow_subsurface = true`` (:func:`tapp.orbits.check_perigee`).
     - ``[model]``: ``gravity`` (J0, Jn, NxM), ``third_bodies`` (list), optional
       ``stm_gravity``/``stm_third_bodies`` (variational model, default the state model),
       ``rtol``/``atol`` (default 1e-13, within ``tapp.dynamics.propagate.TOLERANCE_RANGE``).
@@ -691,6 +694,9 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     if np.linalg.norm(r0) <= RADIUS_km["earth"]:
         raise InputError(source, "injection.r_km", "a position above the Earth's surface",
                          r0.tolist())
+    check_perigee(np.concatenate([r0, v0]), source, "injection",
+                  allow_subsurface=doc.injection.allow_subsurface,
+                  how_to_allow="injection.allow_subsurface = true")
 
     mod = doc.model
     bodies = tuple(mod.third_bodies)
