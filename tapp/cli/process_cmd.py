@@ -22,7 +22,6 @@ from tapp.processor.deck import bind, deck_json, read_deck
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.sequencing import Run, process
 from tapp.processor.tape32 import build_t32
-from tapp.report.tapp3 import bplane_rows, plot_bplane_ellipses, plot_sigma_history
 from tapp.tape.t13 import open_t13
 from tapp.tape.t32 import t32_file_writer
 
@@ -88,6 +87,9 @@ def process_cmd(
                 "t13_source": str(tape), "t13_iden": header.iden})
             outputs.add("--tape", tape_out, t32_file_writer(t32, source=str(tape_out)))
         if plots is not None:
+            # matplotlib only when plots are asked for (it costs ~0.5 s to import)
+            from tapp.report.tapp3 import bplane_rows, plot_bplane_ellipses, plot_sigma_history
+
             title = f"{header.iden}: {deck_obj.title}" if deck_obj.title else header.iden
             outputs.add("--plots", plots / SIGMA_PNG, lambda tmp: plot_sigma_history(
                 run.history, run.history_labels, tmp, f"{title}: σ, fit vs real world"))
