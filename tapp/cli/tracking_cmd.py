@@ -20,6 +20,7 @@ from rich.table import Table
 from tapp.cli.common import app, print_json, run_guarded
 from tapp.outputs import OutputSet, check_paths
 from tapp.tape import describe, write_t13
+from tapp.tape.t32 import format_t32_summary
 from tapp.tracking.oem import format_oem
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import Simulation
@@ -150,6 +151,8 @@ def tape_info(
             print_json(info)
         elif info["format"] == "T13":
             _print_t13(info)
+        elif info["format"] == "T32":
+            typer.echo(format_t32_summary(info))
         else:
             console = Console(width=110)
             console.print(f"format {info['format']}: "
