@@ -138,3 +138,21 @@ def test_system_names_follow_the_permutations_and_mark_constrained_rows():
     assert common[13] == "x13'"
     real = sy.system_names(6)
     assert real[7] == "x10" and real[10] == "x7"
+
+
+def test_miss_sets_as_orbit_sets_need_the_rows_and_transform_like_orbits():
+    """τ = 4, 5: rows n_p..2n_p and 2n_p..3n_p of B (the seed's UDC and DCA sets)."""
+    sy = _systems()
+    eye = np.eye(N_P, N_O)
+    rng = np.random.default_rng(8)
+    b = np.vstack([rng.standard_normal((N_P, N_O)),
+                   np.hstack([_kepler_stm(0.2), rng.standard_normal((N_P, N_O - N_P))]),
+                   np.hstack([_kepler_stm(0.9), rng.standard_normal((N_P, N_O - N_P))])])
+    acc = Accumulator(sy, Stored(eye, eye.copy(), eye.copy(), eye.copy(), b))
+    for tau in (4, 5):
+        t0, t1 = acc.transformation(0, tau, 4), acc.transformation(1, tau, 4)
+        assert np.allclose(t1.T @ t0, np.eye(N_O), rtol=0, atol=1e-10)
+        assert np.allclose(acc.partials(0, tau, "p"), b[(tau - 3) * N_P:(tau - 2) * N_P])
+    short = Accumulator(sy, Stored(eye, eye.copy(), eye.copy(), eye.copy(), b[:N_P]))
+    with pytest.raises(InputError, match="miss set has"):
+        short.transformation(0, 4, 1)
