@@ -23,7 +23,7 @@ from tapp.tape import read_t13
 
 ROOT = Path(__file__).resolve().parents[1]
 LEO = ROOT / "scenarios" / "leo_equatorial.toml"
-SEEDS = (1, 2, 3, 4, 5)
+SEEDS = (1, 2, 3)
 
 
 def _scenario(folder: Path, iden: str) -> Path:
