@@ -10,7 +10,7 @@ rules; in short, a :class:`Schema` subclass is a pydantic v2 model that
   an integer is accepted where a float is declared;
 - requires finite floats, unless the field is ``Annotated[float, AllowInf]`` (:data:`InfFloat`;
   infinities allowed, NaN still refused);
-- is frozen.
+- is frozen; a tuple field accepts a TOML array (lists are declared ``list[...]``).
 
 Checks beyond types raise :class:`Invalid` in validators; :func:`validate` reports them like
 type errors.
@@ -31,7 +31,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from typing import Annotated, Any, TypeVar
+from types import UnionType
+from typing import Annotated, Any, TypeVar, Union, get_args, get_origin
 
 import pydantic
 from pydantic import AfterValidator, ConfigDict, model_validator
@@ -113,7 +114,22 @@ class Schema(pydantic.BaseModel):
                     raise PydanticCustomError(
                         "unknown_key", "no such key", {"key": key, "allowed": allowed,
                                                        "value": data[key]})
+            tuples = [f.alias or name for name, f in cls.model_fields.items()
+                      if _is_tuple(f.annotation)]
+            if any(isinstance(data.get(key), list) for key in tuples):
+                data = {k: tuple(v) if k in tuples and isinstance(v, list) else v
+                        for k, v in data.items()}
         return data
+
+
+def _is_tuple(annotation: Any) -> bool:
+    """Whether a field is a tuple (or an optional one): a TOML array is accepted for it."""
+    origin = get_origin(annotation)
+    if origin is Annotated:
+        return _is_tuple(get_args(annotation)[0])
+    if origin in (Union, UnionType):
+        return any(_is_tuple(a) for a in get_args(annotation))
+    return origin is tuple or annotation is tuple
 
 
 _EXPECTED = {
@@ -157,8 +173,10 @@ def _expected(err: Mapping) -> str:
         return f"at least {ctx['min_length']} item{'s' * (ctx['min_length'] != 1)}"
     if kind in ("too_long", "string_too_long"):
         return f"at most {ctx['max_length']} item{'s' * (ctx['max_length'] != 1)}"
-    if kind in ("union_tag_invalid", "union_tag_not_found"):
-        return f"{ctx.get('discriminator', 'a kind')} one of {ctx.get('expected_tags', '')}"
+    if kind == "union_tag_invalid":
+        return f"one of {ctx['expected_tags']}"
+    if kind == "union_tag_not_found":
+        return "a value (the key is required)"
     if kind in ("value_error", "assertion_error"):
         error = ctx.get("error")
         return error.expected if isinstance(error, Invalid) else str(error)
@@ -227,6 +245,9 @@ def _translate(exc: pydantic.ValidationError, data: Mapping, prefix: str
         if err["type"] == "unknown_key":
             path.append(ctx["key"])
             got = ctx["value"]
+        if err["type"] in ("union_tag_invalid", "union_tag_not_found"):
+            path.append(str(ctx["discriminator"]).strip("'"))
+            got = ctx.get("tag")
         error = ctx.get("error")
         if isinstance(error, Invalid):
             if error.field:

@@ -147,3 +147,39 @@ def test_unique_lists_name_the_repeated_item() -> None:
         validate(Bodies, {"third_bodies": ["sun", "moon", "sun"]}, "m.toml")
     assert str(info.value) == ("m.toml: third_bodies: expected each item once ('sun' is "
                                "repeated) (got ['sun', 'moon', 'sun'])")
+
+
+class Elimination(Schema):
+    command: Literal["eliminate"]
+    parameters: list[str]
+
+
+class Recycle(Schema):
+    command: Literal["recycle"]
+    times: int
+
+
+class Deck(Schema):
+    steps: list[Annotated[Elimination | Recycle, Field(discriminator="command")]] = []
+    window_s: tuple[float, float] = (0.0, 1.0)
+
+
+def test_tagged_tables_name_the_tag_and_their_own_fields() -> None:
+    deck = validate(Deck, {"steps": [{"command": "recycle", "times": 2}]}, "deck.toml")
+    assert isinstance(deck.steps[0], Recycle)
+    with pytest.raises(InputError, match=r"^deck\.toml: steps\[1\]\.command: expected one of "
+                       r"'eliminate', 'recycle' \(got 'recylce'\)$"):
+        validate(Deck, {"steps": [{"command": "recycle", "times": 2},
+                                  {"command": "recylce", "times": 2}]}, "deck.toml")
+    with pytest.raises(InputError, match=r"^deck\.toml: steps\[0\]\.times: expected an integer"):
+        validate(Deck, {"steps": [{"command": "recycle", "times": 1.5}]}, "deck.toml")
+    with pytest.raises(InputError, match=r"^deck\.toml: steps\[0\]\.command: expected a value"):
+        validate(Deck, {"steps": [{"times": 1}]}, "deck.toml")
+
+
+def test_a_tuple_field_takes_a_toml_array() -> None:
+    assert validate(Deck, {"window_s": [2, 3.5]}, "deck.toml").window_s == (2.0, 3.5)
+    with pytest.raises(InputError, match=r"^deck\.toml: window_s\[1\]: expected a number"):
+        validate(Deck, {"window_s": [2, True]}, "deck.toml")
+    with pytest.raises(InputError, match=r"^deck\.toml: window_s: expected"):
+        validate(Deck, {"window_s": [2]}, "deck.toml")
