@@ -198,7 +198,9 @@ def _path(data: Any, loc: Sequence, keep_last: bool) -> tuple[list, Any]:
               and isinstance(part, int) and -len(node) <= part < len(node)):
             path.append(part)
             node = node[part]
-        elif keep_last and i == len(loc) - 1 and isinstance(node, Mapping):
+        elif keep_last and i == len(loc) - 1 and (
+                isinstance(node, Mapping)
+                or (isinstance(node, Sequence) and isinstance(part, int))):
             path.append(part)
             node = None
     return path, node
@@ -253,7 +255,10 @@ def _translate(exc: pydantic.ValidationError, data: Mapping, prefix: str
             if error.field:
                 path.extend(error.field.split("."))
             got = error.got if error.got is not None or error.field else node
-        located.append((tuple(path), _expected(err), got))
+        what = _expected(err)
+        if err["type"] == "missing" and path and isinstance(path[-1], int):
+            what = "an item here (the array is too short)"
+        located.append((tuple(path), what, got))
     first = located[0][0]
     expected: list[str] = []
     for path, what, _ in located:
