@@ -159,6 +159,7 @@ class OutputSet:
     ['a.txt', 'b.txt']
     >>> sorted(p.name for p in folder.iterdir())
     ['a.txt', 'b.txt']
+    >>> import shutil; shutil.rmtree(folder)
     """
 
     _outputs: list[_Output] = field(default_factory=list)
