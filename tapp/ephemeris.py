@@ -51,10 +51,17 @@ _PATHS = {
 }
 
 
-def tai_minus_utc_s(jd_utc: float) -> float:
-    """Return TAI − UTC (s) at a UTC Julian date (10 s before 1972 is not supported)."""
-    if jd_utc < LEAP_SECONDS[0][0]:
-        raise InputError("epoch", "date", "a UTC date on or after 1972-01-01", jd_utc)
+#: Bodies whose positions DE421 gives here (NAIF paths below).
+BODIES = tuple(_PATHS)
+
+
+def tai_minus_utc_s(jd_utc: float, source: str = "epoch") -> float:
+    """Return TAI − UTC (s) at a UTC Julian date (10 s before 1972 is not supported).
+
+    ``source`` names where the date came from in the error (an option such as ``--epoch``).
+    """
+    if not jd_utc >= LEAP_SECONDS[0][0]:
+        raise InputError(source, "date", "a UTC date on or after 1972-01-01", jd_utc)
     value = LEAP_SECONDS[0][1]
     for start, dat in LEAP_SECONDS:
         if jd_utc >= start:
@@ -62,9 +69,9 @@ def tai_minus_utc_s(jd_utc: float) -> float:
     return float(value)
 
 
-def utc_to_tdb_jd(jd_utc: float) -> float:
+def utc_to_tdb_jd(jd_utc: float, source: str = "epoch") -> float:
     """Return the TDB Julian date of a UTC Julian date (TDB ≈ TT, see module docstring)."""
-    return jd_utc + (tai_minus_utc_s(jd_utc) + TT_MINUS_TAI_s) / SECONDS_PER_DAY
+    return jd_utc + (tai_minus_utc_s(jd_utc, source) + TT_MINUS_TAI_s) / SECONDS_PER_DAY
 
 
 def de421_path() -> Path:

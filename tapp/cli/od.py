@@ -73,9 +73,22 @@ def _observations(x_true: np.ndarray, truth: str, stations: str | None, obs_file
         data = setup.load_study(scenario)
         return read_observations(obs_file, load_stations(data, str(scenario)),
                                  setup.tracking(scenario).sigma)
-    return setup.simulated_observations(x_true, truth,
-                                        setup.network_for(x_true, stations, scenario),
+    return setup.simulated_observations(x_true, truth, _network(x_true, stations, scenario),
                                         scenario, seed)
+
+
+def _network(x_true: np.ndarray, stations: str | None, scenario: Path) -> tuple:
+    """The stations named by ``--stations`` (or the scenario's default for the orbit); an
+    unknown name is the option's fault and names ``--stations``."""
+    default = setup.network_for(x_true, None, scenario)  # a bad file names the file
+    if stations is None:
+        return default
+    try:
+        return setup.network_for(x_true, stations, scenario)
+    except InputError as exc:
+        if exc.field != "networks":
+            raise
+        raise InputError("--stations", "name", exc.expected, stations) from None
 
 
 def _elements_dict(x: np.ndarray) -> dict[str, float]:

@@ -22,9 +22,22 @@ from tapp.cli.common import (
 from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics import Propagator, earth_model
 from tapp.dynamics.propagate import check_tolerance
-from tapp.ephemeris import check_coverage, utc_to_tdb_jd
+from tapp.ephemeris import BODIES, check_coverage, utc_to_tdb_jd
+from tapp.errors import InputError
 from tapp.frames.time import parse_epoch
 from tapp.orbits import parse_orbit
+
+
+def _third_bodies(names: list[str]) -> tuple[str, ...]:
+    """The ``--third-body`` values, each a DE421 body other than the Earth, each once."""
+    allowed = [b for b in BODIES if b != "earth"]
+    for name in names:
+        if name not in allowed:
+            raise InputError("--third-body", "third_bodies", f"one of {', '.join(allowed)}", name)
+        if names.count(name) > 1:
+            raise InputError("--third-body", "third_bodies", f"each body once ({name} given "
+                             f"{names.count(name)} times would multiply its pull)", name)
+    return tuple(names)
 
 
 @app.command()
@@ -55,13 +68,14 @@ def propagate(
         arc_s = positive_option("--hours", hours) * 3600.0
         dt = positive_option("--step", step)
         check_grid_size("--hours/--step", grid_samples(arc_s, dt))
-        bodies = tuple(third_body or ())
+        bodies = _third_bodies(third_body or [])
         prop = Propagator(earth_model(truth, bodies, source="--truth", field="model"),
                           earth_model(stm, bodies, source="--stm", field="model"),
                           rtol=check_tolerance(tol, "--tol", "value"), atol=tol)
         ep = parse_epoch(epoch, source="--epoch")
         if bodies:
-            check_coverage(utc_to_tdb_jd(ep.jd), np.array([0.0, arc_s]) / SECONDS_PER_DAY,
+            check_coverage(utc_to_tdb_jd(ep.jd, source="--epoch"),
+                           np.array([0.0, arc_s]) / SECONDS_PER_DAY,
                            source="--epoch/--hours", field="arc")
         t = np.append(np.arange(0.0, arc_s, dt), arc_s)
         start = time.perf_counter()

@@ -147,6 +147,11 @@ def test_temporaries_left_by_a_killed_run_are_removed_by_the_next(tmp_path: Path
     (["iter", str(SWEEP), "--workers", "1000000"], "--workers: expected at most"),
     (["propagate", "--orbit", "SATORB1", "--hours", "abc"], "'--hours'"),
     (["dc", "--orbit", "SATORB1", "--max-iter", "0"], "error: --max-iter:"),
+    # the option at fault is named, not the file or the library's field
+    (["dc", "--orbit", "SATORB1", "--stations", "NOWHERE"], "error: --stations: name:"),
+    (["propagate", "--orbit", "SATORB1", "--third-body", "moon", "--epoch", "1960-01-01"],
+     "error: --epoch: date:"),
+    (["propagate", "--orbit", "SATORB1", "--third-body", "pluto"], "error: --third-body:"),
 ])
 def test_huge_sizes_and_bad_options_are_one_line_before_any_work(args: list[str],
                                                                  says: str) -> None:
