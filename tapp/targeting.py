@@ -110,6 +110,9 @@ Y_NAMES = ("b_dot_r_km", "b_dot_t_km", "flight_time_s")
 
 #: Newton steps allowed on the periapsis time before giving up (one usually suffices).
 MAX_PERIAPSIS_ITERATIONS = 6
+#: Most closest-approach scan steps (max_flight_time_s / scan_step_s), checked before the
+#: scan grid is allocated (a horizon of 1e308 s would otherwise exhaust memory).
+MAX_SCAN_STEPS = 1_000_000
 
 # Central-difference step for the target's velocity and acceleration from DE421 positions:
 # a 4th-order stencil with h = 60 s has truncation ~1e-17 km/s for the Moon, round-off
@@ -247,6 +250,9 @@ class BPlaneProgram:
         if self.scan_step_s >= self.max_flight_time_s:
             raise InputError("targeting", "scan_step_s", "a step shorter than "
                              f"max_flight_time_s = {self.max_flight_time_s} s", self.scan_step_s)
+        if self.max_flight_time_s / self.scan_step_s > MAX_SCAN_STEPS:
+            raise InputError("targeting", "max_flight_time_s", f"at most {MAX_SCAN_STEPS:,} "
+                             f"scan steps of {self.scan_step_s:g} s", self.max_flight_time_s)
         object.__setattr__(self, "_jd_tdb", utc_to_tdb_jd(self.epoch.jd))
 
     @property
@@ -714,6 +720,11 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
         raise InputError(source, "target.scan_step_s",
                          f"a step shorter than target.max_flight_time_s = "
                          f"{tgt.max_flight_time_s:g} s", tgt.scan_step_s)
+    if tgt.max_flight_time_s / tgt.scan_step_s > MAX_SCAN_STEPS:
+        raise InputError(source, "target.max_flight_time_s",
+                         f"at most {MAX_SCAN_STEPS:,} scan steps of target.scan_step_s = "
+                         f"{tgt.scan_step_s:g} s", f"{tgt.max_flight_time_s:g} s, "
+                         f"{tgt.max_flight_time_s / tgt.scan_step_s:.3g} steps")
     program = BPlaneProgram(
         epoch=epoch, r0_km=r0, propagator=propagator, target=tgt.body, reference=tgt.reference,
         max_flight_time_s=tgt.max_flight_time_s, scan_step_s=tgt.scan_step_s,

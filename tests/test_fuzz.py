@@ -130,12 +130,14 @@ class Mutation:
 
 
 def _wrong_type(value: object) -> object:
+    """A value no field of ``value``'s kind accepts (times take a date text or seconds, so a
+    text becomes a boolean, which is neither)."""
     if isinstance(value, bool):
         return 1.5
     if isinstance(value, int | float):
         return "abc"
     if isinstance(value, str):
-        return 1.5
+        return True
     if isinstance(value, list):
         return "abc"
     return 1.5

@@ -158,6 +158,15 @@ def test_huge_sizes_and_bad_options_are_one_line_before_any_work(args: list[str]
     _refused(args, says=says)
 
 
+def test_a_search_horizon_of_1e308_s_is_refused_before_allocating_its_scan(
+        tmp_path: Path) -> None:
+    path = tmp_path / "search.toml"
+    text = (SCENARIOS / "search_bplane.toml").read_text()
+    path.write_text(text.replace("max_flight_time_s = 691200.0", "max_flight_time_s = 1e308"))
+    _refused(["search", str(path)], says=f"{path}: target.max_flight_time_s: expected at most "
+             "1,000,000 scan steps")
+
+
 def test_an_unwritable_save_obs_is_one_line(tmp_path: Path) -> None:
     (tmp_path / "a_file").write_text("")
     _refused(["dc", "--orbit", "SATORB1", "--save-obs", str(tmp_path / "a_file" / "o.h5")],
