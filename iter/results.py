@@ -2,7 +2,7 @@
 
 HDF5 layout (one row per case, sorted by case index)::
 
-    /                 attrs: format = "iter-results", format_version = 1,
+    /                 attrs: format = "iter-results", format_version = 2,
                              generator ("iter, tapp <version>"),
                              sweep_json (the sweep file contents as JSON),
                              definition_json (canonical loops + body; resuming checks it),
@@ -16,7 +16,10 @@ HDF5 layout (one row per case, sorted by case index)::
     /elapsed_s        (N,) float64, wall time of the body
 
 Every dataset has a ``units`` attribute, read from the name's suffix (``azimuth_deg`` ->
-``deg``; see :data:`UNIT_SUFFIXES`), empty when the name carries no recognised unit. The
+``deg``; see :data:`UNIT_SUFFIXES`), empty when the name carries no recognised unit, and a
+``sha256`` attribute, the digest of its values (:func:`values_digest`), checked on read: a
+flipped byte is a :class:`ResultFileError` naming the dataset, never data. Files of
+format_version 1 (no digests) are still read, with a :class:`ResultFileWarning`. The
 file may hold fewer rows than ``n_cases`` while a sweep runs: it is rewritten as cases
 complete, each time to a hidden temporary ``.NAME.<random>.tmp`` beside it, renamed over the
 old one, so it is never half written; temporaries left by a killed run are removed on the next
@@ -32,12 +35,14 @@ one line per case; ``status`` is written as its name (``ok``, ``failed``).
 from __future__ import annotations
 
 import csv
+import hashlib
 import importlib.metadata
 import json
 import math
 import os
 import re
 import secrets
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -50,7 +55,24 @@ from .errors import ResultFileError
 from .table import CaseResult, CaseStatus, OutputValue, ResultTable
 
 FORMAT_NAME = "iter-results"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: The first format version whose datasets carry a ``sha256`` digest.
+DIGEST_VERSION = 2
+
+
+class ResultFileWarning(UserWarning):
+    """A results file is readable but unprotected (format_version 1: no checksums)."""
+
+
+def values_digest(values: np.ndarray | list, text: bool) -> str:
+    """Return the SHA-256 (hex) of a column's values: the JSON list of texts, or the
+    little-endian bytes of numbers."""
+    if text:
+        data = json.dumps([str(v) for v in values]).encode("utf-8")
+    else:
+        array = np.asarray(values)
+        data = np.ascontiguousarray(array, dtype=array.dtype.newbyteorder("<")).tobytes()
+    return hashlib.sha256(data).hexdigest()
 
 #: Name suffix -> units attribute, longest suffixes tried first.
 UNIT_SUFFIXES = {
@@ -171,6 +193,7 @@ def _generator() -> str:
 def _dataset(group: h5py.Group, name: str, data: np.ndarray, units: str) -> h5py.Dataset:
     dataset = group.create_dataset(name, data=data, dtype=data.dtype)
     dataset.attrs["units"] = units
+    dataset.attrs["sha256"] = values_digest(data, text=data.dtype.kind not in "fiu")
     return dataset
 
 
@@ -192,17 +215,25 @@ def read_hdf5(path: str | Path) -> StoredResults:
                                       f"format = {FORMAT_NAME!r})", f.attrs.get("format"))
             attrs = {k: _text_attr(f, source, k) for k in ("sweep_json", "definition_json",
                                                             "created_utc")}
+            version = _version(f, source)
             n_cases = _count_attr(f, source)
             indices = _column(f, source, "case", "i")
             n_rows = indices.size
             names = tuple(_group(f, source, "inputs"))
-            values = np.column_stack([_column(f, source, f"inputs/{n}", "f", n_rows)
-                                      for n in names]) if names else np.empty((n_rows, 0))
+            inputs = [_column(f, source, f"inputs/{n}", "f", n_rows) for n in names]
+            values = np.column_stack(inputs) if names else np.empty((n_rows, 0))
             outputs = {n: _read_column(f, source, f"outputs/{n}", n_rows)
                        for n in _group(f, source, "outputs")}
             status = _column(f, source, "status", "i", n_rows)
             errors = _text_column(f, source, "error", n_rows)
             elapsed_s = _column(f, source, "elapsed_s", "f", n_rows)
+            if version >= DIGEST_VERSION:
+                for name, column in (("case", indices), ("status", status), ("error", errors),
+                                     ("elapsed_s", elapsed_s),
+                                     *((f"inputs/{n}", c) for n, c in zip(names, inputs,
+                                                                         strict=True)),
+                                     *((f"outputs/{n}", c) for n, c in outputs.items())):
+                    _verify(f, source, name, column)
     except OSError as exc:
         raise ResultFileError(source, "file", "a readable HDF5 results file (truncated or "
                               "corrupt?)", str(exc)) from None
@@ -227,6 +258,27 @@ def read_hdf5(path: str | Path) -> StoredResults:
                          sweep_json=attrs["sweep_json"],
                          definition_json=attrs["definition_json"],
                          created_utc=attrs["created_utc"], n_cases=n_cases)
+
+
+def _version(f: h5py.File, source: str) -> int:
+    version = f.attrs.get("format_version", 1)
+    if (not isinstance(version, int | np.integer) or isinstance(version, bool)
+            or not 1 <= version <= FORMAT_VERSION):
+        raise ResultFileError(source, "format_version", f"1 to {FORMAT_VERSION}", version)
+    if version < DIGEST_VERSION:
+        warnings.warn(f"{source}: format_version {version} results carry no checksums; they "
+                      "are checked again once rewritten", ResultFileWarning, stacklevel=3)
+    return int(version)
+
+
+def _verify(f: h5py.File, source: str, name: str, values: np.ndarray | list) -> None:
+    dataset = f[name]
+    stored = dataset.attrs.get("sha256")
+    if isinstance(stored, bytes):
+        stored = stored.decode("ascii", "replace")
+    if stored != values_digest(values, text=h5py.check_string_dtype(dataset.dtype) is not None):
+        raise ResultFileError(source, name, "values matching its sha256 attribute (the file "
+                              "was altered or corrupted after it was written)")
 
 
 def _text_attr(f: h5py.File, source: str, key: str) -> str:

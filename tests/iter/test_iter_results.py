@@ -99,3 +99,49 @@ def test_unwritable_and_foreign_files_are_typed_errors(tmp_path):
     text.write_text("not hdf5")
     with pytest.raises(ResultFileError, match="expected a readable HDF5 results file"):
         read_hdf5(text)
+
+
+def _flip_byte(path, dataset: str) -> None:
+    with h5py.File(path, "r") as f:
+        offset, size = f[dataset].id.get_offset(), f[dataset].id.get_storage_size()
+    data = bytearray(path.read_bytes())
+    data[offset + size // 2] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize("dataset", ["case", "inputs/azimuth_deg", "outputs/i_deg", "status",
+                                     "elapsed_s"])
+def test_a_flipped_byte_in_any_numeric_column_is_an_error_naming_it(tmp_path, dataset):
+    """Issue 10, class 3: every dataset carries a sha256 digest, checked on read."""
+    path = tmp_path / "r.h5"
+    _write(path)
+    _flip_byte(path, dataset)
+    with pytest.raises(ResultFileError, match=f"{dataset}: expected values matching its "
+                       "sha256"):
+        read_hdf5(path)
+
+
+def test_a_changed_text_cell_is_an_error_naming_its_column(tmp_path):
+    path = tmp_path / "r.h5"
+    _write(path)
+    with h5py.File(path, "r+") as f:
+        f["error"][1] = "ValueError: something else"
+    with pytest.raises(ResultFileError, match="error: expected values matching its sha256"):
+        read_hdf5(path)
+
+
+def test_version_1_files_without_digests_are_read_with_a_warning(tmp_path):
+    from iter.results import ResultFileWarning
+
+    path = tmp_path / "r.h5"
+    _write(path)
+    with h5py.File(path, "r+") as f:
+        f.attrs["format_version"] = 1
+
+        def strip(name, obj):
+            if isinstance(obj, h5py.Dataset):
+                del obj.attrs["sha256"]
+
+        f.visititems(strip)
+    with pytest.warns(ResultFileWarning, match="format_version 1 results carry no checksums"):
+        assert read_hdf5(path).table == TABLE

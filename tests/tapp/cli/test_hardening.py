@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from iter.results import values_digest
 from tapp.cli import app
 from tapp.cli.common import EXIT_INPUT
 
@@ -185,10 +186,19 @@ def test_a_sweep_of_1e12_cases_is_refused_before_generating_them(tmp_path: Path,
     assert sorted(p.name for p in tmp_path.iterdir()) == ["big.toml"]
 
 
+def _forge(f: h5py.File, name: str, index: int, value: object) -> None:
+    """Change one value and its digest too (a consistent forgery: the layout checks catch it)."""
+    f[name][index] = value
+    f[name].attrs["sha256"] = values_digest(f[name][()], text=False)
+
+
 @pytest.mark.parametrize(("tamper", "says"), [
-    (lambda f: f["status"].__setitem__(0, 7), "status: expected codes [0, 1]"),
+    (lambda f: f["elapsed_s"].__setitem__(0, 1e300), "elapsed_s: expected values matching "
+     "its sha256 attribute"),
+    (lambda f: f["status"].__setitem__(0, 1), "status: expected values matching its sha256"),
+    (lambda f: _forge(f, "status", 0, 7), "status: expected codes [0, 1]"),
     (lambda f: f.__delitem__("elapsed_s"), "elapsed_s: expected a one-dimensional dataset"),
-    (lambda f: f["case"].__setitem__(1, 0), "case: expected distinct case numbers"),
+    (lambda f: _forge(f, "case", 1, 0), "case: expected distinct case numbers"),
     (lambda f: (f.__delitem__("error"), f.create_dataset("error", data=np.zeros(2))),
      "error: expected"),
     (lambda f: f.attrs.__setitem__("n_cases", "five"), "n_cases: expected a whole number"),
