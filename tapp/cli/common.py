@@ -8,7 +8,7 @@ Exit codes (every command keeps this contract)
     Bad input of any kind, found before any output is written: an option (unparseable, out
     of range, a size beyond the limits below), an input file (missing, not TOML, a field
     missing, misspelt, of the wrong type or out of range, a truncated or corrupt tape or
-    results file, a checksum that does not match), an output path that is an input or
+    ITER results file, a checksum that does not match), an output path that is an input or
     another output (symbolic links and relative paths resolved) or cannot be written, an
     epoch outside the ephemeris' coverage. The message is one line on stderr,
     ``error: SOURCE: FIELD: expected WHAT (got VALUE)``, where SOURCE is the option as typed
@@ -25,9 +25,13 @@ Exit codes (every command keeps this contract)
     Interrupted (Ctrl-C).
 
 Limits checked before allocating: output grids of at most :data:`MAX_GRID_SAMPLES` samples
-(``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases, local Dask
-clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (none with
-``--scheduler``); each message gives the size that would be needed and the option to change.
+(``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases (the product
+of the loops' ``sets``), SEARCH scans of at most ``tapp.targeting.MAX_SCAN_STEPS`` steps,
+local Dask clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (no
+limit with ``--scheduler``); each message gives the size that would be needed and the option
+or field to change. Epochs are checked against DE421's coverage (1899-07-29 .. 2053-10-09)
+before any propagation. An ITER case that runs longer than its body's ``timeout_s`` (program
+bodies: 3600 s unless the sweep file says otherwise) is stopped and recorded as failed.
 
 What is left on disk: nothing new when a command fails. Outputs are written to hidden
 temporaries beside their targets and renamed over them only once all are complete
