@@ -5,7 +5,7 @@ Exit codes (every command keeps this contract)
 0
     Success.
 2
-    Bad input of any kind, found before any output is written: an option (unparseable, out
+    Bad input of any kind, and nothing is written: an option (unparseable, out
     of range, a size beyond the limits below), an input file (missing, not TOML, a field
     missing, misspelt, of the wrong type or out of range, a truncated or corrupt tape or
     ITER results file, a checksum that does not match), an output path that is an input or
@@ -15,7 +15,8 @@ Exit codes (every command keeps this contract)
     (``--process-noise``, ``-o/--output``) when an option is at fault, and the file when a
     file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).
 3, 4
-    A numerical outcome, with its output still printed: ``tapp dc`` did not converge (3);
+    A numerical outcome, with its output still printed and written: ``tapp dc`` did not
+    converge (3);
     ``tapp search`` diverged (3) or met a singular matrix (4).
 1
     Anything else: a computation that could not be completed (``tapp search``: a trajectory
