@@ -16,8 +16,7 @@ Exit codes (every command keeps this contract)
     file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).
 3, 4
     A numerical outcome, with its output still printed and written: ``tapp dc`` did not
-    converge (3);
-    ``tapp search`` diverged (3) or met a singular matrix (4).
+    converge (3); ``tapp search`` diverged (3) or met a singular matrix (4).
 1
     Anything else: a computation that could not be completed (``tapp search``: a trajectory
     that misses the target's sphere of influence), or an internal failure (a bug; out of
