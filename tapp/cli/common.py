@@ -198,7 +198,7 @@ def run_guarded(fn: Callable[[], T]) -> T:
     except OSError as exc:
         if exc.filename is None:
             raise
-        typer.echo(f"error: {exc.filename}: file: expected a readable file "
+        typer.echo(f"error: {exc.filename}: file: expected an accessible file "
                    f"(got {exc.strerror or type(exc).__name__!r})", err=True)
         raise typer.Exit(EXIT_INPUT) from None
     except MemoryError:
