@@ -309,15 +309,8 @@ def test_every_shipped_toml_file_is_fuzzed() -> None:
         p.name for p in SCENARIOS.glob("*.toml"))
 
 
-#: (file, group of mutations) that fail today for want of classes 4/5 in the TAPP III deck
-#: reader (the lead's); xfail(strict=False) until they land.
-KNOWN_GAPS = {
-    ("tapp3_deep_space.toml", "extremes"): "class 4/5 (TAPP III deck, the lead's): an a "
-    "priori sigma of 1e308 overflows when squared",
-    ("tapp3_table_d1.toml", "extremes"): "class 5 (TAPP III deck, the lead's): a dropped or "
-    "emptied [common] table gives a ValueError traceback (zero-size array to reduction "
-    "operation maximum)",
-}
+#: (file, group of mutations) that fail today: none (each entry was a defect to fix).
+KNOWN_GAPS: dict[tuple[str, str], str] = {}
 
 
 def _file_params() -> list:

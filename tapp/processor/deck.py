@@ -78,6 +78,8 @@ TimeRef = int | float | str
 TIME_MATCH_S = 1e-3
 #: Largest negative eigenvalue of a real-world correlation matrix taken as rounding.
 PSD_TOL = 1e-10
+#: Finite a priori σ's must lie in this range (any unit): σ² and 1/σ² stay finite doubles.
+SIGMA_RANGE = (1e-150, 1e150)
 #: The seed's nominal optional miss partitions (Appendix A.1), (tail, head).
 NOMINAL_MISS = {"m1": (0, 6), "m2": (0, 3), "m3": (3, 6), "m4": (6, 12), "m5": (12, 18)}
 
@@ -376,6 +378,11 @@ class _Binder:
             if missing:
                 raise self.fail(f"{field}.sigma", "a σ for every parameter (missing: "
                                 + ", ".join(missing) + ")")
+        lo, hi = SIGMA_RANGE
+        wild = np.flatnonzero(np.isfinite(out) & (out > 0) & ((out < lo) | (out > hi)))
+        if wild.size:
+            raise self.fail(f"{field}.sigma", f"σ between {lo:g} and {hi:g} (or inf: no a "
+                            "priori information)", {order[i]: float(out[i]) for i in wild})
         bad = np.flatnonzero(~(out > 0))
         if bad.size:
             raise self.fail(f"{field}.sigma", "σ > 0 for the estimated parameters (σ = 0 "

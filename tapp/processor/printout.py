@@ -82,6 +82,8 @@ def entity_lines(ent: Entity) -> list[str]:
 
 def closure(budget) -> float:
     """Largest relative residual of a budget: max_i |Σ_s v_si − total_i| / total_i."""
+    if budget.total.size == 0:  # an empty partition (e.g. c2 with nothing eliminated)
+        return 0.0
     total = np.where(budget.total > 0, budget.total, 1.0)
     return float(np.max(np.abs(budget.variances.sum(axis=0) - budget.total) / total))
 

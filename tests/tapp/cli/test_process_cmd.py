@@ -160,3 +160,23 @@ def test_an_output_that_is_an_input_is_refused_before_any_work(files):
     res = runner.invoke(app, ["process", str(path), str(deck), "--tape", str(path)])
     assert res.exit_code == 2 and "TAPE" in res.stderr
     assert path.read_bytes() == before
+
+
+def test_an_a_priori_sigma_beyond_double_range_is_bad_input(tmp_path, files):
+    tape = files[0]
+    code, err, new = _bad(tmp_path, files, _deck_text(tape, fit=sigmas(tape, GM_km3_s2=0.0,
+                                                                       x_km=1e308)))
+    assert code == 2 and "fit.apriori.sigma" in err and "x_km" in err, err
+    assert new == []
+
+
+def test_an_empty_partition_prints_with_an_empty_budget(tmp_path, files):
+    _, path, _ = files
+    tape = files[0]
+    deck = tmp_path / "c2.toml"
+    deck.write_text(_deck_text(tape).replace('"I; 0,-,pk; 1,2,fp"]',
+                                             '"I; 0,-,pk; 1,2,fp", "cov-real c2@current"]'))
+    res = runner.invoke(app, ["process", str(path), str(deck), "--json", "-"])
+    assert res.exit_code == 0, res.output
+    ent = json.loads(res.stdout)["blocks"][-1]["entities"][-1]
+    assert ent["alias"] == "cov-real c2@current" and ent["matrix"] == []
