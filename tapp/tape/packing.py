@@ -122,3 +122,44 @@ def symmetry_defect(matrix) -> np.ndarray:
     diff = np.abs(m - np.swapaxes(m, -1, -2))
     ratio = np.divide(diff, scale, out=np.where(diff > 0, np.inf, 0.0), where=scale > 0)
     return np.max(ratio, axis=(-2, -1))
+
+
+def tr_diagonal(n: int) -> np.ndarray:
+    """Return the positions of the diagonal entries (i, i) in the TR vector of order n, (n,)."""
+    i = np.arange(n)
+    return i * n - i * (i - 1) // 2
+
+
+def scaled_difference(a, b) -> np.ndarray:
+    r"""Return the difference of matrices on the scale of ``b``, shape (...).
+
+    .. math:: \max_{ij} \frac{|A_{ij} - B_{ij}|}{\sqrt{|B_{ii} B_{jj}|}}
+
+    The natural scale of a normal (or covariance) matrix (as in :func:`symmetry_defect`); a
+    difference where the scale is zero gives inf.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (..., n, n)
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    d = np.sqrt(np.abs(np.diagonal(b, axis1=-2, axis2=-1)))
+    return _ratio(np.abs(a - b), d[..., :, None] * d[..., None, :], axes=(-2, -1))
+
+
+def scaled_difference_tr(a, b) -> np.ndarray:
+    """Return :func:`scaled_difference` of TR-packed matrices (..., n (n + 1) / 2), shape (...)."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    n = tr_order(b.shape[-1])
+    d = np.sqrt(np.abs(b[..., tr_diagonal(n)]))
+    rows, cols = _upper(n)
+    return _ratio(np.abs(a - b), d[..., rows] * d[..., cols], axes=(-1,))
+
+
+def _ratio(diff: np.ndarray, scale: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
+    ratio = np.divide(diff, scale, out=np.where(diff > 0, np.inf, 0.0), where=scale > 0)
+    if ratio.size == 0:
+        return np.zeros(ratio.shape[:ratio.ndim - len(axes)])
+    return np.max(ratio, axis=axes)

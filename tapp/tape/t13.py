@@ -1,4 +1,4 @@
-"""The T13 tape (TAPP I -> TAPP III): schema, atomic HDF5 writer, validating reader.
+"""The T13 tape (TAPP I -> TAPP III): schema, atomic HDF5 writer, validating readers.
 
 Seed TAPP III §4.1 fixes the content; DESIGN.md ("Tapes") fixes the HDF5 form. Notation of
 the seed: n_o TAPP I parameters x = [p; q] (p: the n_p orbit parameters at the epoch, q: the
@@ -7,7 +7,8 @@ t_0 < t_1 < ... < t_{n_it} (the union of the input times and the epoch times, t_
 injection); record k covers (t_{k-1}, t_k] and is referred to the epoch t_j, where j either
 stays the same from one record to the next or changes to k-1.
 
-HDF5 layout, version 1 (every dataset has a ``units`` attribute):
+HDF5 layout, version 2 (every dataset has a ``units`` attribute and a Fletcher-32 checksum,
+:mod:`tapp.tape.hdf5io`):
 
 ==========================  =====================  ===========================================
 path                        shape                  content
@@ -34,11 +35,18 @@ records/j, records/k        (n_it,) int            epoch index j, current index 
 records/t_s                 (n_it,) float          t_k, s (= times/t_s[1:])
 records/info                (n_it, 6) float        state at t_k (km, km/s), EME2000
 records/U                   (n_it, n_p, n_o)       ∂p(t_k)/∂x(t_j)
-pairs/k, pairs/station      (n_pairs,) int         (record, station) pairs with data
+pairs/k, pairs/station      (n_pairs,) int         (record, station) pairs with data, each
+                                                   once, sorted by (k, station)
 pairs/n_obs                 (n_pairs,) int         scalar observations in the pair
 pairs/dJ, pairs/dJt         (n_pairs, L)           AᵀWA, AᵀWMWA over (t_{k-1}, t_k] referred
                                                    to t_j; L = n_o(n_o+1)/2 ("TR", upper
-                                                   triangle by rows) or n_o² ("full")
+                                                   triangle by rows) or n_o² ("full"); attrs
+                                                   packing, order (= n_o)
+pairs/dJt_parts (optional)  (n_pairs, 3, L)        AᵀWMWA split into its white-noise, per-pass
+                                                   bias and exponentially correlated parts
+                                                   (attr ``parts`` = white, bias, correlated;
+                                                   :func:`tapp.tracking.noise.
+                                                   normal_matrix_parts`), summing to dJt
 passes/station, t_start_s,  (n_passes,)            tracking passes (before any split at T13
 t_end_s, n_obs                                     times)
 raw/... (optional)          (N, ...)               one row per scalar observation: t_s,
@@ -51,51 +59,66 @@ raw/... (optional)          (N, ...)               one row per scalar observatio
 ==========================  =====================  ===========================================
 
 Units of the normal matrices: entry (a, b) in 1/(u_a u_b) with u the parameters' units; U and
-B entries in (unit of row)/(unit of column). Large datasets are chunked and gzip-compressed.
+B entries in (unit of row)/(unit of column). Every dataset is chunked (whole rows) with a
+Fletcher-32 checksum, text is fixed-length UTF-8, and large datasets are gzip-compressed.
+Version 1 (still read, with a ``UserWarning``) has the same layout without checksums and
+without ``pairs/dJt_parts``; its text is variable-length.
+
 The writer writes to a temporary file beside the target and renames it: no half-written tape.
-The reader rejects a wrong format or version, a missing dataset, a wrong shape, a non-finite
-value, a non-symmetric ("full") or negative-diagonal normal matrix, and an inconsistent epoch
-index, with a :class:`~tapp.errors.TapeError` naming the file and the dataset.
+The readers reject a wrong format or version, a missing dataset, a wrong shape, a non-finite
+value, a non-symmetric ("full") or negative-diagonal normal matrix, parts that do not sum to
+dJt, an inconsistent epoch index and a checksum mismatch, with a
+:class:`~tapp.errors.TapeError` naming the file and the dataset. :func:`read_t13` loads the
+whole tape; :func:`open_t13` loads everything but the pair matrices and reads those record
+range by record range (:meth:`T13File.pair_block`), for tapes too large to unpack at once;
+:func:`memory_pairs` offers the same interface over a tape in memory.
 """
 
 from __future__ import annotations
 
 import math
-import subprocess
-from dataclasses import dataclass, field
-from datetime import UTC, datetime
+import warnings
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import h5py
 import numpy as np
 
-from tapp import __version__
 from tapp.atomic import atomic_write
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError, TapeError
 from tapp.frames.time import Epoch
-from tapp.tape.packing import pack_tr, symmetry_defect, tr_size, unpack_tr
+from tapp.tape import hdf5io
+from tapp.tape.hdf5io import PACKINGS, SYMMETRY_TOL, Checker, Reader, frozen
+from tapp.tape.packing import (
+    pack_tr,
+    scaled_difference,
+    scaled_difference_tr,
+    tr_diagonal,
+    tr_size,
+)
 
 FORMAT = "T13"
-VERSION = 1
-SUPPORTED_VERSIONS = (1,)
-#: Storage of the normal matrices: "TR" (upper triangle by rows, the default) or "full".
-PACKINGS = ("TR", "full")
-#: Relative asymmetry max |M_ij - M_ji| / sqrt(M_ii M_jj) above which a normal matrix is
-#: rejected (:func:`tapp.tape.packing.symmetry_defect`).
-SYMMETRY_TOL = 1e-12
+VERSION = 2
+SUPPORTED_VERSIONS = (1, 2)
+#: Names of the parts of ``pairs/dJt_parts``, in order (as tapp.tracking.noise.PARTS).
+PARTS = ("white", "bias", "correlated")
+#: Largest relative difference max |Σ parts - dJt| / sqrt(dJt_aa dJt_bb) accepted (round-off
+#: of sums of a few thousand terms in another order).
+PARTS_TOL = 1e-10
 #: Names of the state in ``records/info`` (km, km/s, EME2000).
 INFO_COLUMNS = ("x_km", "y_km", "z_km", "vx_km_s", "vy_km_s", "vz_km_s")
 UNITS_NOTE = ("km, km/s, s, rad; normal matrices in 1/(u_a u_b), partials in (row unit)/"
               "(column unit), with u the units of parameters/unit and miss/unit")
-_COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+#: Budget of one block of :meth:`T13File.blocks` (bytes of packed matrices).
+BLOCK_BYTES = 1 << 25
 
-
-def _frozen(a, dtype=float) -> np.ndarray:
-    out = np.array(a, dtype=dtype)
-    out.setflags(write=False)
-    return out
-
+__all__ = ["FORMAT", "INFO_COLUMNS", "PACKINGS", "PARTS", "PARTS_TOL", "SUPPORTED_VERSIONS",
+           "SYMMETRY_TOL", "T13", "VERSION", "MemoryPairs", "PairBlock", "T13File",
+           "TapeMiss", "TapePairs", "TapeParameters", "TapePasses", "TapeRaw", "TapeRecords",
+           "TapeStations", "memory_pairs", "open_t13", "read_t13", "summary",
+           "t13_file_writer", "utc_at", "validate", "write_t13"]
 
 @dataclass(frozen=True, slots=True, eq=False)
 class TapeParameters:
@@ -167,13 +190,24 @@ class TapeRecords:
 
 @dataclass(frozen=True, slots=True, eq=False)
 class TapePairs:
-    """(record, station) pairs with data and their normal matrices, full (n_pairs, n_o, n_o)."""
+    """(record, station) pairs with data and their normal matrices, full in memory.
+
+    Attributes
+    ----------
+    k, station, n_obs : (n_pairs,) int record index, station number, observations; sorted by
+        (k, station).
+    dJ, dJt : (n_pairs, n_o, n_o) AᵀWA and AᵀWMWA, 1/(u_a u_b); None in the header of a
+        lazily read tape (:attr:`T13File.header`).
+    dJt_parts : (n_pairs, 3, n_o, n_o) the :data:`PARTS` of dJt (white, bias, correlated),
+        or None (not on the tape, or a header).
+    """
 
     k: np.ndarray
     station: np.ndarray
     n_obs: np.ndarray
-    dJ: np.ndarray
-    dJt: np.ndarray
+    dJ: np.ndarray | None
+    dJt: np.ndarray | None
+    dJt_parts: np.ndarray | None = None
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -251,41 +285,33 @@ class T13:
         return int(self.records.k.size)
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class PairBlock:
+    """Pairs of records k_first..k_last (inclusive), normal matrices packed TR.
+
+    L = n_o (n_o + 1) / 2 (:func:`tapp.tape.packing.pack_tr`; unpack with
+    :func:`tapp.tape.packing.unpack_tr`).
+
+    Attributes
+    ----------
+    k : (m,) int record index, ascending.
+    station : (m,) int station number, ascending within a record.
+    n_obs : (m,) int scalar observations of each pair.
+    dJ, dJt : (m, L) AᵀWA and AᵀWMWA, 1/(u_a u_b).
+    dJt_parts : (m, 3, L) the :data:`PARTS` of dJt, or None when the tape has no parts.
+    """
+
+    k: np.ndarray
+    station: np.ndarray
+    n_obs: np.ndarray
+    dJ: np.ndarray
+    dJt: np.ndarray
+    dJt_parts: np.ndarray | None
+
+
 # ---------------------------------------------------------------------------------------------
-# Validation (shared by the writer and the reader)
+# Validation (shared by the writer and the readers)
 # ---------------------------------------------------------------------------------------------
-
-
-class _Checker:
-    """Raises TapeError naming the file and the dataset."""
-
-    def __init__(self, source: str):
-        self.source = source
-
-    def fail(self, dataset: str, expected: str, got: object = None) -> None:
-        detail = "" if got is None else f" (got {got})"
-        raise TapeError(f"{self.source}: {dataset}: expected {expected}{detail}")
-
-    def shape(self, dataset: str, a: np.ndarray, shape: tuple[int, ...]) -> None:
-        if a.shape != shape:
-            self.fail(dataset, f"shape {shape}", a.shape)
-
-    def finite(self, dataset: str, a: np.ndarray) -> None:
-        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
-            bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
-            self.fail(dataset, "finite values", f"{a[bad]} at index {bad}")
-
-    def normal(self, dataset: str, m: np.ndarray) -> None:
-        defect = symmetry_defect(m) if m.size else np.zeros(0)
-        if np.any(defect > SYMMETRY_TOL):
-            first = int(np.argmax(defect > SYMMETRY_TOL))
-            self.fail(dataset, f"symmetric normal matrices (relative asymmetry <= "
-                               f"{SYMMETRY_TOL:g})", f"{defect[first]:.3g} in pair {first}")
-        diag = np.diagonal(m, axis1=-2, axis2=-1)
-        if np.any(diag < 0):
-            pair, col = (int(i) for i in np.argwhere(diag < 0)[0])
-            self.fail(dataset, "a non-negative diagonal (sums of squares)",
-                      f"{diag[pair, col]:.3g} in pair {pair}, parameter {col}")
 
 
 def validate(tape: T13, source: str = "T13") -> None:
@@ -293,11 +319,40 @@ def validate(tape: T13, source: str = "T13") -> None:
 
     Checks: shapes against n_o, n_p, n_m, n_ts, n_it; finiteness; T13 times strictly
     ascending from t_0 = 0, each an epoch or an input time; k = 1..n_it; j_1 = 0 and j_k
-    either j_{k-1} or k-1, k-1 exactly when t_{k-1} is an epoch time; pairs unique, with
-    known records and stations and at least one observation; normal matrices symmetric with
-    a non-negative diagonal; raw rows consistent.
+    either j_{k-1} or k-1, k-1 exactly when t_{k-1} is an epoch time; pairs each once and
+    sorted by (k, station), with known records and stations and at least one observation;
+    normal matrices present, symmetric with a non-negative diagonal; the parts of dJt (when
+    present) summing to dJt within :data:`PARTS_TOL`; raw rows consistent.
     """
-    c = _Checker(source)
+    c = Checker(source)
+    _validate_header(c, tape)
+    pairs, n_pairs, n_o = tape.pairs, tape.pairs.k.size, tape.n_o
+    for name in ("dJ", "dJt"):
+        m = getattr(pairs, name)
+        if m is None:
+            c.fail(f"pairs/{name}", "the normal matrices (a complete tape)",
+                   "None: a header without pair matrices")
+        c.shape(f"pairs/{name}", m, (n_pairs, n_o, n_o))
+        c.finite(f"pairs/{name}", m)
+        c.symmetric(f"pairs/{name}", m)
+    if pairs.dJt_parts is not None:
+        c.shape("pairs/dJt_parts", pairs.dJt_parts, (n_pairs, len(PARTS), n_o, n_o))
+        c.finite("pairs/dJt_parts", pairs.dJt_parts)
+        _check_parts_sum(c, scaled_difference(pairs.dJt_parts.sum(axis=1), pairs.dJt), 0)
+    if tape.raw is not None:
+        _validate_raw(c, tape.raw, n_o, tape.n_ts, tape.n_it)
+
+
+def _check_parts_sum(c: Checker, defect: np.ndarray, offset: int) -> None:
+    if np.any(defect > PARTS_TOL):
+        first = int(np.argmax(defect > PARTS_TOL))
+        c.fail("pairs/dJt_parts", f"parts summing to pairs/dJt (relative difference <= "
+                                  f"{PARTS_TOL:g})", f"{defect[first]:.3g} in pair "
+                                                     f"{first + offset}")
+
+
+def _validate_header(c: Checker, tape: T13) -> None:
+    """Everything of :func:`validate` but the pair matrices and the raw rows."""
     n_o, n_p, n_m, n_ts, n_it = tape.n_o, tape.n_p, tape.n_m, tape.n_ts, tape.n_it
     par = tape.parameters
     if not 1 <= n_p <= n_o:
@@ -366,13 +421,12 @@ def validate(tape: T13, source: str = "T13") -> None:
         c.fail("pairs/station", f"station numbers in 1..{n_ts}", pairs.station.tolist())
     if np.any(pairs.n_obs < 1):
         c.fail("pairs/n_obs", "at least one observation per pair", pairs.n_obs.tolist())
-    if np.unique(pairs.k * (n_ts + 1) + pairs.station).size != n_pairs:
-        c.fail("pairs/k", "each (record, station) pair once")
-    for name in ("dJ", "dJt"):
-        m = getattr(pairs, name)
-        c.shape(f"pairs/{name}", m, (n_pairs, n_o, n_o))
-        c.finite(f"pairs/{name}", m)
-        c.normal(f"pairs/{name}", m)
+    keys = pairs.k * (n_ts + 1) + pairs.station
+    if np.any(np.diff(keys) <= 0):
+        first = int(np.argmax(np.diff(keys) <= 0)) + 1
+        c.fail("pairs/k", "each (record, station) pair once, sorted by (k, station)",
+               f"pair {first} = ({pairs.k[first]}, {pairs.station[first]}) after "
+               f"({pairs.k[first - 1]}, {pairs.station[first - 1]})")
 
     ps = tape.passes
     n_passes = ps.station.size
@@ -382,11 +436,9 @@ def validate(tape: T13, source: str = "T13") -> None:
     c.finite("passes/t_end_s", ps.t_end_s)
     if np.any((ps.station < 1) | (ps.station > n_ts)) or np.any(ps.t_end_s < ps.t_start_s):
         c.fail("passes/station", f"station numbers in 1..{n_ts} and t_start_s <= t_end_s")
-    if tape.raw is not None:
-        _validate_raw(c, tape.raw, n_o, n_ts, n_it)
 
 
-def _validate_raw(c: _Checker, raw: TapeRaw, n_o: int, n_ts: int, n_it: int) -> None:
+def _validate_raw(c: Checker, raw: TapeRaw, n_o: int, n_ts: int, n_it: int) -> None:
     n = raw.t_s.size
     for name in ("t_s", "station", "kind", "record", "segment", "value", "weight",
                  "m_white_var", "m_bias_var", "m_corr_var", "m_tau_s"):
@@ -410,107 +462,93 @@ def _validate_raw(c: _Checker, raw: TapeRaw, n_o: int, n_ts: int, n_it: int) -> 
 # ---------------------------------------------------------------------------------------------
 
 
-def _git_commit() -> str:
-    """Commit of the source checkout tapp runs from, or "unknown"."""
-    try:
-        proc = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
-                              capture_output=True, text=True, check=True, timeout=5)
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-    return proc.stdout.strip()
+def _write(f: h5py.File, tape: T13, packing: str, version: int = VERSION) -> None:
+    """Write ``tape`` into the open file ``f``.
 
+    ``version=1`` writes the version-1 layout (no checksums, no ``pairs/dJt_parts``): kept
+    so that the reader of version-1 tapes stays tested.
+    """
+    cs = version >= 2
 
-def _strings(group: h5py.Group, name: str, values, units: str = "") -> None:
-    ds = group.create_dataset(name, data=np.array(list(values), dtype=h5py.string_dtype()))
-    ds.attrs["units"] = units
+    def strings(group: h5py.Group, name: str, values, units: str = "") -> None:
+        hdf5io.write_strings(group, name, values, units, checksums=cs)
 
+    def numbers(group: h5py.Group, name: str, values, units: str, *, big: bool = False
+                ) -> h5py.Dataset:
+        return hdf5io.write_numbers(group, name, values, units, big=big, checksums=cs)
 
-def _numbers(group: h5py.Group, name: str, values, units: str, *, big: bool = False
-             ) -> h5py.Dataset:
-    data = np.asarray(values)
-    options = {}
-    if big and data.size:
-        chunk = list(data.shape)
-        chunk[0] = max(1, min(data.shape[0], max(1, (1 << 18) // max(1, data[0].nbytes))))
-        options = {"chunks": tuple(chunk), **_COMPRESSION}
-    ds = group.create_dataset(name, data=data, **options)
-    ds.attrs["units"] = units
-    return ds
-
-
-def _write(f: h5py.File, tape: T13, packing: str) -> None:
-    f.attrs.update(
-        format=FORMAT, version=VERSION, iden=tape.iden, n_o=tape.n_o, n_p=tape.n_p,
+    hdf5io.write_attrs(f, dict(
+        format=FORMAT, version=version, iden=tape.iden, n_o=tape.n_o, n_p=tape.n_p,
         n_m=tape.n_m, n_ts=tape.n_ts, n_it=tape.n_it, epoch=tape.epoch.iso(6),
         epoch_jd_whole=tape.epoch.jd_whole, epoch_jd_fraction=tape.epoch.jd_fraction,
         time_scale="UTC", frame="EME2000", center="earth", units=UNITS_NOTE, packing=packing,
-        tapp_version=__version__, git_commit=_git_commit(),
-        created_utc=datetime.now(UTC).isoformat(timespec="seconds"))
-    for key in ("scenario", "scenario_source"):
-        f.attrs[key] = tape.provenance.get(key, "")
+        **hdf5io.provenance_attrs()), checksums=cs)
+    hdf5io.write_attrs(f, {key: tape.provenance.get(key, "")
+                           for key in ("scenario", "scenario_source")}, checksums=cs)
 
     par = tape.parameters
     g = f.create_group("parameters")
-    _strings(g, "name", par.name)
-    _strings(g, "unit", par.unit)
-    _strings(g, "kind", par.kind)
-    _numbers(g, "station", par.station, "")
-    _numbers(g, "nominal", par.nominal, "see unit")
+    strings(g, "name", par.name)
+    strings(g, "unit", par.unit)
+    strings(g, "kind", par.kind)
+    numbers(g, "station", par.station, "")
+    numbers(g, "nominal", par.nominal, "see unit")
 
     st = tape.stations
     g = f.create_group("stations")
-    _numbers(g, "id", st.id, "")
-    _strings(g, "name", st.name)
-    _strings(g, "observables", st.observables)
-    _numbers(g, "lat_deg", st.lat_deg, "deg")
-    _numbers(g, "lon_deg", st.lon_deg, "deg")
-    _numbers(g, "h_km", st.h_km, "km")
-    _numbers(g, "elev_mask_deg", st.elev_mask_deg, "deg")
+    numbers(g, "id", st.id, "")
+    strings(g, "name", st.name)
+    strings(g, "observables", st.observables)
+    numbers(g, "lat_deg", st.lat_deg, "deg")
+    numbers(g, "lon_deg", st.lon_deg, "deg")
+    numbers(g, "h_km", st.h_km, "km")
+    numbers(g, "elev_mask_deg", st.elev_mask_deg, "deg")
 
     miss = tape.miss
     g = f.create_group("miss")
-    _strings(g, "name", miss.name)
-    _strings(g, "unit", miss.unit)
-    ds = _numbers(g, "nominal", miss.nominal, "see unit")
-    ds.attrs.update(kind=miss.kind, t_s=miss.t_s)
-    _numbers(f, "B", miss.B, "miss/unit per parameters/unit")
+    strings(g, "name", miss.name)
+    strings(g, "unit", miss.unit)
+    ds = numbers(g, "nominal", miss.nominal, "see unit")
+    hdf5io.write_attrs(ds, {"kind": miss.kind, "t_s": miss.t_s}, checksums=cs)
+    numbers(f, "B", miss.B, "miss/unit per parameters/unit")
 
     rec = tape.records
     g = f.create_group("times")
-    _numbers(g, "t_s", rec.times_s, "s")
-    _numbers(g, "is_epoch", rec.is_epoch, "")
-    _numbers(g, "is_input", rec.is_input, "")
+    numbers(g, "t_s", rec.times_s, "s")
+    numbers(g, "is_epoch", rec.is_epoch, "")
+    numbers(g, "is_input", rec.is_input, "")
     g = f.create_group("records")
-    _numbers(g, "j", rec.j, "")
-    _numbers(g, "k", rec.k, "")
-    _numbers(g, "t_s", rec.t_s, "s")
-    ds = _numbers(g, "info", rec.info, "km, km/s")
-    ds.attrs["columns"] = list(INFO_COLUMNS)
-    _numbers(g, "U", rec.U, "parameters/unit of p(t_k) per parameters/unit of x(t_j)",
-             big=True)
+    numbers(g, "j", rec.j, "")
+    numbers(g, "k", rec.k, "")
+    numbers(g, "t_s", rec.t_s, "s")
+    ds = numbers(g, "info", rec.info, "km, km/s")
+    hdf5io.write_attrs(ds, {"columns": list(INFO_COLUMNS)}, checksums=cs)
+    numbers(g, "U", rec.U, "parameters/unit of p(t_k) per parameters/unit of x(t_j)", big=True)
 
     pairs = tape.pairs
     g = f.create_group("pairs")
-    _numbers(g, "k", pairs.k, "")
-    _numbers(g, "station", pairs.station, "")
-    _numbers(g, "n_obs", pairs.n_obs, "")
+    numbers(g, "k", pairs.k, "")
+    numbers(g, "station", pairs.station, "")
+    numbers(g, "n_obs", pairs.n_obs, "")
+    units = "1/(u_a u_b), u = parameters/unit"
     for name in ("dJ", "dJt"):
-        m = getattr(pairs, name)
-        stored = pack_tr(m) if packing == "TR" else m.reshape(m.shape[0], -1)
-        ds = _numbers(g, name, stored, "1/(u_a u_b), u = parameters/unit", big=True)
-        ds.attrs.update(packing=packing, order=tape.n_o)
+        hdf5io.write_symmetric(g, name, getattr(pairs, name), units, packing, big=True,
+                               checksums=cs)
+    if cs and pairs.dJt_parts is not None:
+        ds = hdf5io.write_symmetric(g, "dJt_parts", pairs.dJt_parts, units, packing, big=True)
+        hdf5io.write_attrs(ds, {"parts": list(PARTS)})
 
     ps = tape.passes
     g = f.create_group("passes")
-    _numbers(g, "station", ps.station, "")
-    _numbers(g, "t_start_s", ps.t_start_s, "s")
-    _numbers(g, "t_end_s", ps.t_end_s, "s")
-    _numbers(g, "n_obs", ps.n_obs, "")
+    numbers(g, "station", ps.station, "")
+    numbers(g, "t_start_s", ps.t_start_s, "s")
+    numbers(g, "t_end_s", ps.t_end_s, "s")
+    numbers(g, "n_obs", ps.n_obs, "")
 
     if tape.raw is not None:
         raw = tape.raw
         g = f.create_group("raw")
-        g.attrs["kinds"] = list(raw.kinds)
+        hdf5io.write_attrs(g, {"kinds": list(raw.kinds)}, checksums=cs)
         for name, units in (("t_s", "s"), ("station", ""), ("kind", "code into attr kinds"),
                             ("record", ""), ("segment", ""), ("value", "km, km/s or rad"),
                             ("A", "observable unit per parameters/unit"),
@@ -518,7 +556,38 @@ def _write(f: h5py.File, tape: T13, packing: str) -> None:
                             ("m_white_var", "(observable unit)^2"),
                             ("m_bias_var", "(observable unit)^2"),
                             ("m_corr_var", "(observable unit)^2"), ("m_tau_s", "s")):
-            _numbers(g, name, getattr(raw, name), units, big=True)
+            numbers(g, name, getattr(raw, name), units, big=True)
+
+
+def t13_file_writer(tape: T13, packing: str = "TR", *, source: str = "T13"
+                    ) -> Callable[[Path], None]:
+    """Validate ``tape`` now; return a function that writes it, complete, at a given path.
+
+    For committing several outputs together (:func:`tapp.atomic.atomic_write` of each);
+    :func:`write_t13` is ``atomic_write(path, t13_file_writer(tape, packing))``.
+
+    Parameters
+    ----------
+    tape : T13
+    packing : "TR" (upper triangle by rows, the default) or "full" (n_o² per matrix).
+    source : name of the tape in the messages of :func:`validate`.
+
+    Raises
+    ------
+    TapeError
+        If the tape fails :func:`validate`.
+    InputError
+        For an unknown packing.
+    """
+    if packing not in PACKINGS:
+        raise InputError("write_t13", "packing", f"one of {', '.join(PACKINGS)}", packing)
+    validate(tape, source)
+
+    def write(path: Path) -> None:
+        with hdf5io.create(Path(path)) as f:
+            _write(f, tape, packing)
+
+    return write
 
 
 def write_t13(path: Path | str, tape: T13, *, packing: str = "TR") -> Path:
@@ -537,86 +606,41 @@ def write_t13(path: Path | str, tape: T13, *, packing: str = "TR") -> Path:
     InputError
         For an unknown packing.
     """
-    if packing not in PACKINGS:
-        raise InputError("write_t13", "packing", f"one of {', '.join(PACKINGS)}", packing)
     path = Path(path)
-    validate(tape, str(path))
-
-    def write(tmp: Path) -> None:
-        with h5py.File(tmp, "w") as f:
-            _write(f, tape, packing)
-
-    return atomic_write(path, write)
+    return atomic_write(path, t13_file_writer(tape, packing, source=str(path)))
 
 
 # ---------------------------------------------------------------------------------------------
-# Reader
+# Readers
 # ---------------------------------------------------------------------------------------------
 
 
-class _Reader:
-    """Reads datasets of an open file, naming the file and the dataset on failure."""
-
-    def __init__(self, f: h5py.File, source: str):
-        self.f = f
-        self.check = _Checker(source)
-
-    def attr(self, name: str, kind: type):
-        if name not in self.f.attrs:
-            self.check.fail(f"attrs/{name}", "this root attribute present")
-        value = self.f.attrs[name]
-        if kind is int:
-            if not (isinstance(value, int | np.integer) and value >= 0):
-                self.check.fail(f"attrs/{name}", "an integer >= 0", value)
-            return int(value)
-        if kind is float:
-            if not (isinstance(value, float | np.floating) and np.isfinite(value)):
-                self.check.fail(f"attrs/{name}", "a finite number", value)
-            return float(value)
-        return value.decode() if isinstance(value, bytes) else str(value)
-
-    def read(self, name: str, kind: str = "f") -> np.ndarray:
-        """Read dataset ``name``; kind "f" float, "i" integer, "b" bool, "s" strings."""
-        if name not in self.f or not isinstance(self.f[name], h5py.Dataset):
-            self.check.fail(name, "this dataset present")
-        ds = self.f[name]
-        try:
-            data = ds.asstr()[()] if kind == "s" and ds.dtype.kind in "OS" else ds[()]
-        except (OSError, TypeError, ValueError) as exc:
-            self.check.fail(name, "readable data (truncated or corrupt file?)", exc)
-        data = np.asarray(data)
-        ok = {"f": "fiu", "i": "iu", "b": "b", "s": "OU"}[kind]
-        if data.dtype.kind not in ok or data.ndim == 0 and kind != "f":
-            self.check.fail(name, {"f": "numbers", "i": "integers", "b": "booleans",
-                                   "s": "strings"}[kind], data.dtype)
-        if kind == "s":
-            return data
-        return _frozen(data, {"f": float, "i": np.int64, "b": bool}[kind])
-
-    def strings(self, name: str) -> tuple[str, ...]:
-        return tuple(str(s) for s in self.read(name, "s"))
-
-    def normal(self, name: str, n_pairs: int, n_o: int) -> np.ndarray:
-        stored = self.read(name)
-        packing = self.f[name].attrs.get("packing", "TR")
-        packing = packing.decode() if isinstance(packing, bytes) else str(packing)
-        if packing == "TR":
-            self.check.shape(name, stored, (n_pairs, tr_size(n_o)))
-            return _frozen(unpack_tr(stored, n_o))
-        if packing != "full":
-            self.check.fail(f"{name}.attrs/packing", f"one of {', '.join(PACKINGS)}", packing)
-        self.check.shape(name, stored, (n_pairs, n_o * n_o))
-        return _frozen(stored.reshape(n_pairs, n_o, n_o))
-
-
-def _read(r: _Reader, *, raw: bool) -> tuple[T13, np.ndarray]:
-    """Return the tape and records/t_s (checked against times/t_s once those are valid)."""
+def _reader(f: h5py.File, source: str) -> tuple[Reader, int]:
+    """Check format and version; return the reader (checksums required from version 2)."""
+    r = Reader(f, source, checksums=False)
     fmt = r.attr("format", str)
     if fmt != FORMAT:
         r.check.fail("attrs/format", f"format = {FORMAT!r}", repr(fmt))
     version = r.attr("version", int)
     if version not in SUPPORTED_VERSIONS:
         r.check.fail("attrs/version", f"a supported version {SUPPORTED_VERSIONS}", version)
+    if version == 1:
+        warnings.warn(f"{source}: T13 version 1 carries no checksums: corruption cannot be "
+                      "detected", UserWarning, stacklevel=3)
+    r.checksums = version >= 2
+    return r, version
+
+
+def _parts_attr(r: Reader) -> None:
+    parts = r.attr("parts", list, owner="pairs/dJt_parts", default=())
+    if parts != PARTS:
+        r.check.fail("pairs/dJt_parts.attrs/parts", f"the parts {', '.join(PARTS)}",
+                     ", ".join(parts) or "none")
+
+
+def _read(r: Reader, *, raw: bool, matrices: bool) -> tuple[T13, np.ndarray]:
+    """Return the tape (pair matrices None unless ``matrices``; their stored shapes checked
+    all the same) and records/t_s (checked against times/t_s once those are valid)."""
     dims = {name: r.attr(name, int) for name in ("n_o", "n_p", "n_m", "n_ts", "n_it")}
     epoch = Epoch(r.attr("epoch_jd_whole", float), r.attr("epoch_jd_fraction", float))
 
@@ -628,8 +652,8 @@ def _read(r: _Reader, *, raw: bool) -> tuple[T13, np.ndarray]:
                             r.read("stations/lon_deg"), r.read("stations/h_km"),
                             r.read("stations/elev_mask_deg"))
     nominal = r.read("miss/nominal")
-    attrs = r.f["miss/nominal"].attrs
-    miss = TapeMiss(str(attrs.get("kind", "")), float(attrs.get("t_s", math.nan)),
+    miss = TapeMiss(r.attr("kind", str, owner="miss/nominal", default=""),
+                    r.attr("t_s", float, owner="miss/nominal", default=math.nan),
                     r.strings("miss/name"), r.strings("miss/unit"), nominal, r.read("B"))
     records = TapeRecords(r.read("times/t_s"), r.read("times/is_epoch", "b"),
                           r.read("times/is_input", "b"), r.read("records/j", "i"),
@@ -640,28 +664,50 @@ def _read(r: _Reader, *, raw: bool) -> tuple[T13, np.ndarray]:
         if dims[name] != value:
             r.check.fail(f"attrs/{name}", f"{name} = {value} as the datasets have", dims[name])
     k = r.read("pairs/k", "i")
-    pairs = TapePairs(k, r.read("pairs/station", "i"), r.read("pairs/n_obs", "i"),
-                      r.normal("pairs/dJ", k.size, dims["n_o"]),
-                      r.normal("pairs/dJt", k.size, dims["n_o"]))
+    n_pairs, n_o = k.size, dims["n_o"]
+    has_parts = r.has("pairs/dJt_parts")
+    if has_parts:
+        _parts_attr(r)
+    if matrices:
+        dj = r.symmetric("pairs/dJ", (n_pairs,), n_o)
+        djt = r.symmetric("pairs/dJt", (n_pairs,), n_o)
+        parts = r.symmetric("pairs/dJt_parts", (n_pairs, len(PARTS)), n_o) if has_parts else None
+    else:
+        r.stored_shape("pairs/dJ", (n_pairs,), n_o)
+        r.stored_shape("pairs/dJt", (n_pairs,), n_o)
+        if has_parts:
+            r.stored_shape("pairs/dJt_parts", (n_pairs, len(PARTS)), n_o)
+        dj = djt = parts = None
+    pairs = TapePairs(k, r.read("pairs/station", "i"), r.read("pairs/n_obs", "i"), dj, djt,
+                      parts)
     passes = TapePasses(r.read("passes/station", "i"), r.read("passes/t_start_s"),
                         r.read("passes/t_end_s"), r.read("passes/n_obs", "i"))
     tape_raw = None
-    if raw and "raw" in r.f:
-        kinds = tuple(str(s) for s in r.f["raw"].attrs.get("kinds", ()))
+    if raw and r.has("raw"):
+        kinds = r.attr("kinds", list, owner="raw", default=())
         tape_raw = TapeRaw(kinds, *(r.read(f"raw/{name}", kind) for name, kind in (
             ("t_s", "f"), ("station", "i"), ("kind", "i"), ("record", "i"), ("segment", "i"),
             ("value", "f"), ("A", "f"), ("weight", "f"), ("m_white_var", "f"),
             ("m_bias_var", "f"), ("m_corr_var", "f"), ("m_tau_s", "f"))))
     provenance = {key: r.attr(key, str) for key in ("tapp_version", "git_commit",
                                                     "created_utc", "scenario",
-                                                    "scenario_source") if key in r.f.attrs}
+                                                    "scenario_source") if r.has_attr(key)}
     tape = T13(r.attr("iden", str), epoch, dims["n_p"], parameters, stations, miss, records,
                pairs, passes, tape_raw, provenance)
     return tape, r.read("records/t_s")
 
 
+def _check_record_times(source: str, record_times: np.ndarray, tape: T13) -> None:
+    if not np.array_equal(record_times, tape.records.t_s):
+        raise TapeError(f"{source}: records/t_s: expected the record times t_k = "
+                        "times/t_s[1:]")
+
+
 def read_t13(path: Path | str, *, raw: bool = True) -> T13:
-    """Read and validate a T13 tape.
+    """Read and validate a whole T13 tape (every pair matrix unpacked in memory).
+
+    For tapes too large for that, :func:`open_t13` reads the pair matrices record range by
+    record range.
 
     Parameters
     ----------
@@ -675,26 +721,252 @@ def read_t13(path: Path | str, *, raw: bool = True) -> T13:
     TapeError
         If it is not a readable HDF5 file (truncated, corrupt), or not a valid T13 tape; the
         message names the file and the dataset (or attribute) at fault.
+
+    Warns
+    -----
+    UserWarning
+        For a version-1 tape (no checksums: corruption cannot be detected).
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(str(path), "file", "an existing T13 tape file")
-    try:
-        f = h5py.File(path, "r")
-    except OSError as exc:
-        raise TapeError(f"{path}: file: expected a readable HDF5 file (truncated or corrupt: "
-                        f"{exc})") from None
-    with f:
-        tape, record_times = _read(_Reader(f, str(path)), raw=raw)
+    with hdf5io.open_tape(path, "T13 tape") as f:
+        r, _ = _reader(f, str(path))
+        tape, record_times = _read(r, raw=raw, matrices=True)
     validate(tape, str(path))
-    if not np.array_equal(record_times, tape.records.t_s):
-        raise TapeError(f"{path}: records/t_s: expected the record times t_k = times/t_s[1:]")
+    _check_record_times(str(path), record_times, tape)
     return tape
 
 
-def summary(tape: T13) -> dict:
+def _record_range(header: T13, k_first: int, k_last: int) -> tuple[int, int]:
+    """Pair indices [lo, hi) of records k_first..k_last (pairs sorted by k)."""
+    n_it = header.n_it
+    if not (isinstance(k_first, int | np.integer) and isinstance(k_last, int | np.integer)
+            and 1 <= k_first <= k_last <= n_it):
+        raise InputError("pair_block", "k_first, k_last",
+                         f"record indices 1 <= k_first <= k_last <= {n_it}", (k_first, k_last))
+    k = header.pairs.k
+    return (int(np.searchsorted(k, k_first, side="left")),
+            int(np.searchsorted(k, k_last, side="right")))
+
+
+def _header(tape: T13) -> T13:
+    pairs = tape.pairs
+    return replace(tape, pairs=TapePairs(pairs.k, pairs.station, pairs.n_obs, None, None, None),
+                   raw=None)
+
+
+class _PairSource:
+    """What :class:`T13File` and :class:`MemoryPairs` share: the header, blocks of pairs."""
+
+    __slots__ = ()
+
+    header: T13
+
+    def pair_block(self, k_first: int, k_last: int) -> PairBlock:  # pragma: no cover
+        raise NotImplementedError
+
+    def blocks(self, max_pairs: int | None = None) -> Iterator[PairBlock]:
+        """Yield the pair blocks of consecutive record ranges covering records 1..n_it.
+
+        Each block holds whole records and at most ``max_pairs`` pairs (default: packed
+        matrices of about :data:`BLOCK_BYTES`), unless one record alone has more.
+        """
+        header = self.header
+        if max_pairs is None:
+            row_bytes = 8 * tr_size(header.n_o) * (2 + len(PARTS))
+            max_pairs = max(1, BLOCK_BYTES // row_bytes)
+        if max_pairs < 1:
+            raise InputError("blocks", "max_pairs", "at least 1", max_pairs)
+        per_record = np.bincount(header.pairs.k, minlength=header.n_it + 1)[1:]
+        k = 1
+        while k <= header.n_it:
+            last, count = k, int(per_record[k - 1])
+            while last < header.n_it and count + per_record[last] <= max_pairs:
+                count += int(per_record[last])
+                last += 1
+            yield self.pair_block(k, last)
+            k = last + 1
+
+
+class T13File(_PairSource):
+    """A T13 tape open for lazy reading of its pair matrices (from :func:`open_t13`).
+
+    A context manager (``with open_t13(path) as tape:``); :meth:`close` closes the file.
+
+    Attributes
+    ----------
+    header : T13
+        Everything of the tape but the pair matrices (``header.pairs.dJ``, ``dJt`` and
+        ``dJt_parts`` are None) and the raw rows (``header.raw`` is None), validated.
+    path : Path
+    version : int
+        Version of the tape.
+    packing : str
+        Storage of the pair matrices on the tape ("TR" or "full").
+    has_parts : bool
+        Whether the tape has ``pairs/dJt_parts``.
+    """
+
+    __slots__ = ("_file", "_reader", "has_parts", "header", "packing", "path", "version")
+
+    def __init__(self, path: Path | str):
+        self.path = Path(path)
+        self._file = hdf5io.open_tape(self.path, "T13 tape")
+        try:
+            self._reader, self.version = _reader(self._file, str(self.path))
+            tape, record_times = _read(self._reader, raw=False, matrices=False)
+            c = self._reader.check
+            _validate_header(c, tape)
+            _check_record_times(str(self.path), record_times, tape)
+            self.packing = self._reader.packing("pairs/dJ")
+            if self._reader.packing("pairs/dJt") != self.packing:
+                c.fail("pairs/dJt.attrs/packing", f"the packing of pairs/dJ ({self.packing})")
+            self.has_parts = self._reader.has("pairs/dJt_parts")
+            if self.has_parts and self._reader.packing("pairs/dJt_parts") != self.packing:
+                c.fail("pairs/dJt_parts.attrs/packing",
+                       f"the packing of pairs/dJ ({self.packing})")
+        except BaseException:
+            self._file.close()
+            raise
+        self.header = tape
+
+    def __enter__(self) -> T13File:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Close the file (:meth:`pair_block` then fails)."""
+        self._file.close()
+
+    def _matrices(self, name: str, lo: int, hi: int, lead: tuple[int, ...]) -> np.ndarray:
+        """Read rows lo..hi-1 of a pair-matrix dataset, checked, packed TR (m, *lead, L)."""
+        n_o = self.header.n_o
+        c = self._reader.check
+        stored = self._reader.read(name, selection=np.s_[lo:hi])
+        c.finite(name, stored)
+        if self.packing == "full":  # as read_t13 + validate: dJ, dJt symmetric; parts as stored
+            full = stored.reshape(hi - lo, *lead, n_o, n_o)
+            if not lead:
+                c.symmetric(name, full, offset=lo)
+            stored = frozen(pack_tr(full))
+        if not lead:
+            diag = stored[:, tr_diagonal(n_o)]
+            if np.any(diag < 0):
+                i, col = (int(v) for v in np.argwhere(diag < 0)[0])
+                c.fail(name, "a non-negative diagonal (normal matrices)",
+                       f"{diag[i, col]:.3g} in pair {i + lo}, row {col}")
+        return stored
+
+    def pair_block(self, k_first: int, k_last: int) -> PairBlock:
+        """Return the pairs of records k_first..k_last (inclusive), read and checked now.
+
+        Only the rows of ``pairs/dJ``, ``pairs/dJt`` (and ``pairs/dJt_parts``) of those
+        records are read (and their checksums checked); they are checked finite, with a
+        non-negative diagonal, symmetric (a "full" tape, then packed TR) and the parts
+        summing to dJt.
+
+        Raises
+        ------
+        InputError
+            Record indices outside 1 <= k_first <= k_last <= n_it.
+        TapeError
+            A check fails (naming the file and the dataset; pairs numbered from 0 over the
+            whole tape).
+        """
+        if not self._file:
+            raise InputError(str(self.path), "file", "an open T13 tape (pair_block after "
+                                                     "close)")
+        lo, hi = _record_range(self.header, k_first, k_last)
+        pairs = self.header.pairs
+        dj = self._matrices("pairs/dJ", lo, hi, ())
+        djt = self._matrices("pairs/dJt", lo, hi, ())
+        parts = None
+        if self.has_parts:
+            parts = self._matrices("pairs/dJt_parts", lo, hi, (len(PARTS),))
+            _check_parts_sum(self._reader.check,
+                             scaled_difference_tr(parts.sum(axis=1), djt), lo)
+        return PairBlock(pairs.k[lo:hi], pairs.station[lo:hi], pairs.n_obs[lo:hi], dj, djt,
+                         parts)
+
+
+def open_t13(path: Path | str) -> T13File:
+    """Open a T13 tape for reading its pair matrices record range by record range.
+
+    Everything but the pair matrices (and the raw rows) is read and validated now, as by
+    :func:`read_t13`; the pair matrices are read and checked block by block
+    (:meth:`T13File.pair_block`, :meth:`T13File.blocks`), so a tape of 20,000 pairs of
+    n_o = 50 needs no more memory than one block.
+
+    Raises
+    ------
+    InputError
+        If the file does not exist.
+    TapeError
+        As :func:`read_t13`, for everything but the values of the pair matrices (their
+        stored shapes are checked).
+
+    Warns
+    -----
+    UserWarning
+        For a version-1 tape.
+
+    Examples
+    --------
+    >>> with open_t13("run.t13.h5") as tape:  # doctest: +SKIP
+    ...     for block in tape.blocks():
+    ...         ...
+    """
+    return T13File(path)
+
+
+class MemoryPairs(_PairSource):
+    """The interface of :class:`T13File` over a tape in memory (from :func:`memory_pairs`).
+
+    Attributes
+    ----------
+    header : T13
+        The tape without its pair matrices and raw rows.
+    """
+
+    __slots__ = ("_tape", "header")
+
+    def __init__(self, tape: T13, source: str = "T13"):
+        validate(tape, source)
+        self._tape = tape
+        self.header = _header(tape)
+
+    def pair_block(self, k_first: int, k_last: int) -> PairBlock:
+        """Return the pairs of records k_first..k_last (inclusive), matrices packed TR.
+
+        Raises
+        ------
+        InputError
+            Record indices outside 1 <= k_first <= k_last <= n_it.
+        """
+        lo, hi = _record_range(self.header, k_first, k_last)
+        pairs = self._tape.pairs
+        parts = None if pairs.dJt_parts is None else frozen(pack_tr(pairs.dJt_parts[lo:hi]))
+        return PairBlock(frozen(pairs.k[lo:hi], np.int64), frozen(pairs.station[lo:hi], np.int64),
+                         frozen(pairs.n_obs[lo:hi], np.int64), frozen(pack_tr(pairs.dJ[lo:hi])),
+                         frozen(pack_tr(pairs.dJt[lo:hi])), parts)
+
+
+def memory_pairs(tape: T13) -> MemoryPairs:
+    """Return the :class:`T13File` interface (``header``, ``pair_block``, ``blocks``) over a
+    tape in memory, validated now.
+
+    Raises
+    ------
+    TapeError
+        If the tape fails :func:`validate`.
+    """
+    return MemoryPairs(tape)
+
+
+def summary(tape: T13, *, version: int = VERSION) -> dict:
     """Return a JSON-ready summary: dimensions, parameters, stations with their passes and
-    observations, epoch times, records and provenance."""
+    observations, epoch times, records and provenance (``version``: of the tape read)."""
     rec = tape.records
     epoch_times = rec.times_s[rec.is_epoch]
     stations = []
@@ -710,7 +982,7 @@ def summary(tape: T13) -> dict:
             "observations": int(tape.pairs.n_obs[mine].sum()),
             "records_with_data": int(np.count_nonzero(mine))})
     return {
-        "format": FORMAT, "version": VERSION, "iden": tape.iden, "epoch_utc": tape.epoch.iso(3),
+        "format": FORMAT, "version": version, "iden": tape.iden, "epoch_utc": tape.epoch.iso(3),
         "dimensions": {"n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                        "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
                        "passes": int(tape.passes.station.size),
@@ -722,7 +994,7 @@ def summary(tape: T13) -> dict:
         "stations": stations,
         "observations": int(tape.pairs.n_obs.sum()),
         "epochs": [{"index": int(i), "t_s": float(t),
-                    "utc": _utc(tape.epoch, float(t))}
+                    "utc": utc_at(tape.epoch, float(t))}
                    for i, t in zip(np.flatnonzero(rec.is_epoch), epoch_times, strict=True)],
         "input_times": int(np.count_nonzero(rec.is_input)),
         "miss": {"kind": tape.miss.kind, "t_s": tape.miss.t_s,
@@ -732,6 +1004,8 @@ def summary(tape: T13) -> dict:
     }
 
 
-def _utc(epoch: Epoch, t_s: float) -> str:
-    return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(3)
+def utc_at(epoch: Epoch, t_s: float, decimals: int = 3) -> str:
+    """Return the UTC date (ISO, ``decimals`` digits of seconds) ``t_s`` seconds after
+    ``epoch``."""
+    return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(decimals)
 

@@ -421,13 +421,13 @@ def validate(t32: T32, source: str = "T32") -> None:
 def _write(f: h5py.File, t32: T32) -> None:
     n_o = t32.n_o
     extra = {k: v for k, v in t32.provenance.items() if k not in STAMPED}
-    f.attrs.update(
+    hdf5io.write_attrs(f, dict(
         format=FORMAT, version=VERSION, iden=t32.iden, n_o=n_o, n_p=t32.n_p, n_m=t32.n_m,
         n_recycles=len(t32.recycles), n_partitions=len(t32.partitions),
         epoch=t32.epoch.iso(6), epoch_jd_whole=t32.epoch.jd_whole,
         epoch_jd_fraction=t32.epoch.jd_fraction, time_scale="UTC", units=UNITS_NOTE,
-        provenance_keys=list(extra), **hdf5io.provenance_attrs())
-    f.attrs.update(extra)
+        provenance_keys=list(extra), **hdf5io.provenance_attrs()))
+    hdf5io.write_attrs(f, extra)
     strings, numbers = hdf5io.write_strings, hdf5io.write_numbers
 
     par = t32.parameters
@@ -478,7 +478,7 @@ def _write(f: h5py.File, t32: T32) -> None:
         eg = rg.create_group("entities")
         for e in rc.entities:
             ent = eg.create_group(str(int(e.omega)))
-            ent.attrs.update(command=e.command, alias=e.alias)
+            hdf5io.write_attrs(ent, {"command": e.command, "alias": e.alias})
             numbers(ent, "matrix", np.asarray(e.matrix, dtype=float),
                     "(row unit)/(column unit), or their product for normal and covariance "
                     "blocks: see rows, cols")
@@ -714,4 +714,4 @@ def format_t32_summary(info: dict) -> str:
     lines += ["", f"written by tapp {prov.get('tapp_version', '?')} on "
                   f"{prov.get('created_utc', '?')} from {prov.get('deck_source', '?')} and "
                   f"{prov.get('t13_source', '?')}"]
-    return "\n".join(lines)
+    return "\n".join(line.rstrip() for line in lines)

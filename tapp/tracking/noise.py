@@ -46,6 +46,9 @@ import numpy as np
 from tapp.errors import InputError
 from tapp.measurements import OBSERVABLE_UNITS, Observable
 
+#: The parts of the real-world AᵀWMWA (:func:`normal_matrix_parts`), in their order.
+PARTS = ("white", "bias", "correlated")
+
 #: Edge unit of each observable kind's noise in scenario files, and the factor to the internal
 #: unit: σ_internal = σ_edge * factor (m -> km, mm/s -> km/s, deg -> rad).
 EDGE_UNITS: dict[str, tuple[str, float]] = {
@@ -184,11 +187,58 @@ def covariance_block(t_s, real: RealNoise) -> np.ndarray:
     return m
 
 
+def normal_matrix_parts(a, t_s, weights, real: RealNoise) -> tuple[np.ndarray, np.ndarray]:
+    r"""Return AᵀWA (n_o, n_o) and AᵀWMWA split into its :data:`PARTS`, (3, n_o, n_o).
+
+    The three terms of the module docstring's formula, for one pass of one observable kind:
+
+    .. math::
+
+        \tilde J_{white} = \sigma_w^2 B^T B,\quad
+        \tilde J_{bias} = \sigma_b^2\, s s^T,\quad
+        \tilde J_{corr} = \sigma_c^2\,(B^T F + F^T B - B^T B),
+
+    each exactly symmetric as written, summing to AᵀWMWA (:func:`normal_matrices`). A term
+    whose σ is zero is a zero matrix.
+
+    Parameters
+    ----------
+    a : array_like, shape (n, n_o)
+        Partials of the n observations w.r.t. the n_o parameters (one kind, one station).
+    t_s : array_like, shape (n,)
+        Their times, s, non-decreasing.
+    weights : array_like, shape (n,)
+        Fit-world weights 1/σ², 1/unit².
+    real : RealNoise
+        Real-world noise of the kind at the station.
+
+    Returns
+    -------
+    j_fit : (n_o, n_o) AᵀWA, 1/(u_a u_b).
+    parts : (3, n_o, n_o) white, per-pass bias and exponentially correlated parts of
+        AᵀWMWA, 1/(u_a u_b).
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(weights, dtype=float)[:, None] * a
+    j_fit = a.T @ b
+    btb = b.T @ b
+    parts = np.zeros((len(PARTS), a.shape[1], a.shape[1]))
+    parts[0] = real.sigma_white**2 * btb
+    if real.sigma_pass_bias > 0:
+        s = b.sum(axis=0)
+        parts[1] = real.sigma_pass_bias**2 * np.outer(s, s)
+    if real.sigma_correlated > 0:
+        btf = b.T @ exponential_kernel_lower(b, t_s, real.tau_s)
+        parts[2] = real.sigma_correlated**2 * (btf + btf.T - btb)
+    return 0.5 * (j_fit + j_fit.T), parts
+
+
 def normal_matrices(a, t_s, weights, real: RealNoise) -> tuple[np.ndarray, np.ndarray]:
     """Return (AᵀWA, AᵀWMWA), each (n_o, n_o), of one pass of one observable kind.
 
     Equations in the module docstring; M is block-diagonal over passes and kinds, so the
-    normal matrices of an arc are the sums of these.
+    normal matrices of an arc are the sums of these. AᵀWMWA is the sum of the parts of
+    :func:`normal_matrix_parts`.
 
     Parameters
     ----------
@@ -201,15 +251,5 @@ def normal_matrices(a, t_s, weights, real: RealNoise) -> tuple[np.ndarray, np.nd
     real : RealNoise
         Real-world noise of the kind at the station.
     """
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(weights, dtype=float)[:, None] * a
-    j_fit = a.T @ b
-    btb = b.T @ b
-    j_real = real.sigma_white**2 * btb
-    if real.sigma_pass_bias > 0:
-        s = b.sum(axis=0)
-        j_real += real.sigma_pass_bias**2 * np.outer(s, s)
-    if real.sigma_correlated > 0:
-        btf = b.T @ exponential_kernel_lower(b, t_s, real.tau_s)
-        j_real += real.sigma_correlated**2 * (btf + btf.T - btb)
-    return 0.5 * (j_fit + j_fit.T), j_real
+    j_fit, parts = normal_matrix_parts(a, t_s, weights, real)
+    return j_fit, parts.sum(axis=0)

@@ -84,7 +84,7 @@ from tapp.tape.t13 import (
     TapeStations,
 )
 from tapp.targeting import BPlaneProgram
-from tapp.tracking.noise import normal_matrices
+from tapp.tracking.noise import PARTS, normal_matrix_parts
 from tapp.tracking.scenario import (
     BIAS_KINDS,
     KINDS,
@@ -303,19 +303,22 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
 
 def _accumulate(ts: TrackingStation, data: _StationData, n_o: int
                 ) -> dict[int, list]:
-    """Per record k: [ΔJ, ΔJ̃, n_obs] of the station (module docstring, item 3)."""
+    """Per record k: [ΔJ, ΔJ̃, n_obs, parts of ΔJ̃ (3, n_o, n_o)] of the station (module
+    docstring, item 3; the parts of :func:`tapp.tracking.noise.normal_matrix_parts`)."""
     out: dict[int, list] = {}
     bounds = np.flatnonzero(np.diff(data.segment, prepend=-1, append=data.segment[-1] + 1))
     for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
         k = int(data.record[start])
-        acc = out.setdefault(k, [np.zeros((n_o, n_o)), np.zeros((n_o, n_o)), 0])
+        acc = out.setdefault(k, [np.zeros((n_o, n_o)), np.zeros((n_o, n_o)), 0,
+                                 np.zeros((len(PARTS), n_o, n_o))])
         t = data.t_s[start:stop]
         for c, (fit, real) in enumerate(zip(ts.fit, ts.real, strict=True)):
             weights = np.full(t.size, fit.weight)
-            j_fit, j_real = normal_matrices(data.a[start:stop, c, :], t, weights, real)
+            j_fit, parts = normal_matrix_parts(data.a[start:stop, c, :], t, weights, real)
             acc[0] += j_fit
-            acc[1] += j_real
+            acc[1] += parts.sum(axis=0)
             acc[2] += t.size
+            acc[3] += parts
     return out
 
 
@@ -501,8 +504,8 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     pair_rows = []
     for ts, d in zip(scenario.stations, data, strict=True):
         if d is not None:
-            for k, (dj, djt, count) in sorted(_accumulate(ts, d, n_o).items()):
-                pair_rows.append((k, ts.number, count, dj, djt))
+            for k, (dj, djt, count, parts) in sorted(_accumulate(ts, d, n_o).items()):
+                pair_rows.append((k, ts.number, count, dj, djt, parts))
         tick(f"normal matrices {ts.station.name}")
     pair_rows.sort(key=lambda row: (row[0], row[1]))
 
@@ -536,7 +539,8 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                             arc.states[at_k], u),
         pairs=TapePairs(np.array([r[0] for r in pair_rows]), np.array([r[1] for r in pair_rows]),
                         np.array([r[2] for r in pair_rows]),
-                        np.array([r[3] for r in pair_rows]), np.array([r[4] for r in pair_rows])),
+                        np.array([r[3] for r in pair_rows]), np.array([r[4] for r in pair_rows]),
+                        dJt_parts=np.array([r[5] for r in pair_rows])),
         passes=_pass_table(stations, data),
         raw=_raw(stations, data, n_o) if raw else None,
         provenance={"scenario": scenario.document_json, "scenario_source": scenario.source},

@@ -12,6 +12,7 @@ from tapp.tracking.noise import (
     covariance_block,
     exponential_kernel_lower,
     normal_matrices,
+    normal_matrix_parts,
 )
 
 # Round-off of sums of ~100 products, relative to the natural scale sqrt(J_aa J_bb).
@@ -70,6 +71,33 @@ def test_pass_bias_adds_the_rank_one_term() -> None:
     _, biased = normal_matrices(a, t, w, RealNoise("range", 0.01, 0.004))
     s = (w[:, None] * a).sum(axis=0)
     assert _scaled_error(biased - white, 0.004**2 * np.outer(s, s)) < 1e-10
+
+
+def test_parts_are_the_three_terms_of_the_dense_product_and_sum_to_it() -> None:
+    rng = np.random.default_rng(11)
+    a, t, w = _pass(rng)
+    real = RealNoise("range_rate", 2e-6, 1e-6, 3e-6, 120.0)
+    j_fit, parts = normal_matrix_parts(a, t, w, real)
+    same_fit, j_real = normal_matrices(a, t, w, real)
+    assert parts.shape == (3, a.shape[1], a.shape[1])
+    np.testing.assert_array_equal(same_fit, j_fit)
+    np.testing.assert_array_equal(parts.sum(axis=0), j_real)  # one is the other, summed
+    wa = w[:, None] * a
+    ones = np.ones((t.size, t.size))
+    kernel = np.exp(-np.abs(t[:, None] - t[None, :]) / real.tau_s)
+    for part, m in zip(parts, (2e-6**2 * np.eye(t.size), 1e-6**2 * ones, 3e-6**2 * kernel),
+                       strict=True):
+        # on the scale of the whole AᵀWMWA: a part alone may be small on some parameter
+        d = np.sqrt(np.diag(j_real))
+        assert np.max(np.abs(part - wa.T @ m @ wa) / np.outer(d, d)) < ROUND_OFF
+        np.testing.assert_array_equal(part, part.T)
+
+
+def test_absent_noise_terms_are_zero_parts() -> None:
+    rng = np.random.default_rng(13)
+    a, t, w = _pass(rng, n=20)
+    _, parts = normal_matrix_parts(a, t, w, RealNoise("range", 0.01))
+    assert np.all(parts[1:] == 0.0) and np.all(np.diag(parts[0]) > 0)
 
 
 @pytest.mark.parametrize(("make", "field"), [

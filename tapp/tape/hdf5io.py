@@ -1,0 +1,488 @@
+"""How the tapes store and check their HDF5 datasets: one writer and one validating reader.
+
+Shared by the T13 (:mod:`tapp.tape.t13`) and T32 (:mod:`tapp.tape.t32`) tapes.
+
+Storage (tapes with checksums: T13 version >= 2, every T32):
+
+- every dataset is chunked and carries HDF5's Fletcher-32 checksum filter, so a flipped byte
+  in its data fails on read; chunks hold whole rows (axis 0) up to :data:`CHUNK_BYTES`, so a
+  slice of rows reads (and checks) only the chunks it touches;
+- large datasets are also gzip-compressed (shuffle, level 4);
+- text is fixed-length UTF-8, in datasets and attributes alike, null-padded to the longest
+  entry: variable-length strings live in HDF5's global heap, which no filter and no checksum
+  covers (and a corrupt global heap can make the HDF5 library loop forever on reading);
+- files are written with the HDF5 1.8 object formats (``libver="v108"``), whose object
+  headers and B-trees carry their own checksums: a flipped byte in the metadata fails too.
+
+Reading: :class:`Reader` reads a dataset or an attribute and checks its kind, and turns every
+failure into a :class:`~tapp.errors.TapeError` ``"{file}: {dataset}: expected ... (got ...)"``:
+a checksum mismatch, an unreadable (truncated) chunk, text that is not UTF-8, a dataset
+without a checksum in a tape whose version promises one. :class:`Checker` holds the checks of
+values (shape, finite, symmetric). :func:`verify` reads every dataset and attribute of any
+tape, chunk by chunk.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+from collections.abc import Iterable
+from datetime import UTC, datetime
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from tapp import __version__
+from tapp.errors import InputError, TapeError
+from tapp.tape.packing import symmetry_defect, tr_size, unpack_tr
+
+#: Target size of a chunk (bytes): whole rows of axis 0 up to this size.
+CHUNK_BYTES = 1 << 18
+#: Compression of large datasets.
+GZIP = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+#: Lowest HDF5 object-format version written: 1.8 (object headers with checksums).
+LIBVER = "v108"
+#: Storage of symmetric matrices: "TR" (upper triangle by rows) or "full" (n² entries).
+PACKINGS = ("TR", "full")
+#: Relative asymmetry max |M_ij - M_ji| / sqrt(M_ii M_jj) above which a symmetric matrix is
+#: rejected (:func:`tapp.tape.packing.symmetry_defect`).
+SYMMETRY_TOL = 1e-12
+
+
+def frozen(a, dtype=float) -> np.ndarray:
+    """Return a read-only copy of ``a`` as ``dtype``."""
+    out = np.array(a, dtype=dtype)
+    out.setflags(write=False)
+    return out
+
+
+def git_commit() -> str:
+    """Commit of the source checkout tapp runs from, or "unknown"."""
+    try:
+        proc = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
+                              capture_output=True, text=True, check=True, timeout=5)
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return proc.stdout.strip()
+
+
+def provenance_attrs() -> dict[str, str]:
+    """Return the root attributes every tape gets: tapp_version, git_commit, created_utc."""
+    return {"tapp_version": __version__, "git_commit": git_commit(),
+            "created_utc": datetime.now(UTC).isoformat(timespec="seconds")}
+
+
+def create(path: Path) -> h5py.File:
+    """Open ``path`` for writing (truncating) with the object formats of :data:`LIBVER`."""
+    return h5py.File(path, "w", libver=LIBVER)
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing
+# ---------------------------------------------------------------------------------------------
+
+
+def _fixed_text(values: list[str]) -> np.ndarray:
+    encoded = [v.encode("utf-8") for v in values]
+    width = max([1, *(len(b) for b in encoded)])
+    return np.array(encoded, dtype=h5py.string_dtype("utf-8", width))
+
+
+def write_attrs(obj: h5py.HLObject, values: dict[str, object], *, checksums: bool = True
+                ) -> None:
+    """Set attributes; text (a str, or a list or tuple of str) as fixed-length UTF-8.
+
+    Fixed-length text is stored in the object header (checksummed from HDF5 1.8 formats),
+    never in the global heap. ``checksums=False`` stores them as h5py does by default
+    (variable-length text: T13 version 1).
+    """
+    for name, value in values.items():
+        if checksums and isinstance(value, str):
+            obj.attrs.create(name, _fixed_text([value])[0])
+        elif (checksums and isinstance(value, list | tuple) and value
+              and all(isinstance(v, str) for v in value)):
+            obj.attrs.create(name, _fixed_text(list(value)))
+        else:
+            obj.attrs[name] = value
+
+
+def _layout(data: np.ndarray, *, compress: bool) -> dict:
+    """Chunked, Fletcher-32 storage options of ``data`` (whole rows per chunk)."""
+    if data.ndim == 0:
+        raise InputError("hdf5io", "data", "an array of at least one dimension (chunked)",
+                         data.shape)
+    if data.size == 0:  # HDF5 needs chunk dims >= 1 <= the maximum dims: let them grow
+        return {"chunks": tuple(max(1, d) for d in data.shape),
+                "maxshape": (None,) * data.ndim, "fletcher32": True}
+    row_bytes = data.itemsize * math.prod(data.shape[1:])
+    rows = max(1, min(data.shape[0], CHUNK_BYTES // max(1, row_bytes)))
+    options = {"chunks": (rows, *data.shape[1:]), "fletcher32": True}
+    if compress:
+        options.update(GZIP)
+    return options
+
+
+def write_strings(group: h5py.Group, name: str, values: Iterable[str], units: str = "", *,
+                  checksums: bool = True) -> h5py.Dataset:
+    """Write text as fixed-length UTF-8, chunked with Fletcher-32, attribute ``units``.
+
+    ``checksums=False`` writes the unfiltered variable-length strings of T13 version 1.
+    """
+    texts = [str(v) for v in values]
+    if not checksums:
+        ds = group.create_dataset(name, data=np.array(texts, dtype=h5py.string_dtype()))
+    else:
+        data = _fixed_text(texts)
+        ds = group.create_dataset(name, data=data, **_layout(data, compress=False))
+    write_attrs(ds, {"units": units}, checksums=checksums)
+    return ds
+
+
+def write_numbers(group: h5py.Group, name: str, values, units: str, *, big: bool = False,
+                  checksums: bool = True) -> h5py.Dataset:
+    """Write numbers (or booleans), chunked with Fletcher-32, attribute ``units``.
+
+    ``big`` also gzip-compresses. ``checksums=False`` writes the layout of T13 version 1
+    (contiguous, or chunked and compressed when ``big``, no checksum).
+    """
+    data = np.asarray(values)
+    if checksums:
+        options = _layout(data, compress=big)
+    elif big and data.size:
+        chunk = list(data.shape)
+        chunk[0] = max(1, min(data.shape[0], CHUNK_BYTES // max(1, data[0].nbytes)))
+        options = {"chunks": tuple(chunk), **GZIP}
+    else:
+        options = {}
+    ds = group.create_dataset(name, data=data, **options)
+    write_attrs(ds, {"units": units}, checksums=checksums)
+    return ds
+
+
+def write_symmetric(group: h5py.Group, name: str, matrices, units: str, packing: str = "TR",
+                    *, big: bool = False, checksums: bool = True) -> h5py.Dataset:
+    """Write symmetric matrices (..., n, n) packed ("TR": (..., n(n+1)/2), "full": (..., n²)).
+
+    Attributes ``packing`` and ``order`` (n) say how to unpack.
+    """
+    m = np.asarray(matrices, dtype=float)
+    n = m.shape[-1]
+    if packing == "TR":
+        rows, cols = np.triu_indices(n)
+        stored = m[..., rows, cols]
+    else:
+        stored = m.reshape(*m.shape[:-2], n * n)
+    ds = write_numbers(group, name, stored, units, big=big, checksums=checksums)
+    write_attrs(ds, {"packing": packing, "order": n}, checksums=checksums)
+    return ds
+
+
+# ---------------------------------------------------------------------------------------------
+# Checking values
+# ---------------------------------------------------------------------------------------------
+
+
+class Checker:
+    """Checks of values; every failure raises TapeError naming the file and the dataset."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, dataset: str, expected: str, got: object = None):
+        """Raise ``TapeError("{source}: {dataset}: expected {expected} (got {got})")``."""
+        detail = "" if got is None else f" (got {got})"
+        raise TapeError(f"{self.source}: {dataset}: expected {expected}{detail}")
+
+    def shape(self, dataset: str, a: np.ndarray | None, shape: tuple[int, ...]) -> None:
+        if a is None:
+            self.fail(dataset, f"an array of shape {shape}", "None")
+        if a.shape != shape:
+            self.fail(dataset, f"shape {shape}", a.shape)
+
+    def finite(self, dataset: str, a: np.ndarray) -> None:
+        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
+            bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
+            self.fail(dataset, "finite values", f"{a[bad]} at index {bad}")
+
+    def symmetric(self, dataset: str, m: np.ndarray, *, what: str = "normal matrices",
+                  label: str | None = "pair", offset: int = 0, tol: float = SYMMETRY_TOL
+                  ) -> None:
+        """Check symmetric matrices (..., n, n) with a non-negative diagonal.
+
+        ``label`` names the leading index in the message ("pair 3"), with ``offset`` added
+        (a slice of a larger stack); None for a single matrix.
+        """
+        stack = m.reshape(-1, *m.shape[-2:])
+
+        def where(i: int) -> str:
+            return "" if label is None else f" in {label} {i + offset}"
+
+        defect = symmetry_defect(stack) if stack.size else np.zeros(0)
+        if np.any(defect > tol):
+            first = int(np.argmax(defect > tol))
+            self.fail(dataset, f"symmetric {what} (relative asymmetry <= {tol:g})",
+                      f"{defect[first]:.3g}{where(first)}")
+        diag = np.diagonal(stack, axis1=-2, axis2=-1)
+        if np.any(diag < 0):
+            i, col = (int(v) for v in np.argwhere(diag < 0)[0])
+            self.fail(dataset, f"a non-negative diagonal ({what})",
+                      f"{diag[i, col]:.3g}{where(i)}, row {col}")
+
+    def text(self, where: str, value: object) -> str:
+        """Return ``value`` (bytes or str) as text; fail unless it is valid UTF-8."""
+        if isinstance(value, bytes | np.bytes_):
+            try:
+                return bytes(value).decode("utf-8")
+            except UnicodeDecodeError:
+                self.fail(where, "UTF-8 text", repr(bytes(value)[:40]))
+        text = str(value)
+        try:  # h5py hands undecodable bytes of a UTF-8 attribute back as lone surrogates
+            text.encode("utf-8")
+        except UnicodeEncodeError:
+            self.fail(where, "UTF-8 text", repr(text.encode("utf-8", "surrogateescape")[:40]))
+        return text
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading
+# ---------------------------------------------------------------------------------------------
+
+
+def open_tape(path: Path | str, what: str = "tape") -> h5py.File:
+    """Open an existing tape for reading.
+
+    Raises
+    ------
+    InputError
+        If the file does not exist ("expected an existing {what} file").
+    TapeError
+        If it is not a readable HDF5 file (truncated, corrupt).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(str(path), "file", f"an existing {what} file")
+    try:
+        return h5py.File(path, "r")
+    except OSError as exc:
+        raise TapeError(f"{path}: file: expected a readable HDF5 file (truncated or corrupt: "
+                        f"{exc})") from None
+
+
+_KINDS = {"f": ("fiu", "numbers", float), "i": ("iu", "integers", np.int64),
+          "b": ("b", "booleans", bool), "s": ("OS", "strings", None)}
+
+
+class Reader:
+    """Reads datasets and attributes of an open file, naming the file and the dataset.
+
+    Parameters
+    ----------
+    f : the open file (or a group: dataset names are then relative to it).
+    source : file name for the messages.
+    checksums : require the Fletcher-32 filter on every dataset read.
+    """
+
+    def __init__(self, f: h5py.File | h5py.Group, source: str, *, checksums: bool = True):
+        self.f = f
+        self.check = Checker(source)
+        self.checksums = checksums
+
+    # -- attributes ----------------------------------------------------------------------
+
+    def _attrs(self, owner: str):
+        try:
+            return self.f.attrs if owner == "" else self.dataset_or_group(owner).attrs
+        except OSError as exc:  # pragma: no cover - corrupt metadata caught on open mostly
+            self.check.fail(owner or "attrs", "readable attributes (corrupt file?)", exc)
+
+    def has_attr(self, name: str, owner: str = "") -> bool:
+        return name in self._attrs(owner)
+
+    def attr(self, name: str, kind: type = str, owner: str = "", default: object = ...):
+        """Return attribute ``name`` of the root (or of ``owner``) as int, float or str.
+
+        Missing: ``default`` if given, else a TapeError.
+        """
+        where = f"{owner}.attrs/{name}" if owner else f"attrs/{name}"
+        attrs = self._attrs(owner)
+        if name not in attrs:
+            if default is not ...:
+                return default
+            self.check.fail(where, "this attribute present")
+        try:
+            value = attrs[name]
+        except (OSError, TypeError, ValueError) as exc:
+            self.check.fail(where, "a readable attribute", exc)
+        if kind is int:
+            if not (isinstance(value, int | np.integer) and not isinstance(value, bool)
+                    and value >= 0):
+                self.check.fail(where, "an integer >= 0", value)
+            return int(value)
+        if kind is float:
+            if not (isinstance(value, float | np.floating | int | np.integer)
+                    and np.isfinite(value)):
+                self.check.fail(where, "a finite number", value)
+            return float(value)
+        if kind is list:
+            values = np.atleast_1d(np.asarray(value, dtype=object))
+            return tuple(self.check.text(where, v) for v in values)
+        if isinstance(value, np.ndarray):
+            self.check.fail(where, "a text", value.tolist())
+        return self.check.text(where, value)
+
+    # -- datasets ------------------------------------------------------------------------
+
+    def dataset_or_group(self, name: str) -> h5py.Dataset | h5py.Group:
+        try:
+            if name not in self.f:
+                self.check.fail(name, "this dataset present")
+            return self.f[name]
+        except (OSError, KeyError) as exc:
+            self.check.fail(name, "a readable object (corrupt file?)", exc)
+
+    def has(self, name: str) -> bool:
+        try:
+            return name in self.f
+        except OSError as exc:
+            self.check.fail(name, "a readable object (corrupt file?)", exc)
+
+    def dataset(self, name: str) -> h5py.Dataset:
+        ds = self.dataset_or_group(name)
+        if not isinstance(ds, h5py.Dataset):
+            self.check.fail(name, "this dataset present", "a group")
+        if self.checksums and not ds.fletcher32:
+            self.check.fail(name, "a Fletcher-32 checksum filter on the dataset", "none")
+        return ds
+
+    def raw(self, name: str, selection=()) -> np.ndarray:
+        """Return the stored data of ``name`` (or a selection of it), unconverted."""
+        ds = self.dataset(name)
+        try:
+            return np.asarray(ds[()] if selection == () else ds[selection])
+        except OSError as exc:
+            if ds.fletcher32 and "filter" in str(exc):
+                self.check.fail(name, "data matching its Fletcher-32 checksum",
+                                "checksum mismatch (corrupt file)")
+            self.check.fail(name, "readable data (truncated or corrupt file?)", exc)
+        except (TypeError, ValueError) as exc:
+            self.check.fail(name, "readable data (truncated or corrupt file?)", exc)
+
+    def read(self, name: str, kind: str = "f", selection=()) -> np.ndarray:
+        """Read dataset ``name``; kind "f" float, "i" integer, "b" bool, "s" strings (UTF-8).
+
+        Returns a read-only array (floats as float64, integers as int64); strings as an
+        array of str.
+        """
+        data = self.raw(name, selection)
+        ok, what, dtype = _KINDS[kind]
+        if data.dtype.kind not in ok or (data.ndim == 0 and kind != "f"):
+            self.check.fail(name, what, data.dtype)
+        if kind == "s":
+            out = np.array([self.check.text(name, v) for v in data.ravel()], dtype=object)
+            return out.reshape(data.shape)
+        return frozen(data, dtype)
+
+    def strings(self, name: str) -> tuple[str, ...]:
+        return tuple(self.read(name, "s"))
+
+    def packing(self, name: str) -> str:
+        packing = self.attr("packing", str, owner=name, default="TR")
+        if packing not in PACKINGS:
+            self.check.fail(f"{name}.attrs/packing", f"one of {', '.join(PACKINGS)}", packing)
+        return packing
+
+    def stored_shape(self, name: str, lead: tuple[int, ...], n: int) -> str:
+        """Check the stored shape of packed symmetric matrices without reading; return the
+        packing."""
+        packing = self.packing(name)
+        length = tr_size(n) if packing == "TR" else n * n
+        got = self.dataset(name).shape
+        if got != (*lead, length):
+            self.check.fail(name, f"shape {(*lead, length)} ({packing} packing, order {n})",
+                            got)
+        return packing
+
+    def symmetric(self, name: str, lead: tuple[int, ...], n: int) -> np.ndarray:
+        """Read packed symmetric matrices and return them full, shape (*lead, n, n)."""
+        packing = self.stored_shape(name, lead, n)
+        stored = self.read(name)
+        if packing == "TR":
+            return frozen(unpack_tr(stored, n))
+        return frozen(stored.reshape(*lead, n, n))
+
+
+def attr_value(check: Checker, where: str, value: object) -> object:
+    """Return an attribute as a JSON-ready value (text checked as UTF-8)."""
+    if isinstance(value, bytes | np.bytes_ | str):
+        return check.text(where, value)
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "OSU":
+            return [check.text(where, v) for v in value.ravel()]
+        return value.tolist()
+    return value
+
+
+def _rows(ds: h5py.Dataset) -> int:
+    """Rows of axis 0 read at once by :func:`verify` (whole chunks, about CHUNK_BYTES)."""
+    if ds.chunks:
+        chunk_bytes = ds.dtype.itemsize * math.prod(ds.chunks)
+        return ds.chunks[0] * max(1, CHUNK_BYTES // max(1, chunk_bytes))
+    row = ds.dtype.itemsize * math.prod(ds.shape[1:])
+    return max(1, CHUNK_BYTES // max(1, row))
+
+
+def verify(path: Path | str) -> list[str]:
+    """Read every dataset and attribute of a tape (any HDF5 file); return the dataset names.
+
+    Each dataset is read whole-chunk by whole-chunk, so its Fletcher-32 checksums are
+    checked, and text (datasets and attributes) must be valid UTF-8. A dataset without a
+    checksum is read all the same (a T13 version-1 tape, another HDF5 file): corruption of
+    its data cannot be detected.
+
+    Raises
+    ------
+    InputError
+        If the file does not exist.
+    TapeError
+        On the first failure: an unreadable file or object, a checksum mismatch, text that
+        is not UTF-8; the message names the file and the dataset (or attribute).
+    """
+    path = Path(path)
+    with open_tape(path) as f:
+        r = Reader(f, str(path), checksums=False)
+        names: list[str] = []
+        owners: list[str] = [""]
+
+        def visit(name: str, obj) -> None:
+            (names if isinstance(obj, h5py.Dataset) else owners).append(name)
+
+        try:
+            f.visititems(visit)
+        except (OSError, KeyError) as exc:
+            r.check.fail("file", "a readable group structure (corrupt file?)", exc)
+        for owner in owners + names:
+            attrs = r._attrs(owner)
+            for key in list(attrs.keys()):
+                where = f"{owner}.attrs/{key}" if owner else f"attrs/{key}"
+                try:
+                    value = attrs[key]
+                except (OSError, TypeError, ValueError) as exc:
+                    r.check.fail(where, "a readable attribute", exc)
+                attr_value(r.check, where, value)
+        for name in names:
+            ds = r.dataset(name)
+            if ds.shape is None:  # an empty (null) dataspace: nothing stored
+                continue
+            if ds.ndim == 0:
+                data = [r.raw(name)]
+            else:
+                step = _rows(ds)
+                data = (r.raw(name, np.s_[a:a + step]) for a in range(0, ds.shape[0], step))
+            for block in data:
+                if block.dtype.kind in "OS":
+                    for v in np.ravel(block):
+                        r.check.text(name, v)
+    return names

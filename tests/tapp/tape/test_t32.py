@@ -1,0 +1,357 @@
+"""T32 tapes: the schema as written, round trips, the validations, corruption, atomic writes."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from tapp.errors import InputError, TapeError
+from tapp.tape import describe, format_t32_summary, hdf5io, read_t32, t32, verify, write_t32
+from tapp.tape.packing import tr_size
+from tapp.tape.t32 import T32, T32Entity, T32Partition
+from tests.tapp.tape.synthetic import t32_tape
+
+
+@pytest.fixture(scope="module")
+def tape() -> T32:
+    return t32_tape(np.random.default_rng(32))
+
+
+@pytest.fixture
+def written(tmp_path: Path, tape: T32) -> Path:
+    return write_t32(tmp_path / "run.t32.h5", tape)
+
+
+def _recycle(tape: T32, i: int = 0, **changes) -> T32:
+    recycles = list(tape.recycles)
+    recycles[i] = dataclasses.replace(recycles[i], **changes)
+    return dataclasses.replace(tape, recycles=tuple(recycles))
+
+
+def _assert_equal(a: object, b: object, where: str) -> None:
+    if isinstance(a, np.ndarray):
+        assert isinstance(b, np.ndarray) and a.shape == b.shape, where
+        np.testing.assert_array_equal(b, a, err_msg=where)
+    elif dataclasses.is_dataclass(a):
+        for f in dataclasses.fields(a):
+            _assert_equal(getattr(a, f.name), getattr(b, f.name), f"{where}.{f.name}")
+    elif isinstance(a, tuple | list):
+        assert len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
+            _assert_equal(x, y, f"{where}[{i}]")
+    elif isinstance(a, dict):
+        assert sorted(a) == sorted(b), where
+        for key in a:
+            _assert_equal(a[key], b[key], f"{where}[{key}]")
+    else:
+        assert a == b, where
+
+
+def test_round_trip_is_exact(written: Path, tape: T32) -> None:
+    back = read_t32(written)
+    for f in dataclasses.fields(T32):
+        if f.name != "provenance":
+            _assert_equal(getattr(tape, f.name), getattr(back, f.name), f.name)
+    for key, value in tape.provenance.items():
+        assert back.provenance[key] == value
+    assert {"tapp_version", "git_commit", "created_utc"} <= set(back.provenance)
+    assert back.recycles[0].entities[1].matrix.shape == (6, 0)  # an empty partition's output
+    assert back.partition("f2").names == () and back.partition("fq").names == ("q3_km",
+                                                                                 "q2_km")
+    assert back.recycles[1].L.flags.writeable is False
+
+
+def test_schema_attributes_groups_and_storage(written: Path, tape: T32) -> None:
+    n_o = tape.n_o
+    with h5py.File(written, "r") as f:
+        attrs = {k: v.decode() if isinstance(v, bytes) else v for k, v in f.attrs.items()}
+        assert attrs["format"] == "T32" and attrs["version"] == 1
+        assert (attrs["n_o"], attrs["n_p"], attrs["n_m"], attrs["n_recycles"],
+                attrs["n_partitions"]) == (n_o, 6, 3, 3, 7)
+        assert attrs["epoch"] == "2026-03-10T12:00:00.000000"
+        assert attrs["deck_source"] == "deck.toml" and attrs["t13_iden"] == "SYNTHETIC"
+        assert [k.decode() for k in f.attrs["provenance_keys"]] == [
+            "deck", "deck_source", "t13_source", "t13_iden"]
+        assert f["recycles/2/S_fit"].shape == (tr_size(n_o),)
+        assert f["recycles/2/S_fit"].attrs["packing"] == b"TR"
+        assert f["recycles/2/L"].shape == (n_o, n_o) and f["recycles/2/B"].shape == (3, n_o)
+        assert f["recycles/info"].shape == (3, 6)
+        np.testing.assert_array_equal(f["recycles/k"][()], [2, 4, 6])
+        ent = f["recycles/3/entities/1"]
+        assert ent.attrs["command"] == b"I; 0,-,pk; 1,2,fp"
+        assert list(ent["cols"].asstr()[()]) == list(tape.system_names["fit"][:6])
+        assert sorted(f["recycles/3/entities"]) == ["1", "3", "4"]
+        assert list(f["partitions/names"].asstr()[()][:6]) == list(tape.parameters.name[:6])
+        assert sorted(f["systems"]) == ["common", "fit", "real"]
+        datasets: list[str] = []
+        f.visititems(lambda name, obj: datasets.append(name) if isinstance(obj, h5py.Dataset)
+                     else None)
+        for name in datasets:
+            ds = f[name]
+            assert ds.fletcher32 and ds.chunks and "units" in ds.attrs, name
+    assert sorted(verify(written)) == sorted(datasets)
+    assert [p.name for p in written.parent.iterdir()] == ["run.t32.h5"]  # no temporary
+    assert written.stat().st_mode & 0o777 == 0o644
+
+
+# ---------------------------------------------------------------------------------------------
+# Validation in memory: the writer refuses, naming the dataset, and writes nothing
+# ---------------------------------------------------------------------------------------------
+
+
+def _skew(m: np.ndarray) -> np.ndarray:
+    out = m.copy()
+    out[0, 1] *= 1.0 + 1e-6
+    return out
+
+
+def _neg_diag(m: np.ndarray) -> np.ndarray:
+    out = m.copy()
+    out[2, 2] = -1.0
+    return out
+
+
+BAD_TAPES = [
+    (lambda t: dataclasses.replace(t, n_p=0), "attrs/n_p"),
+    (lambda t: dataclasses.replace(t, miss_unit=("km",)), "miss/unit"),
+    (lambda t: dataclasses.replace(t, systems={"fit": t.systems["fit"]}), "systems"),
+    (lambda t: dataclasses.replace(t, systems={**t.systems, "fit": t.systems["fit"][:, :3]}),
+     "systems/fit/chain"),
+    (lambda t: dataclasses.replace(t, system_names={**t.system_names, "real": ("x_km",)}),
+     "systems/real/names"),
+    (lambda t: dataclasses.replace(t, partitions=(*t.partitions, T32Partition(
+        "fx", "fit", 3, 10, t.system_names["fit"][3:10]))), "partitions/tail[7]"),
+    (lambda t: dataclasses.replace(t, partitions=(*t.partitions, T32Partition(
+        "pk", "standard", 0, 1, ("x_km",)))), "partitions/name[7]"),
+    (lambda t: dataclasses.replace(t, partitions=(*t.partitions, T32Partition(
+        "bogus", "other", 0, 1, ("x_km",)))), "partitions/system[7]"),
+    (lambda t: dataclasses.replace(t, partitions=(*t.partitions, T32Partition(
+        "fq2", "fit", 6, 8, ("q1_km", "q2_km")))), "partitions/names[7]"),
+    (lambda t: dataclasses.replace(t, S0_fit=_neg_diag(t.S0_fit)), "apriori/S0_fit"),
+    (lambda t: dataclasses.replace(t, Lambda0_real=t.Lambda0_real[:4]), "apriori/Lambda0_real"),
+    (lambda t: _recycle(t, 0, Lambda_fit=_skew(t.recycles[0].Lambda_fit)),
+     "recycles/1/Lambda_fit"),
+    (lambda t: _recycle(t, 1, Lambda_real=_neg_diag(t.recycles[1].Lambda_real)),
+     "recycles/2/Lambda_real"),
+    (lambda t: _recycle(t, 2, Sigma=np.full_like(t.recycles[2].Sigma, np.nan)),
+     "recycles/3/Sigma"),
+    (lambda t: _recycle(t, 0, J=_skew(t.recycles[0].J)), "recycles/1/J"),
+    (lambda t: _recycle(t, 0, L=t.recycles[0].L[:, :2]), "recycles/1/L"),
+    (lambda t: _recycle(t, 0, B=t.recycles[0].B.T), "recycles/1/B"),
+    (lambda t: _recycle(t, 0, transition=np.full((9, 9), np.inf)), "recycles/1/transition"),
+    (lambda t: _recycle(t, 0, info=np.zeros(5)), "recycles/info"),
+    (lambda t: _recycle(t, 1, number=5), "recycles/number"),
+    (lambda t: _recycle(t, 1, k=2), "recycles/k"),
+    (lambda t: _recycle(t, 1, l=1), "recycles/l"),
+    (lambda t: _recycle(t, 0, j=3), "recycles/j"),  # j = k is allowed (an epoch at t_k)
+    (lambda t: _recycle(t, 2, t_l_s=1.0), "recycles/t_l_s"),
+    (lambda t: _recycle(t, 0, entities=t.recycles[0].entities[::-1]), "recycles/1/entities"),
+    (lambda t: _recycle(t, 0, entities=(T32Entity(1, "I; 0,-,pk; 1,2,fp", "", ("a",),
+                                                  ("b", "c"), np.zeros((2, 2))),)),
+     "recycles/1/entities/1/matrix"),
+    (lambda t: _recycle(t, 0, entities=(T32Entity(2, " ", "", (), (), np.zeros((0, 0))),)),
+     "recycles/1/entities/2.attrs/command"),
+    (lambda t: dataclasses.replace(t, provenance={"format": "T13"}), "attrs/format"),
+]
+
+
+@pytest.mark.parametrize(("make", "dataset"), BAD_TAPES)
+def test_writer_refuses_an_invalid_tape_naming_the_dataset(tmp_path: Path, tape: T32, make,
+                                                           dataset: str) -> None:
+    with pytest.raises(TapeError) as err:
+        write_t32(tmp_path / "bad.t32.h5", make(tape))
+    assert str(err.value).startswith(f"{tmp_path / 'bad.t32.h5'}: {dataset}: expected"), \
+        str(err.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_messages_say_what_was_expected_and_got(tape: T32) -> None:
+    bad = _recycle(tape, 0, Lambda_fit=_skew(tape.recycles[0].Lambda_fit))
+    with pytest.raises(TapeError, match=r"T32: recycles/1/Lambda_fit: expected symmetric "
+                                        r"covariance matrix \(relative asymmetry <= 1e-12\) "
+                                        r"\(got [0-9.e-]+\)$"):
+        t32.validate(bad)
+    bad = dataclasses.replace(tape, partitions=(*tape.partitions, T32Partition(
+        "fx", "fit", 3, 10, ())))
+    with pytest.raises(TapeError, match=r"partitions/tail\[7\]: expected 0 <= tail <= head <= "
+                                        r"9 \(rows of the fit system\) for fx \(got tail = 3, "
+                                        r"head = 10\)"):
+        t32.validate(bad)
+
+
+# ---------------------------------------------------------------------------------------------
+# Validation on reading a file
+# ---------------------------------------------------------------------------------------------
+
+
+def _replace(f: h5py.File, name: str, data, *, text: bool = False) -> None:
+    """Replace a dataset by ``data``, checksummed as the writer does, keeping its attrs."""
+    attrs = dict(f[name].attrs)
+    del f[name]
+    parent, _, leaf = name.rpartition("/")
+    if text:
+        hdf5io.write_strings(f[parent], leaf, data)
+    else:
+        hdf5io.write_numbers(f[parent] if parent else f, leaf, np.asarray(data), "")
+    f[name].attrs.update(attrs)
+
+
+def _plain(f: h5py.File, name: str) -> None:
+    data = f[name][()]
+    del f[name]
+    f[name] = data
+
+
+BAD_FILES = [
+    (lambda f: f.attrs.__setitem__("format", "T13"), "attrs/format"),
+    (lambda f: f.attrs.__setitem__("version", 2), "attrs/version"),
+    (lambda f: f.attrs.__setitem__("n_o", 8), "attrs/n_o"),
+    (lambda f: f.attrs.__delitem__("n_recycles"), "attrs/n_recycles"),
+    (lambda f: f.__delitem__("recycles/2/L"), "recycles/2/L"),
+    (lambda f: _replace(f, "recycles/number", [1, 3, 2]), "recycles/number"),
+    (lambda f: _replace(f, "recycles/k", [2, 6, 4]), "recycles/k"),
+    (lambda f: _replace(f, "recycles/t_s", [1200.0, np.nan, 3600.0]), "recycles/t_l_s"),
+    (lambda f: _replace(f, "recycles/info", np.zeros((3, 5))), "recycles/info"),
+    (lambda f: _replace(f, "recycles/1/S_fit", -np.abs(f["recycles/1/S_fit"][()])),
+     "recycles/1/S_fit"),
+    (lambda f: _replace(f, "recycles/2/Jt", f["recycles/2/Jt"][()][:-1]), "recycles/2/Jt"),
+    (lambda f: _replace(f, "recycles/3/Lambda_real",
+                        np.full(f["recycles/3/Lambda_real"].shape, np.inf)),
+     "recycles/3/Lambda_real"),
+    (lambda f: _replace(f, "recycles/1/entities/4/matrix", np.zeros((8, 7))),
+     "recycles/1/entities/4/matrix"),
+    (lambda f: f.move("recycles/1/entities/4", "recycles/1/entities/x"), "recycles/1/entities"),
+    (lambda f: _replace(f, "systems/fit/chain", np.eye(8)), "systems/fit/chain"),
+    (lambda f: _replace(f, "partitions/head", [6, 6, 8, 9, 9, 9, 4]), "partitions/names"),
+    (lambda f: _replace(f, "partitions/head", [6, 6, 8, 9, 9, 10, 1]), "partitions/tail[5]"),
+    (lambda f: _replace(f, "partitions/system", ["standard", "fit", "fit", "fit", "fit",
+                                                 "real", "common"], text=True),
+     "partitions/names[6]"),
+    (lambda f: _replace(f, "apriori/S0_fit", f["apriori/S0_fit"][()][None]), "apriori/S0_fit"),
+    (lambda f: f["apriori/S0_fit"].attrs.__setitem__("packing", "LT"),
+     "apriori/S0_fit.attrs/packing"),
+    (lambda f: _plain(f, "recycles/2/B"), "recycles/2/B"),
+    (lambda f: f["recycles/2/entities/1"].attrs.__setitem__("command", np.bytes_(b"I;\xff")),
+     "recycles/2/entities/1.attrs/command"),
+]
+
+
+@pytest.mark.parametrize(("edit", "dataset"), BAD_FILES)
+def test_reader_rejects_a_bad_tape_naming_the_dataset(written: Path, edit, dataset: str
+                                                      ) -> None:
+    with h5py.File(written, "r+") as f:
+        edit(f)
+    with pytest.raises(TapeError) as err:
+        read_t32(written)
+    assert str(err.value).startswith(f"{written}: {dataset}: expected"), str(err.value)
+
+
+def test_missing_and_truncated_files(tmp_path: Path, written: Path) -> None:
+    with pytest.raises(InputError, match="file: expected an existing T32 tape file"):
+        read_t32(tmp_path / "none.h5")
+    data = written.read_bytes()
+    written.write_bytes(data[: len(data) // 2])
+    with pytest.raises(TapeError, match=f"{written}: file: expected a readable HDF5 file"):
+        read_t32(written)
+
+
+# ---------------------------------------------------------------------------------------------
+# Corruption, atomic writes
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("dataset", ["recycles/1/S_fit", "recycles/2/entities/1/matrix",
+                                     "partitions/names", "recycles/k", "systems/fit/chain"])
+def test_a_flipped_byte_fails_its_checksum(written: Path, dataset: str) -> None:
+    with h5py.File(written, "r") as f:
+        offset = f[dataset].id.get_chunk_info(0).byte_offset
+    with written.open("r+b") as fh:
+        fh.seek(offset + 5)
+        byte = fh.read(1)[0]
+        fh.seek(offset + 5)
+        fh.write(bytes([byte ^ 0x10]))
+    expected = (f"{written}: {dataset}: expected data matching its Fletcher-32 checksum "
+                "(got checksum mismatch (corrupt file))")
+    for read in (read_t32, verify, describe):
+        with pytest.raises(TapeError) as err:
+            read(written)
+        assert str(err.value) == expected
+
+
+def test_a_failed_write_leaves_no_temporary_and_the_old_tape(tmp_path: Path, tape: T32,
+                                                             monkeypatch) -> None:
+    path = write_t32(tmp_path / "run.t32.h5", tape)
+    before = path.read_bytes()
+    calls = []
+
+    def failing(*args, **kwargs):
+        calls.append(args[1])
+        if len(calls) == 5:
+            raise RuntimeError("simulated failure in the middle of the write")
+        return original(*args, **kwargs)
+
+    original = hdf5io.write_symmetric
+    monkeypatch.setattr(hdf5io, "write_symmetric", failing)
+    other = dataclasses.replace(tape, iden="OTHER")
+    with pytest.raises(RuntimeError, match="simulated failure"):
+        write_t32(path, other)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.t32.h5"]
+    assert path.read_bytes() == before
+    calls.clear()
+    with pytest.raises(RuntimeError, match="simulated failure"):
+        write_t32(tmp_path / "new.t32.h5", other)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.t32.h5"]
+
+
+def test_file_writer_validates_first_and_writes_a_complete_tape(tmp_path: Path, tape: T32
+                                                                ) -> None:
+    with pytest.raises(TapeError, match=r"^T32: recycles/k: expected"):
+        t32.t32_file_writer(_recycle(tape, 1, k=2))
+    writer = t32.t32_file_writer(tape)
+    writer(tmp_path / "plain.h5")
+    assert read_t32(tmp_path / "plain.h5").recycles[2].k == 6
+
+
+def test_writer_stamps_its_own_provenance(tmp_path: Path, tape: T32) -> None:
+    again = dataclasses.replace(tape, provenance={**tape.provenance, "tapp_version": "0.0.1",
+                                                  "created_utc": "yesterday"})
+    back = read_t32(write_t32(tmp_path / "x.h5", again))
+    assert back.provenance["tapp_version"] != "0.0.1"
+    assert back.provenance["created_utc"] != "yesterday"
+
+
+# ---------------------------------------------------------------------------------------------
+# Summary
+# ---------------------------------------------------------------------------------------------
+
+
+def test_describe_and_text_summary(written: Path, tape: T32) -> None:
+    info = describe(written)
+    assert info["format"] == "T32" and info["version"] == 1
+    assert info["dimensions"] == {"n_o": 9, "n_p": 6, "n_m": 3, "n_recycles": 3,
+                                  "n_partitions": 7}
+    assert info["verified_datasets"] == len(verify(written))
+    fq = next(p for p in info["partitions"] if p["name"] == "fq")
+    assert fq == {"name": "fq", "system": "fit", "tail": 6, "head": 8,
+                  "names": ["q3_km", "q2_km"]}
+    rc = info["recycles"][1]
+    assert (rc["number"], rc["k"], rc["l"], rc["t_s"]) == (2, 4, 2, 2400.0)
+    assert rc["utc"] == "2026-03-10T12:40:00.000"
+    lam_fit, lam_real = tape.recycles[1].Lambda_fit, tape.recycles[1].Lambda_real
+    assert rc["sigma_position_km"]["fit"] == pytest.approx(math.sqrt(np.trace(lam_fit[:3, :3])))
+    assert rc["sigma_velocity_km_s"]["real"] == pytest.approx(
+        math.sqrt(np.trace(lam_real[3:6, 3:6])))
+    assert [e["command"] for e in rc["entities"]] == [
+        "I; 0,-,pk; 1,2,fp", "I; 0,-,pk; 1,2,f2", "J; 1,2,f1; 1,2,f1"]
+    assert "deck" not in info["provenance"] and info["provenance"]["t13_iden"] == "SYNTHETIC"
+    text = format_t32_summary(info)
+    for expected in ("T32 v1  iden SYNTHETIC", "fq    fit       rows 6..7      q3_km, q2_km",
+                     "ω  1: I; 0,-,pk; 1,2,fp  (partials pk wrt fp@recycle)  6 x 6",
+                     "2026-03-10T12:40:00.000", "from deck.toml and run.t13.h5"):
+        assert expected in text, expected
+    assert f"{rc['sigma_position_km']['fit']:10.4g}" in text
