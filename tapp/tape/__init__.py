@@ -82,8 +82,10 @@ def describe(path: Path | str) -> dict:
                 if isinstance(obj, h5py.Dataset):
                     datasets[name] = {"shape": list(obj.shape or ()), "dtype": str(obj.dtype)}
 
-            f.visititems(visit)
-            attrs = {k: attr_value(r.check, f"attrs/{k}", v) for k, v in f.attrs.items()
+            with r.guard("file", "a readable group structure"):
+                f.visititems(visit)
+                items = list(f.attrs.items())
+            attrs = {k: attr_value(r.check, f"attrs/{k}", v) for k, v in items
                      if k != "scenario"}
             return {"format": fmt or "unknown", "attributes": attrs, "datasets": datasets,
                     "verified_datasets": verified}

@@ -26,7 +26,8 @@ from __future__ import annotations
 
 import math
 import subprocess
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -35,7 +36,7 @@ import numpy as np
 
 from tapp import __version__
 from tapp.errors import InputError, TapeError
-from tapp.tape.packing import symmetry_defect, tr_size, unpack_tr
+from tapp.tape.packing import pack_tr, symmetry_defect, tr_size, unpack_tr
 
 #: Target size of a chunk (bytes): whole rows of axis 0 up to this size.
 CHUNK_BYTES = 1 << 18
@@ -45,6 +46,9 @@ GZIP = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
 LIBVER = "v108"
 #: Storage of symmetric matrices: "TR" (upper triangle by rows) or "full" (n² entries).
 PACKINGS = ("TR", "full")
+#: What h5py raises on corrupt metadata (a checksum mismatch in an object header, a B-tree, a
+#: heap), depending on the call: each is turned into a TapeError naming the object.
+HDF5_ERRORS = (OSError, KeyError, RuntimeError, ValueError, TypeError)
 #: Relative asymmetry max |M_ij - M_ji| / sqrt(M_ii M_jj) above which a symmetric matrix is
 #: rejected (:func:`tapp.tape.packing.symmetry_defect`).
 SYMMETRY_TOL = 1e-12
@@ -169,8 +173,7 @@ def write_symmetric(group: h5py.Group, name: str, matrices, units: str, packing:
     m = np.asarray(matrices, dtype=float)
     n = m.shape[-1]
     if packing == "TR":
-        rows, cols = np.triu_indices(n)
-        stored = m[..., rows, cols]
+        stored = pack_tr(m)
     else:
         stored = m.reshape(*m.shape[:-2], n * n)
     ds = write_numbers(group, name, stored, units, big=big, checksums=checksums)
@@ -288,16 +291,26 @@ class Reader:
         self.check = Checker(source)
         self.checksums = checksums
 
+    @contextmanager
+    def guard(self, where: str, expected: str) -> Iterator[None]:
+        """Turn the errors h5py raises on corrupt metadata into a TapeError naming ``where``."""
+        try:
+            yield
+        except HDF5_ERRORS as exc:
+            self.check.fail(where, f"{expected} (corrupt file?)", exc)
+
     # -- attributes ----------------------------------------------------------------------
 
     def _attrs(self, owner: str):
-        try:
-            return self.f.attrs if owner == "" else self.dataset_or_group(owner).attrs
-        except OSError as exc:  # pragma: no cover - corrupt metadata caught on open mostly
-            self.check.fail(owner or "attrs", "readable attributes (corrupt file?)", exc)
+        obj = self.f if owner == "" else self.dataset_or_group(owner)
+        with self.guard(owner or "attrs", "readable attributes"):
+            return obj.attrs
 
     def has_attr(self, name: str, owner: str = "") -> bool:
-        return name in self._attrs(owner)
+        attrs = self._attrs(owner)
+        with self.guard(f"{owner}.attrs/{name}" if owner else f"attrs/{name}",
+                        "readable attributes"):
+            return name in attrs
 
     def attr(self, name: str, kind: type = str, owner: str = "", default: object = ...):
         """Return attribute ``name`` of the root (or of ``owner``) as int, float or str.
@@ -305,15 +318,13 @@ class Reader:
         Missing: ``default`` if given, else a TapeError.
         """
         where = f"{owner}.attrs/{name}" if owner else f"attrs/{name}"
-        attrs = self._attrs(owner)
-        if name not in attrs:
+        if not self.has_attr(name, owner):
             if default is not ...:
                 return default
             self.check.fail(where, "this attribute present")
-        try:
+        attrs = self._attrs(owner)
+        with self.guard(where, "a readable attribute"):
             value = attrs[name]
-        except (OSError, TypeError, ValueError) as exc:
-            self.check.fail(where, "a readable attribute", exc)
         if kind is int:
             if not (isinstance(value, int | np.integer) and not isinstance(value, bool)
                     and value >= 0):
@@ -334,24 +345,22 @@ class Reader:
     # -- datasets ------------------------------------------------------------------------
 
     def dataset_or_group(self, name: str) -> h5py.Dataset | h5py.Group:
-        try:
-            if name not in self.f:
-                self.check.fail(name, "this dataset present")
+        if not self.has(name):
+            self.check.fail(name, "this dataset present")
+        with self.guard(name, "a readable object"):
             return self.f[name]
-        except (OSError, KeyError) as exc:
-            self.check.fail(name, "a readable object (corrupt file?)", exc)
 
     def has(self, name: str) -> bool:
-        try:
+        with self.guard(name, "a readable object"):
             return name in self.f
-        except OSError as exc:
-            self.check.fail(name, "a readable object (corrupt file?)", exc)
 
     def dataset(self, name: str) -> h5py.Dataset:
         ds = self.dataset_or_group(name)
         if not isinstance(ds, h5py.Dataset):
             self.check.fail(name, "this dataset present", "a group")
-        if self.checksums and not ds.fletcher32:
+        with self.guard(name, "a readable dataset header"):
+            checksummed = ds.fletcher32
+        if self.checksums and not checksummed:
             self.check.fail(name, "a Fletcher-32 checksum filter on the dataset", "none")
         return ds
 
@@ -365,7 +374,7 @@ class Reader:
                 self.check.fail(name, "data matching its Fletcher-32 checksum",
                                 "checksum mismatch (corrupt file)")
             self.check.fail(name, "readable data (truncated or corrupt file?)", exc)
-        except (TypeError, ValueError) as exc:
+        except HDF5_ERRORS as exc:
             self.check.fail(name, "readable data (truncated or corrupt file?)", exc)
 
     def read(self, name: str, kind: str = "f", selection=()) -> np.ndarray:
@@ -459,24 +468,24 @@ def verify(path: Path | str) -> list[str]:
         def visit(name: str, obj) -> None:
             (names if isinstance(obj, h5py.Dataset) else owners).append(name)
 
-        try:
+        with r.guard("file", "a readable group structure"):
             f.visititems(visit)
-        except (OSError, KeyError) as exc:
-            r.check.fail("file", "a readable group structure (corrupt file?)", exc)
         for owner in owners + names:
             attrs = r._attrs(owner)
-            for key in list(attrs.keys()):
+            with r.guard(owner or "attrs", "readable attributes"):
+                keys = list(attrs.keys())
+            for key in keys:
                 where = f"{owner}.attrs/{key}" if owner else f"attrs/{key}"
-                try:
+                with r.guard(where, "a readable attribute"):
                     value = attrs[key]
-                except (OSError, TypeError, ValueError) as exc:
-                    r.check.fail(where, "a readable attribute", exc)
                 attr_value(r.check, where, value)
         for name in names:
             ds = r.dataset(name)
-            if ds.shape is None:  # an empty (null) dataspace: nothing stored
+            with r.guard(name, "a readable dataset header"):
+                shape = ds.shape
+            if shape is None:  # an empty (null) dataspace: nothing stored
                 continue
-            if ds.ndim == 0:
+            if len(shape) == 0:
                 data = [r.raw(name)]
             else:
                 step = _rows(ds)

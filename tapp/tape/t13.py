@@ -60,9 +60,10 @@ raw/... (optional)          (N, ...)               one row per scalar observatio
 
 Units of the normal matrices: entry (a, b) in 1/(u_a u_b) with u the parameters' units; U and
 B entries in (unit of row)/(unit of column). Every dataset is chunked (whole rows) with a
-Fletcher-32 checksum, text is fixed-length UTF-8, and large datasets are gzip-compressed.
-Version 1 (still read, with a ``UserWarning``) has the same layout without checksums and
-without ``pairs/dJt_parts``; its text is variable-length.
+Fletcher-32 checksum, text (of datasets and attributes: h5py reads text attributes as bytes)
+is fixed-length UTF-8, and large datasets are gzip-compressed. Version 1 (still read, with a
+``UserWarning``) has the same layout without checksums and without ``pairs/dJt_parts``; its
+text is variable-length.
 
 The writer writes to a temporary file beside the target and renames it: no half-written tape.
 The readers reject a wrong format or version, a missing dataset, a wrong shape, a non-finite

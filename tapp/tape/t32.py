@@ -14,9 +14,9 @@ recycle time (0 for the first: injection), j the program epoch index; u_a the un
 parameter a (``parameters/unit``; the orbit at t_k has the units of p).
 
 HDF5 layout, version 1. Every dataset is chunked with a Fletcher-32 checksum and has a
-``units`` attribute; text is fixed-length UTF-8; symmetric matrices are packed "TR" (upper
-triangle by rows, L = n_o(n_o+1)/2 entries; attrs ``packing`` = "TR", ``order`` = n_o) as on
-the T13 tape (:mod:`tapp.tape.hdf5io`):
+``units`` attribute; text is fixed-length UTF-8 (attributes too: h5py reads them as bytes);
+symmetric matrices are packed "TR" (upper triangle by rows, L = n_o(n_o+1)/2 entries; attrs
+``packing`` = "TR", ``order`` = n_o) as on the T13 tape (:mod:`tapp.tape.hdf5io`):
 
 ===============================  ===============  =============================================
 path                             shape            content
@@ -532,7 +532,8 @@ def _entities(r: Reader, base: str) -> tuple[T32Entity, ...]:
     group = r.dataset_or_group(f"{base}/entities")
     if not isinstance(group, h5py.Group):
         r.check.fail(f"{base}/entities", "a group of command outputs", "a dataset")
-    keys = list(group.keys())
+    with r.guard(f"{base}/entities", "a readable group"):
+        keys = list(group.keys())
     if not all(key.isdigit() and int(key) >= 1 for key in keys):
         r.check.fail(f"{base}/entities", "command numbers ω >= 1 as group names", keys)
     out = []
@@ -567,8 +568,10 @@ def _read(r: Reader) -> T32:
     group = r.dataset_or_group("systems")
     if not isinstance(group, h5py.Group):
         r.check.fail("systems", "a group of system chains", "a dataset")
-    if sorted(group.keys()) != sorted(CHAINED):
-        r.check.fail("systems", f"the systems {', '.join(CHAINED)}", sorted(group.keys()))
+    with r.guard("systems", "a readable group"):
+        keys = sorted(group.keys())
+    if keys != sorted(CHAINED):
+        r.check.fail("systems", f"the systems {', '.join(CHAINED)}", keys)
     systems = {name: r.read(f"systems/{name}/chain") for name in CHAINED}
     system_names = {name: r.strings(f"systems/{name}/names") for name in CHAINED}
 

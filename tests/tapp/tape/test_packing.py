@@ -10,7 +10,10 @@ from hypothesis import strategies as st
 from tapp.errors import InputError
 from tapp.tape.packing import (
     pack_tr,
+    scaled_difference,
+    scaled_difference_tr,
     symmetry_defect,
+    tr_diagonal,
     tr_index,
     tr_order,
     tr_size,
@@ -55,3 +58,24 @@ def test_symmetry_defect() -> None:
     m = np.array([[2.0, 1.0], [1.0 + 1e-6, 2.0]])
     assert symmetry_defect(m) == pytest.approx(5e-7)
     assert symmetry_defect(np.zeros((2, 2))) == 0.0
+
+
+@settings(max_examples=30, deadline=None)
+@given(n=st.integers(1, 9), seed=st.integers(0, 2**31))
+def test_scaled_difference_packed_and_full_agree(n: int, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(3, n + 1, n))
+    b = np.swapaxes(a, -1, -2) @ a  # normal matrices: |b_ij| <= sqrt(b_ii b_jj)
+    c = b + 1e-9 * (b + np.swapaxes(b, -1, -2))
+    full = scaled_difference(c, b)
+    np.testing.assert_allclose(scaled_difference_tr(pack_tr(c), pack_tr(b)), full, rtol=1e-12)
+    assert np.all(full <= 2e-9 * 1.0001)
+    np.testing.assert_array_equal(pack_tr(b)[:, tr_diagonal(n)], np.diagonal(b, 0, 1, 2))
+
+
+def test_scaled_difference_of_a_zero_scale_and_empty_stacks() -> None:
+    b = np.diag([1.0, 0.0])
+    assert scaled_difference(b + np.array([[0, 0], [0, 1e-30]]), b) == np.inf
+    assert scaled_difference(b, b) == 0.0
+    assert scaled_difference(np.zeros((0, 2, 2)), np.zeros((0, 2, 2))).shape == (0,)
+    assert scaled_difference_tr(np.zeros((0, 3)), np.zeros((0, 3))).shape == (0,)
