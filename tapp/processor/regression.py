@@ -156,7 +156,7 @@ def regression(E1, S00, J00, Lambda_bar00, Jt00) -> Regression:
     σ = 2 (real): fit variance 1/(1/4 + 1) = 0.8, real 0.2²·4 + 0.8²·4 = 2.72.
 
     >>> r = regression([[1.0]], [[0.25]], [[1.0]], [[4.0]], [[4.0]])
-    >>> float(r.Lambda1_11[0, 0]), round(float(r.Lambda_real[0, 0]), 12)
+    >>> round(float(r.Lambda1_11[0, 0]), 12), round(float(r.Lambda_real[0, 0]), 12)
     (0.8, 2.72)
     """
     E1, S00, J00, Lambda_bar00, Jt00 = (np.asarray(a, dtype=float)
