@@ -16,10 +16,18 @@ from pathlib import Path
 if __package__ in (None, ""):  # run as a script: make the repository importable
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
-from tests.bench import common, od, propagation, sweeps, targeting, tracking  # noqa: E402
+from tests.bench import (  # noqa: E402
+    common,
+    od,
+    processor,
+    propagation,
+    sweeps,
+    targeting,
+    tracking,
+)
 
 SECTIONS = {module.NAME: module
-            for module in (propagation, tracking, od, targeting, sweeps)}
+            for module in (propagation, tracking, od, targeting, sweeps, processor)}
 
 
 def main(argv: list[str] | None = None) -> int:
