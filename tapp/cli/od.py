@@ -1,4 +1,24 @@
-"""``tapp dc``, ``tapp ekf``, ``tapp rsig``: the approximate-STM study's estimators."""
+"""``tapp dc``, ``tapp ekf``, ``tapp rsig``: the approximate-STM study's estimators.
+
+Exit codes of ``tapp dc`` (the outcomes of :mod:`tapp.od.batch`; the output is printed and
+``--save-obs`` written in every case but bad input):
+
+= ============================================================================================
+0 converged: the RMS settled within the fit limit
+3 diverged: the RMS grew, or failed to settle within the iteration limit
+4 ill-conditioned: the normal matrix of the first iteration is too ill-conditioned for the
+  data to determine the state; its condition number and the undetermined state directions
+  are printed, and the DC does not iterate
+5 stalled: the RMS settled above the fit limit (the data are not fitted)
+6 converging: the iteration limit was reached while the RMS was still falling geometrically;
+  the observed contraction factor and the projected iterations to the fit limit are printed
+= ============================================================================================
+
+Bad input (2) includes an arc longer than the data span (``--arc`` and the span named); no
+measurement in the arc fails like any computation that cannot start (1, "too few
+measurements"), for ``tapp ekf`` too. Observation files (``--obs``, ``--save-obs``): HDF5,
+CSV, or a CCSDS TDM in KVN (``.tdm``; :mod:`tapp.od.obsfile`, :mod:`tapp.ccsds.tdm`).
+"""
 
 from __future__ import annotations
 
@@ -27,10 +47,18 @@ from tapp.dynamics import Propagator, earth_model
 from tapp.errors import InputError
 from tapp.frames.elements import cartesian_to_elements
 from tapp.od import setup
-from tapp.od.batch import DCSettings, differential_correction
+from tapp.od.batch import (
+    STATE_NAMES,
+    DCOutcome,
+    DCSettings,
+    IllConditionedError,
+    describe_direction,
+    differential_correction,
+)
 from tapp.od.ekf import extended_kalman_filter
 from tapp.od.observations import Observations
 from tapp.od.obsfile import observations_file_writer, read_observations
+from tapp.od.rate import PredictedRate, predicted_rate
 from tapp.od.rsig import r_signature
 from tapp.orbits import DEFAULT_SCENARIO
 from tapp.outputs import OutputSet, check_paths
@@ -39,8 +67,13 @@ from tapp.stations_file import load_stations
 _ARC = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([smhd]?)\s*$")
 _UNIT_S = {"s": 1.0, "m": 60.0, "h": 3600.0, "d": 86400.0, "": 3600.0}
 _APRIORI_KEYS = ("sx", "sy", "sz", "svx", "svy", "svz")
-#: Exit code of a DC that did not converge (its output is still printed).
+#: Exit codes of ``tapp dc`` per outcome (module docstring); its output is still printed.
 EXIT_DIVERGED = 3
+EXIT_ILL_CONDITIONED = 4
+EXIT_STALLED = 5
+EXIT_CONVERGING = 6
+EXIT_CODE = {DCOutcome.CONVERGED: 0, DCOutcome.DIVERGED: EXIT_DIVERGED,
+             DCOutcome.STALLED: EXIT_STALLED, DCOutcome.CONVERGING: EXIT_CONVERGING}
 
 OrbitOpt = Annotated[str, typer.Option(help="Orbit name (SATORB1..8) or a=..,e=..,i=..,"
                                        "raan=..,argp=..,M=.. (km, deg)")]
@@ -72,9 +105,43 @@ def _observations(x_true: np.ndarray, truth: str, stations: str | None, obs_file
     if obs_file is not None:
         data = setup.load_study(scenario)
         return read_observations(obs_file, load_stations(data, str(scenario)),
-                                 setup.tracking(scenario).sigma)
+                                 setup.tracking(scenario).sigma, epoch=setup.epoch(scenario),
+                                 sigma_kinds=setup.KINDS)
     return setup.simulated_observations(x_true, truth, _network(x_true, stations, scenario),
                                         scenario, seed)
+
+
+def _spacecraft(orbit: str) -> str:
+    """The spacecraft's name in a TDM: the orbit's name, or SPACECRAFT for an element set."""
+    return orbit if orbit.replace("_", "").replace("-", "").isalnum() else "SPACECRAFT"
+
+
+def _settings(scenario: Path, max_iter: int | None) -> DCSettings:
+    """The scenario's [dc_settings], with ``--max-iter`` in place of its iteration limit."""
+    table = setup.study_file(scenario).dc_settings.model_dump()
+    if max_iter is not None:
+        if max_iter < 2:
+            raise InputError("--max-iter", "value", "a whole number >= 2 (two RMS values "
+                             "tell a falling RMS from a rising one)", max_iter)
+        table["max_iterations"] = max_iter
+    return DCSettings(**table)
+
+
+def _rate(data: Observations, truth: str, stm: str, x_true: np.ndarray, theta0_rad: float
+          ) -> PredictedRate | None:
+    try:
+        return predicted_rate(data, earth_model(truth, source="--truth", field="model"),
+                              earth_model(stm, source="--stm", field="model"), x_true,
+                              theta0_rad)
+    except np.linalg.LinAlgError:
+        return None
+
+
+def _eigen_json(rate: PredictedRate | None) -> list[dict[str, float]] | None:
+    if rate is None:
+        return None
+    return [{"re": float(v.real), "im": float(v.imag), "abs": float(abs(v))}
+            for v in rate.eigenvalues]
 
 
 def _network(x_true: np.ndarray, stations: str | None, scenario: Path) -> tuple:
@@ -104,60 +171,116 @@ def dc(
     truth: TruthOpt = "J2",
     stm: StmOpt = "J2",
     stations: Annotated[str | None, typer.Option(help="Network or station name.")] = None,
-    max_iter: Annotated[int, typer.Option(help="Iteration limit (>= 1).")] = 12,
+    max_iter: Annotated[int | None, typer.Option(help="Iteration limit (>= 2; default: the "
+                                                 "scenario's [dc_settings]).")] = None,
     seed: Annotated[int | None, typer.Option(help="Noise seed (default: scenario's).")] = None,
-    obs: Annotated[Path | None, typer.Option(help="Observation file (.h5 or .csv) instead "
-                                             "of simulated data.")] = None,
-    save_obs: Annotated[Path | None, typer.Option(help="Write the observations used.")] = None,
+    obs: Annotated[Path | None, typer.Option(help="Observation file (.h5, .csv or a CCSDS "
+                                             "TDM .tdm) instead of simulated data.")] = None,
+    save_obs: Annotated[Path | None, typer.Option(help="Write the observations used (.h5, "
+                                                  ".csv or .tdm).")] = None,
     scenario: ScenarioOpt = DEFAULT_SCENARIO,
     allow_subsurface: SubsurfaceOpt = False,
     json_out: JsonOpt = False,
 ) -> None:
-    """Batch differential correction from the brief's offset initial estimate."""
+    """Batch differential correction from the brief's offset initial estimate.
 
-    def body() -> None:
+    Exit 0 converged, 3 diverged, 4 ill-conditioned, 5 stalled, 6 converging (the limit was
+    reached while converging); the predicted rate ρ is printed beside the observed factor.
+    """
+
+    def body() -> int:
         check_paths({"--obs": obs, "--scenario": scenario}, {"--save-obs": save_obs})
         arc_s = parse_arc_s(arc)
-        if max_iter < 1:
-            raise InputError("--max-iter", "value", "a whole number >= 1", max_iter)
+        settings = _settings(scenario, max_iter)
         x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm)
         data = _observations(x_true, truth, stations, obs, scenario,
                              seed_option("--seed", seed))
+        window = data.arc(arc_s, "--arc", got=arc)
         if save_obs is not None:
             outputs = OutputSet()
-            outputs.add("--save-obs", save_obs, observations_file_writer(save_obs, data))
+            outputs.add("--save-obs", save_obs, observations_file_writer(
+                save_obs, data, epoch=setup.epoch(scenario), spacecraft=_spacecraft(orbit),
+                comments=(f"observations of {orbit} for tapp dc (scenario {scenario.name})",)))
             outputs.commit()
         x_start = setup.initial_estimate(x_true, setup.offset(scenario))
-        result = differential_correction(data.window(arc_s), prop, x_start,
-                                         theta0_rad=setup.tracking(scenario).theta0_rad,
-                                         settings=DCSettings(max_iterations=max_iter))
+        theta0 = setup.tracking(scenario).theta0_rad
+        try:
+            result = differential_correction(window, prop, x_start, theta0_rad=theta0,
+                                             settings=settings)
+        except IllConditionedError as exc:
+            _print_ill_conditioned(exc, json_out)
+            return EXIT_ILL_CONDITIONED
+        rate = _rate(window, truth, stm, x_true, theta0)
         err_km = float(np.linalg.norm(result.x0[:3] - x_true[:3]))
+        code = EXIT_CODE[DCOutcome(result.status)]
         if json_out:
+            q = result.contraction_factor
             print_json({"converged": result.converged, "status": result.status,
-                        "reason": result.reason, "iterations": len(result.iterations),
-                        "rms": result.rms, "final_elements": _elements_dict(result.x0),
+                        "exit_code": code, "reason": result.reason,
+                        "iterations": len(result.iterations),
+                        "converged_at": result.converged_at, "rms": result.rms,
+                        "contraction_factor": q if np.isfinite(q) else None,
+                        "projected_iterations": result.projected_iterations,
+                        "predicted_rate": None if rate is None else rate.rho,
+                        "eigenvalues": _eigen_json(rate),
+                        "final_elements": _elements_dict(result.x0),
                         "position_error_km": err_km, "measurements": result.n_measurements})
         else:
-            _print_dc(result, f"DC {orbit}, {arc}, ({truth},{stm}): {result.status}", err_km)
-        if not result.converged:
-            raise typer.Exit(EXIT_DIVERGED)
+            _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}): {result.status}",
+                      err_km)
+        return code
 
-    run_guarded(body)
+    code = run_guarded(body)
+    if code:
+        raise typer.Exit(code)
 
 
-def _print_dc(result, title: str, err_km: float) -> None:
+def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float) -> None:
     table = Table(title=title)
     table.add_column("iteration", justify="right")
     table.add_column("RMS", justify="right")
     table.add_column("|δr| (m)", justify="right")
+    table.add_column("|δx|_N", justify="right")
     for it in result.iterations:
         table.add_row(str(it.index), f"{it.rms:.4f}",
-                      f"{np.linalg.norm(it.correction[:3]) * 1e3:.3f}")
+                      f"{np.linalg.norm(it.correction[:3]) * 1e3:.3f}", f"{it.step:.4g}")
     console = Console(width=100)
     console.print(table)
-    console.print(f"{result.reason}; {result.n_measurements} measurements; epoch "
-                  f"position error {err_km * 1e3:.3f} m")
+    q = result.contraction_factor
+    observed = f"observed contraction factor q = {q:.4g}" if np.isfinite(q) else \
+        "no contraction factor (one iteration)"
+    if rate is None:
+        predicted = "predicted rate ρ: none (singular normal matrix at the true state)"
+    else:
+        lead = ", ".join(f"{v.real:.4g}{v.imag:+.4g}i" if abs(v.imag) > 0 else f"{v.real:.4g}"
+                         for v in rate.eigenvalues[:2])
+        predicted = f"predicted rate ρ = {rate.rho:.4g} (largest eigenvalues of M: {lead})"
+    console.print(f"{result.status}: {result.reason}")
+    console.print(f"{predicted}; {observed}")
+    console.print(f"{result.n_measurements} measurements; epoch position error "
+                  f"{err_km * 1e3:.3f} m")
+
+
+def _print_ill_conditioned(exc: IllConditionedError, json_out: bool) -> None:
+    if json_out:
+        print_json({"converged": False, "status": "ill-conditioned",
+                    "exit_code": EXIT_ILL_CONDITIONED, "reason": str(exc),
+                    "condition_number": exc.condition if np.isfinite(exc.condition) else None,
+                    "max_condition": exc.limit, "measurements": exc.n_measurements,
+                    "undetermined_directions": [
+                        {"relative_eigenvalue": float(lam),
+                         **{n: float(c) for n, c in zip(STATE_NAMES, d, strict=True)}}
+                        for d, lam in zip(exc.directions, exc.eigenvalues, strict=True)]})
+        return
+    console = Console(width=100)
+    console.print(f"ill-conditioned: the normal matrix of the first iteration has condition "
+                  f"number {exc.condition:.3g} (scaled to a unit diagonal; limit "
+                  f"{exc.limit:.3g}) with {exc.n_measurements} measurements; not iterated")
+    console.print("state directions the data do not determine (unit vectors of the scaled "
+                  "state, relative eigenvalue):")
+    for d, lam in zip(exc.directions, exc.eigenvalues, strict=True):
+        console.print(f"  {describe_direction(d)}   ({lam:.3g})")
 
 
 def _apriori(text: str, scenario: Path) -> np.ndarray:
@@ -196,7 +319,8 @@ def ekf(
     process_noise: Annotated[float, typer.Option(help="White-noise acceleration spectral "
                                                  "density q (km^2/s^3).")] = 0.0,
     seed: Annotated[int | None, typer.Option(help="Noise seed.")] = None,
-    obs: Annotated[Path | None, typer.Option(help="Observation file (.h5 or .csv).")] = None,
+    obs: Annotated[Path | None, typer.Option(help="Observation file (.h5, .csv or a CCSDS "
+                                             "TDM .tdm).")] = None,
     scenario: ScenarioOpt = DEFAULT_SCENARIO,
     allow_subsurface: SubsurfaceOpt = False,
     json_out: JsonOpt = False,
@@ -210,7 +334,7 @@ def ekf(
         p0 = _apriori(apriori, scenario)
         q_km2_s3 = nonnegative_option("--process-noise", process_noise)
         data = _observations(x_true, truth, stations, obs, scenario,
-                             seed_option("--seed", seed)).window(arc_s)
+                             seed_option("--seed", seed)).arc(arc_s, "--arc", got=arc)
         x_start = setup.initial_estimate(x_true, setup.offset(scenario))
         result = extended_kalman_filter(data, prop, x_start, p0,
                                         theta0_rad=setup.tracking(scenario).theta0_rad,

@@ -2,12 +2,13 @@
 
 Bad input (scenario file or field, an unreadable or corrupt tape, an output path that is the
 scenario or the other output) is one line on stderr naming the file and the field or dataset,
-or the option, exit code 2 (1 for other failures; see :mod:`tapp.cli.common`). The tape and
-the OEM are written together or not at all (:class:`tapp.outputs.OutputSet`).
+or the option, exit code 2 (1 for other failures; see :mod:`tapp.cli.common`). The tape, the
+OEM and the TDM are written together or not at all (:class:`tapp.outputs.OutputSet`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 from typing import Annotated
@@ -17,6 +18,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from tapp.ccsds.tdm import format_tdm, tdm_from_tracks, tracks_from_rows
 from tapp.cli.common import app, print_json, run_guarded
 from tapp.outputs import OutputSet, check_paths
 from tapp.tape import describe, write_t13
@@ -50,13 +52,34 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool) -> tuple[Simulation, 
 
 
 def _outputs(output: Path, sim: Simulation, oem: Path | None,
-             oem_text: str | None) -> OutputSet:
-    """The tape and the OEM, to be written together or not at all."""
+             oem_text: str | None, tdm: Path | None = None,
+             tdm_text: str | None = None) -> OutputSet:
+    """The tape, the OEM and the TDM, to be written together or not at all."""
     outputs = OutputSet()
     outputs.add("-o/--output", output, lambda tmp: write_t13(tmp, sim.tape))
     if oem is not None:
         outputs.add("--oem", oem, lambda tmp: tmp.write_text(oem_text, encoding="utf-8"))
+    if tdm is not None:
+        outputs.add("--tdm", tdm, lambda tmp: tmp.write_text(tdm_text, encoding="utf-8"))
     return outputs
+
+
+def _tdm_text(sim: Simulation, scenario: Path) -> str:
+    """The observations of the tape's raw rows as a CCSDS TDM (one segment per station)."""
+    tape, raw = sim.tape, sim.tape.raw
+    st = tape.stations
+    schedule = read_scenario(scenario).schedule
+    tracks = tracks_from_rows(raw.t_s, raw.station - 1, raw.kind, raw.value, raw.kinds,
+                              st.name, tape.iden,
+                              path="2,1" if schedule.light_time == "one_way" else "1,2,1",
+                              span_end_s=min(schedule.end_s, float(sim.t_s[-1])))
+    where = {n: f"station {n}: geodetic lat {lat:.6f} deg, lon {lon:.6f} deg, h {h:.4f} km "
+             f"(WGS84), mask {m:g} deg" for n, lat, lon, h, m in
+             zip(st.name, st.lat_deg, st.lon_deg, st.h_km, st.elev_mask_deg, strict=True)}
+    tracks = [dataclasses.replace(t, comments=(where[t.station],)) for t in tracks]
+    return format_tdm(tdm_from_tracks(tracks, tape.epoch, comments=(
+        f"TAPP I observations of {scenario.name}, tape {tape.iden}: the models' values, "
+        "noise-free",)))
 
 
 @app.command()
@@ -68,26 +91,35 @@ def simulate(
                                       "row, weight and real-world noise (raw/ group).")] = False,
     oem: Annotated[Path | None, typer.Option("--oem", help="Also write the trajectory as a "
                                              "CCSDS OEM 2.0 (KVN) file.")] = None,
+    tdm: Annotated[Path | None, typer.Option("--tdm", help="Also write the observations as a "
+                                             "CCSDS TDM 2.0 (KVN) file.")] = None,
     json_out: JsonOpt = False,
 ) -> None:
     """TAPP I: simulate the tracking of a scenario and write its T13 tape."""
 
     def body() -> None:
-        check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem})
-        sim, wall_s = _simulate_with_bar(scenario, raw, quiet=json_out)
+        check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
+                                             "--tdm": tdm})
+        sim, wall_s = _simulate_with_bar(scenario, raw or tdm is not None, quiet=json_out)
+        tdm_text = None
+        if tdm is not None:
+            tdm_text = _tdm_text(sim, scenario)
+            if not raw:  # the raw rows were for the TDM only
+                sim = dataclasses.replace(sim, tape=dataclasses.replace(sim.tape, raw=None))
         tape = sim.tape
         oem_text = None
         if oem is not None:
             oem_text = format_oem(tape.epoch, sim.t_s, sim.states, object_name=tape.iden,
                                   object_id=tape.iden,
                                   comments=(f"TAPP I trajectory of {scenario.name}",))
-        _outputs(output, sim, oem, oem_text).commit()
+        _outputs(output, sim, oem, oem_text, tdm, tdm_text).commit()
         out = {"tape": str(output), "bytes": output.stat().st_size, "iden": tape.iden,
                "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
                "passes": int(tape.passes.station.size),
                "observations": int(tape.pairs.n_obs.sum()), "raw": raw,
-               "oem": None if oem is None else str(oem), "wall_s": wall_s}
+               "oem": None if oem is None else str(oem),
+               "tdm": None if tdm is None else str(tdm), "wall_s": wall_s}
         if json_out:
             print_json(out)
             return
@@ -98,6 +130,8 @@ def simulate(
                       f"observations in {out['passes']} passes")
         if oem is not None:
             console.print(f"OEM {oem} ({sim.t_s.size} states)")
+        if tdm is not None:
+            console.print(f"TDM {tdm} ({out['observations']} observations)")
 
     run_guarded(body)
 

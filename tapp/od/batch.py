@@ -13,48 +13,142 @@ normal equations (Tapley, Schutz & Born, *Statistical Orbit Determination*, 2004
 by Cholesky, x_{k+1} = x_k + δx. Without an a priori the first term is absent (the study's
 "infinite a priori covariance").
 
-Convergence, after the brief's RMS = sqrt(Σ y_i² w_i / m) (here w_i = 1/σ_i², so RMS ≈ 1 at
-the noise level), made explicit and configurable in :class:`DCSettings`:
+Before the first correction the normal matrix is diagnosed: when its condition number, once
+scaled to a unit diagonal, exceeds ``max_condition`` the data do not determine the state,
+and :class:`IllConditionedError` reports the condition number and the undetermined state
+directions (the eigenvectors of the scaled matrix whose eigenvalues are below
+λ_max / ``max_condition``) instead of iterating on into nonsense.
 
-- converged at iteration k when |RMS_{k-1} - RMS_k| / RMS_k < ``rms_rel_tol`` (the RMS
-  stopped decreasing appreciably, and did not grow appreciably either), or when RMS_k <
+Outcomes (:class:`DCOutcome`), after the brief's RMS = sqrt(Σ y_i² w_i / m) (here
+w_i = 1/σ_i², so RMS ≈ 1 at the noise level), with the thresholds of :class:`DCSettings`:
+
+- the RMS has **settled** at iteration k when |RMS_{k-1} - RMS_k| / RMS_k < ``rms_rel_tol``
+  (it stopped changing appreciably) and the correction just computed would not change it
+  appreciably either, δx_kᵀ N δx_k / (2 m RMS_k²) < ``rms_rel_tol`` (for Gauss-Newton
+  δxᵀNδx is the predicted decrease of the weighted sum of squares m RMS²): two equal RMS
+  values in a row while the RMS oscillates on its way down are not a convergence;
+- **converged** when the RMS settles at RMS_k <= ``rms_fit_limit``, or when RMS_k <
   ``rms_floor`` (a noise-free fit is exact to rounding);
-- stalled (converged by the rule above but to a wrong orbit) when the settled RMS exceeds
-  ``rms_fit_limit`` (the data are not fitted to their noise level);
-- diverged when RMS_k > ``divergence_ratio`` × min_{j<k} RMS_j (the RMS grows), when the
-  reference trajectory cannot be propagated (it hit the Earth or blew up), or when
-  ``max_iterations`` pass without convergence (the RMS fails to settle).
+- **stalled** when the RMS settles above ``rms_fit_limit`` (the data are not fitted to their
+  noise level: the iteration found a point that is not the orbit);
+- **diverged** when RMS_k > ``divergence_ratio`` × min_{j<k} RMS_j (the RMS grows), when the
+  reference trajectory cannot be propagated (it hit the Earth or blew up), or when the
+  iteration limit K is reached with the RMS not falling (it fails to settle);
+- **converging** when the iteration limit K is reached while the RMS is still falling
+  geometrically: the observed contraction factor q < 1 (below) and the largest RMS of the
+  last w iterations is below the largest of the iterations before them (an envelope, so that
+  an RMS oscillating on its way down counts as falling). The result gives q and the
+  iterations still needed to reach ``rms_fit_limit`` if the fall goes on,
+  ceil(log(rms_fit_limit / RMS_K) / log q) (0 when RMS_K is within the limit already).
+
+The observed contraction factor q is measured on the corrections, not on the RMS: near the
+solution the DC with a truncated STM is the fixed-point iteration e_{k+1} = M e_k,
+M = I - (H̃ᵀWH̃)⁻¹H̃ᵀWH (:mod:`tapp.od.rate`), so the corrections obey δx_{k+1} = M δx_k
+exactly, whatever the noise (the noise only moves the fixed point). q is exp of the
+least-squares slope of log |δx_k|_N over the last w = min(K - 1, max(``trend_window``, K // 2))
+iterations, with |δx|_N = sqrt(δxᵀ N δx) the correction's size in the metric of the normal
+matrix N (scale-free; for a complex pair of eigenvalues a long window averages the
+oscillation out).
+In the linear regime q estimates the spectral radius ρ of M; far from the solution, or once
+the corrections reach the rounding level of a converged fit, it is only a summary of the
+iterations' pace.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 import scipy.linalg
 
 from tapp.dynamics import PropagationError, Propagator
-from tapp.errors import InputError, TooFewMeasurementsError
+from tapp.errors import InputError, SingularMatrixError, TooFewMeasurementsError
 from tapp.od.observations import Observations, predict, residuals
+
+#: Names of the state components, in order (km, km/s).
+STATE_NAMES = ("x", "y", "z", "vx", "vy", "vz")
+
+
+class DCOutcome(StrEnum):
+    """The four outcomes of a differential correction (module docstring for the rules)."""
+
+    CONVERGED = "converged"
+    CONVERGING = "converging"
+    STALLED = "stalled"
+    DIVERGED = "diverged"
 
 
 @dataclass(frozen=True, slots=True)
 class DCSettings:
-    """Iteration control of the differential correction (module docstring for the rules)."""
+    """Iteration control of the differential correction (module docstring for the rules).
+
+    ``max_iterations`` >= 2 (two RMS values are needed to tell a falling RMS from a rising
+    one); the contraction factor is measured over the last max(``trend_window``, K // 2)
+    iterations (K - 1 at most);
+    ``max_condition`` bounds the condition number of the scaled normal matrix at the start.
+    """
 
     max_iterations: int = 15
     rms_rel_tol: float = 1e-3
     divergence_ratio: float = 10.0
     rms_floor: float = 1e-6
     rms_fit_limit: float = 3.0
+    trend_window: int = 10
+    max_condition: float = 1e10
 
     def __post_init__(self) -> None:
-        if self.max_iterations < 1:
-            raise InputError("dc", "max_iterations", "an integer >= 1", self.max_iterations)
+        if self.max_iterations < 2:
+            raise InputError("dc", "max_iterations", "an integer >= 2 (two RMS values tell "
+                             "a falling RMS from a rising one)", self.max_iterations)
         if not self.rms_rel_tol > 0:
             raise InputError("dc", "rms_rel_tol", "a number > 0", self.rms_rel_tol)
         if not self.divergence_ratio > 1:
             raise InputError("dc", "divergence_ratio", "a number > 1", self.divergence_ratio)
+        if self.trend_window < 2:
+            raise InputError("dc", "trend_window", "an integer >= 2", self.trend_window)
+        if not self.max_condition > 1:
+            raise InputError("dc", "max_condition", "a number > 1", self.max_condition)
+
+
+class IllConditionedError(SingularMatrixError):
+    """The normal matrix at the start of a DC is too ill-conditioned for the data to
+    determine the state.
+
+    Attributes
+    ----------
+    condition : condition number of the normal matrix scaled to a unit diagonal (inf when
+        it is singular).
+    limit : the ``max_condition`` it exceeds.
+    directions : (n, 6) undetermined state directions, unit vectors in the scaled state
+        (each component divided by 1/sqrt(N_ii)), weakest first.
+    eigenvalues : (n,) their eigenvalues relative to the largest.
+    n_measurements : scalar measurements in the arc.
+    """
+
+    def __init__(self, condition: float, limit: float, directions: np.ndarray,
+                 eigenvalues: np.ndarray, n_measurements: int):
+        self.condition = condition
+        self.limit = limit
+        self.directions = directions
+        self.eigenvalues = eigenvalues
+        self.n_measurements = n_measurements
+        dirs = "; ".join(describe_direction(d) for d in directions)
+        super().__init__(f"normal matrix ill-conditioned before the first correction: "
+                         f"condition number {condition:.3g} > {limit:.3g} with "
+                         f"{n_measurements} measurements; the data do not determine "
+                         f"{len(directions)} state direction(s): {dirs}")
+
+
+def describe_direction(v: np.ndarray, smallest: float = 0.1) -> str:
+    """Return a state direction as text, e.g. ``-0.70 z + 0.71 vz`` (components >= 0.1)."""
+    order = np.argsort(-np.abs(v))
+    if v[order[0]] < 0:  # a direction's sign is arbitrary: lead with a positive term
+        v = -v
+    terms = [(v[i], STATE_NAMES[i]) for i in order if abs(v[i]) >= smallest]
+    text = " ".join(f"{'-' if c < 0 else '+'} {abs(c):.2f} {n}" for c, n in terms)
+    return text.removeprefix("+ ")
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,7 +156,8 @@ class DCIteration:
     """One iteration: the estimate it started from, its residual RMS and its correction.
 
     ``x0`` (6,) km, km/s; ``rms`` weighted RMS (dimensionless); ``correction`` δx (6,);
-    ``covariance`` (6, 6) the formal covariance (normal matrix inverse) at this iteration.
+    ``covariance`` (6, 6) the formal covariance (normal matrix inverse) at this iteration;
+    ``step`` |δx|_N = sqrt(δxᵀ N δx), the correction's size in the normal matrix's metric.
     """
 
     index: int
@@ -70,15 +165,18 @@ class DCIteration:
     rms: float
     correction: np.ndarray
     covariance: np.ndarray
+    step: float = math.nan
 
 
 @dataclass(frozen=True, slots=True)
 class DCResult:
     """Outcome of a differential correction.
 
-    ``status`` is "converged", "stalled" or "diverged"; ``reason`` says which rule fired;
-    ``x0`` is the final estimate (the start of the last iteration, whose RMS is the last
-    one reported); ``covariance`` its formal covariance.
+    ``status`` is a :class:`DCOutcome` value; ``reason`` says which rule fired; ``x0`` is the
+    final estimate (the start of the last iteration, whose RMS is the last one reported);
+    ``covariance`` its formal covariance; ``contraction_factor`` the observed factor q
+    (module docstring; NaN with fewer than two iterations); ``projected_iterations`` the
+    iterations still needed to reach the fit limit (status "converging" only, else None).
     """
 
     status: str
@@ -87,15 +185,27 @@ class DCResult:
     x0: np.ndarray
     covariance: np.ndarray
     n_measurements: int
+    contraction_factor: float = math.nan
+    projected_iterations: int | None = None
 
     @property
     def converged(self) -> bool:
-        return self.status == "converged"
+        return self.status == DCOutcome.CONVERGED
+
+    @property
+    def converged_at(self) -> int | None:
+        """Iteration at which the DC converged (its RMS settled), or None."""
+        return len(self.iterations) if self.converged else None
 
     @property
     def rms(self) -> np.ndarray:
         """RMS per iteration (K,)."""
         return np.array([it.rms for it in self.iterations])
+
+    @property
+    def steps(self) -> np.ndarray:
+        """Correction sizes |δx_k|_N per iteration (K,)."""
+        return np.array([it.step for it in self.iterations])
 
 
 def _linearise(obs: Observations, prop: Propagator, x0: np.ndarray, theta0_rad: float
@@ -109,6 +219,78 @@ def _linearise(obs: Observations, prop: Propagator, x0: np.ndarray, theta0_rad: 
     return y.reshape(-1), big_h.reshape(-1, 6)
 
 
+def scaled_condition(normal: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """Return (condition number, eigenvalues ascending, eigenvectors as columns) of the
+    symmetric matrix ``normal`` (6, 6) scaled to a unit diagonal, D^-1/2 N D^-1/2.
+
+    The scaling removes the units (km against km/s) from the condition number; a zero on
+    the diagonal (a component no measurement depends on) gives an infinite condition number.
+    """
+    d = np.sqrt(np.diag(normal))
+    if not np.all(d > 0) or not np.all(np.isfinite(normal)):
+        eye = np.eye(normal.shape[0])
+        bad = np.flatnonzero(~(d > 0))
+        values = np.ones(normal.shape[0])
+        values[bad] = 0.0
+        return math.inf, values, eye
+    scaled = normal / np.outer(d, d)
+    values, vectors = np.linalg.eigh(0.5 * (scaled + scaled.T))
+    cond = values[-1] / values[0] if values[0] > 0 else math.inf
+    return float(cond), values, vectors
+
+
+def _diagnose(normal: np.ndarray, settings: DCSettings, n_measurements: int) -> None:
+    """Raise IllConditionedError if the scaled normal matrix is too ill-conditioned."""
+    cond, values, vectors = scaled_condition(normal)
+    if cond <= settings.max_condition:
+        return
+    weak = values < values[-1] / settings.max_condition
+    raise IllConditionedError(cond, settings.max_condition, vectors[:, weak].T,
+                              values[weak] / values[-1], n_measurements)
+
+
+def contraction_factor(steps: np.ndarray, window: int) -> float:
+    """Return q = exp(slope) of the least-squares line through log steps[-w-1:], w =
+    min(window, len(steps) - 1); NaN with fewer than two positive steps."""
+    tail = np.asarray(steps, dtype=float)[-(window + 1):]
+    tail = tail[np.isfinite(tail) & (tail > 0)]
+    if tail.size < 2:
+        return math.nan
+    slope = np.polyfit(np.arange(tail.size), np.log(tail), 1)[0]
+    return float(np.exp(slope))
+
+
+def trend_window(n_iterations: int, settings: DCSettings) -> int:
+    """Return w, the iterations over which the contraction factor is measured (>= 1)."""
+    return max(1, min(n_iterations - 1, max(settings.trend_window, n_iterations // 2)))
+
+
+def _at_limit(history: list[DCIteration], settings: DCSettings
+              ) -> tuple[str, str, float, int | None]:
+    """Outcome when the iteration limit is reached: converging or diverged."""
+    k = len(history)
+    w = trend_window(k, settings)
+    q = contraction_factor(np.array([it.step for it in history]), w)
+    rms = np.array([it.rms for it in history])
+    rms_now = rms[-1]
+    # the largest RMS of the last w iterations against the largest before them
+    envelope_now, envelope_then = rms[-w:].max(), rms[:-w].max()
+    if q < 1 and envelope_now < envelope_then:
+        limit = settings.rms_fit_limit
+        more = 0 if rms_now <= limit else math.ceil(math.log(limit / rms_now) / math.log(q))
+        return (DCOutcome.CONVERGING,
+                f"iteration limit {k} reached while converging: over the last {w} "
+                f"iterations the RMS fell to {rms_now:.4g} (largest {envelope_now:.4g}, "
+                f"{envelope_then:.4g} before) and the corrections shrank by {q:.3g} per "
+                f"iteration; {more} more iteration(s) to reach the fit limit {limit:g} "
+                "at that pace", q, more)
+    trend = (f"the corrections did not shrink (factor {q:.3g} per iteration)" if not q < 1
+             else f"the RMS did not fall (largest {envelope_now:.4g} over the last {w} "
+             f"iterations, {envelope_then:.4g} before)")
+    return (DCOutcome.DIVERGED, f"no convergence in {k} iterations: {trend}; RMS "
+            f"{rms_now:.4g}", q, None)
+
+
 def differential_correction(obs: Observations, prop: Propagator, x_start: np.ndarray, *,
                             theta0_rad: float = 0.0, settings: DCSettings = DCSettings(),
                             apriori: tuple[np.ndarray, np.ndarray] | None = None) -> DCResult:
@@ -120,6 +302,8 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
     ------
     TooFewMeasurementsError
         Fewer than 6 scalar measurements.
+    IllConditionedError
+        The normal matrix of the first iteration is ill-conditioned (module docstring).
     """
     if obs.count < 6:
         raise TooFewMeasurementsError(6, obs.count)
@@ -129,7 +313,7 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
     if apriori is not None:
         info_prior = scipy.linalg.inv(apriori[1])  # 6x6 SPD, well conditioned by construction
     history: list[DCIteration] = []
-    status, reason = "diverged", f"no convergence in {settings.max_iterations} iterations"
+    status, reason, q, more = DCOutcome.DIVERGED, "", math.nan, None
     for k in range(1, settings.max_iterations + 1):
         try:
             y, big_h = _linearise(obs, prop, x, theta0_rad)
@@ -142,6 +326,8 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
             break
         # normal equations: (P̄⁻¹ + HᵀWH) δx = P̄⁻¹(x̄ - x) + HᵀWy
         normal = info_prior + big_h.T @ (w[:, None] * big_h)
+        if k == 1:
+            _diagnose(normal, settings, obs.count)
         rhs = big_h.T @ (w * y)
         if apriori is not None:
             rhs = rhs + info_prior @ (apriori[0] - x)
@@ -152,15 +338,21 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
             break
         dx = scipy.linalg.cho_solve(chol, rhs)
         cov = scipy.linalg.cho_solve(chol, np.eye(6))
-        history.append(DCIteration(k, x.copy(), rms, dx, cov))
+        # |δx|_N = sqrt(δxᵀ N δx)
+        step = float(np.sqrt(max(dx @ normal @ dx, 0.0)))
+        history.append(DCIteration(k, x.copy(), rms, dx, cov, step))
         rms_prev = [it.rms for it in history[:-1]]
         if rms < settings.rms_floor:
-            status, reason = "converged", f"RMS below {settings.rms_floor:g} at iteration {k}"
+            status, reason = DCOutcome.CONVERGED, f"RMS below {settings.rms_floor:g} at " \
+                f"iteration {k}"
             break
-        if rms_prev and abs(rms_prev[-1] - rms) / rms < settings.rms_rel_tol:
-            status = "converged" if rms <= settings.rms_fit_limit else "stalled"
-            reason = (f"RMS changed by less than {settings.rms_rel_tol:g} (relative) at "
-                      f"iteration {k}" + ("" if status == "converged" else
+        # settled: the RMS did not change, and the correction would not change it
+        if rms_prev and abs(rms_prev[-1] - rms) / rms < settings.rms_rel_tol and \
+                step**2 / (2 * y.size * rms**2) < settings.rms_rel_tol:
+            settled = rms <= settings.rms_fit_limit
+            status = DCOutcome.CONVERGED if settled else DCOutcome.STALLED
+            reason = (f"RMS settled (changed by less than {settings.rms_rel_tol:g}, "
+                      f"relative) at iteration {k}" + ("" if settled else
                                           f", settling at {rms:.4g} > {settings.rms_fit_limit:g}"))
             break
         if rms_prev and rms > settings.divergence_ratio * min(rms_prev):
@@ -168,6 +360,12 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
                       f"minimum {min(rms_prev):.4g}, at iteration {k}")
             break
         x = x + dx
-    last = history[-1] if history else DCIteration(0, x, np.nan, np.zeros(6), np.full((6, 6),
-                                                                                     np.nan))
-    return DCResult(status, reason, tuple(history), last.x0, last.covariance, obs.count)
+    else:
+        status, reason, q, more = _at_limit(history, settings)
+    if math.isnan(q) and len(history) >= 2:
+        q = contraction_factor(np.array([it.step for it in history]),
+                               trend_window(len(history), settings))
+    last = history[-1] if history else DCIteration(0, x, np.nan, np.zeros(6),
+                                                   np.full((6, 6), np.nan))
+    return DCResult(str(status), reason, tuple(history), last.x0, last.covariance, obs.count,
+                    q, more)

@@ -24,7 +24,7 @@ import numpy as np
 from filterpy.kalman import update
 
 from tapp.dynamics import Propagator
-from tapp.errors import InputError
+from tapp.errors import InputError, TooFewMeasurementsError
 from tapp.measurements.observables import MeasurementModel
 from tapp.od.observations import Observations
 
@@ -60,7 +60,17 @@ def process_noise(q_km2_s3: float, dt_s: float) -> np.ndarray:
 
 def extended_kalman_filter(obs: Observations, prop: Propagator, x0: np.ndarray, P0: np.ndarray,
                            *, theta0_rad: float = 0.0, q_km2_s3: float = 0.0) -> EKFResult:
-    """Filter ``obs`` from the estimate (x0 (6,), P0 (6, 6)) at t = 0."""
+    """Filter ``obs`` from the estimate (x0 (6,), P0 (6, 6)) at t = 0.
+
+    Raises
+    ------
+    TooFewMeasurementsError
+        No measurement in ``obs`` (the arc holds no pass): nothing to filter.
+    InputError
+        P0 not symmetric positive-definite, or q < 0.
+    """
+    if obs.count == 0:
+        raise TooFewMeasurementsError(1, 0)
     P0 = np.asarray(P0, dtype=float)
     if P0.shape != (6, 6) or not np.allclose(P0, P0.T) or np.any(np.linalg.eigvalsh(P0) <= 0):
         raise InputError("ekf", "apriori", "a symmetric positive-definite 6x6 covariance")

@@ -31,6 +31,9 @@ class Observations:
     stations : the stations, in index order.
     kinds : observable kinds of the columns.
     sigma : (k,) standard deviations of the columns, same units.
+    span_s : end of the time span the data set covers, s from the epoch (the end of the
+        tracking schedule: a station may see nothing in its last minutes); None when not
+        known, then the last observation time stands for it (:attr:`end_s`).
     """
 
     t_s: np.ndarray
@@ -39,6 +42,7 @@ class Observations:
     stations: tuple[Station, ...]
     kinds: tuple[str, ...]
     sigma: np.ndarray
+    span_s: float | None = None
 
     def __post_init__(self) -> None:
         m = self.t_s.shape[0]
@@ -55,11 +59,37 @@ class Observations:
         """Number of scalar measurements, M k."""
         return int(self.values.size)
 
+    @property
+    def end_s(self) -> float:
+        """End of the data span, s from the epoch: ``span_s``, else the last observation
+        time (0 without observations)."""
+        if self.span_s is not None:
+            return float(self.span_s)
+        return float(self.t_s[-1]) if self.t_s.size else 0.0
+
     def window(self, t_end_s: float) -> Observations:
         """Return the observations with t <= t_end_s (an arc of the data set)."""
         keep = self.t_s <= t_end_s
         return Observations(self.t_s[keep], self.station[keep], self.values[keep],
-                            self.stations, self.kinds, self.sigma)
+                            self.stations, self.kinds, self.sigma,
+                            min(self.end_s, float(t_end_s)))
+
+    def arc(self, arc_s: float, source: str = "--arc", field: str = "value",
+            got: object = None) -> Observations:
+        """Return the first ``arc_s`` seconds of the data.
+
+        Raises
+        ------
+        InputError
+            ``arc_s`` is longer than the data span (:attr:`end_s`, with 1 ms of slack): names
+            ``source`` (the option or file that asked for the arc), ``field`` and the span.
+        """
+        end = self.end_s
+        if arc_s > end + 1e-3:
+            raise InputError(source, field, f"an arc no longer than the data span, 0 .. "
+                             f"{end:.0f} s from the epoch ({end / 3600:.4g} h = "
+                             f"{end / 86400:.4g} d)", arc_s if got is None else got)
+        return self.window(arc_s)
 
     def passes(self) -> list[np.ndarray]:
         """Return the row indices of each pass (contiguous visibility of one station)."""
@@ -133,4 +163,4 @@ def simulate(truth: Propagator, x0: np.ndarray, stations: tuple[Station, ...],
     if rng is not None:
         values = values + rng.standard_normal(values.shape) * sigma
     return Observations(t[order], np.concatenate(rows_s)[order], values, tuple(stations),
-                        tuple(kinds), sigma)
+                        tuple(kinds), sigma, float(traj.t_s[-1]))

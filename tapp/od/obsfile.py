@@ -1,12 +1,17 @@
-"""Observation files: HDF5 (self-contained) and CSV (stations and σ from the scenario).
+"""Observation files: HDF5 (self-contained), CSV and CCSDS TDM (stations and σ from the
+scenario).
 
 HDF5 layout: datasets ``t_s`` (M,), ``station`` (M,) int, ``values`` (M, k) with attribute
 ``kinds`` and ``units``; ``sigma`` (k,); group ``stations`` with ``name``, ``lat_deg``,
 ``lon_deg``, ``h_km``, ``elev_mask_deg``; root attributes format="tapp-observations",
-version, creation time. CSV: a header ``t_s,station,range_km,range_rate_km_s`` (any subset
-of the kind columns ``range_km``, ``range_rate_km_s``, ``azimuth_rad``, ``elevation_rad``)
-and one row per observation time and station. Files are written to a temporary name and
-renamed; readers name the file and the field at fault.
+version, creation time, ``span_s`` (the end of the data span). CSV: a header
+``t_s,station,range_km,range_rate_km_s`` (any subset of the kind columns ``range_km``,
+``range_rate_km_s``, ``azimuth_rad``, ``elevation_rad``) and one row per observation time and
+station. TDM (``.tdm``, or any file whose first line is ``CCSDS_TDM_VERS``): the KVN Tracking
+Data Message of :mod:`tapp.ccsds.tdm`, one segment per station, epochs in UTC (the scenario's
+epoch is t = 0), participants the station and the spacecraft; read back, the participants
+must name stations of the scenario and the observables must have a σ in it. Files are written
+to a temporary name and renamed; readers name the file and the field at fault.
 """
 
 from __future__ import annotations
@@ -22,7 +27,16 @@ import numpy as np
 
 from tapp import __version__
 from tapp.atomic import atomic_write
+from tapp.ccsds.tdm import (
+    KEYWORD_OF_KIND,
+    format_tdm,
+    parse_tdm,
+    read_tracks,
+    tdm_from_tracks,
+)
+from tapp.ccsds.tdm import StationTrack as _Track
 from tapp.errors import InputError
+from tapp.frames.time import Epoch
 from tapp.measurements.stations import Station
 from tapp.od.observations import Observations
 
@@ -32,13 +46,57 @@ FORMAT = "tapp-observations"
 VERSION = 1
 
 
-def observations_file_writer(path: Path, obs: Observations) -> Callable[[Path], None]:
+def is_tdm(path: Path) -> bool:
+    """True for a ``.tdm`` path, or a file whose first non-blank text is ``CCSDS_TDM_VERS``."""
+    path = Path(path)
+    if path.suffix.lower() == ".tdm":
+        return True
+    if path.suffix in (".csv", ".h5", ".hdf5") or not path.is_file():
+        return False
+    with path.open("rb") as fh:
+        return fh.read(4096).lstrip().startswith(b"CCSDS_TDM_VERS")
+
+
+def tdm_text(obs: Observations, epoch: Epoch, spacecraft: str,
+             comments: tuple[str, ...] = ()) -> str:
+    """Return ``obs`` as the KVN text of a TDM: one segment per station, t = 0 at ``epoch``."""
+    tracks = []
+    for s, st in enumerate(obs.stations):
+        rows = obs.station == s
+        if not np.any(rows):
+            continue
+        where = (f"station {st.name}: geodetic lat {math.degrees(st.lat_rad):.6f} deg, lon "
+                 f"{math.degrees(st.lon_rad):.6f} deg, h {st.h_km:.4f} km (WGS84), mask "
+                 f"{math.degrees(st.elev_mask_rad):g} deg")
+        tracks.append(_Track(st.name, spacecraft, tuple(obs.kinds), obs.t_s[rows],
+                             obs.values[rows], obs.end_s, "1,2,1", (where,)))
+    sigma = ", ".join(f"{KEYWORD_OF_KIND[k]} {v:g}" for k, v in zip(obs.kinds, obs.sigma,
+                                                                   strict=True))
+    notes = (*comments, f"standard deviations (km, km/s, rad): {sigma}",
+             "values are instantaneous at the receive time (no light time)")
+    return format_tdm(tdm_from_tracks(tracks, epoch, comments=notes))
+
+
+def observations_file_writer(path: Path, obs: Observations, *, epoch: Epoch | None = None,
+                             spacecraft: str = "SPACECRAFT", comments: tuple[str, ...] = ()
+                             ) -> Callable[[Path], None]:
     """Return ``write(at)``, which writes ``obs`` as a complete file at ``at`` in the format
-    ``path``'s suffix asks for (.csv as CSV, otherwise HDF5); for
-    :class:`tapp.outputs.OutputSet`, which passes a temporary beside ``path``."""
+    ``path``'s suffix asks for (.csv as CSV, .tdm as a CCSDS TDM, otherwise HDF5); for
+    :class:`tapp.outputs.OutputSet`, which passes a temporary beside ``path``.
+
+    A TDM needs the ``epoch`` of t = 0 (UTC) and names the ``spacecraft``; ``comments`` go
+    to its header.
+    """
     path = Path(path)
     kinds = [str(k) for k in obs.kinds]
-    if path.suffix == ".csv":
+    if path.suffix.lower() == ".tdm":
+        if epoch is None:
+            raise InputError(str(path), "epoch", "the UTC epoch of t = 0 to write a TDM")
+        text = tdm_text(obs, epoch, spacecraft, comments)
+
+        def write(tmp: Path) -> None:
+            tmp.write_text(text, encoding="utf-8")
+    elif path.suffix == ".csv":
         def write(tmp: Path) -> None:
             with tmp.open("w", newline="") as fh:
                 out = csv.writer(fh)
@@ -50,7 +108,7 @@ def observations_file_writer(path: Path, obs: Observations) -> Callable[[Path], 
         def write(tmp: Path) -> None:
             with h5py.File(tmp, "w") as f:
                 f.attrs.update(format=FORMAT, version=VERSION, tapp_version=__version__,
-                               created_utc=datetime.now(UTC).isoformat())
+                               created_utc=datetime.now(UTC).isoformat(), span_s=obs.end_s)
                 f.create_dataset("t_s", data=obs.t_s).attrs["units"] = "s"
                 f.create_dataset("station", data=obs.station)
                 v = f.create_dataset("values", data=obs.values)
@@ -66,17 +124,31 @@ def observations_file_writer(path: Path, obs: Observations) -> Callable[[Path], 
     return write
 
 
-def write_observations(path: Path, obs: Observations) -> None:
-    """Write ``obs`` to ``path`` (.h5/.hdf5 as HDF5, .csv as CSV), atomically."""
-    atomic_write(path, observations_file_writer(path, obs))
+def write_observations(path: Path, obs: Observations, *, epoch: Epoch | None = None,
+                       spacecraft: str = "SPACECRAFT") -> None:
+    """Write ``obs`` to ``path`` (.h5/.hdf5 as HDF5, .csv as CSV, .tdm as a TDM with t = 0 at
+    ``epoch``), atomically."""
+    atomic_write(path, observations_file_writer(path, obs, epoch=epoch,
+                                                spacecraft=spacecraft))
 
 
 def read_observations(path: Path, stations: dict[str, Station] | None = None,
-                      sigma: np.ndarray | None = None) -> Observations:
-    """Read an observation file; a CSV needs the ``stations`` by name and ``sigma``."""
+                      sigma: np.ndarray | None = None, *, epoch: Epoch | None = None,
+                      sigma_kinds: tuple[str, ...] = ("range", "range_rate")
+                      ) -> Observations:
+    """Read an observation file; a CSV or a TDM needs the ``stations`` by name and ``sigma``.
+
+    For a CSV ``sigma`` (k,) goes with the columns in order; for a TDM with ``sigma_kinds``
+    (the file's observables must be among them) and the TDM's epochs are counted from
+    ``epoch`` (UTC).
+    """
     path = Path(path)
     if not path.exists():
         raise InputError(str(path), "file", "an existing observation file")
+    if is_tdm(path):
+        if epoch is None:
+            raise InputError(str(path), "epoch", "the scenario's epoch to read a TDM")
+        return _read_tdm(path, stations or {}, sigma, sigma_kinds, epoch)
     if path.suffix == ".csv":
         return _read_csv(path, stations or {}, sigma)
     try:
@@ -95,10 +167,48 @@ def read_observations(path: Path, stations: dict[str, Station] | None = None,
                                                        g["elev_mask_deg"][()], strict=True))
             kinds = tuple(str(k) for k in f["values"].attrs["kinds"])
             t, s, v, sg = f["t_s"][()], f["station"][()], f["values"][()], f["sigma"][()]
+            span = f.attrs.get("span_s")
     except OSError as exc:
         raise InputError(str(path), "file", f"a readable HDF5 file ({exc})") from None
     _check(path, t, v)
-    return Observations(t, s.astype(int), v, st, kinds, sg)
+    span_s = float(span) if span is not None and np.isfinite(span) else None
+    return Observations(t, s.astype(int), v, st, kinds, sg, span_s)
+
+
+def _read_tdm(path: Path, stations: dict[str, Station], sigma: np.ndarray | None,
+              sigma_kinds: tuple[str, ...], epoch: Epoch) -> Observations:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise InputError(str(path), "file", "a text (KVN) TDM") from None
+    tracks = read_tracks(parse_tdm(text, str(path)), epoch, stations)
+    if not tracks:
+        raise InputError(str(path), "data", "at least one observation")
+    kinds = tracks[0].kinds
+    for i, tr in enumerate(tracks[1:], start=2):
+        if tr.kinds != kinds:
+            raise InputError(str(path), f"track {i} ({tr.station})", "the observables of the "
+                             f"first ({', '.join(KEYWORD_OF_KIND[k] for k in kinds)})",
+                             ", ".join(KEYWORD_OF_KIND[k] for k in tr.kinds))
+    if sigma is None or len(sigma) != len(sigma_kinds):
+        raise InputError(str(path), "sigma", f"a standard deviation for each of "
+                         f"{', '.join(sigma_kinds)} from the scenario")
+    missing = [k for k in kinds if k not in sigma_kinds]
+    if missing:
+        raise InputError(str(path), KEYWORD_OF_KIND[missing[0]], "observables with a standard "
+                         "deviation in the scenario (" + ", ".join(
+                             KEYWORD_OF_KIND[k] for k in sigma_kinds) + ")")
+    names = list(dict.fromkeys(tr.station for tr in tracks))
+    index = {n: i for i, n in enumerate(names)}
+    t = np.concatenate([tr.t_s for tr in tracks])
+    s = np.concatenate([np.full(tr.t_s.size, index[tr.station]) for tr in tracks])
+    v = np.concatenate([tr.values for tr in tracks])
+    order = np.lexsort((s, t))
+    ends = [tr.span_end_s for tr in tracks if tr.span_end_s is not None]
+    span = max([*ends, float(t.max())])
+    sg = np.array([sigma[sigma_kinds.index(k)] for k in kinds], dtype=float)
+    return Observations(t[order], s[order], v[order], tuple(stations[n] for n in names), kinds,
+                        sg, span)
 
 
 def _check(path: Path, t: np.ndarray, values: np.ndarray) -> None:

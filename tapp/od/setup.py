@@ -30,7 +30,7 @@ from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator, earth_model, parse_gravity
 from tapp.errors import InputError
 from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
-from tapp.frames.time import parse_epoch
+from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements.stations import Station
 from tapp.od.observations import Observations, simulate
 from tapp.orbits import DEFAULT_SCENARIO, OrbitTable, parse_orbit
@@ -39,6 +39,8 @@ from tapp.stations_file import StationTable, load_network
 from tapp.tomlfile import read_toml
 
 Positive = Annotated[float, Field(gt=0)]
+#: The observable kinds of the study's tracking, in the order of ``Tracking.sigma``.
+KINDS = ("range", "range_rate")
 
 
 def _gravity(spec: str) -> str:
@@ -65,21 +67,37 @@ class StudyTracking(Schema):
 
 
 class InitialOffset(Schema):
-    """``[initial_offset]``: the brief's initial estimate (Δa m, e, Δi deg)."""
+    """``[initial_offset]``: the brief's initial estimate, an error added to the true
+    elements of every orbit: Δa (m), Δe, Δi (deg).
+
+    ``de`` is added to each orbit's e (the brief: e = 0.00012 for the circular orbits,
+    0.10012 for SATORB7). ``e`` instead *sets* e for every orbit: the earlier reading of the
+    brief, kept so that study files written for it still read; give one of the two.
+    """
 
     da_m: float
-    e: Annotated[float, Field(ge=0, lt=1)]
+    de: float | None = None
+    e: Annotated[float, Field(ge=0, lt=1)] | None = None
     di_deg: float
+
+    @model_validator(mode="after")
+    def _one_e(self) -> InitialOffset:
+        if (self.de is None) == (self.e is None):
+            raise Invalid("either de (added to e) or e (replacing it), not both",
+                          "both" if self.de is not None else "neither", "de")
+        return self
 
 
 class DCSettingsTable(Schema):
     """``[dc_settings]``: fields of :class:`tapp.od.batch.DCSettings`."""
 
-    max_iterations: Annotated[int, Field(ge=1)] = 15
+    max_iterations: Annotated[int, Field(ge=2)] = 15
     rms_rel_tol: Positive = 1e-3
     divergence_ratio: Annotated[float, Field(gt=1)] = 10.0
     rms_floor: Positive = 1e-6
     rms_fit_limit: Positive = 3.0
+    trend_window: Annotated[int, Field(ge=2)] = 10
+    max_condition: Annotated[float, Field(gt=1)] = 1e10
 
 
 class DCBlock(Schema):
@@ -113,6 +131,57 @@ class RSigBlock(Schema):
     cases: list[Annotated[list[GravityName], Field(min_length=2, max_length=2)]]
 
 
+class Grid(Schema):
+    """A grid ``first``, ``first + step``, ... up to ``last`` (inclusive), in the field's
+    units."""
+
+    first: Annotated[float, Field(ge=0)]
+    last: Annotated[float, Field(ge=0)]
+    step: Positive
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Grid:
+        if self.last < self.first:
+            raise Invalid(f"last >= first ({self.first:g})", self.last, "last")
+        if (self.last - self.first) / self.step > 1000:
+            raise Invalid("at most 1000 grid points", (self.last - self.first) / self.step,
+                          "step")
+        return self
+
+    def values(self) -> np.ndarray:
+        """The grid points (n,)."""
+        n = int(math.floor((self.last - self.first) / self.step + 1e-9))
+        return self.first + self.step * np.arange(n + 1)
+
+
+class RateVsArcBlock(Schema):
+    """``[rate_vs_arc]``: ρ against arc length (h) for one orbit, truth and STM models."""
+
+    orbit: str
+    truth: GravityName
+    stm: Annotated[list[GravityName], Field(min_length=1)]
+    arcs_h: Grid
+
+
+class RateVsInclinationBlock(Schema):
+    """``[rate_vs_inclination]``: ρ against inclination (deg) of ``orbit``'s elements over one
+    arc, seen from one ``network`` (the same stations at every inclination)."""
+
+    orbit: str
+    truth: GravityName
+    stm: Annotated[list[GravityName], Field(min_length=1)]
+    arc_h: Positive
+    network: str
+    inclinations_deg: Grid
+
+    @model_validator(mode="after")
+    def _range(self) -> RateVsInclinationBlock:
+        if self.inclinations_deg.last > 180:
+            raise Invalid("inclinations within 0..180 deg", self.inclinations_deg.last,
+                          "inclinations_deg.last")
+        return self
+
+
 class StudyFile(Schema):
     """Schema of the study file (module docstring)."""
 
@@ -126,6 +195,8 @@ class StudyFile(Schema):
     dc: list[DCBlock] = []
     ekf: EKFBlock | None = None
     rsig: RSigBlock | None = None
+    rate_vs_arc: RateVsArcBlock | None = None
+    rate_vs_inclination: RateVsInclinationBlock | None = None
 
     @model_validator(mode="after")
     def _names_exist(self) -> StudyFile:
@@ -135,9 +206,16 @@ class StudyFile(Schema):
                 if orbit not in self.orbits:
                     raise Invalid(f"an orbit of [orbits.*] ({known})", orbit,
                                   f"dc[{i}].orbits[{j}]")
-        for key, block in (("ekf", self.ekf), ("rsig", self.rsig)):
+        for key, block in (("ekf", self.ekf), ("rsig", self.rsig),
+                           ("rate_vs_arc", self.rate_vs_arc),
+                           ("rate_vs_inclination", self.rate_vs_inclination)):
             if block is not None and block.orbit not in self.orbits:
                 raise Invalid(f"an orbit of [orbits.*] ({known})", block.orbit, f"{key}.orbit")
+        inc = self.rate_vs_inclination
+        if inc is not None and inc.network not in self.networks and inc.network not in \
+                self.stations:
+            raise Invalid(f"a network of [networks] ({', '.join(self.networks)}) or a station",
+                          inc.network, "rate_vs_inclination.network")
         for network, names in self.networks.items():
             for i, name in enumerate(names):
                 if name not in self.stations:
@@ -161,11 +239,13 @@ class Tracking:
 
 @dataclass(frozen=True, slots=True)
 class Offset:
-    """The brief's initial estimate: Δa (km), e replaced, Δi (rad)."""
+    """The brief's initial estimate: Δa (km), Δe added (or e set, when ``e`` is given), Δi
+    (rad)."""
 
     da_km: float
-    e: float
+    de: float
     di_rad: float
+    e: float | None = None
 
 
 @cache
@@ -184,32 +264,48 @@ def load_study(path: Path = DEFAULT_SCENARIO) -> dict:
     return _study(Path(path))[0]
 
 
+def epoch(path: Path = DEFAULT_SCENARIO) -> Epoch:
+    """Return the study's epoch (UTC), the t = 0 of its observations."""
+    text = study_file(path).epoch
+    if isinstance(text, dt.datetime):
+        text = text.isoformat().removesuffix("+00:00")
+    return parse_epoch(text, source=str(path))
+
+
 def tracking(path: Path = DEFAULT_SCENARIO) -> Tracking:
     """Return the ``[tracking]`` settings."""
-    study = study_file(path)
-    table = study.tracking
-    src = str(path)
-    epoch = study.epoch
-    if isinstance(epoch, dt.datetime):
-        epoch = epoch.isoformat().removesuffix("+00:00")
+    table = study_file(path).tracking
     sigma = np.array([table.sigma_range_m * 1e-3, table.sigma_range_rate_mm_s * 1e-6])
     return Tracking(table.data_interval_s, table.span_days * 86400.0, sigma, table.seed,
-                    math.radians(table.equatorial_below_deg),
-                    parse_epoch(epoch, source=src).gmst_rad())
+                    math.radians(table.equatorial_below_deg), epoch(path).gmst_rad())
+
+
+def sigma_by_kind(path: Path = DEFAULT_SCENARIO) -> dict[str, float]:
+    """Return the study's measurement standard deviations by observable kind (km, km/s)."""
+    return dict(zip(KINDS, tracking(path).sigma.tolist(), strict=True))
 
 
 def offset(path: Path = DEFAULT_SCENARIO) -> Offset:
     """Return the ``[initial_offset]`` of the brief."""
     table = study_file(path).initial_offset
-    return Offset(table.da_m * 1e-3, table.e, math.radians(table.di_deg))
+    return Offset(table.da_m * 1e-3, table.de or 0.0, math.radians(table.di_deg), table.e)
 
 
 def initial_estimate(x_true: np.ndarray, off: Offset) -> np.ndarray:
-    """Return the brief's initial estimate: elements of x_true with a + Δa, e := e0, i + Δi."""
+    """Return the brief's initial estimate: the elements of x_true (6,) with a + Δa,
+    e + Δe (or e := ``off.e`` when set), i + Δi, the other elements unchanged.
+
+    Raises
+    ------
+    InputError
+        The offset makes e negative or >= 1.
+    """
     el = np.array(cartesian_to_elements(x_true, GM_EARTH_km3_s2), dtype=float)
     el[0] += off.da_km
-    el[1] = off.e
+    el[1] = el[1] + off.de if off.e is None else off.e
     el[2] += off.di_rad
+    if not 0 <= el[1] < 1:
+        raise InputError("initial_offset", "de", "an offset leaving 0 <= e < 1", el[1])
     return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
@@ -234,12 +330,18 @@ def network_for(x_true: np.ndarray, name: str | None, path: Path = DEFAULT_SCENA
 
 
 def simulated_observations(x_true: np.ndarray, truth_spec: str, stations: tuple[Station, ...],
-                           path: Path = DEFAULT_SCENARIO, seed: int | None = None
-                           ) -> Observations:
-    """Simulate the study's 5-day observation file for one orbit and truth model."""
+                           path: Path = DEFAULT_SCENARIO, seed: int | None = None,
+                           span_s: float | None = None, noise: bool = True) -> Observations:
+    """Simulate the study's 5-day observation file for one orbit and truth model.
+
+    ``span_s`` shortens the file (default: the scenario's span); ``noise=False`` gives the
+    noise-free values (for a prediction that needs only the times and the stations).
+    """
     trk = tracking(path)
-    t = np.arange(0.0, trk.span_s + 0.5 * trk.data_interval_s, trk.data_interval_s)
-    rng = np.random.default_rng(trk.seed if seed is None else seed)
+    span = trk.span_s if span_s is None else min(span_s, trk.span_s)
+    t = np.arange(0.0, span + 0.5 * trk.data_interval_s, trk.data_interval_s)
+    t = t[t <= span + 1e-9 * max(span, 1.0)]
+    rng = np.random.default_rng(trk.seed if seed is None else seed) if noise else None
     truth = Propagator(earth_model(truth_spec, source=str(path), field="truth"))
     return simulate(truth, x_true, stations, t, trk.sigma, rng, theta0_rad=trk.theta0_rad)
 

@@ -1,9 +1,14 @@
 """The approximate-STM study end to end: every run of the brief, as data.
 
-The runs are read from the study's scenario file (``[[dc]]``, ``[ekf]``, ``[rsig]``; see
-``scenarios/approx_stm.toml``, validated by :class:`tapp.od.setup.StudyFile`); each DC run
-uses the brief's offset initial estimate and the 5-day simulated observation file of its orbit
-and truth model, cut to the run's arc. The results are plain dataclasses;
+The runs are read from the study's scenario file (``[[dc]]``, ``[ekf]``, ``[rsig]``,
+``[rate_vs_arc]``, ``[rate_vs_inclination]``; see ``scenarios/approx_stm.toml``, validated by
+:class:`tapp.od.setup.StudyFile`); each DC run uses the brief's offset initial estimate and the
+5-day simulated observation file of its orbit and truth model, cut to the run's arc. Beside
+each DC run go the predicted convergence rate ρ of its (J_N, J_M) pair on the same
+observations at the true state (:mod:`tapp.od.rate`) and the study's own predictor, the
+ratio R_M / R_N of the error-growth signatures (:mod:`tapp.od.rsig`) of the variational and
+the state model at the end of the arc. The ρ curves use noise-free observations (ρ depends on
+the times, stations and weights only). The results are plain dataclasses;
 :mod:`tapp.report.approx_stm` turns them into the report.
 """
 
@@ -15,17 +20,27 @@ from pathlib import Path
 
 import numpy as np
 
+from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator, earth_model
+from tapp.errors import TooFewMeasurementsError
+from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.od import setup
 from tapp.od.batch import DCResult, DCSettings, differential_correction
 from tapp.od.ekf import EKFResult, extended_kalman_filter
+from tapp.od.rate import PredictedRate, predicted_rate
 from tapp.od.rsig import RSignature, r_signature
 from tapp.orbits import DEFAULT_SCENARIO
+from tapp.stations_file import load_network
 
 
 @dataclass(frozen=True, slots=True)
 class DCRun:
-    """One DC case: which block, orbit, (truth, STM) models and arc, and its outcome."""
+    """One DC case: which block, orbit, (truth, STM) models and arc, and its outcome.
+
+    ``rate`` is the predicted rate at the true state (None when the normal matrix is
+    singular); ``r_ratio`` = R_M / R_N at the end of the arc (the study's signature of the
+    variational model over that of the state model); ``x_true`` (6,) the true epoch state.
+    """
 
     block: str
     orbit: str
@@ -34,6 +49,25 @@ class DCRun:
     arc_h: float
     result: DCResult
     position_error_km: float
+    rate: PredictedRate | None = None
+    r_ratio: float = float("nan")
+    x_true: np.ndarray | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class RateCurve:
+    """ρ of one (truth, STM) pair along a swept quantity ``x`` (arc h or inclination deg).
+
+    ``rho`` (n,) NaN where the data were too few; ``oscillating`` (n,) a complex dominant
+    pair.
+    """
+
+    orbit: str
+    truth: str
+    stm: str
+    x: np.ndarray
+    rho: np.ndarray
+    oscillating: np.ndarray
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,6 +103,12 @@ class StudyResults:
     rsig: tuple[RRun, ...]
     sigma: np.ndarray
     network: dict[str, tuple[str, ...]]
+    rate_vs_arc: tuple[RateCurve, ...] = ()
+    rate_vs_inclination: tuple[RateCurve, ...] = ()
+    inclination_arc_h: float = float("nan")
+    inclination_network: str = ""
+    settings: DCSettings = DCSettings()
+    offset: setup.Offset | None = None
 
 
 def planned_cases(path: Path = DEFAULT_SCENARIO) -> int:
@@ -77,7 +117,32 @@ def planned_cases(path: Path = DEFAULT_SCENARIO) -> int:
     n = sum(len(b.orbits) * len(b.stm) * len(b.arcs_h) for b in study.dc)
     if study.ekf:
         n += len(study.ekf.stm) * len(study.ekf.apriori)
+    if study.rate_vs_arc:
+        n += len(study.rate_vs_arc.stm)
+    if study.rate_vs_inclination:
+        n += len(study.rate_vs_inclination.stm)
     return n + (len(study.rsig.cases) if study.rsig else 0)
+
+
+def _rate_or_none(obs, truth, stm, x_true, theta0) -> PredictedRate | None:
+    try:
+        return predicted_rate(obs, truth, stm, x_true, theta0)
+    except (np.linalg.LinAlgError, TooFewMeasurementsError):
+        return None
+
+
+def _curve(orbit: str, truth: str, stm: str, x: np.ndarray,
+           rates: list[PredictedRate | None]) -> RateCurve:
+    rho = np.array([np.nan if r is None else r.rho for r in rates])
+    osc = np.array([r is not None and r.oscillating for r in rates])
+    return RateCurve(orbit, truth, stm, np.asarray(x, dtype=float), rho, osc)
+
+
+def with_inclination(x: np.ndarray, inclination_rad: float) -> np.ndarray:
+    """Return the state (6,) of the orbit of x (6,) with its inclination replaced."""
+    el = np.array(cartesian_to_elements(x, GM_EARTH_km3_s2), dtype=float)
+    el[2] = inclination_rad
+    return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
 def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = lambda _: None
@@ -100,7 +165,18 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
         return obs_cache[orbit, truth]
 
     dc_runs, blocks = [], []
-    for block in study.dc:
+    r_end: dict[tuple[str, str, str, float], float] = {}
+
+    def r_at_end(orbit: str, truth: str, stm: str, arc_h: float) -> float:
+        if (orbit, truth, stm, arc_h) not in r_end:
+            prop = Propagator(earth_model(truth, source=src, field="dc.truth"),
+                              earth_model(stm, source=src, field="dc.stm"))
+            sig = r_signature(prop, setup.true_orbit(orbit, path),
+                              np.array([0.0, arc_h * 3600.0]), theta0)
+            r_end[orbit, truth, stm, arc_h] = float(sig.r[-1])
+        return r_end[orbit, truth, stm, arc_h]
+
+    for index, block in enumerate(study.dc):
         title = block.title if block.title is not None else f"block {len(blocks) + 1}"
         blocks.append(title)
         for orbit in block.orbits:
@@ -109,13 +185,19 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
             truth = block.truth
             obs = observations(orbit, truth)
             for stm in block.stm:
-                prop = Propagator(earth_model(truth, source=src, field="dc.truth"),
-                                  earth_model(stm, source=src, field="dc.stm"))
+                state_model = earth_model(truth, source=src, field="dc.truth")
+                var_model = earth_model(stm, source=src, field="dc.stm")
+                prop = Propagator(state_model, var_model)
                 for arc_h in block.arcs_h:
-                    res = differential_correction(obs.window(arc_h * 3600.0), prop, x_start,
-                                                  theta0_rad=theta0, settings=settings)
+                    data = obs.arc(arc_h * 3600.0, src, f"dc[{index}].arcs_h", arc_h)
+                    res = differential_correction(data, prop, x_start, theta0_rad=theta0,
+                                                  settings=settings)
                     err = float(np.linalg.norm(res.x0[:3] - x_true[:3]))
-                    dc_runs.append(DCRun(title, orbit, truth, stm, float(arc_h), res, err))
+                    rate = _rate_or_none(data, state_model, var_model, x_true, theta0)
+                    ratio = r_at_end(orbit, truth, stm, arc_h) / r_at_end(orbit, truth,
+                                                                        truth, arc_h)
+                    dc_runs.append(DCRun(title, orbit, truth, stm, float(arc_h), res, err,
+                                         rate, ratio, x_true))
                     advance(f"DC {orbit} ({truth},{stm}) {arc_h:g} h")
 
     ekf_runs = []
@@ -124,7 +206,7 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
         orbit, truth = ekf.orbit, ekf.truth
         x_true = setup.true_orbit(orbit, path)
         x_start = setup.initial_estimate(x_true, off)
-        obs = observations(orbit, truth).window(ekf.arc_h * 3600.0)
+        obs = observations(orbit, truth).arc(ekf.arc_h * 3600.0, src, "ekf.arc_h", ekf.arc_h)
         for stm in ekf.stm:
             prop = Propagator(earth_model(truth, source=src, field="ekf.truth"),
                               earth_model(stm, source=src, field="ekf.stm"))
@@ -145,6 +227,48 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
             r_runs.append(RRun(rs.orbit, truth, stm, r_signature(prop, x_true, t, theta0)))
             advance(f"R(t) ({truth},{stm})")
 
+    arc_curves = []
+    ra = study.rate_vs_arc
+    if ra:
+        x_true = setup.true_orbit(ra.orbit, path)
+        arcs_h = ra.arcs_h.values()
+        state_model = earth_model(ra.truth, source=src, field="rate_vs_arc.truth")
+        obs = setup.simulated_observations(x_true, ra.truth, setup.network_for(x_true, None,
+                                                                               path),
+                                           path, span_s=float(arcs_h[-1]) * 3600.0,
+                                           noise=False)
+        for stm in ra.stm:
+            var_model = earth_model(stm, source=src, field="rate_vs_arc.stm")
+            rates = [_rate_or_none(obs.window(a * 3600.0), state_model, var_model, x_true,
+                                   theta0) for a in arcs_h]
+            arc_curves.append(_curve(ra.orbit, ra.truth, stm, arcs_h, rates))
+            advance(f"rho vs arc ({ra.truth},{stm})")
+
+    inc_curves = []
+    ri = study.rate_vs_inclination
+    if ri:
+        x_orbit = setup.true_orbit(ri.orbit, path)
+        stations = load_network(setup.load_study(path), src, ri.network)
+        incs = ri.inclinations_deg.values()
+        state_model = earth_model(ri.truth, source=src, field="rate_vs_inclination.truth")
+        data = []
+        for inc in incs:
+            x_i = with_inclination(x_orbit, np.radians(inc))
+            try:
+                o = setup.simulated_observations(x_i, ri.truth, stations, path,
+                                                 span_s=ri.arc_h * 3600.0, noise=False)
+            except TooFewMeasurementsError:
+                o = None
+            data.append((x_i, o))
+        for stm in ri.stm:
+            var_model = earth_model(stm, source=src, field="rate_vs_inclination.stm")
+            rates = [None if o is None else _rate_or_none(o, state_model, var_model, x_i,
+                                                          theta0) for x_i, o in data]
+            inc_curves.append(_curve(ri.orbit, ri.truth, stm, incs, rates))
+            advance(f"rho vs inclination ({ri.truth},{stm})")
+
     return StudyResults(tuple(dc_runs), tuple(blocks), tuple(ekf_runs),
                         ekf.title if ekf else "", ekf.last_passes if ekf else 0, tuple(r_runs),
-                        setup.tracking(path).sigma, network)
+                        setup.tracking(path).sigma, network, tuple(arc_curves),
+                        tuple(inc_curves), ri.arc_h if ri else float("nan"),
+                        ri.network if ri else "", settings, off)

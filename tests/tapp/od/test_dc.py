@@ -1,18 +1,36 @@
-"""Batch differential correction: the study's contrast, exact recovery, covariance realism."""
+"""Batch differential correction: the study's contrast, exact recovery, covariance realism,
+the four outcomes, the predicted rate against the observed one, the ill-conditioning
+diagnosis."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
 from scipy.stats import chi2
 
 from tapp.dynamics import Propagator, earth_model
+from tapp.errors import InputError, TooFewMeasurementsError
 from tapp.od import setup
-from tapp.od.batch import DCSettings, differential_correction
+from tapp.od.batch import (
+    DCIteration,
+    DCOutcome,
+    DCSettings,
+    IllConditionedError,
+    _at_limit,
+    contraction_factor,
+    differential_correction,
+)
 from tapp.od.observations import simulate
+from tapp.od.rate import predicted_rate
 
 TEN_METRES_km = 1e-2
 ONE_CM_km = 1e-5
+#: The issue's bound on |q - ρ| / ρ for a slowly converging DC in its linear regime.
+FIVE_PERCENT = 0.05
+#: ρ of the exact variational model: M = 0 to rounding.
+ROUNDING = 1e-9
 
 
 @pytest.fixture(scope="module")
@@ -38,8 +56,117 @@ def test_ci_contrast_j2j2_converges_j2j0_diverges(satorb1) -> None:
     assert good.rms[-1] == pytest.approx(1.0, abs=0.1)  # weighted RMS at the noise level
     bad = differential_correction(obs, Propagator(earth_model("J2"), earth_model("J0")),
                                   x_start, theta0_rad=theta0)
-    assert not bad.converged
+    assert bad.status == DCOutcome.DIVERGED
     assert bad.rms[-1] > bad.rms[0]
+
+
+def test_predicted_rate_separates_the_contrast(satorb1) -> None:
+    """ρ at the true state: > 1 for the diverging (J2,J0) DC over 24 h, 0 to rounding for the
+    exact (J2,J2) one (M = 0 when H̃ = H)."""
+    x_true, _ = satorb1
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(86400.0)
+    theta0 = setup.tracking().theta0_rad
+    diverging = predicted_rate(obs, earth_model("J2"), earth_model("J0"), x_true, theta0)
+    assert diverging.rho > 1 and not diverging.oscillating
+    assert diverging.eigenvalues.shape == (6,)
+    assert abs(diverging.eigenvalues[0]) == pytest.approx(diverging.rho)
+    exact = predicted_rate(obs, earth_model("J2"), earth_model("J2"), x_true, theta0)
+    assert exact.rho < ROUNDING
+
+
+def test_slow_convergence_pace_matches_the_predicted_rate() -> None:
+    """SATORB3, (J2,J0), 24 h: a slow, linear convergence. With 30 iterations (of about 60
+    it needs) the DC is "converging", and the factor by which its corrections shrink in
+    the linear regime is ρ within 5 %; the projection counts the iterations left."""
+    x_true = setup.true_orbit("SATORB3")
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true), span_s=86400.0)
+    theta0 = setup.tracking().theta0_rad
+    rate = predicted_rate(obs, earth_model("J2"), earth_model("J0"), x_true, theta0)
+    assert 0.5 < rate.rho < 1
+    res = differential_correction(obs, Propagator(earth_model("J2"), earth_model("J0")),
+                                  setup.initial_estimate(x_true, setup.offset()),
+                                  theta0_rad=theta0,
+                                  settings=DCSettings(max_iterations=30, divergence_ratio=1e3))
+    assert res.status == DCOutcome.CONVERGING and res.converged_at is None
+    assert abs(res.contraction_factor - rate.rho) < FIVE_PERCENT * rate.rho
+    expected = math.ceil(math.log(3.0 / res.rms[-1]) / math.log(res.contraction_factor))
+    assert res.projected_iterations == expected > 0
+    assert f"{res.contraction_factor:.3g}" in res.reason
+    # in the linear regime each correction is M times the one before: |δx_k|_N falls as ρ^k
+    ratios = res.steps[16:] / res.steps[15:-1]
+    np.testing.assert_allclose(ratios, rate.rho, rtol=FIVE_PERCENT)
+
+
+def test_a_short_arc_is_diagnosed_not_iterated(satorb1) -> None:
+    """10 minutes from one near-equatorial station: the out-of-plane components (z, vz) of
+    an equatorial orbit are undetermined; the DC says so before the first correction."""
+    x_true, x_start = satorb1
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(600.0)
+    with pytest.raises(IllConditionedError) as info:
+        differential_correction(obs, Propagator(earth_model("J2")), x_start,
+                                theta0_rad=setup.tracking().theta0_rad)
+    err = info.value
+    assert err.condition > err.limit == DCSettings().max_condition
+    assert err.directions.shape == (1, 6) and err.n_measurements == obs.count
+    weak = np.abs(err.directions[0])
+    assert weak[2] > 0.6 and weak[5] > 0.6  # z and vz
+    assert "condition number" in str(err) and "vz" in str(err)
+
+
+@pytest.mark.parametrize(("orbit", "largest"), [("SATORB7", 300.0), ("SATORB8", 200.0)])
+def test_eccentric_orbits_start_a_few_hundred_sigma_off(orbit: str, largest: float) -> None:
+    """The additive offset (+0.00012 on e): SATORB7 and SATORB8 start near their own e, and
+    the first RMS of a 6 h DC is a few hundred, not the 1e5 of an orbit made circular."""
+    x_true = setup.true_orbit(orbit)
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true), span_s=6 * 3600.0)
+    res = differential_correction(obs, Propagator(earth_model("J2")),
+                                  setup.initial_estimate(x_true, setup.offset()),
+                                  theta0_rad=setup.tracking().theta0_rad,
+                                  settings=DCSettings(max_iterations=2))
+    assert 10 < res.rms[0] < largest
+
+
+def test_no_measurement_in_the_arc_is_too_few(satorb1) -> None:
+    x_true, x_start = satorb1
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(60.0)
+    with pytest.raises(TooFewMeasurementsError):
+        differential_correction(obs, Propagator(earth_model("J2")), x_start)
+
+
+def _history(rms: list[float], steps: list[float]) -> list[DCIteration]:
+    return [DCIteration(k + 1, np.zeros(6), r, np.zeros(6), np.eye(6), s)
+            for k, (r, s) in enumerate(zip(rms, steps, strict=True))]
+
+
+def test_contraction_factor_of_a_geometric_sequence_is_its_ratio() -> None:
+    steps = 5.0 * 0.8 ** np.arange(20)
+    assert contraction_factor(steps, 10) == pytest.approx(0.8, rel=1e-12)
+    assert math.isnan(contraction_factor(steps[:1], 10))
+    # a complex pair of modulus 0.9 and period 4: a long window averages the rotation out
+    k = np.arange(60)
+    rotating = 0.9**k * (1.5 + np.cos(np.pi * k / 2))
+    assert contraction_factor(rotating, 30) == pytest.approx(0.9, rel=0.01)
+
+
+@pytest.mark.parametrize(("rms", "steps", "status"), [
+    # the limit reached while the RMS falls geometrically: converging
+    ([1000 * 0.9**k for k in range(20)], [50 * 0.9**k for k in range(20)], "converging"),
+    # oscillating on its way down: the envelope falls, converging
+    ([1000 * 0.95**k * (1.3 + (-1) ** k) for k in range(40)],
+     [50 * 0.95**k for k in range(40)], "converging"),
+    # the RMS rises slowly (below the divergence ratio): diverged
+    ([100 * 1.02**k for k in range(20)], [5 * 1.02**k for k in range(20)], "diverged"),
+    # the RMS falls but the corrections grow: diverged
+    ([1000 - k for k in range(20)], [5 * 1.1**k for k in range(20)], "diverged"),
+])
+def test_outcome_at_the_iteration_limit(rms, steps, status) -> None:
+    got, reason, q, more = _at_limit(_history(rms, steps), DCSettings())
+    assert got == status
+    if status == "converging":
+        assert 0 < q < 1 and more == math.ceil(math.log(3.0 / rms[-1]) / math.log(q))
+        assert "more iteration" in reason
+    else:
+        assert more is None and "no convergence" in reason
 
 
 def test_noise_free_matching_models_recover_truth(satorb1) -> None:
@@ -74,9 +201,9 @@ def test_formal_covariance_matches_scatter_of_noisy_runs() -> None:
 
 
 def test_settings_are_validated() -> None:
-    from tapp.errors import InputError
-
     with pytest.raises(InputError, match="max_iterations"):
-        DCSettings(max_iterations=0)
+        DCSettings(max_iterations=1)
     with pytest.raises(InputError, match="divergence_ratio"):
         DCSettings(divergence_ratio=1.0)
+    with pytest.raises(InputError, match="max_condition"):
+        DCSettings(max_condition=1.0)

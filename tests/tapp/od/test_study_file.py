@@ -3,11 +3,14 @@ a boolean or a string where a number belongs is one line naming the file and the
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
 
+from tapp.constants import GM_EARTH_km3_s2
 from tapp.errors import InputError
+from tapp.frames.elements import cartesian_to_elements
 from tapp.od import setup
 from tapp.orbits import DEFAULT_SCENARIO
 
@@ -32,9 +35,42 @@ def _error(path: Path) -> InputError:
 def test_the_shipped_study_file_validates() -> None:
     study = setup.study_file()
     assert study.tracking.seed == 1969 and len(study.orbits) == 8
-    assert [b.truth for b in study.dc] == ["J2", "5x5", "J2", "J2"]
+    assert [b.truth for b in study.dc] == ["J2", "5x5", "J2", "J2", "J2"]
     assert study.ekf.apriori["1"][0] == 0.68 and study.rsig.cases[0] == ["J0", "J0"]
     assert setup.tracking().seed == 1969 and setup.load_study()["tracking"]["seed"] == 1969
+    assert study.dc_settings.max_iterations == 100
+    arcs = study.rate_vs_arc.arcs_h.values()
+    assert (arcs[0], arcs[-1]) == (6.0, 48.0)
+    incs = study.rate_vs_inclination.inclinations_deg.values()
+    assert (incs[0], incs[-1]) == (0.0, 180.0)
+
+
+def test_the_offset_is_added_to_e() -> None:
+    """The brief: the same error added to every orbit, +0.00012 on e (SATORB7 starts at
+    e = 0.10012, SATORB8 at 0.30012, the circular orbits at 0.00012)."""
+    off = setup.offset()
+    assert (off.de, off.e) == (0.00012, None)
+    for name, e0 in (("SATORB1", 0.0), ("SATORB7", 0.1), ("SATORB8", 0.3)):
+        x = setup.initial_estimate(setup.true_orbit(name), off)
+        a, e, i = cartesian_to_elements(x, GM_EARTH_km3_s2)[:3]
+        true = setup.study_file().orbits[name]
+        assert e == pytest.approx(e0 + 0.00012, abs=1e-12)
+        assert a == pytest.approx(true.a_km + 0.1, abs=1e-9)
+        assert math.degrees(i) == pytest.approx(true.i_deg + 0.002, abs=1e-9)
+
+
+def test_the_earlier_reading_e_set_still_reads_and_one_of_the_two_is_required(
+        tmp_path: Path) -> None:
+    path = _study(tmp_path, "de = 0.00012", "e = 0.00012")
+    off = setup.offset(path)
+    x = setup.initial_estimate(setup.true_orbit("SATORB7", path), off)
+    assert cartesian_to_elements(x, GM_EARTH_km3_s2)[1] == pytest.approx(0.00012, abs=1e-12)
+    (tmp_path / "both").mkdir()
+    both = _error(_study(tmp_path / "both", "de = 0.00012", "de = 0.00012\ne = 0.00012"))
+    assert both.field == "initial_offset.de" and both.expected.startswith("either de")
+    (tmp_path / "neither").mkdir()
+    neither = _error(_study(tmp_path / "neither", "de = 0.00012", ""))
+    assert neither.field == "initial_offset.de"
 
 
 def test_a_misspelled_seed_is_named_with_the_allowed_keys(tmp_path: Path) -> None:
@@ -60,8 +96,16 @@ def test_an_unknown_section_is_refused(tmp_path: Path) -> None:
     ("lat_deg = -0.6226", "lat_deg = true", "stations.QUITO.lat_deg", "a number"),
     ("h_km = 3.55", "h_km = 1e9", "stations.QUITO.h_km", "a ground-station height in"),
     ("da_m = 100.0", "da_m = inf", "initial_offset.da_m", "a finite number"),
-    ("max_iterations = 12", "max_iterations = 12.5", "dc_settings.max_iterations",
+    ("max_iterations = 100", "max_iterations = 12.5", "dc_settings.max_iterations",
      "an integer"),
+    ("max_iterations = 100", "max_iterations = 1", "dc_settings.max_iterations",
+     "a finite number >= 2"),
+    ("de = 0.00012", "de = true", "initial_offset.de", "a number"),
+    ("step = 0.5 }", "step = 0.0 }", "rate_vs_arc.arcs_h.step", "a finite number > 0"),
+    ('network = "global"', 'network = "galactic"', "rate_vs_inclination.network",
+     "a network of [networks]"),
+    ("last = 180.0", "last = 190.0", "rate_vs_inclination.inclinations_deg.last",
+     "inclinations within 0..180 deg"),
     ("rms_rel_tol = 1e-3", "rms_rel_tl = 1e-3", "dc_settings.rms_rel_tl", "no such key"),
     ('truth = "J2"', 'truth = "J42"', "dc[0].truth", "degree <= 8"),
     ('orbits = ["SATORB1"]', 'orbits = ["SATORB9"]', "dc[0].orbits[0]", "an orbit of"),
