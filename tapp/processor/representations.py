@@ -14,8 +14,8 @@ is the system chain (links, :mod:`tapp.processor.links`, Table B-3) times the or
 ∂x^{τ,1}/∂x = [[∂p^τ/∂p, ∂p^τ/∂q], [0, I]] (3-14); for μ = 1 every factor is adjointed in
 place, (AB)* = A* B*. The orbit link's adjoint (3-15) is [[P*, 0], [−Qᵀ P*, I]] with
 P* = Γ P Γᵀ (3-13), exact for the symplectic transition of a Hamiltonian flow (gravity and
-third bodies: the force models of TAPP I); a block that is not symplectic (checked to
-:data:`SYMPLECTIC_TOL` of ‖P‖²) is adjointed by an LU solve instead.
+third bodies: the force models of TAPP I); a block that is not symplectic (checked against
+:data:`SYMPLECTIC_TOL`) is adjointed by an LU solve instead.
 
 The partials accumulator (μ, τ, ρ| (3-30) is rows t..h of ⟨μ, τ, χ⟩ for a system partition
 ρ of system χ, and rows t..h of a stored matrix (I, U, V, W, B: the orbit at epoch, current
@@ -51,8 +51,10 @@ import numpy as np
 from tapp.errors import InputError
 from tapp.processor.links import Constraint, Link, Permutation
 
-#: Relative tolerance of the symplectic identity PᵀΓP = Γ, scaled by ‖P‖², under which the
-#: orbit link is adjointed by (3-13).
+#: Largest |PᵀΓP − Γ| (entrywise) under which the orbit link is adjointed by (3-13): with
+#: PᵀΓP = Γ + Δ, ΓPΓᵀ = P⁻ᵀ(I + ΔΓᵀ), so Δ is the relative error of the result. The bound
+#: widens only to the rounding of the check itself, 100 ε ‖P‖², which is also the accuracy an
+#: LU solve of such a P reaches (ε cond P).
 SYMPLECTIC_TOL = 1e-8
 
 ORBIT_SETS = {0: "epoch", 1: "current", 2: "recycle", 3: "injection", 4: "miss2", 5: "miss3"}
@@ -171,8 +173,8 @@ def _gamma(n: int) -> np.ndarray:
 def orbit_block_adjoint(p: np.ndarray) -> np.ndarray:
     """Return P* = (P⁻¹)ᵀ of an orbit block (n_p, n_p): Γ P Γᵀ if P is symplectic (3-13)."""
     g = _gamma(p.shape[0])
-    scale = max(1.0, float(np.max(np.abs(p))) ** 2)
-    if np.max(np.abs(p.T @ g @ p - g)) <= SYMPLECTIC_TOL * scale:
+    rounding = 100.0 * np.finfo(float).eps * float(np.max(np.abs(p))) ** 2
+    if np.max(np.abs(p.T @ g @ p - g)) <= max(SYMPLECTIC_TOL, rounding):
         return g @ p @ g.T
     return np.linalg.solve(p, np.eye(p.shape[0])).T
 

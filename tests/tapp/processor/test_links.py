@@ -156,3 +156,12 @@ def test_miss_sets_as_orbit_sets_need_the_rows_and_transform_like_orbits():
     short = Accumulator(sy, Stored(eye, eye.copy(), eye.copy(), eye.copy(), b[:N_P]))
     with pytest.raises(InputError, match="miss set has"):
         short.transformation(0, 4, 1)
+
+
+def test_a_large_block_that_is_not_symplectic_is_adjointed_by_a_solve():
+    """P = 2S with S symplectic and ‖S‖ = 1e4: PᵀΓP = 4Γ, so ΓPΓᵀ would be 4x too large."""
+    s = np.eye(6)
+    s[:3, 3:] = 1e4 * np.eye(3)
+    p = 2.0 * s
+    assert np.allclose(orbit_block_adjoint(p), np.linalg.inv(p).T, rtol=1e-12, atol=0)
+    assert np.allclose(orbit_block_adjoint(s), np.linalg.inv(s).T, rtol=1e-12, atol=0)
