@@ -443,6 +443,7 @@ class Processor:
                 self._read(k + 1)
             if self.progress is not None:
                 self.progress(k, self.n_it)
+        self._flush()  # read the tail too: every record's matrices are checked once
         return Run(tuple(self.blocks), tuple(self.history),
                    tuple(self.acc.labels(plan.history.tau, plan.history.rho, self.miss_names)),
                    tuple(self.recycles), self.S0_fit, self.Lambda0_real, tuple(self.sources))
