@@ -48,6 +48,7 @@ from tapp.errors import InputError
 from tapp.frames.elements import cartesian_to_elements
 from tapp.od import setup
 from tapp.od.batch import (
+    MAX_ITERATIONS,
     STATE_NAMES,
     DCOutcome,
     DCSettings,
@@ -120,9 +121,10 @@ def _settings(scenario: Path, max_iter: int | None) -> DCSettings:
     """The scenario's [dc_settings], with ``--max-iter`` in place of its iteration limit."""
     table = setup.study_file(scenario).dc_settings.model_dump()
     if max_iter is not None:
-        if max_iter < 2:
-            raise InputError("--max-iter", "value", "a whole number >= 2 (two RMS values "
-                             "tell a falling RMS from a rising one)", max_iter)
+        if not 2 <= max_iter <= MAX_ITERATIONS:
+            raise InputError("--max-iter", "value", f"a whole number in 2 .. "
+                             f"{MAX_ITERATIONS:,} (two RMS values tell a falling RMS from a "
+                             "rising one)", max_iter)
         table["max_iterations"] = max_iter
     return DCSettings(**table)
 
@@ -171,8 +173,8 @@ def dc(
     truth: TruthOpt = "J2",
     stm: StmOpt = "J2",
     stations: Annotated[str | None, typer.Option(help="Network or station name.")] = None,
-    max_iter: Annotated[int | None, typer.Option(help="Iteration limit (>= 2; default: the "
-                                                 "scenario's [dc_settings]).")] = None,
+    max_iter: Annotated[int | None, typer.Option(help="Iteration limit (2..10000; default: "
+                                                 "the scenario's [dc_settings]).")] = None,
     seed: Annotated[int | None, typer.Option(help="Noise seed (default: scenario's).")] = None,
     obs: Annotated[Path | None, typer.Option(help="Observation file (.h5, .csv or a CCSDS "
                                              "TDM .tdm) instead of simulated data.")] = None,

@@ -69,6 +69,8 @@ from tapp.od.observations import Observations, predict, residuals
 
 #: Names of the state components, in order (km, km/s).
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "vz")
+#: Most iterations a DC may be asked for (each propagates the whole arc with its STM).
+MAX_ITERATIONS = 10_000
 
 
 class DCOutcome(StrEnum):
@@ -84,10 +86,10 @@ class DCOutcome(StrEnum):
 class DCSettings:
     """Iteration control of the differential correction (module docstring for the rules).
 
-    ``max_iterations`` >= 2 (two RMS values are needed to tell a falling RMS from a rising
-    one); the contraction factor is measured over the last max(``trend_window``, K // 2)
-    iterations (K - 1 at most);
-    ``max_condition`` bounds the condition number of the scaled normal matrix at the start.
+    ``max_iterations`` in 2 .. :data:`MAX_ITERATIONS` (two RMS values are needed to tell a
+    falling RMS from a rising one); the contraction factor is measured over the last
+    max(``trend_window``, K // 2) iterations (K - 1 at most); ``max_condition`` bounds the
+    condition number of the scaled normal matrix at the start.
     """
 
     max_iterations: int = 15
@@ -99,9 +101,10 @@ class DCSettings:
     max_condition: float = 1e10
 
     def __post_init__(self) -> None:
-        if self.max_iterations < 2:
-            raise InputError("dc", "max_iterations", "an integer >= 2 (two RMS values tell "
-                             "a falling RMS from a rising one)", self.max_iterations)
+        if not 2 <= self.max_iterations <= MAX_ITERATIONS:
+            raise InputError("dc", "max_iterations", f"an integer in 2 .. {MAX_ITERATIONS:,} "
+                             "(two RMS values tell a falling RMS from a rising one)",
+                             self.max_iterations)
         if not self.rms_rel_tol > 0:
             raise InputError("dc", "rms_rel_tol", "a number > 0", self.rms_rel_tol)
         if not self.divergence_ratio > 1:

@@ -32,6 +32,7 @@ from tapp.errors import InputError
 from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements.stations import Station
+from tapp.od.batch import MAX_ITERATIONS
 from tapp.od.observations import Observations, simulate
 from tapp.orbits import DEFAULT_SCENARIO, OrbitTable, parse_orbit
 from tapp.schema import Invalid, Schema, validate
@@ -91,7 +92,7 @@ class InitialOffset(Schema):
 class DCSettingsTable(Schema):
     """``[dc_settings]``: fields of :class:`tapp.od.batch.DCSettings`."""
 
-    max_iterations: Annotated[int, Field(ge=2)] = 15
+    max_iterations: Annotated[int, Field(ge=2, le=MAX_ITERATIONS)] = 15
     rms_rel_tol: Positive = 1e-3
     divergence_ratio: Annotated[float, Field(gt=1)] = 10.0
     rms_floor: Positive = 1e-6

@@ -100,6 +100,8 @@ def test_an_unknown_section_is_refused(tmp_path: Path) -> None:
      "an integer"),
     ("max_iterations = 100", "max_iterations = 1", "dc_settings.max_iterations",
      "a finite number >= 2"),
+    ("max_iterations = 100", "max_iterations = 100000", "dc_settings.max_iterations",
+     "a finite number <= 10000"),
     ("de = 0.00012", "de = true", "initial_offset.de", "a number"),
     ("step = 0.5 }", "step = 0.0 }", "rate_vs_arc.arcs_h.step", "a finite number > 0"),
     ('network = "global"', 'network = "galactic"', "rate_vs_inclination.network",
