@@ -174,7 +174,7 @@ def dc(
     stm: StmOpt = "J2",
     stations: Annotated[str | None, typer.Option(help="Network or station name.")] = None,
     max_iter: Annotated[int | None, typer.Option(help="Iteration limit (2..10000; default: "
-                                                 "the scenario's [dc_settings]).")] = None,
+                                                 "the scenario's \\[dc_settings]).")] = None,
     seed: Annotated[int | None, typer.Option(help="Noise seed (default: scenario's).")] = None,
     obs: Annotated[Path | None, typer.Option(help="Observation file (.h5, .csv or a CCSDS "
                                              "TDM .tdm) instead of simulated data.")] = None,
