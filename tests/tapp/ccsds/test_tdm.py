@@ -2,8 +2,9 @@
 cannot use, and the round trip of tapp's own observations.
 
 The examples are those of CCSDS 503.0-B (TDM Blue Book) as shipped in Orekit's test resources
-(src/test/resources/ccsds/tdm/kvn/), kept in ``../shared/data/ccsds-tdm/`` beside the
-repository (its README says what each contains). Expected record counts are read off the files
+(src/test/resources/ccsds/tdm/kvn/, Apache License 2.0), copied from the workplace's
+``shared/data/ccsds-tdm/`` into ``tests/data/ccsds-tdm/`` with their README, so the tests need
+nothing outside the repository. Expected record counts are read off the files
 by eye: TDMExample2 has one TRANSMIT_FREQ_2 and six RECEIVE_FREQ_1 records; TDMExample8 has
 three epochs per segment, segment 1 with DOPPLER_INTEGRATED, ANGLE_1, ANGLE_2 and segment 2
 with RANGE besides.
@@ -29,7 +30,7 @@ from tapp.ccsds.tdm import (
 from tapp.errors import InputError
 from tapp.frames.time import Epoch, parse_epoch
 
-EXAMPLES = Path(__file__).resolve().parents[4] / "shared" / "data" / "ccsds-tdm"
+EXAMPLES = Path(__file__).resolve().parents[2] / "data" / "ccsds-tdm"
 EPOCH = parse_epoch("2026-01-01T00:00:00")
 #: Written epochs carry 1 ns; a split Julian date holds about 1e-11 s.
 ONE_NANOSECOND_s = 1e-9

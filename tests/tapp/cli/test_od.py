@@ -162,7 +162,7 @@ def test_dc_saves_and_reads_a_tdm(tmp_path: Path) -> None:
 
 
 def test_a_published_tdm_is_refused_in_one_line_naming_keyword_and_block() -> None:
-    example = Path(__file__).resolve().parents[4] / "shared/data/ccsds-tdm/TDMExample8.txt"
+    example = Path(__file__).resolve().parents[2] / "data/ccsds-tdm/TDMExample8.txt"
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--obs", str(example)])
     assert res.exit_code == 2
     line = res.stderr.strip()
