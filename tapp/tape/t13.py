@@ -44,9 +44,9 @@ pairs/dJ, pairs/dJt         (n_pairs, L)           AᵀWA, AᵀWMWA over (t_{k-1
                                                    packing, order (= n_o)
 pairs/dJt_parts (optional)  (n_pairs, 3, L)        AᵀWMWA split into its white-noise, per-pass
                                                    bias and exponentially correlated parts
-                                                   (attr ``parts`` = white, bias, correlated;
-                                                   :func:`tapp.tracking.noise.
-                                                   normal_matrix_parts`), summing to dJt
+                                                   (attr ``parts`` = white, bias, correlated:
+                                                   the terms of ``normal_matrix_parts`` of
+                                                   tapp.tracking.noise), summing to dJt
 passes/station, t_start_s,  (n_passes,)            tracking passes (before any split at T13
 t_end_s, n_obs                                     times)
 raw/... (optional)          (N, ...)               one row per scalar observation: t_s,
