@@ -64,7 +64,7 @@ class TrackingData(Protocol):
 
     header: object
 
-    def pair_block(self, k_first: int, k_last: int): ...
+    def pair_block(self, k_first: int, k_last: int, *, parts: bool = True): ...
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -202,7 +202,7 @@ class Processor:
         n_ts = self.station_ids.size
         step = max(1, PAIRS_PER_BLOCK // max(1, n_ts))
         for a in range(first, last + 1, step):
-            blk = self.data.pair_block(a, min(a + step - 1, last))
+            blk = self.data.pair_block(a, min(a + step - 1, last), parts=self.plan.budget)
             keep = self._keep(np.asarray(blk.k), np.asarray(blk.station))
             if not np.any(keep):
                 continue

@@ -762,7 +762,8 @@ class _PairSource:
 
     header: T13
 
-    def pair_block(self, k_first: int, k_last: int) -> PairBlock:  # pragma: no cover
+    def pair_block(self, k_first: int, k_last: int, *, parts: bool = True
+                   ) -> PairBlock:  # pragma: no cover
         raise NotImplementedError
 
     def blocks(self, max_pairs: int | None = None) -> Iterator[PairBlock]:
@@ -859,8 +860,11 @@ class T13File(_PairSource):
                        f"{diag[i, col]:.3g} in pair {i + lo}, row {col}")
         return stored
 
-    def pair_block(self, k_first: int, k_last: int) -> PairBlock:
+    def pair_block(self, k_first: int, k_last: int, *, parts: bool = True) -> PairBlock:
         """Return the pairs of records k_first..k_last (inclusive), read and checked now.
+
+        ``parts=False`` skips ``pairs/dJt_parts`` (``dJt_parts`` is then None): TAPP III needs
+        them only for its error budget, and they are 3/5 of the bytes.
 
         Only the rows of ``pairs/dJ``, ``pairs/dJt`` (and ``pairs/dJt_parts``) of those
         records are read (and their checksums checked); they are checked finite, with a
@@ -882,13 +886,13 @@ class T13File(_PairSource):
         pairs = self.header.pairs
         dj = self._matrices("pairs/dJ", lo, hi, ())
         djt = self._matrices("pairs/dJt", lo, hi, ())
-        parts = None
-        if self.has_parts:
-            parts = self._matrices("pairs/dJt_parts", lo, hi, (len(PARTS),))
+        split = None
+        if parts and self.has_parts:
+            split = self._matrices("pairs/dJt_parts", lo, hi, (len(PARTS),))
             _check_parts_sum(self._reader.check,
-                             scaled_difference_tr(parts.sum(axis=1), djt), lo)
+                             scaled_difference_tr(split.sum(axis=1), djt), lo)
         return PairBlock(pairs.k[lo:hi], pairs.station[lo:hi], pairs.n_obs[lo:hi], dj, djt,
-                         parts)
+                         split)
 
 
 def open_t13(path: Path | str) -> T13File:
@@ -937,7 +941,7 @@ class MemoryPairs(_PairSource):
         self._tape = tape
         self.header = _header(tape)
 
-    def pair_block(self, k_first: int, k_last: int) -> PairBlock:
+    def pair_block(self, k_first: int, k_last: int, *, parts: bool = True) -> PairBlock:
         """Return the pairs of records k_first..k_last (inclusive), matrices packed TR.
 
         Raises
@@ -947,10 +951,11 @@ class MemoryPairs(_PairSource):
         """
         lo, hi = _record_range(self.header, k_first, k_last)
         pairs = self._tape.pairs
-        parts = None if pairs.dJt_parts is None else frozen(pack_tr(pairs.dJt_parts[lo:hi]))
+        split = None if pairs.dJt_parts is None or not parts else frozen(
+            pack_tr(pairs.dJt_parts[lo:hi]))
         return PairBlock(frozen(pairs.k[lo:hi], np.int64), frozen(pairs.station[lo:hi], np.int64),
                          frozen(pairs.n_obs[lo:hi], np.int64), frozen(pack_tr(pairs.dJ[lo:hi])),
-                         frozen(pack_tr(pairs.dJt[lo:hi])), parts)
+                         frozen(pack_tr(pairs.dJt[lo:hi])), split)
 
 
 def memory_pairs(tape: T13) -> MemoryPairs:

@@ -209,3 +209,13 @@ def test_a_fit_normal_matrix_that_cannot_be_inverted_names_the_time_and_the_dire
     with pytest.raises(InputError, match=r"k = 2 .*KOUROU\.x_km") as err:
         run(tape, doc)
     assert "deck.toml" in str(err.value)
+
+
+def test_without_a_budget_the_parts_are_not_read_and_the_covariances_are_the_same(tape):
+    doc = deck(tape, times={"print": [3], "recycle": [1]}, commands={"print": OUT})
+    with_budget = run(tape, doc)
+    without = run(tape, {**doc, "budget": {"enabled": False}})
+    for alias in OUT:
+        assert np.array_equal(final(without, alias), final(with_budget, alias))
+    assert all(e.budget is None for b in without.blocks for e in b.entities)
+    assert any(e.budget is not None for b in with_budget.blocks for e in b.entities)
