@@ -52,6 +52,7 @@ from tapp.processor.representations import (
     Stored,
 )
 from tapp.tape.packing import unpack_tr
+from tapp.tape.t32 import T32Entity, T32Recycle
 
 #: Pairs read from the tape at a time (bounds the memory of a block of packed matrices).
 PAIRS_PER_BLOCK = 2048
@@ -99,37 +100,14 @@ class HistoryRow:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class RecycleOutput:
-    """What a recycle writes to the T32 tape (fields of :class:`tapp.tape.t32.T32Recycle`),
-    every n_o x n_o matrix in the representation x^k of the current time."""
-
-    number: int
-    k: int
-    l: int
-    j: int
-    t_s: float
-    t_l_s: float
-    info: np.ndarray
-    S_fit: np.ndarray
-    Lambda_fit: np.ndarray
-    Lambda_real: np.ndarray
-    L: np.ndarray
-    Sigma: np.ndarray
-    J: np.ndarray
-    Jt: np.ndarray
-    B: np.ndarray
-    transition: np.ndarray
-    entities: tuple[Entity, ...]
-
-
-@dataclass(frozen=True, slots=True, eq=False)
 class Run:
-    """A processed tape: the O3 blocks, the σ history, the recycle outputs, the a priori."""
+    """A processed tape: the O3 blocks, the σ history, the a priori, and the recycles as the
+    T32 tape carries them (every n_o x n_o matrix in the representation x^k of its time)."""
 
     blocks: tuple[Block, ...]
     history: tuple[HistoryRow, ...]
     history_labels: tuple[str, ...]
-    recycles: tuple[RecycleOutput, ...]
+    recycles: tuple[T32Recycle, ...]
     S0_fit: np.ndarray
     Lambda0_real: np.ndarray
     budget_sources: tuple[str, ...] = ()
@@ -181,7 +159,7 @@ class Processor:
         self.C = np.zeros_like(self.Jt_src)
         self.blocks: list[Block] = []
         self.history: list[HistoryRow] = []
-        self.recycles: list[RecycleOutput] = []
+        self.recycles: list[T32Recycle] = []
 
     # -----------------------------------------------------------------------------------------
     # Phase 4: tape read-in
@@ -410,16 +388,18 @@ class Processor:
         self.acc.invalidate()
         self.current = None
 
-    def _t32_recycle(self, k: int, number: int, cur: _Current, ents) -> RecycleOutput:
+    def _t32_recycle(self, k: int, number: int, cur: _Current, ents) -> T32Recycle:
         t = self.acc.transformation(0, 1, 1)
         ta = self.acc.transformation(1, 1, 1)
         transition = t @ self.acc.transformation(1, 2, 1).T
         fit = self._matrix(cur)("L'")
-        return RecycleOutput(
+        entities = tuple(T32Entity(e.omega, e.command.seed(), e.command.alias(), e.rows, e.cols,
+                                   e.matrix) for e in ents)
+        return T32Recycle(
             number, k, self.l, self.j, self._t(k), self._t(self.l), self.info.copy(),
             symmetric(ta @ cur.S @ ta.T), symmetric(t @ fit @ t.T), symmetric(t @ cur.Lb @ t.T),
             t @ cur.L @ ta.T, symmetric(t @ cur.Sigma @ t.T), symmetric(ta @ self.J @ ta.T),
-            symmetric(ta @ self.Jt @ ta.T), self.stored.B @ ta.T, transition, ents)
+            symmetric(ta @ self.Jt @ ta.T), self.stored.B @ ta.T, transition, entities)
 
     # -----------------------------------------------------------------------------------------
 
@@ -470,4 +450,4 @@ def process(data: TrackingData, plan: Plan, *, source: str = "deck",
 
 
 __all__ = ["ISOLATED_SETS", "SYSTEMS", "SYSTEM_PARTITIONS", "Block", "HistoryRow", "Processor",
-           "RecycleOutput", "Run", "TrackingData", "process"]
+           "Run", "TrackingData", "process"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 from tapp.processor.plan import Plan
 from tapp.processor.representations import ISOLATED_SETS, SYSTEM_PARTITIONS, SYSTEMS
 from tapp.processor.sequencing import Run
-from tapp.tape.t32 import T32, T32Entity, T32Partition, T32Recycle
+from tapp.tape.t32 import T32, T32Partition
 
 _SYSTEM = {1: "standard", 3: "common", 4: "fit", 6: "real"}
 
@@ -33,17 +33,11 @@ def build_t32(run: Run, plan: Plan, header, provenance: dict[str, str]) -> T32:
     """Return the T32 tape of a run (module docstring)."""
     sy = plan.systems
     miss_names = tuple(header.miss.name)
-    recycles = tuple(
-        T32Recycle(r.number, r.k, r.l, r.j, r.t_s, r.t_l_s, r.info, r.S_fit, r.Lambda_fit,
-                   r.Lambda_real, r.L, r.Sigma, r.J, r.Jt, r.B, r.transition,
-                   tuple(T32Entity(e.omega, e.command.seed(), e.command.alias(), e.rows,
-                                   e.cols, e.matrix) for e in r.entities))
-        for r in run.recycles)
     return T32(header.iden, header.epoch, sy.n_p, header.parameters, miss_names,
                tuple(header.miss.unit),
                {SYSTEMS[c]: sy.chain_matrix(c) for c in (3, 4, 6)},
                {SYSTEMS[c]: tuple(sy.system_names(c)) for c in (3, 4, 6)},
-               _partitions(plan, miss_names), run.S0_fit, run.Lambda0_real, recycles,
+               _partitions(plan, miss_names), run.S0_fit, run.Lambda0_real, run.recycles,
                provenance)
 
 
