@@ -37,7 +37,10 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    the correlated real world, O(n) per pass). The real world's M is block-diagonal over
    (station, observable kind, pass) *and record*: a pass that straddles a T13 time is split
    there, since the tape has no place for the cross terms of two records (and TAPP III
-   treats the noise of new data as uncorrelated with what came before).
+   treats the noise of new data as uncorrelated with what came before). ΔJ̃ is also kept
+   split into its white, per-pass bias and correlated parts (``pairs/dJt_parts``,
+   :func:`tapp.tracking.noise.normal_matrix_parts`), which sum to it: TAPP III's error
+   budget reads them.
 
 4. **Miss parameters.** m at the miss time from the state propagated from t_0 (B-plane of the
    osculating target-relative hyperbola, or orbit elements), and
