@@ -50,16 +50,20 @@ tapp.errors.InputError: study.toml: sed: expected no such key (allowed: seed, si
 
 from __future__ import annotations
 
+import datetime as dt
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TypeVar
+from typing import Annotated, TypeVar
+
+from pydantic import AfterValidator, PlainValidator
 
 from iter.schema import AllowInf, InfFloat, Invalid, Schema, Unique
 from iter.schema import validate as _validate
 from tapp.errors import InputError
 from tapp.tomlfile import read_toml
 
-__all__ = ["AllowInf", "InfFloat", "Invalid", "Schema", "Unique", "load", "validate"]
+__all__ = ["AllowInf", "InfFloat", "Invalid", "Schema", "Tolerance", "Unique", "UtcDate", "load",
+           "validate"]
 
 M = TypeVar("M", bound=Schema)
 
@@ -86,3 +90,26 @@ def validate(model: type[M], data: Mapping, source: str, *, prefix: str = "") ->
 def load(model: type[M], path: Path | str) -> M:
     """Read the TOML file at ``path`` and validate it as ``model`` (errors name the file)."""
     return validate(model, read_toml(path), str(Path(path)))
+
+
+def _tolerance(value: float) -> float:
+    # the range lives with the integrator (tapp.dynamics.propagate.TOLERANCE_RANGE); imported
+    # here, not at module level, so reading a file does not load the compiled dynamics
+    from tapp.dynamics.propagate import check_tolerance
+
+    try:
+        return check_tolerance(value)
+    except InputError as exc:
+        raise Invalid(exc.expected, value) from None
+
+
+def _utc_date(value: object) -> object:
+    if not isinstance(value, str | dt.datetime):
+        raise Invalid("a UTC date (ISO 8601 string or TOML date-time)", value)
+    return value
+
+
+#: An integrator tolerance, within the documented range (``check_tolerance``).
+Tolerance = Annotated[float, AfterValidator(_tolerance)]
+#: A UTC date: an ISO 8601 string or a TOML date-time (parsed by the file's reader).
+UtcDate = Annotated[object, PlainValidator(_utc_date)]

@@ -91,18 +91,17 @@ from typing import Annotated, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
-from pydantic import AfterValidator, Field, PlainValidator
+from pydantic import AfterValidator, Field
 
 from search import SearchResult, solve
 from tapp.bplane import REFERENCE_POLES, BPlane, b_plane
 from tapp.constants import SECONDS_PER_DAY, GM_km3_s2, RADIUS_km
 from tapp.dynamics import BODIES, PropagationError, Propagator, earth_model
-from tapp.dynamics.propagate import check_tolerance
 from tapp.ephemeris import position_km, utc_to_tdb_jd
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.orbits import check_perigee, check_state_bounds
-from tapp.schema import Invalid, Schema, Unique, validate
+from tapp.schema import Invalid, Schema, Tolerance, Unique, UtcDate, validate
 
 #: Names of the independent variables x (injection velocity, EME2000) and dependent ones y.
 X_NAMES = ("vx_km_s", "vy_km_s", "vz_km_s")
@@ -549,19 +548,6 @@ def _nonzero(value: float) -> float:
     return value
 
 
-def _tolerance(value: float) -> float:
-    try:
-        return check_tolerance(value)
-    except InputError as exc:
-        raise Invalid(exc.expected, value) from None
-
-
-def _epoch_text(value: object) -> object:
-    if not isinstance(value, str | dt.datetime):
-        raise Invalid("a UTC date (ISO 8601 string or TOML date-time)", value)
-    return value
-
-
 _Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 _Positive = Annotated[float, Field(gt=0)]
 _Count = Annotated[int, Field(ge=1)]
@@ -584,8 +570,8 @@ class SearchModel(Schema):
     third_bodies: _ThirdBodies = []
     stm_gravity: str | None = None
     stm_third_bodies: _ThirdBodies | None = None
-    rtol: Annotated[float, AfterValidator(_tolerance)] = 1e-13
-    atol: Annotated[float, AfterValidator(_tolerance)] = 1e-13
+    rtol: Tolerance = 1e-13
+    atol: Tolerance = 1e-13
 
 
 class SearchTarget(Schema):
@@ -648,7 +634,7 @@ class SearchFile(Schema):
     """Schema of a SEARCH scenario (:func:`scenario_search` for the tables)."""
 
     title: str = ""
-    epoch: Annotated[object, PlainValidator(_epoch_text)]
+    epoch: UtcDate
     injection: SearchInjection
     model: SearchModel
     target: SearchTarget = SearchTarget()

@@ -64,13 +64,12 @@ from tapp.bplane import REFERENCE_POLES
 from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics import BODIES, ForceModel, Propagator, earth_model, parse_gravity
 from tapp.dynamics.forces import check_parameter_value, default_parameters
-from tapp.dynamics.propagate import check_tolerance
 from tapp.errors import InputError
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.stations import Station
 from tapp.orbits import check_perigee, state_from_elements
-from tapp.schema import Invalid, Schema, Unique, validate
+from tapp.schema import Invalid, Schema, Tolerance, Unique, UtcDate, validate
 from tapp.stations_file import StationTable
 from tapp.tomlfile import read_toml
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
@@ -309,19 +308,6 @@ def _time_value(value: object) -> object:
     return value
 
 
-def _epoch_value(value: object) -> object:
-    if not isinstance(value, str | dt.datetime):
-        raise Invalid("a UTC date (ISO 8601 string or TOML date-time)", value)
-    return value
-
-
-def _tolerance(value: float) -> float:
-    try:
-        return check_tolerance(value)
-    except InputError as exc:
-        raise Invalid(exc.expected, value) from None
-
-
 def _gravity(spec: str) -> str:
     try:
         parse_gravity(spec)
@@ -335,7 +321,6 @@ Time = Annotated[object, PlainValidator(_time_value)]
 Window = Annotated[list[Time], Field(min_length=2, max_length=2)]
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
-Tolerance = Annotated[float, AfterValidator(_tolerance)]
 GravityName = Annotated[str, AfterValidator(_gravity)]
 ThirdBody = Literal[tuple(b for b in BODIES if b != "earth")]  # type: ignore[valid-type]
 Kind = Literal[KINDS]  # type: ignore[valid-type]
@@ -480,7 +465,7 @@ class ScenarioFile(Schema):
 
     title: str = ""
     iden: str | None = None
-    epoch: Annotated[object, PlainValidator(_epoch_value)]
+    epoch: UtcDate
     injection: InjectionTable
     model: ModelTable
     parameters: ParametersTable = ParametersTable()
