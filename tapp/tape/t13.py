@@ -352,10 +352,10 @@ def _check_parts_sum(c: Checker, defect: np.ndarray, offset: int) -> None:
                                                      f"{first + offset}")
 
 
-def _validate_header(c: Checker, tape: T13) -> None:
-    """Everything of :func:`validate` but the pair matrices and the raw rows."""
-    n_o, n_p, n_m, n_ts, n_it = tape.n_o, tape.n_p, tape.n_m, tape.n_ts, tape.n_it
-    par = tape.parameters
+def check_parameters(c: Checker, par: TapeParameters, n_p: int) -> None:
+    """Check the n_o parameters x = [p; q] of a tape (T13 or T32): 1 <= n_p <= n_o, one
+    unit, kind, station number and finite nominal value each, unique names."""
+    n_o = len(par.name)
     if not 1 <= n_p <= n_o:
         c.fail("attrs/n_p", f"1 <= n_p <= n_o = {n_o}", n_p)
     for name in ("unit", "kind"):
@@ -366,6 +366,13 @@ def _validate_header(c: Checker, tape: T13) -> None:
     c.finite("parameters/nominal", par.nominal)
     if len(set(par.name)) != n_o:
         c.fail("parameters/name", "unique names", sorted(par.name))
+
+
+def _validate_header(c: Checker, tape: T13) -> None:
+    """Everything of :func:`validate` but the pair matrices and the raw rows."""
+    n_o, n_p, n_m, n_ts, n_it = tape.n_o, tape.n_p, tape.n_m, tape.n_ts, tape.n_it
+    par = tape.parameters
+    check_parameters(c, par, n_p)
 
     st = tape.stations
     c.shape("stations/id", st.id, (n_ts,))

@@ -101,7 +101,7 @@ from tapp.atomic import atomic_write
 from tapp.frames.time import Epoch
 from tapp.tape import hdf5io
 from tapp.tape.hdf5io import Checker, Reader
-from tapp.tape.t13 import TapeParameters, utc_at
+from tapp.tape.t13 import TapeParameters, check_parameters, utc_at
 
 FORMAT = "T32"
 VERSION = 1
@@ -319,17 +319,7 @@ def validate(t32: T32, source: str = "T32") -> None:
     """
     c = Checker(source)
     n_o, n_p, n_m = t32.n_o, t32.n_p, t32.n_m
-    par = t32.parameters
-    if not 1 <= n_p <= n_o:
-        c.fail("attrs/n_p", f"1 <= n_p <= n_o = {n_o}", n_p)
-    for name in ("unit", "kind"):
-        if len(getattr(par, name)) != n_o:
-            c.fail(f"parameters/{name}", f"{n_o} entries", len(getattr(par, name)))
-    for name in ("station", "nominal"):
-        c.shape(f"parameters/{name}", getattr(par, name), (n_o,))
-    c.finite("parameters/nominal", par.nominal)
-    if len(set(par.name)) != n_o:
-        c.fail("parameters/name", "unique names", sorted(par.name))
+    check_parameters(c, t32.parameters, n_p)
     if len(t32.miss_unit) != n_m:
         c.fail("miss/unit", f"{n_m} entries", len(t32.miss_unit))
 
