@@ -1,0 +1,294 @@
+"""Earth orientation: the rotation from the inertial frame (GCRS) to the Earth-fixed (ITRS).
+
+Two models, chosen by name (``earth_orientation`` in every scenario file, ``--earth-orientation``
+on the CLI):
+
+``"iau2006"`` (the default for new scenarios): the IERS Conventions (2010) CIO-based
+transformation,
+
+.. math::
+    [ITRS] = W(t)\\,R_3(ERA)\\,C(t)\\,[GCRS],
+
+with C the GCRS → CIRS matrix of the CIP coordinates X, Y (IAU 2006 precession, IAU 2000A
+nutation, ERFA ``xy06`` series, plus the IERS offsets dX, dY) and the CIO locator s; ERA the Earth
+rotation angle of UT1 (ERFA ``era00``); W = R_1(−y_p) R_2(−x_p) R_3(s') the polar motion (ERFA
+``pom00``, s' from ``sp00``). C is built from X, Y, s in closed form (IERS Conventions eq. 5.10,
+ERFA ``c2ixys``): C = R_3(−s) [[1 − aX², −aXY, −X], [−aXY, 1 − aY², −Y], [X, Y, Z]],
+Z = √(1 − X² − Y²), a = 1/(1 + Z). The inertial axes of the project ("EME2000") are then the
+GCRS; DE421's ICRF agrees with it to ~0.1 mas.
+
+``"gmst"`` (the approximate-STM study's model, kept so that study reproduces what it
+reproduces): W = C = I and the angle is θ(t) = GMST_82(epoch, UT1 = UTC) + ω_E t with
+ω_E = 7.292115e-5 rad/s. It leaves out precession and nutation since J2000 (31.5 km at
+Goldstone on 2026-01-01) and is self-consistent only in a study that simulates and fits with
+it.
+
+Speed: the slow parts of the iau2006 model (X, Y, s, x_p, y_p, s' and the UT1 − TAI drift Δ)
+are evaluated by ERFA at Chebyshev nodes and held as 12 h, 14-coefficient series
+(:mod:`tapp.frames.chebyshev`); the angle is ERA(t) = ERA_0 + ω_ERA (t + Δ(t)),
+ω_ERA = 2π · 1.00273781191135448 / 86400 s. The same series drive the geopotential inside the
+compiled integrator. Their error against direct ERFA calls is below 1e-13 rad (0.6 μm at the
+surface; measured in the tests).
+
+Station velocity (both models) is a rigid rotation about the spin axis at the nominal rate,
+v = ω (ĉ × r), ĉ the CIP (or z) in the inertial frame, as astropy's ``get_gcrs_posvel``: the
+CIP's own motion (precession-nutation, ≤ 4e-5 m/s) and the length-of-day excess (≤ 1e-5 m/s)
+are left out.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import SimpleNamespace
+
+import erfa
+import numpy as np
+
+from tapp.constants import OMEGA_EARTH_rad_s
+from tapp.errors import InputError
+from tapp.frames.chebyshev import ChebyshevTable, fit_chebyshev
+from tapp.frames.eop import EopTable, finals2000a
+from tapp.frames.rotation import r3
+from tapp.frames.time import Epoch
+from tapp.frames.timescales import TimeScales
+
+#: Earth orientation models, the default first.
+MODELS = ("iau2006", "gmst")
+#: Rate of the Earth rotation angle in TT-uniform seconds of UT1, rad/s (IERS Conventions 5.15).
+OMEGA_ERA_rad_s = 2.0 * math.pi * 1.00273781191135448 / 86400.0
+#: Segments and degree of the slow-term series.
+SERIES_SEGMENT_s = 43200.0
+SERIES_N_COEF = 14
+#: The slow terms, as three 3-vector series: (X, Y, s), (x_p, y_p, s') rad and (Δ s, 0, 0).
+N_SLOW_SERIES = 3
+
+_NUMPY_OPS = SimpleNamespace(sin=np.sin, cos=np.cos, sqrt=np.sqrt)
+
+
+def check_model(name: str, source: str = "scenario", field_name: str = "earth_orientation"
+                ) -> str:
+    """Return ``name`` if it is one of :data:`MODELS`, else raise InputError."""
+    if name not in MODELS:
+        raise InputError(source, field_name, " or ".join(f'"{m}"' for m in MODELS), name)
+    return name
+
+
+def _mul(a: list, b: list) -> list:
+    return [[a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j] for j in range(3)]
+            for i in range(3)]
+
+
+def _rot(axis: int, angle, ops) -> list:
+    """Frame rotation R_axis(angle) (SOFA sense: R_3(α) = [[c, s, 0], [−s, c, 0], [0, 0, 1]])."""
+    c, s = ops.cos(angle), ops.sin(angle)
+    zero, one = 0.0 * c, 0.0 * c + 1.0
+    i, j = [(1, 2), (2, 0), (0, 1)][axis - 1]
+    m = [[zero, zero, zero], [zero, zero, zero], [zero, zero, zero]]
+    m[axis - 1][axis - 1] = one
+    m[i][i], m[i][j], m[j][i], m[j][j] = c, s, -s, c
+    return m
+
+
+def itrs_from_gcrs_elements(x, y, s, xp, yp, sp, era, ops=_NUMPY_OPS) -> list:
+    """Return the GCRS → ITRS matrix as nested 3x3 lists of expressions (module docstring).
+
+    Any arithmetic with ``ops.sin``, ``ops.cos`` and ``ops.sqrt`` works: NumPy arrays (one
+    matrix per element) or CasADi symbols (the integrator's geopotential).
+    """
+    z = ops.sqrt(1.0 - x * x - y * y)
+    a = 1.0 / (1.0 + z)
+    c2i = _mul(_rot(3, -s, ops), [[1.0 - a * x * x, -a * x * y, -x],
+                                  [-a * x * y, 1.0 - a * y * y, -y], [x, y, z]])
+    pom = _mul(_rot(1, -yp, ops), _mul(_rot(2, -xp, ops), _rot(3, sp, ops)))
+    return _mul(pom, _mul(_rot(3, era, ops), c2i))
+
+
+@dataclass(frozen=True, slots=True)
+class EarthAttitude:
+    """The Earth's orientation at N instants.
+
+    Attributes
+    ----------
+    itrs_from_gcrs : (N, 3, 3) rotation inertial → Earth-fixed.
+    spin_axis : (N, 3) unit rotation axis (CIP; z for gmst) in inertial axes.
+    omega_rad_s : rotation rate about it, rad/s.
+    """
+
+    itrs_from_gcrs: np.ndarray
+    spin_axis: np.ndarray
+    omega_rad_s: float
+
+    @property
+    def gcrs_from_itrs(self) -> np.ndarray:
+        """(N, 3, 3) rotation Earth-fixed → inertial."""
+        return np.swapaxes(self.itrs_from_gcrs, -1, -2)
+
+
+@dataclass(frozen=True, slots=True)
+class EarthOrientation:
+    """One Earth orientation model bound to a scenario epoch (build with the classmethods).
+
+    Attributes
+    ----------
+    model : "iau2006" or "gmst".
+    theta0_rad : the angle at t = 0: ERA (iau2006) or GMST (gmst), rad.
+    scales : the scenario's time scales (iau2006), None for gmst.
+    """
+
+    model: str
+    theta0_rad: float
+    scales: TimeScales | None = None
+    _segments: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @classmethod
+    def gmst(cls, epoch: Epoch) -> EarthOrientation:
+        """The study's model: GMST IAU-82 at the epoch (UT1 = UTC) plus ω_E t."""
+        return cls("gmst", epoch.gmst_rad())
+
+    @classmethod
+    def gmst_angle(cls, theta0_rad: float) -> EarthOrientation:
+        """The gmst model from its angle at t = 0, rad (for tests and notebooks)."""
+        return cls("gmst", float(theta0_rad))
+
+    @classmethod
+    def iau2006(cls, epoch: Epoch, eop: EopTable | None = None,
+                source: str = "epoch") -> EarthOrientation:
+        """The IAU 2006/2000A model with the IERS EOP (default: astropy-iers-data's table).
+
+        Raises
+        ------
+        InputError
+            For an epoch before 1972 or outside the EOP table.
+        """
+        scales = TimeScales.of(epoch, finals2000a() if eop is None else eop, source)
+        whole, fraction = scales.ut1(np.zeros(1), source)
+        return cls("iau2006", float(erfa.era00(whole[0], fraction[0])), scales)
+
+    @classmethod
+    def of(cls, model: str, epoch: Epoch, eop: EopTable | None = None,
+           source: str = "scenario") -> EarthOrientation:
+        """Build the named model (:data:`MODELS`) for ``epoch``."""
+        if check_model(model, source) == "gmst":
+            return cls.gmst(epoch)
+        return cls.iau2006(epoch, eop, source)
+
+    @property
+    def eop_note(self) -> str:
+        """Where the EOP came from, for reports and tapes ("" for gmst)."""
+        if self.scales is None:
+            return ""
+        eop = self.scales.eop
+        return "none (UT1 = UTC, no polar motion)" if eop.is_zero else Path(eop.source).name
+
+    def uses_predicted_eop(self, t_s) -> bool:
+        """True if any time lies past the last measured EOP value (predictions used)."""
+        return self.scales is not None and self.scales.eop.uses_predictions(
+            self.scales.utc_mjd(t_s))
+
+    def check_covers(self, t_s, source: str = "epoch") -> None:
+        """Raise InputError naming the first time outside the EOP table (iau2006)."""
+        if self.scales is not None:
+            self.scales.eop.check_covers(self.scales.utc_mjd(t_s), source)
+
+    # --- the slow terms ------------------------------------------------------------------
+
+    def slow_terms(self, t_s, source: str = "epoch") -> np.ndarray:
+        """Return the iau2006 slow terms at t_s (M,) by ERFA, shape (3, M, 3).
+
+        Series 0: X, Y (with dX, dY), s; 1: x_p, y_p, s' (rad); 2: (Δ, 0, 0) with
+        Δ(t) = (UT1 − TAI)(t) − (UT1 − TAI)(0), s.
+        """
+        scales = self._require_scales()
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        tt1, tt2 = scales.tt(t)
+        x, y = erfa.xy06(tt1, tt2)
+        s = erfa.s06(tt1, tt2, x, y)  # before the offsets, as the SOFA cookbook does
+        eop = scales.eop.at(scales.utc_mjd(t), source)
+        x, y = x + eop.dx_rad, y + eop.dy_rad
+        sp = erfa.sp00(tt1, tt2)
+        drift = scales.ut1_minus_tai_s(t, source) - scales.ut1_minus_tai_s(np.zeros(1))[0]
+        out = np.zeros((N_SLOW_SERIES, t.size, 3))
+        out[0] = np.stack([x, y, s], -1)
+        out[1] = np.stack([eop.xp_rad, eop.yp_rad, sp], -1)
+        out[2, :, 0] = drift
+        return out
+
+    def series(self, t_start_s: float, t_end_s: float, segment_s: float = SERIES_SEGMENT_s,
+               n_coef: int = SERIES_N_COEF) -> ChebyshevTable:
+        """Chebyshev series of the slow terms on [t_start, t_end] (segments from the first)."""
+        self.check_covers(np.array([t_start_s, t_end_s]))
+        return fit_chebyshev(self.slow_terms, t_start_s, t_end_s, segment_s, n_coef)
+
+    def _require_scales(self) -> TimeScales:
+        if self.scales is None:
+            raise InputError("earth orientation", "model", "iau2006 for slow terms", self.model)
+        return self.scales
+
+    def _cached_slow_terms(self, t: np.ndarray) -> np.ndarray:
+        """Slow terms from series on the grid k · 12 h from the epoch, fitted on first use."""
+        k = np.floor(t / SERIES_SEGMENT_s).astype(int)
+        out = np.empty((N_SLOW_SERIES, t.size, 3))
+        for seg in np.unique(k):
+            if seg not in self._segments:
+                start = seg * SERIES_SEGMENT_s
+                self._segments[seg] = fit_chebyshev(self.slow_terms, start,
+                                                    start + SERIES_SEGMENT_s,
+                                                    SERIES_SEGMENT_s, SERIES_N_COEF)
+            mask = k == seg
+            out[:, mask] = self._segments[seg].evaluate(t[mask])
+        return out
+
+    # --- the attitude --------------------------------------------------------------------
+
+    def angle_rad(self, t_s, drift_s=0.0) -> np.ndarray:
+        """The rotation angle at t_s: GMST_0 + ω_E t, or ERA_0 + ω_ERA (t + Δ), rad."""
+        t = np.asarray(t_s, dtype=float)
+        if self.model == "gmst":
+            return self.theta0_rad + OMEGA_EARTH_rad_s * t
+        return self.theta0_rad + OMEGA_ERA_rad_s * (t + drift_s)
+
+    @property
+    def omega_rad_s(self) -> float:
+        """The rotation rate of the model, rad/s."""
+        return OMEGA_EARTH_rad_s if self.model == "gmst" else OMEGA_ERA_rad_s
+
+    def attitude(self, t_s, source: str = "epoch") -> EarthAttitude:
+        """Return the attitude at scenario times t_s (N,) s (iau2006 by the cached series).
+
+        Raises
+        ------
+        InputError
+            For a time outside the EOP table (iau2006).
+        """
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        if self.model == "gmst":
+            axis = np.zeros(t.shape + (3,))
+            axis[..., 2] = 1.0
+            return EarthAttitude(r3(self.angle_rad(t)), axis, OMEGA_EARTH_rad_s)
+        self.check_covers(t, source)
+        return self._attitude_of(t, self._cached_slow_terms(t.ravel()))
+
+    def attitude_exact(self, t_s, source: str = "epoch") -> EarthAttitude:
+        """As :meth:`attitude`, with the slow terms straight from ERFA (no series)."""
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        if self.model == "gmst":
+            return self.attitude(t)
+        return self._attitude_of(t, self.slow_terms(t.ravel(), source))
+
+    def _attitude_of(self, t: np.ndarray, slow: np.ndarray) -> EarthAttitude:
+        (x, y, s), (xp, yp, sp), (drift, _, _) = (np.moveaxis(slow[i], -1, 0)
+                                                  for i in range(N_SLOW_SERIES))
+        era = self.angle_rad(t.ravel(), drift)
+        m = itrs_from_gcrs_elements(x, y, s, xp, yp, sp, era)
+        matrix = np.stack([np.stack(row, -1) for row in m], -2).reshape(t.shape + (3, 3))
+        axis = np.stack([x, y, np.sqrt(1.0 - x * x - y * y)], -1).reshape(t.shape + (3,))
+        return EarthAttitude(matrix, axis, OMEGA_ERA_rad_s)
+
+
+def as_orientation(value: EarthOrientation | float) -> EarthOrientation:
+    """Return ``value`` if it is an EarthOrientation; a float is the gmst model's angle."""
+    if isinstance(value, EarthOrientation):
+        return value
+    return EarthOrientation.gmst_angle(float(value))
