@@ -2,9 +2,11 @@
 
 DE421 (Folkner, Williams & Boggs 2009, IPN Progress Report 42-178) ships inside the
 ``skyfield-data`` package and is read with ``jplephem``: nothing is downloaded at run time.
-Its axes are the ICRF, which we take as EME2000 (they differ by ~20 mas, far below what
-matters for third-body accelerations). Its time argument is TDB; we use TDB ≈ TT =
-UTC + ΔAT + 32.184 s (the periodic TDB−TT term, under 2 ms, is neglected).
+Its axes are the ICRF, which the iau2006 Earth orientation takes as the GCRS axes, and the
+gmst model as EME2000 (they differ by ~20 mas, far below what matters for third-body
+accelerations). Its time argument is TDB: with the iau2006 model it is TDB proper
+(:class:`tapp.frames.timescales.TimeScales`); with gmst, as in the approximate-STM study,
+TDB ≈ TT = UTC + ΔAT + 32.184 s (the periodic TDB−TT term, under 2 ms, neglected).
 
 For the compiled propagator the positions relative to the integration centre are fitted by
 piecewise Chebyshev series (:func:`chebyshev_table`), evaluated inside the C driver.
@@ -21,20 +23,11 @@ import numpy as np
 from jplephem.spk import SPK
 
 from tapp.constants import SECONDS_PER_DAY
-from tapp.dynamics.compiled import EphemerisTable
 from tapp.errors import InputError
+from tapp.frames.chebyshev import ChebyshevTable, fit_chebyshev
+from tapp.frames.eop import MJD_OFFSET, leap_seconds
 from tapp.frames.time import Epoch
-
-#: TAI − UTC (s) from the given UTC Julian date on (IERS Bulletin C; 37 s since 2017-01-01).
-LEAP_SECONDS = (
-    (2441317.5, 10), (2441499.5, 11), (2441683.5, 12), (2442048.5, 13), (2442413.5, 14),
-    (2442778.5, 15), (2443144.5, 16), (2443509.5, 17), (2443874.5, 18), (2444239.5, 19),
-    (2444786.5, 20), (2445151.5, 21), (2445516.5, 22), (2446247.5, 23), (2447161.5, 24),
-    (2447892.5, 25), (2448257.5, 26), (2448804.5, 27), (2449169.5, 28), (2449534.5, 29),
-    (2450083.5, 30), (2450630.5, 31), (2451179.5, 32), (2453736.5, 33), (2454832.5, 34),
-    (2456109.5, 35), (2457204.5, 36), (2457754.5, 37),
-)
-TT_MINUS_TAI_s = 32.184
+from tapp.frames.timescales import TimeScales, TT_MINUS_TAI_s
 
 # NAIF paths from the solar-system barycentre (0) in DE421: lists of (center, target).
 _PATHS = {
@@ -56,17 +49,12 @@ BODIES = tuple(_PATHS)
 
 
 def tai_minus_utc_s(jd_utc: float, source: str = "epoch") -> float:
-    """Return TAI − UTC (s) at a UTC Julian date (10 s before 1972 is not supported).
+    """Return TAI − UTC (s) at a UTC Julian date, from the IERS leap-second table.
 
-    ``source`` names where the date came from in the error (an option such as ``--epoch``).
+    ``source`` names where the date came from in the error (an option such as ``--epoch``);
+    dates before 1972 are refused (:meth:`tapp.frames.eop.LeapSeconds.at_utc`).
     """
-    if not jd_utc >= LEAP_SECONDS[0][0]:
-        raise InputError(source, "date", "a UTC date on or after 1972-01-01", jd_utc)
-    value = LEAP_SECONDS[0][1]
-    for start, dat in LEAP_SECONDS:
-        if jd_utc >= start:
-            value = dat
-    return float(value)
+    return float(leap_seconds().at_utc(jd_utc - MJD_OFFSET, source))
 
 
 def utc_to_tdb_jd(jd_utc: float, source: str = "epoch") -> float:
@@ -145,28 +133,28 @@ def position_km(body: str, center: str, jd_tdb: float | np.ndarray,
 
 
 def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t_start_s: float,
-                    t_end_s: float, segment_s: float = 43200.0, n_coef: int = 14
-                    ) -> EphemerisTable:
-    """Fit piecewise Chebyshev series to body positions relative to ``center``.
+                    t_end_s: float, segment_s: float = 43200.0, n_coef: int = 14,
+                    scales: TimeScales | None = None) -> ChebyshevTable:
+    """Fit piecewise Chebyshev series to body positions relative to ``center`` (km).
 
     Covers [min(t_start, t_end), max(...)] seconds from the UTC epoch, in segments of
-    ``segment_s`` with ``n_coef`` coefficients per coordinate, interpolating at the
-    Chebyshev points of the first kind. With the defaults (12 h, 14 coefficients) the fit
-    reproduces DE421 to well under a metre for the Moon (checked in the tests).
+    ``segment_s`` with ``n_coef`` coefficients per coordinate (:func:`fit_chebyshev`). With
+    ``scales`` the ephemeris is read at TDB(t) of those scales; without, at TT (see the
+    module docstring). With the defaults (12 h, 14 coefficients) the fit reproduces DE421 to
+    well under a metre for the Moon (checked in the tests).
     """
     if not bodies:
-        return EphemerisTable.empty()
-    lo, hi = min(t_start_s, t_end_s), max(t_start_s, t_end_s)
-    n_seg = max(1, int(np.ceil((hi - lo) / segment_s - 1e-12)))
-    k = np.arange(n_coef)
-    tau = np.cos(np.pi * (k + 0.5) / n_coef)  # first-kind nodes in (-1, 1)
-    seg_start = lo + segment_s * np.arange(n_seg)
-    t_nodes = seg_start[:, None] + 0.5 * (tau[None, :] + 1.0) * segment_s  # (n_seg, n_coef)
-    jd_tdb = utc_to_tdb_jd(epoch_jd_utc)
-    offset_days = t_nodes.ravel() / SECONDS_PER_DAY
-    coeffs = np.empty((len(bodies), n_seg, 3, n_coef))
-    for b, body in enumerate(bodies):
-        pos = position_km(body, center, jd_tdb, offset_days).reshape(n_seg, n_coef, 3)
-        for s in range(n_seg):
-            coeffs[b, s] = np.polynomial.chebyshev.chebfit(tau, pos[s], n_coef - 1).T
-    return EphemerisTable(np.ascontiguousarray(coeffs), float(lo), float(segment_s))
+        return ChebyshevTable.empty()
+    if scales is None:
+        jd_tdb = utc_to_tdb_jd(epoch_jd_utc)
+
+        def tdb(t: np.ndarray) -> tuple[float, np.ndarray]:
+            return jd_tdb, t / SECONDS_PER_DAY
+    else:
+        tdb = scales.tdb
+
+    def positions(t: np.ndarray) -> np.ndarray:
+        jd, jd2 = tdb(t)
+        return np.stack([position_km(body, center, jd, jd2) for body in bodies])
+
+    return fit_chebyshev(positions, t_start_s, t_end_s, segment_s, n_coef)

@@ -53,7 +53,7 @@ from __future__ import annotations
 import datetime as dt
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Annotated, TypeVar
+from typing import Annotated, Literal, TypeVar
 
 from pydantic import AfterValidator, PlainValidator
 
@@ -62,8 +62,8 @@ from iter.schema import validate as _validate
 from tapp.errors import InputError
 from tapp.tomlfile import read_toml
 
-__all__ = ["AllowInf", "InfFloat", "Invalid", "Schema", "Tolerance", "Unique", "UtcDate", "load",
-           "validate"]
+__all__ = ["AllowInf", "EarthOrientationName", "EopSource", "InfFloat", "Invalid", "Schema",
+           "Tolerance", "Unique", "UtcDate", "load", "validate"]
 
 M = TypeVar("M", bound=Schema)
 
@@ -113,3 +113,19 @@ def _utc_date(value: object) -> object:
 Tolerance = Annotated[float, AfterValidator(_tolerance)]
 #: A UTC date: an ISO 8601 string or a TOML date-time (parsed by the file's reader).
 UtcDate = Annotated[object, PlainValidator(_utc_date)]
+#: The Earth orientation model of a scenario file (``earth_orientation``): see
+#: :mod:`tapp.frames.orientation`. New scenarios default to "iau2006".
+EarthOrientationName = Literal["iau2006", "gmst"]
+
+
+def _eop_source(value: object) -> object:
+    if not isinstance(value, str) or not value.strip():
+        raise Invalid('"iers" (the shipped IERS table), "none" (UT1 = UTC, no polar motion) or '
+                      "the path of an IERS finals2000A file", value)
+    return value
+
+
+#: Where the EOP come from (``eop``): "iers", "none" or a finals2000A file path (relative to
+#: the scenario file); see :func:`tapp.frames.orientation.orientation_for`.
+EopSource = Annotated[str, PlainValidator(_eop_source)]
+

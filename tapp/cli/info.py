@@ -11,10 +11,16 @@ from tapp import __version__
 from tapp.cli.common import app
 from tapp.constants import MAX_DEGREE
 from tapp.dynamics.compiled import cache_dir
-from tapp.ephemeris import LEAP_SECONDS, de421_path
+from tapp.ephemeris import de421_path
+from tapp.frames.eop import MJD_OFFSET, finals2000a, iers_data_dir, leap_seconds
+from tapp.frames.time import Epoch
 
 _PACKAGES = ("numpy", "scipy", "casadi", "h5py", "filterpy", "jplephem", "skyfield-data",
-             "dask", "typer")
+             "pyerfa", "astropy-iers-data", "dask", "typer")
+
+
+def _date(mjd: float) -> str:
+    return Epoch(MJD_OFFSET + mjd // 1, mjd % 1).iso(0)[:10]
 
 
 @app.command()
@@ -38,7 +44,12 @@ def info() -> None:
     data.add_row("DE421 ephemeris", "1899-07-29 .. 2053-10-09", str(de421_path()))
     data.add_row("EGM96 field", f"degree/order 2..{MAX_DEGREE}",
                  "NASA/TP-1998-206861 (tapp/data/egm96_deg8.txt)")
-    data.add_row("TAI-UTC", f"1972-01-01 .. (last step JD {LEAP_SECONDS[-1][0]}: "
-                 f"{LEAP_SECONDS[-1][1]} s)", "IERS Bulletin C")
+    leaps = leap_seconds()
+    data.add_row("TAI-UTC", f"1972-01-01 .. (last step {_date(leaps.start_mjd[-1])}: "
+                 f"{leaps.tai_minus_utc_s[-1]:g} s; expires {leaps.expires})",
+                 str(iers_data_dir() / "Leap_Second.dat"))
+    eop = finals2000a()
+    data.add_row("IERS EOP (UT1-UTC, pole, dX/dY)", f"{_date(eop.mjd[0])} .. {_date(eop.mjd[-1])}"
+                 f" (predicted from {_date(eop.predicted_from_mjd)})", eop.source)
     data.add_row("compiled propagators", "cache", str(cache_dir()))
     console.print(data)

@@ -38,6 +38,7 @@ import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as dop
 
 from tapp.errors import TappError
+from tapp.frames.chebyshev import ChebyshevTable
 
 STATUS = {
     0: "ok",
@@ -113,7 +114,7 @@ class CompiledPropagator:
     fn: ctypes._CFuncPtr
 
     def integrate(self, which: int, y0: np.ndarray, t0_s: float, t_out_s: np.ndarray,
-                  q: np.ndarray, c: np.ndarray, eph: EphemerisTable, rtol: float, atol: float,
+                  q: np.ndarray, c: np.ndarray, eph: ChebyshevTable, rtol: float, atol: float,
                   n_err: int, max_steps: int) -> tuple[int, np.ndarray, np.ndarray]:
         """Run the driver; return (status, y (N, ny), stats [accepted, rejected, nfev])."""
         y0 = np.ascontiguousarray(y0, dtype=float)
@@ -122,40 +123,10 @@ class CompiledPropagator:
         stats = np.zeros(3)
         status = self.fn(which, y0.size, float(t0_s), y0, t_out_s.size, t_out_s, y_out,
                          np.ascontiguousarray(q, dtype=float) if len(q) else np.zeros(1),
-                         np.ascontiguousarray(c, dtype=float), eph.coeffs, eph.n_bodies,
+                         np.ascontiguousarray(c, dtype=float), eph.coeffs, eph.n_series,
                          eph.n_segments, eph.n_coef, eph.t0_s, eph.h_s, rtol, atol, n_err,
                          max_steps, stats)
         return int(status), y_out, stats
-
-
-@dataclass(frozen=True, slots=True)
-class EphemerisTable:
-    """Piecewise Chebyshev positions of third bodies relative to the centre.
-
-    ``coeffs`` has shape (n_bodies, n_segments, 3, n_coef), km; segment k covers
-    [t0_s + k h_s, t0_s + (k+1) h_s] in seconds from the epoch.
-    """
-
-    coeffs: np.ndarray
-    t0_s: float
-    h_s: float
-
-    @property
-    def n_bodies(self) -> int:
-        return int(self.coeffs.shape[0])
-
-    @property
-    def n_segments(self) -> int:
-        return int(self.coeffs.shape[1])
-
-    @property
-    def n_coef(self) -> int:
-        return int(self.coeffs.shape[3])
-
-    @staticmethod
-    def empty() -> EphemerisTable:
-        """A table with no bodies (the driver never reads it)."""
-        return EphemerisTable(np.zeros((0, 1, 3, 1)), 0.0, 1.0)
 
 
 @cache

@@ -18,7 +18,10 @@ column-major. Nobody slices it by hand: use :func:`split_augmented`.
 
 Both CasADi functions share the signature ``f(t, y, q, c, rb) -> ydot`` with c = [θ0] (Earth
 rotation angle at the epoch, rad) and rb the stacked third-body positions relative to the
-centre (km), in the order of :attr:`Equations.bodies`.
+centre (km), in the order of :attr:`Equations.bodies`, followed, when the field is oriented by
+the iau2006 model (:attr:`Equations.oriented`), by its nine slow terms (the three series of
+:meth:`tapp.frames.orientation.EarthOrientation.slow_terms`). The driver evaluates all of rb
+from one Chebyshev table.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ class Equations:
     f_var: ca.Function
     bodies: tuple[str, ...]
     params: tuple[str, ...]
+    oriented: bool = False
 
     @property
     def n_aug(self) -> int:
@@ -55,31 +59,37 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
     Raises
     ------
     InputError
-        When the two models have different centres.
+        When the two models have different centres or Earth orientation models.
     """
     if state_model.center != var_model.center:
         raise InputError("model", "center", "the same centre for the state and variational "
                          "models", f"{state_model.center} vs {var_model.center}")
+    if state_model.earth_orientation != var_model.earth_orientation:
+        raise InputError("model", "earth_orientation", "the same Earth orientation for the "
+                         "state and variational models", f"{state_model.earth_orientation} vs "
+                         f"{var_model.earth_orientation}")
     bodies = tuple(sorted(set(state_model.third_bodies) | set(var_model.third_bodies)))
+    oriented = state_model.oriented_field or var_model.oriented_field
     nq = len(params)
     t = ca.SX.sym("t")
     c = ca.SX.sym("c", 1)
     q = ca.SX.sym("q", nq)
-    rb = ca.SX.sym("rb", 3 * len(bodies))
+    rb = ca.SX.sym("rb", 3 * len(bodies) + (9 if oriented else 0))
     r_bodies = {b: rb[3 * i:3 * i + 3] for i, b in enumerate(bodies)}
+    slow = rb[3 * len(bodies):] if oriented else None
     q_map = {name: q[i] for i, name in enumerate(params)}
 
     x = ca.SX.sym("x", 6)
     r, v = x[:3], x[3:]
-    a_state = acceleration(state_model, t, r, c[0], q_map, r_bodies)
+    a_state = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow)
     xdot = ca.vertcat(v, a_state)
     f_state = ca.Function("f_state", [t, x, q, c, rb], [ca.cse(xdot)],
                           ["t", "y", "q", "c", "rb"], ["ydot"])
 
     y = ca.SX.sym("y", 42 + 6 * nq)
     r, v = y[:3], y[3:6]
-    a_n = acceleration(state_model, t, r, c[0], q_map, r_bodies)
-    a_m = acceleration(var_model, t, r, c[0], q_map, r_bodies)
+    a_n = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow)
+    a_m = acceleration(var_model, t, r, c[0], q_map, r_bodies, slow)
     phi = ca.reshape(y[6:42], 6, 6)
     da_dr = ca.jacobian(a_m, r)
     a_mat = ca.vertcat(ca.horzcat(ca.SX.zeros(3, 3), ca.SX.eye(3)),
@@ -91,7 +101,7 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
         parts.append(ca.vec(ca.mtimes(a_mat, s) + b_mat))
     f_var = ca.Function("f_var", [t, y, q, c, rb], [ca.cse(ca.vertcat(*parts))],
                         ["t", "y", "q", "c", "rb"], ["ydot"])
-    return Equations(f_state, f_var, bodies, tuple(params))
+    return Equations(f_state, f_var, bodies, tuple(params), oriented)
 
 
 def initial_augmented(x0: np.ndarray, n_params: int) -> np.ndarray:

@@ -19,9 +19,14 @@ the recursion factors stay O(1) at any degree:
         - \\sqrt{\\frac{(2n+1)(n+m-1)(n-m-1)}{(2n-3)(n+m)(n-m)}}\\,\\frac{R^2}{r^2}\\bar V_{n-2,m}
 
 (the same for \\bar W), \\bar V_{00} = R/r, \\bar W_{00} = 0. The acceleration is ∇U, taken
-by CasADi; with tesserals the Earth-fixed position is R3(θ(t)) r with
-θ(t) = θ0 + ω_E t (GMST at the epoch plus the IERS rotation rate), so ∇U w.r.t. the inertial
-position is already the inertial acceleration.
+by CasADi. The Earth-fixed position is r_f = M(t) r with M the inertial → Earth-fixed rotation
+of the model's ``earth_orientation`` (:mod:`tapp.frames.orientation`): for ``"iau2006"`` the
+full W R3(ERA) C, built symbolically from the Chebyshev series of its slow terms (X, Y, s,
+x_p, y_p, s', UT1 drift Δ) that the driver evaluates beside the ephemeris, with
+ERA = ERA_0 + ω_ERA (t + Δ); for ``"gmst"`` R3(θ0 + ω_E t) with tesserals and the identity for a
+zonal field (symmetric about the inertial z axis). U(M r) with M orthogonal gives
+∇_r U = Mᵀ ∇_f U: the gradient w.r.t. the inertial position is already the inertial
+acceleration.
 
 Third bodies (point masses, relative to a possibly accelerated centre; Montenbruck & Gill
 eq. 3.37):
@@ -47,6 +52,7 @@ import casadi as ca
 from tapp.constants import GM_km3_s2, OMEGA_EARTH_rad_s, R_EARTH_km, egm96_coefficients
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError
+from tapp.frames.orientation import OMEGA_ERA_rad_s, itrs_from_gcrs_elements
 
 _HARMONIC = re.compile(r"^([CS])(\d)(\d)$")
 _ZONAL_J = re.compile(r"^J(\d)$")
@@ -183,12 +189,20 @@ def field_coefficients(model: ForceModel, q: Mapping[str, ca.SX]
     return coeffs
 
 
-def body_fixed_position(model: ForceModel, r: ca.SX, t: ca.SX, theta0: ca.SX) -> ca.SX:
-    """Rotate inertial r (km) into the body-fixed frame when the field has tesserals.
+def body_fixed_position(model: ForceModel, r: ca.SX, t: ca.SX, theta0: ca.SX,
+                        slow: ca.SX | None = None) -> ca.SX:
+    """Rotate inertial r (km) into the body-fixed frame (module docstring).
 
-    r_fixed = R3(θ) r with θ = θ0 + ω_E t (rad). A zonal field is symmetric about the spin
-    axis, so no rotation is applied (and the model stays autonomous).
+    ``slow`` holds the iau2006 slow terms (X, Y, s, x_p, y_p, s', Δ, 0, 0) at t; ``theta0``
+    is ERA (iau2006) or GMST (gmst) at t = 0, rad. A gmst zonal field is symmetric about the
+    inertial z axis, so no rotation is applied (and the model stays autonomous).
     """
+    if model.oriented_field:
+        era = theta0 + OMEGA_ERA_rad_s * (t + slow[6])
+        m = itrs_from_gcrs_elements(slow[0], slow[1], slow[2], slow[3], slow[4], slow[5], era,
+                                    ca)
+        return ca.vertcat(*(m[i][0] * r[0] + m[i][1] * r[1] + m[i][2] * r[2]
+                            for i in range(3)))
     if model.gravity.order == 0:
         return r
     theta = theta0 + OMEGA_EARTH_rad_s * t
@@ -197,7 +211,7 @@ def body_fixed_position(model: ForceModel, r: ca.SX, t: ca.SX, theta0: ca.SX) ->
 
 
 def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mapping[str, ca.SX],
-                 r_bodies: Mapping[str, ca.SX]) -> ca.SX:
+                 r_bodies: Mapping[str, ca.SX], slow: ca.SX | None = None) -> ca.SX:
     """Return the inertial acceleration (km/s^2) of ``model`` as a CasADi expression.
 
     Parameters
@@ -207,9 +221,10 @@ def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mappin
     theta0 : SX (1,)  Earth rotation angle at the epoch, rad.
     q : mapping of parameter name to symbol; absent names take their nominal values.
     r_bodies : mapping of third-body name to its position relative to the centre (km).
+    slow : SX (9,) the iau2006 slow terms at t (:func:`body_fixed_position`), if oriented.
     """
     gm = q.get("GM", model.gm_center_km3_s2)
-    r_fixed = body_fixed_position(model, r, t, theta0)
+    r_fixed = body_fixed_position(model, r, t, theta0, slow)
     u = central_potential(model, r_fixed, gm, field_coefficients(model, q))
     acc = ca.gradient(u, r)
     for body in model.third_bodies:

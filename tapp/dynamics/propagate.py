@@ -15,16 +15,13 @@ from functools import cache
 
 import numpy as np
 
-from tapp.dynamics.compiled import (
-    STATUS,
-    CompiledPropagator,
-    EphemerisTable,
-    compiled_propagator,
-)
+from tapp.dynamics.compiled import STATUS, CompiledPropagator, compiled_propagator
 from tapp.dynamics.equations import Equations, build_equations, initial_augmented, split_augmented
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError, TappError
+from tapp.frames.chebyshev import ChebyshevTable
+from tapp.frames.orientation import EarthOrientation
 
 
 class PropagationError(TappError):
@@ -131,7 +128,8 @@ class Propagator:
 
     def propagate(self, x0: np.ndarray, t_s: np.ndarray, *, t0_s: float = 0.0,
                   stm: bool = True, param_values: Mapping[str, float] | None = None,
-                  theta0_rad: float = 0.0, epoch_jd_utc: float | None = None) -> Trajectory:
+                  theta0_rad: float = 0.0, epoch_jd_utc: float | None = None,
+                  orientation: EarthOrientation | None = None) -> Trajectory:
         """Integrate from (t0_s, x0) to every time in ``t_s``.
 
         Parameters
@@ -140,8 +138,12 @@ class Propagator:
         t_s : (N,) output times, seconds from the epoch, monotonic away from t0_s.
         stm : integrate Φ and S too (else only the state, with ``state_model``).
         param_values : values of ``params`` other than their nominal ones.
-        theta0_rad : Earth rotation angle at the epoch (GMST), used by tesseral fields.
+        theta0_rad : Earth rotation angle at the epoch (GMST), used by gmst tesseral fields
+            when no ``orientation`` is given.
         epoch_jd_utc : UTC Julian date of t = 0; required when third bodies are present.
+        orientation : the scenario's Earth orientation; required by an iau2006 model with a
+            field (its angle replaces ``theta0_rad``; with third bodies the ephemeris is read
+            at its TDB).
 
         Raises
         ------
@@ -168,14 +170,21 @@ class Propagator:
             values[name] = check_parameter_value(name, value, "propagate",
                                                  f"param_values.{name}")
         q = np.array([values[name] for name in self.params])
-        eph = self._ephemeris(eqs.bodies, epoch_jd_utc, t0_s, t_s)
+        if orientation is not None:
+            if self.state_model.gravity.degree >= 2 and \
+                    orientation.model != self.state_model.earth_orientation:
+                raise InputError("propagate", "orientation", f"the force model's Earth "
+                                 f"orientation {self.state_model.earth_orientation!r}",
+                                 orientation.model)
+            theta0_rad = orientation.theta0_rad
+        table = self._series(eqs, epoch_jd_utc, orientation, t0_s, t_s)
         if stm:
             y0 = initial_augmented(x0, len(self.params))
             n_err = 6 if self.error_control == "state" else y0.size
         else:
             y0, n_err = x0, 6
         status, y, stats = lib.integrate(1 if stm else 0, y0, t0_s, t_s, q,
-                                         np.array([theta0_rad]), eph, self.rtol, self.atol,
+                                         np.array([theta0_rad]), table, self.rtol, self.atol,
                                          n_err, self.max_steps)
         if status != 0:
             raise PropagationError(f"propagation stopped: {STATUS.get(status, status)} after "
@@ -186,14 +195,25 @@ class Propagator:
             states, phi, sens = y, None, None
         return Trajectory(t_s, states, phi, sens, self.params, int(stats[0]), int(stats[2]))
 
-    def _ephemeris(self, bodies: tuple[str, ...], epoch_jd_utc: float | None, t0_s: float,
-                   t_s: np.ndarray) -> EphemerisTable:
-        if not bodies:
-            return EphemerisTable.empty()
-        if epoch_jd_utc is None:
-            raise InputError("propagate", "epoch", "an epoch (UTC) when third bodies are "
-                             "modelled", None)
-        from tapp.ephemeris import chebyshev_table
+    def _series(self, eqs: Equations, epoch_jd_utc: float | None,
+                orientation: EarthOrientation | None, t0_s: float, t_s: np.ndarray
+                ) -> ChebyshevTable:
+        """The driver's table: third-body positions, then the iau2006 slow terms if oriented."""
+        lo, hi = min(t0_s, t_s.min()), max(t0_s, t_s.max())
+        table = ChebyshevTable.empty()
+        scales = orientation.scales if orientation is not None else None
+        if eqs.oriented:
+            if orientation is None or orientation.model != "iau2006":
+                raise InputError("propagate", "orientation", "the scenario's iau2006 Earth "
+                                 "orientation for a model with earth_orientation = 'iau2006'",
+                                 None if orientation is None else orientation.model)
+            table = orientation.series(lo, hi)
+        if eqs.bodies:
+            if epoch_jd_utc is None:
+                raise InputError("propagate", "epoch", "an epoch (UTC) when third bodies are "
+                                 "modelled", None)
+            from tapp.ephemeris import chebyshev_table
 
-        return chebyshev_table(bodies, self.state_model.center, epoch_jd_utc,
-                               min(t0_s, t_s.min()), max(t0_s, t_s.max()))
+            table = chebyshev_table(eqs.bodies, self.state_model.center, epoch_jd_utc, lo, hi,
+                                    scales=scales).stacked(table)
+        return table

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 from tapp.constants import MAX_DEGREE, GM_km3_s2
 from tapp.errors import InputError
+from tapp.frames.orientation import check_model
 
 _ZONAL = re.compile(r"^[Jj](\d+)$")
 _FIELD = re.compile(r"^(\d+)\s*[xX]\s*(\d+)$")
@@ -77,13 +78,20 @@ class ForceModel:
     third_bodies : tuple of str
         Point-mass perturbers, from DE421, with the indirect term of a non-inertial centre;
         each at most once (a repeated body would add its pull twice).
+    earth_orientation : str
+        How the Earth's field is oriented (:data:`tapp.frames.orientation.MODELS`):
+        ``"gmst"`` (a zonal field about the inertial z axis, tesserals by GMST + ω t) or
+        ``"iau2006"`` (the full GCRS → ITRS rotation). Scenario files default to iau2006;
+        this kernel default keeps the study's model.
     """
 
     gravity: GravitySpec
     center: str = "earth"
     third_bodies: tuple[str, ...] = ()
+    earth_orientation: str = "gmst"
 
     def __post_init__(self) -> None:
+        check_model(self.earth_orientation, "model")
         if self.center not in BODIES:
             raise InputError("model", "center", f"one of {', '.join(BODIES)}", self.center)
         if self.center != "earth" and self.gravity.degree > 1:
@@ -110,9 +118,15 @@ class ForceModel:
         """Short label, e.g. ``J2`` or ``5x5+sun+moon``."""
         return "+".join((self.gravity.name, *self.third_bodies))
 
+    @property
+    def oriented_field(self) -> bool:
+        """True when the field needs the full Earth orientation (iau2006 and degree >= 2)."""
+        return self.earth_orientation == "iau2006" and self.center == "earth" and \
+            self.gravity.degree >= 2
+
 
 def earth_model(spec: str, third_bodies: tuple[str, ...] = (), *, source: str = "model",
-                field: str = "gravity") -> ForceModel:
+                field: str = "gravity", earth_orientation: str = "gmst") -> ForceModel:
     """Return an Earth-centred :class:`ForceModel` from a gravity spec string."""
     return ForceModel(parse_gravity(spec, source=source, field=field), "earth",
-                      tuple(third_bodies))
+                      tuple(third_bodies), earth_orientation)

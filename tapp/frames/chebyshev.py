@@ -100,10 +100,8 @@ def fit_chebyshev(fn: Callable[[np.ndarray], np.ndarray], t_start_s: float, t_en
     values = np.asarray(fn(t_nodes.ravel()), dtype=float)
     n_series = values.shape[0]
     values = values.reshape(n_series, n_seg, n_coef, 3)
-    # Chebyshev interpolation at the first-kind nodes is a discrete cosine transform:
-    # a_j = (2 - δ_j0)/n Σ_k f(τ_k) T_j(τ_k).
-    t_matrix = np.cos(np.outer(np.arange(n_coef), np.pi * (np.arange(n_coef) + 0.5) / n_coef))
-    weights = np.full(n_coef, 2.0 / n_coef)
-    weights[0] = 1.0 / n_coef
-    coeffs = np.einsum("j,jk,bskc->bscj", weights, t_matrix, values)
+    coeffs = np.empty((n_series, n_seg, 3, n_coef))
+    for b in range(n_series):
+        for k in range(n_seg):
+            coeffs[b, k] = np.polynomial.chebyshev.chebfit(tau, values[b, k], n_coef - 1).T
     return ChebyshevTable(np.ascontiguousarray(coeffs), float(lo), float(segment_s))

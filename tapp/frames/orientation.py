@@ -292,3 +292,30 @@ def as_orientation(value: EarthOrientation | float) -> EarthOrientation:
     if isinstance(value, EarthOrientation):
         return value
     return EarthOrientation.gmst_angle(float(value))
+
+
+def orientation_for(model: str, epoch: Epoch, eop: str = "iers", base_dir: Path | None = None,
+                    source: str = "scenario") -> EarthOrientation:
+    """Build a scenario's Earth orientation from its ``earth_orientation`` and ``eop`` keys.
+
+    ``eop``: "iers" (the IERS table shipped in astropy-iers-data), "none" (UT1 = UTC, no polar
+    motion or CIP offsets: a study beyond the predictions) or the path of an IERS
+    ``finals2000A`` file, relative to ``base_dir``. The gmst model uses no EOP.
+
+    Raises
+    ------
+    InputError
+        Naming ``source``: an unknown model, an unreadable EOP file, an epoch outside the table.
+    """
+    check_model(model, source)
+    if model == "gmst":
+        return EarthOrientation.gmst(epoch)
+    if eop == "iers":
+        table = finals2000a()
+    elif eop == "none":
+        table = EopTable.zero()
+    else:
+        path = Path(eop)
+        table = finals2000a((base_dir / path) if base_dir and not path.is_absolute() else path)
+    return EarthOrientation.iau2006(epoch, table, source)
+

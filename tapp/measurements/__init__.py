@@ -2,7 +2,7 @@
 
 Numerical kernels only (pure NumPy, no I/O), shared by the tracking simulator (TAPP I) and the
 orbit-determination code. Conventions: km, km/s, s, rad; time-major arrays (N, ...); spacecraft
-states in EME2000; Earth rotation by :func:`tapp.frames.earth_rotation_angle_rad`.
+states in the inertial frame (GCRS); Earth orientation by :mod:`tapp.frames.orientation`.
 """
 
 from tapp.measurements.observables import (

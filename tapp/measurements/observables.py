@@ -53,9 +53,9 @@ from enum import StrEnum
 
 import numpy as np
 
-from tapp.constants import C_LIGHT_km_s, GM_EARTH_km3_s2, OMEGA_EARTH_rad_s
+from tapp.constants import C_LIGHT_km_s, GM_EARTH_km3_s2
 from tapp.errors import DivergenceError, InputError
-from tapp.frames.rotation import earth_rotation_angle_rad
+from tapp.frames.orientation import EarthAttitude, EarthOrientation, as_orientation
 from tapp.measurements.stations import (
     Station,
     StationParameters,
@@ -317,9 +317,8 @@ def solve_light_time(
     t_s,
     state_eci,
     r_station_ecef_km,
-    theta0_rad: float,
+    orientation: EarthOrientation | float,
     light_time: LightTime,
-    omega_rad_s: float = OMEGA_EARTH_rad_s,
 ) -> LightTimeSolution:
     """Return the light-time geometry for receive times t_s (N,) at a station.
 
@@ -331,12 +330,10 @@ def solve_light_time(
         Spacecraft inertial states at t_s, [km, km/s].
     r_station_ecef_km : array_like, shape (3,)
         Station Earth-fixed position, km.
-    theta0_rad : float
-        GMST at the scenario epoch, rad.
+    orientation : EarthOrientation or float
+        The scenario's Earth orientation (a float: the gmst model's angle at the epoch, rad).
     light_time : LightTime
         The model.
-    omega_rad_s : float
-        Earth rotation rate, rad/s.
 
     Raises
     ------
@@ -345,9 +342,8 @@ def solve_light_time(
     """
     t = np.asarray(t_s, dtype=float)
     x = np.asarray(state_eci, dtype=float)
-    station_rx = station_state_eci(
-        r_station_ecef_km, earth_rotation_angle_rad(theta0_rad, t, omega_rad_s), omega_rad_s
-    )
+    orientation = as_orientation(orientation)
+    station_rx = station_state_eci(r_station_ecef_km, orientation.attitude(t))
 
     def down_distance(tau):
         bounce = light_time.spacecraft_state(t, x, tau)
@@ -359,8 +355,7 @@ def solve_light_time(
         return LightTimeSolution(tau_d, np.zeros_like(tau_d), bounce, station_rx, station_rx)
 
     def station_at(tau_u):
-        theta = earth_rotation_angle_rad(theta0_rad, t - tau_d - tau_u, omega_rad_s)
-        return station_state_eci(r_station_ecef_km, theta, omega_rad_s)
+        return station_state_eci(r_station_ecef_km, orientation.attitude(t - tau_d - tau_u))
 
     def up_distance(tau_u):
         return np.linalg.norm(bounce[..., :3] - station_at(tau_u)[..., :3], axis=-1)
@@ -417,18 +412,18 @@ def light_time_range_rate_km_s(solution: LightTimeSolution, two_way: bool = True
 
 @dataclass(frozen=True, slots=True)
 class _Geometry:
-    """Spacecraft at the bounce, tau_down, and the legs (weight, station state, theta)."""
+    """Spacecraft at the bounce, tau_down, and the legs (weight, station state, attitude)."""
 
     spacecraft: np.ndarray
     tau_down_s: np.ndarray
-    theta_rx: np.ndarray
+    attitude_rx: EarthAttitude
     solution: LightTimeSolution | None
-    legs: tuple[tuple[float, np.ndarray, np.ndarray], ...]
+    legs: tuple[tuple[float, np.ndarray, EarthAttitude], ...]
 
     def enu(self, station: Station):
         """Down-leg station-to-spacecraft vector in the station's ENU axes at reception, km."""
         relative = self.spacecraft[..., :3] - self.legs[0][1][..., :3]
-        return np.einsum("...ij,...j->...i", station.enu_from_eci(self.theta_rx), relative)
+        return np.einsum("...ij,...j->...i", station.enu_from_eci(self.attitude_rx), relative)
 
 
 @dataclass(frozen=True, slots=True)
@@ -445,16 +440,15 @@ class MeasurementModel:
     ----------
     station : Station
         The tracking station.
-    theta0_rad : float
-        GMST at the scenario epoch, rad (``Epoch.gmst_rad()``).
+    orientation : EarthOrientation
+        The scenario's Earth orientation (:mod:`tapp.frames.orientation`); a float given here is
+        taken as the gmst model's angle at the epoch, rad (``Epoch.gmst_rad()``).
     kinds : tuple of str
         Observable kinds, a subset of ("range", "range_rate", "azimuth", "elevation").
     light_time : LightTime or None
         None: instantaneous geometry (observation and signal at the receive time).
     range_bias_km, range_rate_bias_km_s : float
         Constant biases added to range and range-rate.
-    omega_rad_s : float
-        Earth rotation rate, rad/s.
 
     Examples
     --------
@@ -466,12 +460,11 @@ class MeasurementModel:
     """
 
     station: Station
-    theta0_rad: float
+    orientation: EarthOrientation
     kinds: tuple[str, ...] = ("range", "range_rate")
     light_time: LightTime | None = None
     range_bias_km: float = 0.0
     range_rate_bias_km_s: float = 0.0
-    omega_rad_s: float = OMEGA_EARTH_rad_s
 
     def __post_init__(self) -> None:
         try:
@@ -482,30 +475,27 @@ class MeasurementModel:
                 self.kinds,
             ) from err
         object.__setattr__(self, "kinds", kinds)
-
-    def _theta(self, t_s):
-        return earth_rotation_angle_rad(self.theta0_rad, t_s, self.omega_rad_s)
+        object.__setattr__(self, "orientation", as_orientation(self.orientation))
 
     def station_eci(self, t_s):
         """Return the station inertial state at t_s (N,), shape (N, 6)."""
-        return station_state_eci(self.station.r_ecef_km, self._theta(t_s), self.omega_rad_s)
+        return station_state_eci(self.station.r_ecef_km, self.orientation.attitude(t_s))
 
     def _geometry(self, t_s, state_eci) -> _Geometry:
         t = np.asarray(t_s, dtype=float)
         x = np.asarray(state_eci, dtype=float)
-        theta_rx = self._theta(t)
+        attitude_rx = self.orientation.attitude(t)
         if self.light_time is None:
-            station = self.station_eci(t)
-            return _Geometry(x, np.zeros(t.shape), theta_rx, None, ((1.0, station, theta_rx),))
-        sol = solve_light_time(
-            t, x, self.station.r_ecef_km, self.theta0_rad, self.light_time, self.omega_rad_s
-        )
-        legs = ((1.0, sol.station_receive_eci, theta_rx),)
+            station = station_state_eci(self.station.r_ecef_km, attitude_rx)
+            return _Geometry(x, np.zeros(t.shape), attitude_rx, None,
+                             ((1.0, station, attitude_rx),))
+        sol = solve_light_time(t, x, self.station.r_ecef_km, self.orientation, self.light_time)
+        legs = ((1.0, sol.station_receive_eci, attitude_rx),)
         if self.light_time.two_way:
-            theta_tx = self._theta(t - sol.tau_down_s - sol.tau_up_s)
-            legs = ((0.5, sol.station_receive_eci, theta_rx),
-                    (0.5, sol.station_transmit_eci, theta_tx))
-        return _Geometry(sol.spacecraft_eci, sol.tau_down_s, theta_rx, sol, legs)
+            attitude_tx = self.orientation.attitude(t - sol.tau_down_s - sol.tau_up_s)
+            legs = ((0.5, sol.station_receive_eci, attitude_rx),
+                    (0.5, sol.station_transmit_eci, attitude_tx))
+        return _Geometry(sol.spacecraft_eci, sol.tau_down_s, attitude_rx, sol, legs)
 
     def _observables(self, t_s, state_eci, kinds):
         """Return {kind: values (N,)} without biases, solving the light time once."""
@@ -552,17 +542,17 @@ class MeasurementModel:
         return np.stack([obs[k] + bias.get(k, 0.0) for k in self.kinds], axis=-1)
 
     def _leg_partials(self, geo: _Geometry):
-        """Return per leg (theta (N,), weighted dh/d bounce state (N, m, 6)).
+        """Return per leg (attitude, weighted dh/d bounce state (N, m, 6)).
 
         Range and range-rate rows carry the leg's weight; the angle rows are whole on the
         down-leg (leg 0) and zero on the up-leg.
         """
         angles = None
         if Observable.AZIMUTH in self.kinds or Observable.ELEVATION in self.kinds:
-            rot = self.station.enu_from_eci(geo.theta_rx)
+            rot = self.station.enu_from_eci(geo.attitude_rx)
             angles = azimuth_elevation_partials(geo.enu(self.station), rot)
         out = []
-        for number, (weight, station, theta) in enumerate(geo.legs):
+        for number, (weight, station, attitude) in enumerate(geo.legs):
             rows = np.zeros(geo.tau_down_s.shape + (len(self.kinds), 6))
             for row, kind in enumerate(self.kinds):
                 if kind is Observable.RANGE:
@@ -573,7 +563,7 @@ class MeasurementModel:
                     )
                 elif number == 0:
                     rows[..., row, :] = angles[..., 0 if kind is Observable.AZIMUTH else 1, :]
-            out.append((theta, rows))
+            out.append((attitude, rows))
         return out
 
     def state_partials(self, t_s, state_eci):
@@ -593,14 +583,14 @@ class MeasurementModel:
 
         Columns named by ``STATION_PARAMETER_NAMES[parameters]``: (r_s km, lon rad, z km) or
         Earth-fixed (x, y, z) km. Chain rule per leg: dh/dp = (dh/d station state at the leg's
-        time) (d station state / dp at that time's rotation angle), with dh/d station state =
+        time) (d station state / dp at that time's attitude), with dh/d station state =
         -dh/d spacecraft state for every kind (angles: axes held fixed).
         """
         geo = self._geometry(t_s, state_eci)
         r_ecef = self.station.r_ecef_km
         return -sum(
-            rows @ station_state_partials(r_ecef, theta, parameters, self.omega_rad_s)
-            for theta, rows in self._leg_partials(geo)
+            rows @ station_state_partials(r_ecef, attitude, parameters)
+            for attitude, rows in self._leg_partials(geo)
         )
 
     def bias_partials(self, t_s):

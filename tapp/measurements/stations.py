@@ -1,15 +1,15 @@
 """Ground stations: Earth-fixed location, inertial state, and partials w.r.t. location.
 
-A station is fixed in the Earth-fixed frame of :mod:`tapp.frames.rotation`; its inertial
-(EME2000) state at scenario time t is
+A station is fixed in the Earth-fixed frame (ITRS); its inertial (GCRS) state at scenario
+time t is
 
 .. math::
 
-    \\mathbf r(t) = R_3(-\\theta(t))\\,\\mathbf r_f,\\qquad
-    \\mathbf v(t) = \\boldsymbol\\omega \\times \\mathbf r(t),\\qquad
-    \\theta(t) = \\theta_0 + \\omega_\\oplus t
+    \\mathbf r(t) = M(t)^T\\,\\mathbf r_f,\\qquad
+    \\mathbf v(t) = \\omega\\,\\hat{\\mathbf c}(t) \\times \\mathbf r(t)
 
-(:func:`tapp.frames.earth_rotation_angle_rad`, the same model the dynamics use).
+with M the inertial → Earth-fixed rotation and ĉ the spin axis of the scenario's Earth
+orientation model (:mod:`tapp.frames.orientation`, the same model the dynamics use).
 
 Two location parameterisations are offered for estimation and consider analysis:
 
@@ -26,10 +26,9 @@ from typing import Literal
 
 import numpy as np
 
-from tapp.constants import OMEGA_EARTH_rad_s
 from tapp.errors import InputError
 from tapp.frames.geodesy import ecef_to_geodetic, enu_matrix, geodetic_to_ecef
-from tapp.frames.rotation import earth_rotation_angle_rad, eci_to_ecef_matrix, r3
+from tapp.frames.orientation import EarthAttitude, EarthOrientation, as_orientation
 
 StationParameters = Literal["cylindrical", "ecef"]
 _PARAMETER_CHOICES = '"cylindrical" or "ecef"'
@@ -46,83 +45,65 @@ STATION_PARAMETER_NAMES = {
 HEIGHT_RANGE_km = (-0.5, 10.0)
 
 
-def station_state_eci(r_ecef_km, theta_rad, omega_rad_s: float = OMEGA_EARTH_rad_s):
-    """Return the inertial state [r km, v km/s] of an Earth-fixed point, shape (..., 6).
+def station_state_eci(r_ecef_km, attitude: EarthAttitude):
+    """Return the inertial state [r km, v km/s] of an Earth-fixed point, shape (N, 6).
 
     Parameters
     ----------
-    r_ecef_km : array_like, shape (3,) or (..., 3)
-        Earth-fixed position, km.
-    theta_rad : array_like, shape (...)
-        Earth rotation angle at each time, rad.
-    omega_rad_s : float
-        Earth rotation rate, rad/s.
+    r_ecef_km : array_like, shape (3,)
+        Earth-fixed (ITRS) position, km.
+    attitude : EarthAttitude
+        The Earth's orientation at the N times (:meth:`EarthOrientation.attitude`).
 
     Notes
     -----
-    r = R3(-theta) r_f and v = omega z_hat x r = omega (-r_y, r_x, 0).
+    r = Mᵀ r_f with M the inertial → Earth-fixed rotation, and v = ω ĉ × r, ĉ the spin axis
+    (the CIP; z for gmst): a rigid rotation (see :mod:`tapp.frames.orientation` for what the
+    velocity leaves out).
     """
-    r = np.einsum("...ij,...j->...i", r3(-np.asarray(theta_rad, float)), np.asarray(r_ecef_km))
-    v = omega_rad_s * np.stack([-r[..., 1], r[..., 0], np.zeros_like(r[..., 0])], -1)
+    r = np.einsum("...ij,j->...i", attitude.gcrs_from_itrs, np.asarray(r_ecef_km, dtype=float))
+    v = attitude.omega_rad_s * np.cross(attitude.spin_axis, r)
     return np.concatenate([r, v], axis=-1)
 
 
-def station_state_partials(
-    r_ecef_km,
-    theta_rad,
-    parameters: StationParameters = "cylindrical",
-    omega_rad_s: float = OMEGA_EARTH_rad_s,
-):
-    """Return d[r_eci, v_eci]/d(location parameters), shape (..., 6, 3).
+def location_jacobian(r_ecef_km, parameters: StationParameters = "cylindrical") -> np.ndarray:
+    """Return d r_f / d(location parameters), shape (3, 3), at an Earth-fixed position (km).
+
+    Cylindrical (r_s, lon, z): r_f = (r_s cos lon, r_s sin lon, z), so the columns are
+    (cos lon, sin lon, 0), (-r_s sin lon, r_s cos lon, 0), (0, 0, 1); ECEF: the identity.
+    """
+    r_f = np.asarray(r_ecef_km, dtype=float)
+    if parameters == "ecef":
+        return np.eye(3)
+    if parameters != "cylindrical":
+        raise InputError("station_state_partials", "parameters", _PARAMETER_CHOICES, parameters)
+    spin_radius = np.hypot(r_f[0], r_f[1])
+    lon = np.arctan2(r_f[1], r_f[0])
+    c, s = np.cos(lon), np.sin(lon)
+    return np.array([[c, -spin_radius * s, 0.0], [s, spin_radius * c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def station_state_partials(r_ecef_km, attitude: EarthAttitude,
+                           parameters: StationParameters = "cylindrical"):
+    """Return d[r_eci, v_eci]/d(location parameters), shape (N, 6, 3).
 
     Parameters
     ----------
     r_ecef_km : array_like, shape (3,)
         Earth-fixed position, km (the point where the partials are taken).
-    theta_rad : array_like, shape (...)
-        Earth rotation angle at each time, rad.
+    attitude : EarthAttitude
+        The Earth's orientation at the N times.
     parameters : {"cylindrical", "ecef"}
         ``"cylindrical"``: columns d/d(r_s km, lon rad, z km); ``"ecef"``: d/d(x, y, z km).
-    omega_rad_s : float
-        Earth rotation rate, rad/s.
 
     Notes
     -----
-    Cylindrical: with alpha = lon + theta, r_eci = (r_s cos alpha, r_s sin alpha, z) and
-    v_eci = omega (-r_s sin alpha, r_s cos alpha, 0), so
-
-    .. math::
-
-        \\frac{\\partial \\mathbf r}{\\partial (r_s, \\lambda, z)} =
-        \\begin{pmatrix} \\cos\\alpha & -r_s\\sin\\alpha & 0 \\\\
-        \\sin\\alpha & r_s\\cos\\alpha & 0 \\\\ 0 & 0 & 1 \\end{pmatrix},\\quad
-        \\frac{\\partial \\mathbf v}{\\partial (r_s, \\lambda, z)} = \\omega
-        \\begin{pmatrix} -\\sin\\alpha & -r_s\\cos\\alpha & 0 \\\\
-        \\cos\\alpha & -r_s\\sin\\alpha & 0 \\\\ 0 & 0 & 0 \\end{pmatrix}.
-
-    ECEF: dr/dr_f = R3(-theta), dv/dr_f = [omega z_hat x] R3(-theta).
+    With J = d r_f / dp (:func:`location_jacobian`): dr/dp = Mᵀ J and dv/dp = ω [ĉ×] Mᵀ J,
+    the derivatives of :func:`station_state_eci`.
     """
-    theta = np.asarray(theta_rad, dtype=float)
-    r_f = np.asarray(r_ecef_km, dtype=float)
-    out = np.zeros(theta.shape + (6, 3))
-    if parameters == "cylindrical":
-        spin_radius = np.hypot(r_f[0], r_f[1])
-        alpha = np.arctan2(r_f[1], r_f[0]) + theta
-        ca, sa = np.cos(alpha), np.sin(alpha)
-        out[..., 0, 0], out[..., 1, 0] = ca, sa
-        out[..., 0, 1], out[..., 1, 1] = -spin_radius * sa, spin_radius * ca
-        out[..., 2, 2] = 1.0
-        out[..., 3, 0], out[..., 4, 0] = -omega_rad_s * sa, omega_rad_s * ca
-        out[..., 3, 1] = -omega_rad_s * spin_radius * ca
-        out[..., 4, 1] = -omega_rad_s * spin_radius * sa
-    elif parameters == "ecef":
-        rot = r3(-theta)
-        out[..., :3, :] = rot
-        out[..., 3, :] = -omega_rad_s * rot[..., 1, :]
-        out[..., 4, :] = omega_rad_s * rot[..., 0, :]
-    else:
-        raise InputError("station_state_partials", "parameters", _PARAMETER_CHOICES, parameters)
-    return out
+    dr = attitude.gcrs_from_itrs @ location_jacobian(r_ecef_km, parameters)
+    dv = attitude.omega_rad_s * np.cross(attitude.spin_axis[..., :, None], dr, axis=-2)
+    return np.concatenate([dr, dv], axis=-2)
 
 
 @dataclass(frozen=True, slots=True)
@@ -220,25 +201,20 @@ class Station:
         """Rotation Earth-fixed -> local East-North-Up, shape (3, 3)."""
         return enu_matrix(self.lat_rad, self.lon_rad)
 
-    def enu_from_eci(self, theta_rad) -> np.ndarray:
-        """Rotation inertial -> local East-North-Up at rotation angles theta, shape (..., 3, 3)."""
-        return self.enu_from_ecef @ eci_to_ecef_matrix(theta_rad)
+    def enu_from_eci(self, attitude: EarthAttitude) -> np.ndarray:
+        """Rotation inertial -> local East-North-Up at the attitude's times, shape (N, 3, 3)."""
+        return self.enu_from_ecef @ attitude.itrs_from_gcrs
 
-    def state_eci(self, theta0_rad: float, t_s, omega_rad_s: float = OMEGA_EARTH_rad_s):
+    def state_eci(self, orientation: EarthOrientation | float, t_s):
         """Return the inertial state [r km, v km/s] at times t_s (N,) s, shape (N, 6).
 
-        theta0_rad is the GMST at the scenario epoch (see :func:`station_state_eci`).
+        ``orientation`` is the scenario's Earth orientation (a float: the gmst model's angle at
+        the epoch, rad).
         """
-        theta = earth_rotation_angle_rad(theta0_rad, t_s, omega_rad_s)
-        return station_state_eci(self.r_ecef_km, theta, omega_rad_s)
+        return station_state_eci(self.r_ecef_km, as_orientation(orientation).attitude(t_s))
 
-    def state_partials(
-        self,
-        theta0_rad: float,
-        t_s,
-        parameters: StationParameters = "cylindrical",
-        omega_rad_s: float = OMEGA_EARTH_rad_s,
-    ):
+    def state_partials(self, orientation: EarthOrientation | float, t_s,
+                       parameters: StationParameters = "cylindrical"):
         """Return d[r_eci, v_eci]/d(location), shape (N, 6, 3) (see station_state_partials)."""
-        theta = earth_rotation_angle_rad(theta0_rad, t_s, omega_rad_s)
-        return station_state_partials(self.r_ecef_km, theta, parameters, omega_rad_s)
+        return station_state_partials(self.r_ecef_km, as_orientation(orientation).attitude(t_s),
+                                      parameters)

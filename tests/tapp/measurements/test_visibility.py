@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from tapp.frames import Elements, earth_rotation_angle_rad, kepler_states
+from tapp.frames import Elements, kepler_states
+from tapp.frames.orientation import EarthOrientation
 from tapp.measurements import (
     MeasurementModel,
     Station,
@@ -25,9 +26,9 @@ STATION = Station.from_degrees("Madrid-like", 40.4272, -4.2506, 0.834, elev_mask
 
 def _spacecraft_along(enu_direction, distance_km):
     """Inertial states (N, 6) at T_s placed along a local ENU direction of STATION."""
-    theta = earth_rotation_angle_rad(THETA0_rad, T_s)
-    station = station_state_eci(STATION.r_ecef_km, theta)
-    enu_to_eci = np.swapaxes(STATION.enu_from_eci(theta), -1, -2)
+    attitude = EarthOrientation.gmst_angle(THETA0_rad).attitude(T_s)
+    station = station_state_eci(STATION.r_ecef_km, attitude)
+    enu_to_eci = np.swapaxes(STATION.enu_from_eci(attitude), -1, -2)
     offset = distance_km * enu_to_eci @ (np.asarray(enu_direction) / np.linalg.norm(enu_direction))
     return np.concatenate([station[:, :3] + offset, station[:, 3:]], axis=1)
 

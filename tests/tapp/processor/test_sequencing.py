@@ -191,14 +191,17 @@ def test_error_budget_variances_add_up_to_every_printed_total(tape):
 
 
 def test_error_budget_closes_to_1e_10_when_the_fit_is_well_conditioned(tape):
-    """Station locations known a priori to 1 m (κ < 1e6, checked): ε·κ < 1e-10."""
+    """Station locations known a priori to 1 m (κ = 4e5 < 1e6, checked): the closure is within
+    4 ε·κ (4e-10; measured 1.5e-10 and 0.9e-10 on two builds whose partials differ in the last
+    bits), where a mis-assembled budget would be off by the size of a source (> 1e-3)."""
     fit = {n: v * (0.2 if "." in n and "bias" not in n else 1.0)
            for n, v in sigmas(tape).items()}
     out = run(tape, deck(tape, fit=fit, real=fit, times={"print": [1, 2, 3], "recycle": [2]},
                          commands={"print": ["cov-real o@current", "cov-real m"]}))
-    assert max(_condition(tape, fit, [], k) for k in (1, 2, 3)) < 1e6
+    kappa = max(_condition(tape, fit, [], k) for k in (1, 2, 3))
+    assert kappa < 1e6
     closures = _closures(out)
-    assert len(closures) == 8 and max(c for _, c in closures) < 1e-10
+    assert len(closures) == 8 and max(c for _, c in closures) < 4 * np.finfo(float).eps * kappa
 
 
 def test_a_fit_normal_matrix_that_cannot_be_inverted_names_the_time_and_the_direction(tape):
