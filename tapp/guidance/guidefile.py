@@ -1,0 +1,143 @@
+"""The guidance file (TOML) of a TAPP II study, and its binding to a T32 tape.
+
+Layout (units at the edge: mrad, mm/s, deg; the code works in rad, km/s)::
+
+    title = "..."
+    [tape]                          # optional expectation checked against the tape
+    iden = "DSN-LUNAR-2026-03-10"
+    [targets]
+    miss = ["b_dot_t_km", "b_dot_r_km"]   # 2 or 3 miss components of the tape to null
+    [manoeuvres]
+    recycles = [1, 2, 3]            # recycle numbers i' of the tape (default: all)
+    [execution]                     # 1σ, Gates-type (tapp.guidance.execution)
+    sigma_proportional = 0.02       # magnitude error, fraction of |Δv|, < 1
+    sigma_pointing_mrad = 10.0      # per axis perpendicular to Δv, <= 200 (small angles)
+    sigma_fixed_mm_s = 1.0          # per axis, isotropic
+    [corridor]                      # optional: about the aim point
+    radius_km = 100.0               # a circle in the B-plane, or
+    # semi_axes_km = [150.0, 80.0]  # an ellipse, the first axis at angle_deg
+    # angle_deg = 30.0              # from T toward R
+    flight_time_s = 60.0            # optional |Δt_f| limit
+
+Every σ must be finite and >= 0; the corridor's sizes > 0; targets and manoeuvres are
+checked against the tape when bound (:func:`bind`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated
+
+from pydantic import Field, model_validator
+
+from tapp.errors import InputError
+from tapp.guidance.execution import ExecutionErrors
+from tapp.guidance.model import Problem, build_problem
+from tapp.guidance.statistics import BPLANE, FLIGHT_TIME, Corridor, bplane_rows, flight_time_row
+from tapp.schema import Invalid, Schema, Unique, load
+from tapp.tape.t32 import T32
+
+#: Largest pointing σ, mrad: the model adds pointing errors as small angles.
+MAX_POINTING_MRAD = 200.0
+
+Positive = Annotated[float, Field(gt=0)]
+
+
+class TapeExpect(Schema):
+    iden: str | None = None
+
+
+class Targets(Schema):
+    miss: Annotated[list[str], Field(min_length=2, max_length=3), Unique]
+
+
+class Manoeuvres(Schema):
+    recycles: Annotated[list[int], Field(min_length=1), Unique] | None = None
+
+
+class ExecutionTable(Schema):
+    sigma_proportional: Annotated[float, Field(ge=0, lt=1)] = 0.0
+    sigma_pointing_mrad: Annotated[float, Field(ge=0, le=MAX_POINTING_MRAD)] = 0.0
+    sigma_fixed_mm_s: Annotated[float, Field(ge=0)] = 0.0
+
+
+class CorridorTable(Schema):
+    radius_km: Positive | None = None
+    semi_axes_km: Annotated[list[Positive], Field(min_length=2, max_length=2)] | None = None
+    angle_deg: float = 0.0
+    flight_time_s: Positive | None = None
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> CorridorTable:
+        if (self.radius_km is None) == (self.semi_axes_km is None):
+            raise Invalid("either radius_km or semi_axes_km (the B-plane corridor)",
+                          {"radius_km": self.radius_km, "semi_axes_km": self.semi_axes_km})
+        return self
+
+
+class GuideFile(Schema):
+    """The guidance file (module docstring); validated strictly, unknown keys are errors."""
+
+    title: str = ""
+    tape: TapeExpect = TapeExpect()
+    targets: Targets
+    manoeuvres: Manoeuvres = Manoeuvres()
+    execution: ExecutionTable = ExecutionTable()
+    corridor: CorridorTable | None = None
+
+
+def read_guide(path: Path | str) -> GuideFile:
+    """Read and validate a guidance file (errors name the file and the field)."""
+    return load(GuideFile, path)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Study:
+    """A guidance file bound to its tape: the problem, the corridor and the title."""
+
+    problem: Problem
+    corridor: Corridor | None
+    title: str
+
+
+def _corridor(table: CorridorTable | None, t32: T32, source: str) -> Corridor | None:
+    if table is None:
+        return None
+    if bplane_rows(t32.miss_name) is None:
+        raise InputError(source, "corridor", f"a tape with the B-plane miss components "
+                         f"{', '.join(BPLANE)}", ", ".join(t32.miss_name))
+    if table.flight_time_s is not None and flight_time_row(t32.miss_name) is None:
+        raise InputError(source, "corridor.flight_time_s", f"a tape with a flight time miss "
+                         f"component ({' or '.join(FLIGHT_TIME)})", ", ".join(t32.miss_name))
+    axes = (table.radius_km, table.radius_km) if table.semi_axes_km is None \
+        else tuple(table.semi_axes_km)
+    return Corridor(axes, math.radians(table.angle_deg), table.flight_time_s)
+
+
+def bind(guide: GuideFile, t32: T32, source: str, tape_source: str = "T32") -> Study:
+    """Return the study a guidance file asks of a tape.
+
+    Raises
+    ------
+    InputError
+        A tape other than the one expected, targets or manoeuvre recycles the tape does not
+        have, targets the velocity cannot control, a corridor without B-plane (or flight-time)
+        miss components (naming the guidance file), or orbit parameters that are not
+        Cartesian (naming the tape).
+    """
+    if guide.tape.iden is not None and guide.tape.iden != t32.iden:
+        raise InputError(source, "tape.iden", f"the tape's identification {t32.iden!r}",
+                         guide.tape.iden)
+    ex = guide.execution
+    errors = ExecutionErrors(ex.sigma_proportional, ex.sigma_pointing_mrad * 1e-3,
+                             ex.sigma_fixed_mm_s * 1e-6)
+    recycles = guide.manoeuvres.recycles
+    manoeuvres = tuple(r.number for r in t32.recycles) if recycles is None else tuple(recycles)
+    problem = build_problem(t32, tuple(guide.targets.miss), manoeuvres, errors,
+                            tape_source=tape_source, guide_source=source)
+    return Study(problem, _corridor(guide.corridor, t32, source), guide.title)
+
+
+__all__ = ["GuideFile", "MAX_POINTING_MRAD", "Study", "bind", "read_guide"]

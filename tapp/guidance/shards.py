@@ -1,0 +1,127 @@
+"""Run the Monte Carlo in shards, in this process or on Dask, as ITER runs its cases.
+
+A shard is a run of whole RNG blocks (:data:`tapp.guidance.montecarlo.BLOCK_SAMPLES`
+samples each) simulated by :func:`tapp.guidance.montecarlo.simulate_blocks`; shards run on
+the executor of :func:`iter.execute.open_executor` (a local Dask cluster by default, a running
+cluster given its scheduler address, or serially), complete in any order, and are gathered
+in sample order. Since every sample depends on its own block's generator and row only, the
+gathered samples, and every statistic of them, are bitwise the same whatever the shard size
+and the number of workers.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from iter.execute import DaskExecutor, Execution, open_executor
+from tapp.guidance.model import Problem
+from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples, simulate_blocks
+
+#: Shards per worker slot when the shard size is chosen automatically (load balance).
+SHARDS_PER_SLOT = 4
+#: Largest automatic shard, blocks (keeps the progress bar moving and worker memory small).
+MAX_AUTO_SHARD_BLOCKS = 50
+
+
+@dataclass(frozen=True, slots=True)
+class Shard:
+    """RNG blocks first_block .. first_block + n_blocks − 1, the ``index``-th shard."""
+
+    index: int
+    first_block: int
+    n_blocks: int
+
+
+def plan_shards(n_samples: int, shard_samples: int) -> tuple[Shard, ...]:
+    """Split ``n_samples`` into shards of ``shard_samples`` (a multiple of the block)."""
+    per = shard_samples // BLOCK_SAMPLES
+    n_blocks = math.ceil(n_samples / BLOCK_SAMPLES)
+    return tuple(Shard(i, b, min(per, n_blocks - b))
+                 for i, b in enumerate(range(0, n_blocks, per)))
+
+
+def default_shard_samples(n_samples: int, slots: int) -> int:
+    """About :data:`SHARDS_PER_SLOT` shards per slot, 1 to :data:`MAX_AUTO_SHARD_BLOCKS`
+    blocks each, in samples."""
+    n_blocks = math.ceil(n_samples / BLOCK_SAMPLES)
+    per = max(1, min(MAX_AUTO_SHARD_BLOCKS, math.ceil(n_blocks / (SHARDS_PER_SLOT * slots))))
+    return per * BLOCK_SAMPLES
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ShardRun:
+    """The gathered samples and how they were run."""
+
+    samples: Samples
+    shard_samples: int
+    where: str
+
+
+def run_shards(problem: Problem, seed: int, n_samples: int, execution: Execution,
+               shard_samples: int | None = None,
+               progress: Callable[[int, int], None] | None = None) -> ShardRun:
+    """Simulate ``n_samples`` samples in shards on ``execution``; gather in sample order.
+
+    Parameters
+    ----------
+    problem : the guidance problem.
+    seed : root seed of the RNG blocks.
+    n_samples : number of samples, >= 1.
+    execution : where to run (``iter.Execution``).
+    shard_samples : samples per shard, a multiple of BLOCK_SAMPLES; None chooses.
+    progress : called with (samples done, n_samples) as shards complete.
+
+    Raises
+    ------
+    iter.SchedulerError
+        The scheduler address does not answer, or its cluster has no worker.
+    """
+    with open_executor(execution) as executor:
+        size = shard_samples or default_shard_samples(n_samples, executor.slots)
+        shards = plan_shards(n_samples, size)
+        parts: list[Samples | None] = [None] * len(shards)
+        done = 0
+
+        def record(shard: Shard, part: Samples) -> None:
+            nonlocal done
+            parts[shard.index] = part
+            done += part.n
+            if progress is not None:
+                progress(done, n_samples)
+
+        if isinstance(executor, DaskExecutor):
+            _on_dask(executor, problem, seed, n_samples, shards, record)
+        else:
+            for shard in shards:
+                record(shard, simulate_blocks(problem, seed, shard.first_block,
+                                              shard.n_blocks, n_samples))
+        where = executor.description
+    samples = Samples(np.concatenate([p.dv_km_s for p in parts]),
+                      np.concatenate([p.miss for p in parts]))
+    return ShardRun(samples, size, where)
+
+
+def _on_dask(executor: DaskExecutor, problem: Problem, seed: int, n_samples: int,
+             shards: tuple[Shard, ...], record: Callable[[Shard, Samples], None]) -> None:
+    """Submit every shard (the problem scattered once); record each as it completes."""
+    from distributed import as_completed
+
+    client = executor.client
+    [remote] = client.scatter([problem], broadcast=True)
+    pending = {client.submit(simulate_blocks, remote, seed, s.first_block, s.n_blocks,
+                             n_samples, pure=False): s for s in shards}
+    try:
+        for future in as_completed(list(pending), loop=client.loop):
+            record(pending.pop(future), future.result())
+            future.release()
+    finally:
+        if pending:
+            client.cancel(list(pending))
+
+
+__all__ = ["MAX_AUTO_SHARD_BLOCKS", "SHARDS_PER_SLOT", "Shard", "ShardRun",
+           "default_shard_samples", "plan_shards", "run_shards"]

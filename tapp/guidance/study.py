@@ -1,0 +1,161 @@
+"""A TAPP II study: a T32 tape and a guidance file in, ΔV and miss statistics out.
+
+:func:`run_guidance` (paths) and :func:`guidance_study` (objects) bind the guidance file to
+the tape (:func:`tapp.guidance.guidefile.bind`), run the Monte Carlo in shards
+(:func:`tapp.guidance.shards.run_shards`), propagate the linear covariance
+(:func:`tapp.guidance.linear.linear_covariance`) and return both sets of statistics
+(:mod:`tapp.guidance.statistics`) with the per-sample outcomes, in one
+:class:`GuidanceResult`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from iter.execute import Execution
+from tapp.errors import InputError
+from tapp.guidance.execution import ExecutionErrors
+from tapp.guidance.guidefile import GuideFile, bind, read_guide
+from tapp.guidance.linear import linear_covariance
+from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples
+from tapp.guidance.shards import run_shards
+from tapp.guidance.statistics import Corridor, Outcome, linear_outcome, sample_outcome
+from tapp.tape.t32 import T32, read_t32
+
+#: Fewest samples (a covariance needs two).
+MIN_SAMPLES = 2
+#: Most samples: the gathered outcomes are ~100 bytes a sample (3 manoeuvres, 3 miss
+#: components), 0.5 GB at this bound.
+MAX_SAMPLES = 5_000_000
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class GuidanceResult:
+    """The outcome of a guidance study.
+
+    Attributes
+    ----------
+    title : the guidance file's title.
+    tape_iden : identification of the T32 tape.
+    tape_source, guide_source : the files (or labels) read.
+    targets : names of the targeted miss components.
+    errors : the execution errors.
+    corridor : the corridor, or None.
+    miss_name, miss_unit : the miss components of the final miss.
+    n_samples, seed : the Monte Carlo's size and root seed.
+    block_samples, shard_samples : samples per RNG block and per shard.
+    where : where the shards ran (e.g. "local cluster (2 workers)").
+    wall_s : wall time of the Monte Carlo, s.
+    monte_carlo, linear : the statistics of the samples and of the linear covariance.
+    samples : the per-sample outcomes, in sample order.
+    """
+
+    title: str
+    tape_iden: str
+    tape_source: str
+    guide_source: str
+    targets: tuple[str, ...]
+    errors: ExecutionErrors
+    corridor: Corridor | None
+    miss_name: tuple[str, ...]
+    miss_unit: tuple[str, ...]
+    n_samples: int
+    seed: int
+    block_samples: int
+    shard_samples: int
+    where: str
+    wall_s: float
+    monte_carlo: Outcome
+    linear: Outcome
+    samples: Samples
+
+
+def check_samples(n: int, option: str = "samples") -> int:
+    """Return ``n`` if MIN_SAMPLES <= n <= MAX_SAMPLES, else raise InputError naming it."""
+    if isinstance(n, bool) or not isinstance(n, int) or not MIN_SAMPLES <= n <= MAX_SAMPLES:
+        raise InputError(option, "value", f"a whole number of samples {MIN_SAMPLES}.."
+                         f"{MAX_SAMPLES:,}", n)
+    return n
+
+
+def check_shard_samples(n: int | None, option: str = "shard_samples") -> int | None:
+    """Return ``n`` if None or a positive multiple of BLOCK_SAMPLES, else raise InputError."""
+    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < BLOCK_SAMPLES
+                          or n % BLOCK_SAMPLES):
+        raise InputError(option, "value", f"a whole multiple of {BLOCK_SAMPLES:,} samples (the "
+                         "RNG block)", n)
+    return n
+
+
+def check_seed(seed: int, option: str = "seed") -> int:
+    """Return ``seed`` if it is a whole number >= 0 (a SeedSequence entropy)."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InputError(option, "value", "a whole number >= 0 (a seed for numpy's "
+                         "SeedSequence)", seed)
+    return seed
+
+
+def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
+                   execution: Execution | None = None, shard_samples: int | None = None,
+                   progress: Callable[[int, int], None] | None = None,
+                   guide_source: str = "guidance", tape_source: str = "T32"
+                   ) -> GuidanceResult:
+    """Run a guidance study on a tape in memory (module docstring).
+
+    Parameters
+    ----------
+    t32 : the T32 tape.
+    guide : the validated guidance file.
+    samples : Monte Carlo samples, MIN_SAMPLES..MAX_SAMPLES.
+    seed : root seed, >= 0.
+    execution : where the shards run (``iter.Execution``); None: a local Dask cluster, one
+        worker per core; ``Execution(serial=True)`` runs in this process.
+    shard_samples : samples per shard, a multiple of BLOCK_SAMPLES; None chooses.
+    progress : called with (samples done, samples) as shards complete.
+    guide_source, tape_source : named in errors and in the result.
+
+    Raises
+    ------
+    InputError
+        Bad sizes or seed, or a guidance file that does not fit the tape.
+    iter.SchedulerError
+        The scheduler does not answer.
+    """
+    check_samples(samples)
+    check_seed(seed)
+    check_shard_samples(shard_samples)
+    study = bind(guide, t32, guide_source, tape_source)
+    problem = study.problem
+    start = time.perf_counter()
+    run = run_shards(problem, seed, samples, Execution() if execution is None else execution,
+                     shard_samples, progress)
+    wall_s = time.perf_counter() - start
+    lin = linear_covariance(problem)
+    return GuidanceResult(
+        study.title, t32.iden, tape_source, guide_source,
+        tuple(problem.miss_name[i] for i in problem.targets), problem.errors, study.corridor,
+        problem.miss_name, problem.miss_unit, samples, seed, BLOCK_SAMPLES, run.shard_samples,
+        run.where, wall_s, sample_outcome(problem, run.samples, study.corridor),
+        linear_outcome(problem, lin, study.corridor), run.samples)
+
+
+def run_guidance(t32_path: Path | str, guide_path: Path | str, *, samples: int, seed: int,
+                 execution: Execution | None = None, shard_samples: int | None = None,
+                 progress: Callable[[int, int], None] | None = None) -> GuidanceResult:
+    """Run a guidance study from a T32 tape file and a guidance file (module docstring).
+
+    See :func:`guidance_study` for the parameters and errors; the tape and the guidance file
+    are read and validated first (errors name them).
+    """
+    guide = read_guide(guide_path)
+    t32 = read_t32(t32_path)
+    return guidance_study(t32, guide, samples=samples, seed=seed, execution=execution,
+                          shard_samples=shard_samples, progress=progress,
+                          guide_source=str(guide_path), tape_source=str(t32_path))
+
+
+__all__ = ["MAX_SAMPLES", "MIN_SAMPLES", "GuidanceResult", "check_samples",
+           "check_shard_samples", "check_seed", "guidance_study", "run_guidance"]

@@ -1,0 +1,82 @@
+"""Reproducibility: the same seed gives bitwise the same samples and statistics whatever the
+shard size and the number of Dask workers (serial; the default local cluster, one worker
+process; a running cluster of two worker threads reached by its address)."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+
+from iter.execute import Execution
+from tapp.guidance.montecarlo import BLOCK_SAMPLES
+from tapp.guidance.shards import plan_shards
+from tapp.guidance.study import guidance_study
+from tapp.report.tapp2 import guidance_dict
+from tests.tapp.guidance.helpers import deep_space_t32, guide
+
+N = 5_500  # five whole blocks and a partial one
+SEED = 99
+HOW = ("where", "shard_samples", "wall_s")
+
+
+@pytest.fixture(scope="module")
+def cluster_address():
+    """A running Dask cluster of two worker threads, reached over TCP like a remote one."""
+    from distributed import LocalCluster
+
+    # the dashboard on a free port: 8787 stays free for the local clusters the code starts
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, protocol="tcp://",
+                      dashboard_address=":0", silence_logs=logging.ERROR) as cluster:
+        yield cluster.scheduler_address
+
+
+def _run(execution: Execution, shard_samples: int | None = None, samples: int = N):
+    return guidance_study(deep_space_t32(), guide(corridor={"radius_km": 300.0}),
+                          samples=samples, seed=SEED, execution=execution,
+                          shard_samples=shard_samples)
+
+
+def _same(a, b) -> None:
+    np.testing.assert_array_equal(a.samples.dv_km_s, b.samples.dv_km_s)
+    np.testing.assert_array_equal(a.samples.miss, b.samples.miss)
+    da, db = guidance_dict(a), guidance_dict(b)
+    assert {k: v for k, v in da.items() if k not in HOW} == \
+        {k: v for k, v in db.items() if k not in HOW}
+
+
+def test_shard_sizes_and_workers_do_not_change_a_bit(cluster_address):
+    serial = _run(Execution(serial=True), BLOCK_SAMPLES)
+    assert serial.where == "serial"
+    _same(serial, _run(Execution(serial=True), 4 * BLOCK_SAMPLES))
+    two = _run(Execution(scheduler=cluster_address), 2 * BLOCK_SAMPLES)
+    assert two.where.startswith("scheduler ") and "(2 workers)" in two.where
+    _same(serial, two)
+    _same(serial, _run(Execution(scheduler=cluster_address)))  # automatic shard size
+
+
+def test_the_default_local_cluster_of_one_worker_process_gives_the_same_numbers():
+    local = _run(Execution(workers=1), BLOCK_SAMPLES)
+    assert local.where == "local cluster (1 workers)"
+    _same(_run(Execution(serial=True), 3 * BLOCK_SAMPLES), local)
+
+
+def test_a_smaller_run_is_the_first_samples_of_a_larger_one():
+    small = _run(Execution(serial=True), samples=2_345)
+    large = _run(Execution(serial=True), samples=N)
+    np.testing.assert_array_equal(small.samples.miss, large.samples.miss[:2_345])
+    np.testing.assert_array_equal(small.samples.dv_km_s, large.samples.dv_km_s[:2_345])
+
+
+def test_another_seed_gives_other_samples():
+    a = _run(Execution(serial=True), samples=1_000)
+    b = guidance_study(deep_space_t32(), guide(), samples=1_000, seed=SEED + 1,
+                       execution=Execution(serial=True))
+    assert not np.any(a.samples.miss == b.samples.miss)
+
+
+def test_shards_cover_the_blocks_once_in_order():
+    shards = plan_shards(10_500, 3 * BLOCK_SAMPLES)
+    assert [(s.index, s.first_block, s.n_blocks) for s in shards] == \
+        [(0, 0, 3), (1, 3, 3), (2, 6, 3), (3, 9, 2)]
