@@ -1,0 +1,133 @@
+"""``tapp guide``: TAPP II on a T32 tape and a guidance file -> ΔV and miss statistics.
+
+The Monte Carlo runs in shards on Dask (a local cluster by default, ``--scheduler`` for a
+running one) and prints Markdown tables, Monte Carlo beside linear covariance; ``--json``
+writes every statistic, ``--plots`` the B-plane scatter and the ΔV histograms. Bad input (the
+tape, the guidance file or its fields, an option, an output path that is an input, a
+scheduler that does not answer) is one line on stderr naming the file or option and the
+field, exit 2; all outputs are written together or none (:class:`tapp.outputs.OutputSet`).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from iter import SchedulerError, SweepInputError
+from iter.execute import CONNECT_TIMEOUT_S, Execution
+from tapp.cli.common import app, print_json, run_guarded
+from tapp.errors import InputError
+from tapp.guidance.guidefile import read_guide
+from tapp.guidance.statistics import bplane_rows
+from tapp.guidance.study import (
+    GuidanceResult,
+    check_samples,
+    check_seed,
+    check_shard_samples,
+    guidance_study,
+)
+from tapp.outputs import OutputSet, check_paths
+from tapp.report.tapp2 import (
+    guidance_dict,
+    guidance_markdown,
+    plot_bplane_scatter,
+    plot_dv_histograms,
+)
+from tapp.tape.t32 import read_t32
+
+SCATTER_PNG = "bplane_scatter.png"
+HISTOGRAM_PNG = "dv_histograms.png"
+
+
+def _execution(scheduler: str | None, workers: int | None, timeout_s: float) -> Execution:
+    try:
+        return Execution(scheduler=scheduler, workers=workers, connect_timeout_s=timeout_s)
+    except SweepInputError as exc:
+        raise InputError(f"--{exc.field.replace('_', '-')}", "value", exc.expected,
+                         exc.got) from None
+
+
+def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Execution,
+           shard_size: int | None, quiet: bool) -> GuidanceResult:
+    guide_file = read_guide(guide)
+    t32 = read_t32(tape)
+    columns = (TextColumn("{task.description:<8}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("samples"), TimeElapsedColumn())
+    with Progress(*columns, console=Console(stderr=True), disable=quiet,
+                  transient=True) as bar:
+        task = bar.add_task("TAPP II", total=samples)
+
+        def progress(done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total)
+
+        try:
+            return guidance_study(t32, guide_file, samples=samples, seed=seed,
+                                  execution=execution, shard_samples=shard_size,
+                                  progress=progress, guide_source=str(guide),
+                                  tape_source=str(tape))
+        except SchedulerError as exc:
+            raise InputError("--scheduler", "value", f"a Dask scheduler answering within "
+                             f"{exc.timeout_s:g} s ({exc.reason})", exc.address) from None
+
+
+@app.command("guide")
+def guide_cmd(
+    tape: Annotated[Path, typer.Argument(help="T32 tape (RUN.t32.h5) from tapp process "
+                                         "--tape.")],
+    guide: Annotated[Path, typer.Argument(help="Guidance file (TOML): targets, manoeuvres, "
+                                          "execution errors, corridor.")],
+    samples: Annotated[int, typer.Option("--samples", help="Monte Carlo samples.")],
+    seed: Annotated[int, typer.Option("--seed", help="Root seed (numpy SeedSequence).")],
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", help="Address tcp://HOST:PORT of a running Dask scheduler [default: "
+                            "start a local cluster].")] = None,
+    workers: Annotated[int | None, typer.Option(
+        "--workers", help="Local-cluster worker processes [default: one per core].")] = None,
+    connect_timeout_s: Annotated[float, typer.Option(
+        "--connect-timeout-s", help="Wait for the scheduler, s.")] = CONNECT_TIMEOUT_S,
+    shard_size: Annotated[int | None, typer.Option(
+        "--shard-size", help="Samples per Dask task, a multiple of 1,000 [default: auto]; "
+                             "the results do not depend on it.")] = None,
+    json_path: Annotated[Path | None, typer.Option(
+        "--json", help="Write every statistic as JSON here ('-' for standard output).")] = None,
+    plots: Annotated[Path | None, typer.Option(
+        "--plots", help="Write the PNG plots into this folder.")] = None,
+) -> None:
+    """TAPP II: Monte Carlo midcourse guidance from a T32 tape, beside linear covariance."""
+
+    def body() -> None:
+        json_file = None if json_path is None or str(json_path) == "-" else json_path
+        pngs = {} if plots is None else {f"--plots ({name})": plots / name
+                                         for name in (SCATTER_PNG, HISTOGRAM_PNG)}
+        check_paths({"TAPE": tape, "GUIDE": guide}, {"--json": json_file, **pngs})
+        check_samples(samples, "--samples")
+        check_seed(seed, "--seed")
+        check_shard_samples(shard_size, "--shard-size")
+        execution = _execution(scheduler, workers, connect_timeout_s)
+        quiet = json_path is not None and json_file is None
+        result = _study(tape, guide, samples, seed, execution, shard_size, quiet)
+        content = guidance_dict(result)
+        outputs = OutputSet()
+        if json_file is not None:
+            outputs.add("--json", json_file,
+                        lambda tmp: tmp.write_text(json.dumps(content), "utf-8"))
+        if plots is not None:
+            title = f"{result.tape_iden}: {result.title}" if result.title else result.tape_iden
+            if bplane_rows(result.miss_name) is not None:
+                outputs.add("--plots", plots / SCATTER_PNG, lambda tmp: plot_bplane_scatter(
+                    result, tmp, f"{title}: final B-plane miss"))
+            outputs.add("--plots", plots / HISTOGRAM_PNG, lambda tmp: plot_dv_histograms(
+                result, tmp, f"{title}: ΔV per manoeuvre"))
+        outputs.commit()
+        if json_path is not None and json_file is None:
+            print_json(content)
+        else:
+            typer.echo(guidance_markdown(result), nl=False)
+
+    run_guarded(body)
+
