@@ -134,13 +134,15 @@ def position_km(body: str, center: str, jd_tdb: float | np.ndarray,
 
 def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t_start_s: float,
                     t_end_s: float, segment_s: float = 43200.0, n_coef: int = 14,
-                    scales: TimeScales | None = None) -> ChebyshevTable:
+                    scales: TimeScales | None = None, origin_s: float | None = None
+                    ) -> ChebyshevTable:
     """Fit piecewise Chebyshev series to body positions relative to ``center`` (km).
 
     Covers [min(t_start, t_end), max(...)] seconds from the UTC epoch, in segments of
     ``segment_s`` with ``n_coef`` coefficients per coordinate (:func:`fit_chebyshev`). With
     ``scales`` the ephemeris is read at TDB(t) of those scales; without, at TT (see the
-    module docstring). With the defaults (12 h, 14 coefficients) the fit reproduces DE421 to
+    module docstring). ``origin_s`` puts the segments on a grid (see :func:`fit_chebyshev`).
+    With the defaults (12 h, 14 coefficients) the fit reproduces DE421 to
     well under a metre for the Moon (checked in the tests).
     """
     if not bodies:
@@ -157,4 +159,4 @@ def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t
         jd, jd2 = tdb(t)
         return np.stack([position_km(body, center, jd, jd2) for body in bodies])
 
-    return fit_chebyshev(positions, t_start_s, t_end_s, segment_s, n_coef)
+    return fit_chebyshev(positions, t_start_s, t_end_s, segment_s, n_coef, origin_s)

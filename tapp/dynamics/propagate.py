@@ -214,6 +214,8 @@ class Propagator:
                                  "modelled", None)
             from tapp.ephemeris import chebyshev_table
 
-            table = chebyshev_table(eqs.bodies, self.state_model.center, epoch_jd_utc, lo, hi,
-                                    scales=scales).stacked(table)
+            table = chebyshev_table(
+                eqs.bodies, self.state_model.center, epoch_jd_utc, lo, hi, scales=scales,
+                origin_s=None if scales is None else orientation.segment_origin_s
+            ).stacked(table)
         return table

@@ -87,12 +87,18 @@ class ChebyshevTable:
 
 
 def fit_chebyshev(fn: Callable[[np.ndarray], np.ndarray], t_start_s: float, t_end_s: float,
-                  segment_s: float, n_coef: int) -> ChebyshevTable:
-    """Fit ``fn`` on [min, max] of the two times in segments of ``segment_s`` from the first.
+                  segment_s: float, n_coef: int, origin_s: float | None = None
+                  ) -> ChebyshevTable:
+    """Fit ``fn`` on [min, max] of the two times in segments of ``segment_s``.
 
-    ``fn(t)`` takes times (M,) in s from the epoch and returns (n_series, M, 3).
+    Segments start at the first time, or, with ``origin_s``, on the grid origin_s + k
+    segment_s (so that a kink of ``fn`` on that grid, e.g. daily EOP values interpolated
+    linearly, falls on a segment boundary). ``fn(t)`` takes times (M,) in s from the epoch
+    and returns (n_series, M, 3).
     """
     lo, hi = min(t_start_s, t_end_s), max(t_start_s, t_end_s)
+    if origin_s is not None:
+        lo = origin_s + segment_s * np.floor((lo - origin_s) / segment_s + 1e-12)
     n_seg = max(1, int(np.ceil((hi - lo) / segment_s - 1e-12)))
     tau = np.cos(np.pi * (np.arange(n_coef) + 0.5) / n_coef)  # first-kind nodes in (-1, 1)
     seg_start = lo + segment_s * np.arange(n_seg)

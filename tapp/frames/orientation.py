@@ -215,11 +215,25 @@ class EarthOrientation:
         out[2, :, 0] = drift
         return out
 
+    @property
+    def segment_origin_s(self) -> float:
+        """Scenario time of the 0h or 12h UTC at or before the epoch, s: the series' grid.
+
+        The EOP are daily values interpolated linearly, with a kink at each 0h UTC; segments
+        of 12 h on this grid put every kink on a boundary, where a Chebyshev fit loses nothing
+        (a segment across one errs by up to 1e-10 rad).
+        """
+        if self.scales is None:
+            return 0.0
+        return -float(np.mod(self.scales.epoch.jd_fraction * 86400.0, SERIES_SEGMENT_s))
+
     def series(self, t_start_s: float, t_end_s: float, segment_s: float = SERIES_SEGMENT_s,
                n_coef: int = SERIES_N_COEF) -> ChebyshevTable:
-        """Chebyshev series of the slow terms on [t_start, t_end] (segments from the first)."""
+        """Chebyshev series of the slow terms covering [t_start, t_end], on the UTC grid
+        (:attr:`segment_origin_s`)."""
         self.check_covers(np.array([t_start_s, t_end_s]))
-        return fit_chebyshev(self.slow_terms, t_start_s, t_end_s, segment_s, n_coef)
+        return fit_chebyshev(self.slow_terms, t_start_s, t_end_s, segment_s, n_coef,
+                             self.segment_origin_s)
 
     def _require_scales(self) -> TimeScales:
         if self.scales is None:
@@ -227,12 +241,15 @@ class EarthOrientation:
         return self.scales
 
     def _cached_slow_terms(self, t: np.ndarray) -> np.ndarray:
-        """Slow terms from series on the grid k · 12 h from the epoch, fitted on first use."""
-        k = np.floor(t / SERIES_SEGMENT_s).astype(int)
+        """Slow terms from 12 h series on the UTC grid (:attr:`segment_origin_s`), fitted on
+        first use; a time on a boundary takes the segment that ends there (so the last row of
+        the EOP table is usable)."""
+        origin = self.segment_origin_s
+        k = (np.ceil((t - origin) / SERIES_SEGMENT_s) - 1).astype(int)
         out = np.empty((N_SLOW_SERIES, t.size, 3))
         for seg in np.unique(k):
             if seg not in self._segments:
-                start = seg * SERIES_SEGMENT_s
+                start = origin + seg * SERIES_SEGMENT_s
                 self._segments[seg] = fit_chebyshev(self.slow_terms, start,
                                                     start + SERIES_SEGMENT_s,
                                                     SERIES_SEGMENT_s, SERIES_N_COEF)

@@ -34,14 +34,14 @@ from tests.tapp.frames.conftest import (
 #: The cookbook prints the matrix to 15 decimals (half a unit: 5e-16); allow 1e-14 (measured
 #: 2.7e-15).
 COOKBOOK_PRINT = 1e-14
-#: Station GCRS position against astropy: 1 mm. Measured 0.01-0.16 mm with attitude() (the
-#: largest in 1990, where a 12 h series segment straddles 0h UTC: see the xfail below), and
-#: 0.01-0.04 mm with attitude_exact(); 0.03-0.05 mm on the synthetic 2030-2050 table.
+#: Station GCRS position against astropy: 1 mm. Measured 0.01-0.04 mm with attitude() and
+#: attitude_exact(); 0.03-0.05 mm on the synthetic 2030-2050 table.
 ONE_MM_km = 1e-6
 #: Station GCRS velocity against astropy: 1 μm/s (measured ≤ 0.011 μm/s).
 ONE_UM_PER_S_km_s = 1e-9
 #: attitude() (Chebyshev series) against attitude_exact() (ERFA): 1e-13 rad, which is
-#: 0.6 μm at the Earth's surface (measured 8e-16 rad for an epoch at 0h UTC).
+#: 0.6 μm at the Earth's surface (measured 8e-16 rad; the 12 h segments lie on the
+#: 0h/12h UTC grid, so the EOP's daily kinks fall on their boundaries).
 SERIES_ANGLE_rad = 1e-13
 #: erfa.c2t06a takes X, Y from the IAU 2006/2000A matrix, tapp from the X, Y series (xy06):
 #: the two differ by about a microarcsecond (measured 5e-12 rad); allow 3e-11 rad (6 μas).
@@ -190,19 +190,10 @@ def test_series_matches_erfa_over_ten_days_epoch_at_0h_utc():
     assert _series_error_rad(Epoch.from_calendar(2026, 1, 1)) < SERIES_ANGLE_rad
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "BUG tapp/frames/orientation.py EarthOrientation._cached_slow_terms: the 12 h segments "
-    "run from the scenario epoch, so for an epoch off 0h/12h UTC a segment straddles 0h UTC, "
-    "where the linearly interpolated EOP (UT1 - UTC, pole, dX, dY) have a kink; the 14-term "
-    "series then errs by up to 1e-10 rad (0.6 mm at the surface; 1.3 us of UT1), not 1e-13"))
 def test_series_matches_erfa_over_ten_days_epoch_off_0h_utc():
     assert _series_error_rad(Epoch.from_calendar(2020, 3, 7, 5, 17, 3.25)) < SERIES_ANGLE_rad
 
 
-@pytest.mark.xfail(strict=True, raises=InputError, reason=(
-    "BUG tapp/frames/orientation.py EarthOrientation._cached_slow_terms: a time inside the EOP "
-    "table whose 12 h series segment reaches past the table's end raises InputError naming a "
-    "time the caller never asked for (attitude_exact works)"))
 def test_attitude_near_the_end_of_the_table():
     table = finals2000a()
     last = Epoch(np.floor(table.mjd[-1]) + MJD_OFFSET - 1.0, 0.75)  # 18:00 UTC, last day but one
