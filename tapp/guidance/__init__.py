@@ -38,6 +38,13 @@ error of the navigation's estimate.
 4. A recycle that is not a manoeuvre only updates the estimate. The final true miss after
    the last correction is m = B_last d, every miss component of the tape.
 
+The tape's estimator never hears of a manoeuvre: its a priori after one claims a velocity
+knowledge of fractions of a mm/s while e holds the execution error, so its later estimates
+(and corrections) degrade. ``[navigation] after_manoeuvre = "inflate"`` in the guidance file
+replaces L_k, Σ_k after the first manoeuvre by those of the same fit world whose a priori
+holds the manoeuvre's execution-error covariance (:mod:`tapp.guidance.navigation`); the maps
+stay linear and everything else is unchanged.
+
 The Monte Carlo (:mod:`tapp.guidance.montecarlo`) draws the samples in fixed RNG blocks and
 runs them in shards on Dask (:mod:`tapp.guidance.shards`), reproducibly whatever the workers
 and shard size; the linear covariance (:mod:`tapp.guidance.linear`) propagates the exact

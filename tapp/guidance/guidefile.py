@@ -9,6 +9,11 @@ Layout (units at the edge: mrad, mm/s, deg; the code works in rad, km/s)::
     miss = ["b_dot_t_km", "b_dot_r_km"]   # 2 or 3 miss components of the tape to null
     [manoeuvres]
     recycles = [1, 2, 3]            # recycle numbers i' of the tape (default: all)
+    [navigation]
+    after_manoeuvre = "tape"        # the tape's estimator, which does not know of the
+                                    # manoeuvres; "inflate": its a priori after a manoeuvre
+                                    # holds the execution-error covariance
+                                    # (tapp.guidance.navigation)
     [execution]                     # 1σ, Gates-type (tapp.guidance.execution)
     sigma_proportional = 0.02       # magnitude error, fraction of |Δv|, < 1
     sigma_pointing_mrad = 10.0      # per axis perpendicular to Δv, <= 200 (small angles)
@@ -28,13 +33,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
 from tapp.errors import InputError
 from tapp.guidance.execution import ExecutionErrors
 from tapp.guidance.model import Problem, build_problem
+from tapp.guidance.navigation import fit_world, inflate_after_manoeuvres
 from tapp.guidance.statistics import BPLANE, FLIGHT_TIME, Corridor, bplane_rows, flight_time_row
 from tapp.schema import Invalid, Schema, Unique, load
 from tapp.tape.t32 import T32
@@ -55,6 +61,10 @@ class Targets(Schema):
 
 class Manoeuvres(Schema):
     recycles: Annotated[list[int], Field(min_length=1), Unique] | None = None
+
+
+class Navigation(Schema):
+    after_manoeuvre: Literal["tape", "inflate"] = "tape"
 
 
 class ExecutionTable(Schema):
@@ -84,6 +94,7 @@ class GuideFile(Schema):
     tape: TapeExpect = TapeExpect()
     targets: Targets
     manoeuvres: Manoeuvres = Manoeuvres()
+    navigation: Navigation = Navigation()
     execution: ExecutionTable = ExecutionTable()
     corridor: CorridorTable | None = None
 
@@ -95,10 +106,12 @@ def read_guide(path: Path | str) -> GuideFile:
 
 @dataclass(frozen=True, slots=True, eq=False)
 class Study:
-    """A guidance file bound to its tape: the problem, the corridor and the title."""
+    """A guidance file bound to its tape: the problem, the corridor, the navigation model
+    ("tape" or "inflate") and the title."""
 
     problem: Problem
     corridor: Corridor | None
+    navigation: str
     title: str
 
 
@@ -137,7 +150,10 @@ def bind(guide: GuideFile, t32: T32, source: str, tape_source: str = "T32") -> S
     manoeuvres = tuple(r.number for r in t32.recycles) if recycles is None else tuple(recycles)
     problem = build_problem(t32, tuple(guide.targets.miss), manoeuvres, errors,
                             tape_source=tape_source, guide_source=source)
-    return Study(problem, _corridor(guide.corridor, t32, source), guide.title)
+    navigation = guide.navigation.after_manoeuvre
+    if navigation == "inflate":
+        problem = inflate_after_manoeuvres(problem, fit_world(t32))
+    return Study(problem, _corridor(guide.corridor, t32, source), navigation, guide.title)
 
 
 __all__ = ["GuideFile", "MAX_POINTING_MRAD", "Study", "bind", "read_guide"]

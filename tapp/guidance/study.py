@@ -43,6 +43,8 @@ class GuidanceResult:
     tape_source, guide_source : the files (or labels) read.
     targets : names of the targeted miss components.
     errors : the execution errors.
+    navigation : the navigation after a manoeuvre, "tape" or "inflate"
+        (:mod:`tapp.guidance.navigation`).
     corridor : the corridor, or None.
     miss_name, miss_unit : the miss components of the final miss.
     n_samples, seed : the Monte Carlo's size and root seed.
@@ -59,6 +61,7 @@ class GuidanceResult:
     guide_source: str
     targets: tuple[str, ...]
     errors: ExecutionErrors
+    navigation: str
     corridor: Corridor | None
     miss_name: tuple[str, ...]
     miss_unit: tuple[str, ...]
@@ -136,7 +139,8 @@ def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
     lin = linear_covariance(problem)
     return GuidanceResult(
         study.title, t32.iden, tape_source, guide_source,
-        tuple(problem.miss_name[i] for i in problem.targets), problem.errors, study.corridor,
+        tuple(problem.miss_name[i] for i in problem.targets), problem.errors,
+        study.navigation, study.corridor,
         problem.miss_name, problem.miss_unit, samples, seed, BLOCK_SAMPLES, run.shard_samples,
         run.where, wall_s, sample_outcome(problem, run.samples, study.corridor),
         linear_outcome(problem, lin, study.corridor), run.samples)

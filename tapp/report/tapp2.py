@@ -11,6 +11,7 @@ methods), import matplotlib only when called.
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,9 @@ from tapp.report.markdown import table
 
 _DAY_S = 86400.0
 _M_PER_KM = 1000.0
+_NAVIGATION = {"tape": "the tape's estimator (its a priori ignores the execution errors)",
+               "inflate": "a priori inflated by the execution-error covariance, regression "
+                          "re-run"}
 #: Samples drawn in the B-plane scatter (the first ones: a deterministic subset).
 SCATTER_SAMPLES = 20_000
 
@@ -56,7 +60,8 @@ def guidance_dict(r: GuidanceResult) -> dict:
     c = r.corridor
     return {
         "title": r.title, "tape": r.tape_source, "iden": r.tape_iden, "guide": r.guide_source,
-        "targets": list(r.targets), "miss_name": list(r.miss_name),
+        "targets": list(r.targets), "navigation": r.navigation,
+        "miss_name": list(r.miss_name),
         "miss_unit": list(r.miss_unit),
         "execution": {"sigma_proportional": r.errors.sigma_proportional,
                       "sigma_pointing_rad": r.errors.sigma_pointing_rad,
@@ -80,7 +85,9 @@ def _magnitude_row(m: Magnitude) -> list[str]:
 
 
 def _fraction(value: float | None) -> str:
-    return "—" if value is None else f"{value:.4f}"
+    if value is None:
+        return "—"
+    return f"{value:.4f}" if value == 0 or value >= 1e-3 else f"{value:.2e}"
 
 
 def _dv_table(r: GuidanceResult) -> str:
@@ -131,7 +138,7 @@ def _corridor_text(r: GuidanceResult) -> str:
                    / n)
     return (f"Corridor: B-plane {shape} about the aim point{limit}. Monte Carlo fractions "
             f"have a binomial standard error of {se:.1e} (either).\n\n"
-            + table(["method", "outside B-plane", "outside |Δt_f|", "outside either"], rows))
+            + table(["method", "outside B-plane", "outside Δt_f limit", "outside either"], rows))
 
 
 def guidance_markdown(r: GuidanceResult) -> str:
@@ -146,6 +153,7 @@ def guidance_markdown(r: GuidanceResult) -> str:
         f"{e.sigma_proportional * 100:g} % of |Δv| along Δv, "
         f"{e.sigma_pointing_rad * 1e3:g} mrad pointing per perpendicular axis, "
         f"{e.sigma_fixed_km_s * 1e6:g} mm/s fixed per axis.",
+        f"Navigation after a manoeuvre: {_NAVIGATION[r.navigation]}.",
         f"Monte Carlo: {r.n_samples:,} samples, seed {r.seed} (RNG blocks of "
         f"{r.block_samples:,}, shards of {r.shard_samples:,}), {r.where}, "
         f"{r.wall_s:.2f} s.", "",
@@ -184,14 +192,14 @@ def plot_bplane_scatter(r: GuidanceResult, path: Path, title: str) -> Path:
     bp = bplane_rows(r.miss_name)
     miss = r.samples.miss[:SCATTER_SAMPLES]
     fig, ax = plt.subplots(figsize=(6.4, 6.0))
-    ax.plot(miss[:, bp[0]], miss[:, bp[1]], ".", ms=1.5, alpha=0.3, color="0.4",
-            label=f"samples ({len(miss):,})")
+    ax.plot(miss[:, bp[0]], miss[:, bp[1]], ".", ms=1.5, alpha=0.3, color="0.6",
+            label=f"samples ({len(miss):,})", zorder=1)
     for o, color, style in ((r.monte_carlo, "tab:red", "-"), (r.linear, "tab:blue", "--")):
         cov = o.miss_cov[np.ix_(bp, bp)]
         for scale in (1.0, 3.0):
             pts = ellipse_points(cov, scale) + o.miss_mean[bp]
-            ax.plot(pts[:, 0], pts[:, 1], style, color=color, lw=1.2 if scale == 1 else 0.8,
-                    label=f"{o.method} {scale:g}σ")
+            ax.plot(pts[:, 0], pts[:, 1], style, color=color, lw=1.4 if scale == 1 else 0.9,
+                    label=f"{o.method} {scale:g}σ", zorder=3)
     if r.corridor is not None:
         a, b = r.corridor.semi_axes_km
         t = np.linspace(0.0, 2.0 * np.pi, 361)
@@ -203,7 +211,7 @@ def plot_bplane_scatter(r: GuidanceResult, path: Path, title: str) -> Path:
     ax.set_ylabel("δB·R (km)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7)
-    ax.set_title(title, fontsize=9)
+    ax.set_title(textwrap.fill(title, 70), fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
@@ -219,9 +227,10 @@ def plot_dv_histograms(r: GuidanceResult, path: Path, title: str) -> Path:
     mags = np.sqrt(np.einsum("smi,smi->sm", dv, dv)) * _M_PER_KM
     for i, (ax, mc, lin) in enumerate(zip(axes[0], mans, r.linear.manoeuvres, strict=True)):
         ax.hist(mags[:, i], bins=80, color="0.6", density=True)
-        for m, color, style in ((mc, "tab:red", "-"), (lin, "tab:blue", "--")):
+        for m, method, color, style in ((mc, "Monte Carlo", "tab:red", "-"),
+                                        (lin, "linear", "tab:blue", "--")):
             p99 = dict(m.magnitude.percentiles_km_s)[99.0] * _M_PER_KM
-            ax.axvline(p99, color=color, ls=style, label=f"99 % {p99:.3g} m/s")
+            ax.axvline(p99, color=color, ls=style, label=f"{method}: 99 % {p99:.3g} m/s")
         ax.set_xlabel("|Δv| (m/s)")
         ax.set_title(f"recycle {mc.number}, t = {mc.t_s / _DAY_S:.2f} d", fontsize=9)
         ax.legend(fontsize=7)

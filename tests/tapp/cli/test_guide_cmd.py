@@ -67,6 +67,8 @@ def test_guide_prints_markdown_and_writes_json_and_plots(files, scheduler, tmp_p
     assert "## B-plane dispersion (1σ)" in out and "outside either" in out
     content = json.loads(js.read_text())
     assert content["samples"] == 4000 and content["seed"] == 3
+    assert content["navigation"] == "tape" and content["targets"] == ["b_dot_t_km",
+                                                                      "b_dot_r_km"]
     assert content["shard_samples"] == 2000 and content["where"].startswith("scheduler")
     mc, lin = content["monte_carlo"], content["linear"]
     assert [m["recycle"] for m in mc["manoeuvres"]] == [1, 2, 3]
@@ -136,6 +138,8 @@ def _run_bad(tmp_path: Path, files, guide_text: str | None = None, options=(),
      "corridor.flight_time_s: expected a finite number > 0"),
     (lambda t: t.replace("DSN-LUNAR", "LEO"), "tape.iden: expected the tape's identification"),
     (lambda t: t.replace("[targets]", "[target]"), "target: expected no such key"),
+    (lambda t: t.replace("[execution]", '[navigation]\nafter_manoeuvre = "kalman"\n[execution]'),
+     "navigation.after_manoeuvre: expected one of 'tape' or 'inflate'"),
 ])
 def test_bad_guidance_files_are_one_line_exit_2_and_write_nothing(tmp_path, files, edit,
                                                                    fragment):
@@ -186,3 +190,16 @@ def test_an_output_that_is_an_input_is_refused_before_any_work(files):
                               "1", "--json", str(guide)])
     assert res.exit_code == 2 and "--json" in res.stderr and "GUIDE" in res.stderr
     assert guide.read_bytes() == before
+
+
+def test_the_shipped_guidance_file_runs(files, scheduler):
+    tape, _ = files
+    shipped = Path(__file__).resolve().parents[3] / "scenarios" / "tapp2_deep_space.toml"
+    res = runner.invoke(app, ["guide", str(tape), str(shipped), "--samples", "2000", "--seed",
+                              "1", "--scheduler", scheduler, "--json", "-"])
+    assert res.exit_code == 0, res.stderr
+    content = json.loads(res.stdout)
+    assert content["navigation"] == "inflate" and len(content["targets"]) == 3
+    # the informed navigation's later corrections are small beside the first
+    dv = [m["magnitude"]["mean_km_s"] for m in content["linear"]["manoeuvres"]]
+    assert dv[2] < dv[1] < 0.1 * dv[0]

@@ -1,4 +1,5 @@
-"""The Monte Carlo against the linear covariance, on the deep-space tape (three manoeuvres).
+"""The Monte Carlo against the linear covariance, on the deep-space tape (three manoeuvres,
+either navigation after a manoeuvre).
 
 Statistical levels (N samples, every test independent of the others' outcome):
 
@@ -12,8 +13,9 @@ Statistical levels (N samples, every test independent of the others' outcome):
   number of samples below it is Binomial(N, 0.99) when it is right, |z| < 5; equivalently it
   lies between the order statistics N·0.99 ∓ 5√(N·0.99·0.01) of the sample.
 
-A model error the size of one execution-error term, or a Σ_k left out, moves these by tens of
-σ at this N (checked by :func:`test_the_checks_see_a_missing_execution_error`).
+Each navigation is a separate family at these levels. A model error the size of one
+execution-error term moves these by tens of σ at this N (checked by
+:func:`test_the_checks_see_a_missing_execution_error`).
 """
 
 from __future__ import annotations
@@ -36,9 +38,11 @@ COV_Z = 5.0
 SERIAL = Execution(serial=True)
 
 
-@pytest.fixture(scope="module")
-def problem():
-    return bind(guide(), deep_space_t32(), "guide.toml").problem
+@pytest.fixture(scope="module", params=["tape", "inflate"])
+def problem(request):
+    """Both navigations after a manoeuvre (tapp.guidance.navigation)."""
+    return bind(guide(navigation={"after_manoeuvre": request.param}), deep_space_t32(),
+                "guide.toml").problem
 
 
 @pytest.fixture(scope="module")
