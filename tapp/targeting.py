@@ -87,6 +87,7 @@ import datetime as dt
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
@@ -99,9 +100,19 @@ from tapp.constants import SECONDS_PER_DAY, GM_km3_s2, RADIUS_km
 from tapp.dynamics import BODIES, PropagationError, Propagator, earth_model
 from tapp.ephemeris import position_km, utc_to_tdb_jd
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
+from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.orbits import check_perigee, check_state_bounds
-from tapp.schema import Invalid, Schema, Tolerance, Unique, UtcDate, validate
+from tapp.schema import (
+    EarthOrientationName,
+    EopSource,
+    Invalid,
+    Schema,
+    Tolerance,
+    Unique,
+    UtcDate,
+    validate,
+)
 
 #: Names of the independent variables x (injection velocity, EME2000) and dependent ones y.
 X_NAMES = ("vx_km_s", "vy_km_s", "vz_km_s")
@@ -213,6 +224,9 @@ class BPlaneProgram:
     periapsis_time_tol_s : float, optional
         Stop the Newton iteration on t_e when the osculating time to periapsis is below this,
         s (default 1e-3: B moves ~3e-7 km and t_f ~1e-8 s in that time near the Moon).
+    orientation : EarthOrientation, optional
+        The Earth orientation of the models (default: gmst at the epoch, with the ephemeris at
+        TT); with iau2006 the ephemeris is read at its TDB.
     """
 
     epoch: Epoch
@@ -223,6 +237,7 @@ class BPlaneProgram:
     max_flight_time_s: float = 8.0 * SECONDS_PER_DAY
     scan_step_s: float = 600.0
     periapsis_time_tol_s: float = 1e-3
+    orientation: EarthOrientation | None = None
     _jd_tdb: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -253,6 +268,8 @@ class BPlaneProgram:
             raise InputError("targeting", "max_flight_time_s", f"at most {MAX_SCAN_STEPS:,} "
                              f"scan steps of {self.scan_step_s:g} s", self.max_flight_time_s)
         object.__setattr__(self, "_jd_tdb", utc_to_tdb_jd(self.epoch.jd))
+        if self.orientation is None:
+            object.__setattr__(self, "orientation", EarthOrientation.gmst(self.epoch))
 
     @property
     def gm_target_km3_s2(self) -> float:
@@ -272,8 +289,7 @@ class BPlaneProgram:
         t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))
         h = _EPHEMERIS_STEP_s
         offsets = np.array([-2.0, -1.0, 0.0, 1.0, 2.0]) * h
-        days = (t[:, None] + offsets[None, :]).ravel() / SECONDS_PER_DAY
-        p = position_km(self.target, self.propagator.state_model.center, self._jd_tdb, days)
+        p = self._position_km(self.target, (t[:, None] + offsets[None, :]).ravel())
         p = p.reshape(t.size, 5, 3)
         vel = (8.0 * (p[:, 3] - p[:, 1]) - (p[:, 4] - p[:, 0])) / (12.0 * h)
         acc = (-p[:, 4] + 16.0 * p[:, 3] - 30.0 * p[:, 2] + 16.0 * p[:, 1] - p[:, 0]) / (
@@ -283,11 +299,21 @@ class BPlaneProgram:
     def acceleration_km_s2(self, t_s: float, state: np.ndarray) -> np.ndarray:
         """Return the state model's acceleration (3,), km/s^2, at one time and state (6,)."""
         eqs, _ = self.propagator.compiled()
-        center = self.propagator.state_model.center
-        rb = np.concatenate([position_km(body, center, self._jd_tdb, t_s / SECONDS_PER_DAY)[0]
-                             for body in eqs.bodies])
-        xdot = eqs.f_state(t_s, state, np.zeros(0), [self.epoch.gmst_rad()], rb)
+        t = np.array([t_s], dtype=np.float64)
+        rb = [self._position_km(body, t)[0] for body in eqs.bodies]
+        if eqs.oriented:
+            rb.append(self.orientation.slow_terms(t).ravel())
+        xdot = eqs.f_state(t_s, state, np.zeros(0), [self.orientation.theta0_rad],
+                           np.concatenate([np.zeros(0), *rb]))
         return np.asarray(xdot, dtype=np.float64).ravel()[3:6]
+
+    def _position_km(self, body: str, t_s: np.ndarray) -> np.ndarray:
+        """Position (N, 3) km of ``body`` relative to the centre, at TDB (TT with gmst)."""
+        center = self.propagator.state_model.center
+        scales = self.orientation.scales
+        if scales is None:
+            return position_km(body, center, self._jd_tdb, t_s / SECONDS_PER_DAY)
+        return position_km(body, center, *scales.tdb(t_s))
 
     def soi_radius_km(self, distance_km: ArrayLike) -> np.ndarray:
         r"""Return Laplace's sphere-of-influence radius :math:`D(\mu_b/\mu_c)^{2/5}`, km."""
@@ -298,7 +324,7 @@ class BPlaneProgram:
         try:
             return self.propagator.propagate(
                 np.concatenate([self.r0_km, v0]), t_s, stm=stm,
-                theta0_rad=self.epoch.gmst_rad(), epoch_jd_utc=self.epoch.jd)
+                orientation=self.orientation, epoch_jd_utc=self.epoch.jd)
         except PropagationError as exc:
             raise PropagationError(f"{exc} (injection velocity {v0.tolist()} km/s)") from exc
 
@@ -635,6 +661,8 @@ class SearchFile(Schema):
 
     title: str = ""
     epoch: UtcDate
+    earth_orientation: EarthOrientationName = "iau2006"
+    eop: EopSource = "iers"
     injection: SearchInjection
     model: SearchModel
     target: SearchTarget = SearchTarget()
@@ -651,7 +679,9 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     Tables and keys (units in the names; the file ``scenarios/search_bplane.toml`` is the
     commented example; the schema is :class:`SearchFile`):
 
-    - ``epoch``: UTC date of the injection (t = 0); ``title``: free text (optional).
+    - ``epoch``: UTC date of the injection (t = 0); ``title``: free text (optional);
+      ``earth_orientation`` ("iau2006", the default, or "gmst") and ``eop`` ("iers", "none" or
+      a finals2000A path): :func:`tapp.frames.orientation.orientation_for`.
     - ``[injection]``: ``r_km`` (3), ``v_km_s`` (3, the first guess x0), EME2000, Earth-centred;
       a first guess whose perigee is below the Earth's surface is refused unless
       ``allow_subsurface = true`` (:func:`tapp.orbits.check_perigee`).
@@ -694,8 +724,12 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     bodies = tuple(mod.third_bodies)
     stm_gravity = mod.gravity if mod.stm_gravity is None else mod.stm_gravity
     stm_bodies = bodies if mod.stm_third_bodies is None else tuple(mod.stm_third_bodies)
-    state_model = earth_model(mod.gravity, bodies, source=source, field="model.gravity")
-    var_model = earth_model(stm_gravity, stm_bodies, source=source, field="model.stm_gravity")
+    orientation = orientation_for(doc.earth_orientation, epoch, doc.eop,
+                                  Path(source).parent, source)
+    state_model = earth_model(mod.gravity, bodies, source=source, field="model.gravity",
+                              earth_orientation=orientation.model)
+    var_model = earth_model(stm_gravity, stm_bodies, source=source, field="model.stm_gravity",
+                            earth_orientation=orientation.model)
     propagator = Propagator(state_model, var_model, rtol=mod.rtol, atol=mod.atol)
 
     tgt = doc.target
@@ -714,7 +748,7 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     program = BPlaneProgram(
         epoch=epoch, r0_km=r0, propagator=propagator, target=tgt.body, reference=tgt.reference,
         max_flight_time_s=tgt.max_flight_time_s, scan_step_s=tgt.scan_step_s,
-        periapsis_time_tol_s=tgt.periapsis_time_tol_s)
+        periapsis_time_tol_s=tgt.periapsis_time_tol_s, orientation=orientation)
 
     srch = doc.search
     return BPlaneSearch(

@@ -156,6 +156,21 @@ def seed_option(name: str, value: int | None) -> int | None:
     return value
 
 
+#: The ``--earth-orientation`` option of every command that reads a scenario (or builds one).
+EarthOrientationOpt = Annotated[str | None, typer.Option(
+    "--earth-orientation", help='Earth orientation model, overriding the file: "iau2006" (IAU '
+    '2006/2000A with IERS EOP) or "gmst" (GMST + omega t, the approximate-STM study\'s).')]
+
+
+def earth_orientation_option(value: str | None) -> str | None:
+    """Return the ``--earth-orientation`` value (None: the file's), or raise InputError."""
+    if value is None:
+        return None
+    from tapp.frames.orientation import check_model
+
+    return check_model(value, "--earth-orientation", "value")
+
+
 def check_grid_size(option: str, n: float, limit: int = MAX_GRID_SAMPLES,
                     what: str = "output samples") -> int:
     """Return ``n`` as an int if it is at most ``limit``, else raise InputError naming

@@ -84,7 +84,9 @@ def process_cmd(
         if tape_out is not None:
             t32 = build_t32(run, plan, header, {
                 "deck": deck_json(deck_obj), "deck_source": str(deck),
-                "t13_source": str(tape), "t13_iden": header.iden})
+                "t13_source": str(tape), "t13_iden": header.iden,
+                **{f"t13_{key}": header.provenance[key] for key in ("earth_orientation", "eop")
+                   if key in header.provenance}})
             outputs.add("--tape", tape_out, t32_file_writer(t32, source=str(tape_out)))
         if plots is not None:
             # matplotlib only when plots are asked for (it costs ~0.5 s to import)

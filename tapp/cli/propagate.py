@@ -12,8 +12,10 @@ from rich.console import Console
 from rich.table import Table
 
 from tapp.cli.common import (
+    EarthOrientationOpt,
     app,
     check_grid_size,
+    earth_orientation_option,
     grid_samples,
     positive_option,
     print_json,
@@ -24,6 +26,7 @@ from tapp.dynamics import Propagator, earth_model
 from tapp.dynamics.propagate import check_tolerance
 from tapp.ephemeris import BODIES, check_coverage, utc_to_tdb_jd
 from tapp.errors import InputError
+from tapp.frames.orientation import orientation_for
 from tapp.frames.time import parse_epoch
 from tapp.orbits import parse_orbit
 
@@ -60,8 +63,9 @@ def propagate(
     allow_subsurface: Annotated[bool, typer.Option(
         "--allow-subsurface", help="Accept an orbit whose perigee is below the Earth's "
         "surface.")] = False,
+    earth_orientation: EarthOrientationOpt = None,
 ) -> None:
-    """Propagate an Earth orbit with its state transition matrix (EME2000, km, km/s)."""
+    """Propagate an Earth orbit with its state transition matrix (GCRS, km, km/s)."""
 
     def body() -> None:
         x0 = parse_orbit(orbit, scenario=scenario, allow_subsurface=allow_subsurface)
@@ -69,22 +73,28 @@ def propagate(
         dt = positive_option("--step", step)
         check_grid_size("--hours/--step", grid_samples(arc_s, dt))
         bodies = _third_bodies(third_body or [])
-        prop = Propagator(earth_model(truth, bodies, source="--truth", field="model"),
-                          earth_model(stm, bodies, source="--stm", field="model"),
-                          rtol=check_tolerance(tol, "--tol", "value"), atol=tol)
         ep = parse_epoch(epoch, source="--epoch")
+        model = earth_orientation_option(earth_orientation) or "iau2006"
+        orientation = orientation_for(model, ep, source="--epoch")
+        prop = Propagator(earth_model(truth, bodies, source="--truth", field="model",
+                                      earth_orientation=model),
+                          earth_model(stm, bodies, source="--stm", field="model",
+                                      earth_orientation=model),
+                          rtol=check_tolerance(tol, "--tol", "value"), atol=tol)
         if bodies:
             check_coverage(utc_to_tdb_jd(ep.jd, source="--epoch"),
                            np.array([0.0, arc_s]) / SECONDS_PER_DAY,
                            source="--epoch/--hours", field="arc")
         t = np.append(np.arange(0.0, arc_s, dt), arc_s)
         start = time.perf_counter()
-        traj = prop.propagate(x0, t, theta0_rad=ep.gmst_rad(), epoch_jd_utc=ep.jd)
+        orientation.check_covers(np.array([0.0, arc_s]), "--epoch/--hours")
+        traj = prop.propagate(x0, t, epoch_jd_utc=ep.jd, orientation=orientation)
         elapsed = time.perf_counter() - start
         if json_out:
             print_json({"t_s": traj.t_s, "state": traj.states, "stm": traj.stm})
             return
-        table = Table(title=f"{orbit}: truth {truth}, STM {stm}, {hours:g} h")
+        table = Table(title=f"{orbit}: truth {truth}, STM {stm}, {hours:g} h, Earth "
+                      f"orientation {model}")
         for col in ("t (s)", "x (km)", "y (km)", "z (km)", "vx (km/s)", "vy (km/s)",
                     "vz (km/s)", "|Φ|max"):
             table.add_column(col, justify="right")

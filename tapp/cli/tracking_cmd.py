@@ -19,7 +19,13 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from tapp.ccsds.tdm import format_tdm, tdm_from_tracks, tracks_from_rows
-from tapp.cli.common import app, print_json, run_guarded
+from tapp.cli.common import (
+    EarthOrientationOpt,
+    app,
+    earth_orientation_option,
+    print_json,
+    run_guarded,
+)
 from tapp.outputs import OutputSet, check_paths
 from tapp.tape import describe, write_t13
 from tapp.tape.t32 import format_t32_summary
@@ -35,8 +41,9 @@ app.add_typer(tape_app, name="tape")
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
 
 
-def _simulate_with_bar(path: Path, raw: bool, quiet: bool) -> tuple[Simulation, float]:
-    scenario = read_scenario(path)
+def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: str | None = None
+                       ) -> tuple[Simulation, float]:
+    scenario = read_scenario(path, earth_orientation)
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
         "{task.completed}/{task.total}"), TimeElapsedColumn())
@@ -93,6 +100,7 @@ def simulate(
                                              "CCSDS OEM 2.0 (KVN) file.")] = None,
     tdm: Annotated[Path | None, typer.Option("--tdm", help="Also write the observations as a "
                                              "CCSDS TDM 2.0 (KVN) file.")] = None,
+    earth_orientation: EarthOrientationOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
     """TAPP I: simulate the tracking of a scenario and write its T13 tape."""
@@ -100,7 +108,9 @@ def simulate(
     def body() -> None:
         check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
                                              "--tdm": tdm})
-        sim, wall_s = _simulate_with_bar(scenario, raw or tdm is not None, quiet=json_out)
+        sim, wall_s = _simulate_with_bar(scenario, raw or tdm is not None, quiet=json_out,
+                                         earth_orientation=earth_orientation_option(
+                                             earth_orientation))
         tdm_text = None
         if tdm is not None:
             tdm_text = _tdm_text(sim, scenario)
@@ -169,7 +179,9 @@ def _print_t13(info: dict) -> None:
     prov = info["provenance"]
     console.print(f"{info['observations']} observations, {info['input_times']} input times; "
                   f"written by tapp {prov.get('tapp_version', '?')} on "
-                  f"{prov.get('created_utc', '?')} from {prov.get('scenario_source', '?')}")
+                  f"{prov.get('created_utc', '?')} from {prov.get('scenario_source', '?')}; "
+                  f"Earth orientation {prov.get('earth_orientation', 'gmst (not recorded)')}"
+                  + (f", EOP {prov['eop']}" if prov.get("eop") else ""))
 
 
 @tape_app.command("info")

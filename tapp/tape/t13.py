@@ -100,6 +100,15 @@ from tapp.tape.packing import (
     tr_size,
 )
 
+#: Provenance attributes the simulator stamps: the scenario (JSON) and its file, the Earth
+#: orientation model ("iau2006" or "gmst") and the EOP source of the run.
+SCENARIO_PROVENANCE = ("scenario", "scenario_source", "earth_orientation", "eop")
+
+
+def frame_of(provenance: dict[str, str]) -> str:
+    """The inertial frame of a run: GCRS under iau2006, EME2000 under gmst (or unstated)."""
+    return "GCRS" if provenance.get("earth_orientation") == "iau2006" else "EME2000"
+
 FORMAT = "T13"
 VERSION = 2
 SUPPORTED_VERSIONS = (1, 2)
@@ -489,10 +498,10 @@ def _write(f: h5py.File, tape: T13, packing: str, version: int = VERSION) -> Non
         format=FORMAT, version=version, iden=tape.iden, n_o=tape.n_o, n_p=tape.n_p,
         n_m=tape.n_m, n_ts=tape.n_ts, n_it=tape.n_it, epoch=tape.epoch.iso(6),
         epoch_jd_whole=tape.epoch.jd_whole, epoch_jd_fraction=tape.epoch.jd_fraction,
-        time_scale="UTC", frame="EME2000", center="earth", units=UNITS_NOTE, packing=packing,
-        **hdf5io.provenance_attrs()), checksums=cs)
-    hdf5io.write_attrs(f, {key: tape.provenance.get(key, "")
-                           for key in ("scenario", "scenario_source")}, checksums=cs)
+        time_scale="UTC", frame=frame_of(tape.provenance), center="earth", units=UNITS_NOTE,
+        packing=packing, **hdf5io.provenance_attrs()), checksums=cs)
+    hdf5io.write_attrs(f, {key: tape.provenance.get(key, "") for key in SCENARIO_PROVENANCE},
+                       checksums=cs)
 
     par = tape.parameters
     g = f.create_group("parameters")
@@ -698,8 +707,8 @@ def _read(r: Reader, *, raw: bool, matrices: bool) -> tuple[T13, np.ndarray]:
             ("value", "f"), ("A", "f"), ("weight", "f"), ("m_white_var", "f"),
             ("m_bias_var", "f"), ("m_corr_var", "f"), ("m_tau_s", "f"))))
     provenance = {key: r.attr(key, str) for key in ("tapp_version", "git_commit",
-                                                    "created_utc", "scenario",
-                                                    "scenario_source") if r.has_attr(key)}
+                                                    "created_utc", *SCENARIO_PROVENANCE)
+                  if r.has_attr(key)}
     tape = T13(r.attr("iden", str), epoch, dims["n_p"], parameters, stations, miss, records,
                pairs, passes, tape_raw, provenance)
     return tape, r.read("records/t_s")

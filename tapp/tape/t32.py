@@ -706,5 +706,6 @@ def format_t32_summary(info: dict) -> str:
     prov = info["provenance"]
     lines += ["", f"written by tapp {prov.get('tapp_version', '?')} on "
                   f"{prov.get('created_utc', '?')} from {prov.get('deck_source', '?')} and "
-                  f"{prov.get('t13_source', '?')}"]
+                  f"{prov.get('t13_source', '?')}; Earth orientation "
+                  f"{prov.get('t13_earth_orientation', 'gmst (not recorded)')}"]
     return "\n".join(line.rstrip() for line in lines)

@@ -12,7 +12,12 @@ Tables and keys (units in the key names; times are seconds from the epoch, or UT
 ISO strings or TOML dates)::
 
     title = "..."                   iden = "..."  (tape identification, default: file stem)
-    epoch = "2026-01-01T00:00:00"   UTC of the injection, t = 0
+    epoch = "2026-01-01T00:00:00"   UTC of the injection, t = 0 (scenario time t is SI seconds
+                                    from it: a date across a leap second counts it)
+    earth_orientation = "iau2006"   or "gmst" (tapp.frames.orientation; stations, the field)
+    eop = "iers"                    Earth orientation parameters: "iers" (the shipped IERS
+                                    table), "none" (UT1 = UTC, no polar motion: a study
+                                    beyond the predictions) or a finals2000A file path
     [injection]        r_km = [3], v_km_s = [3]   (EME2000, Earth-centred), or classical
                        elements a_km, e, i_deg, raan_deg, argp_deg and M_deg or nu_deg;
                        allow_subsurface = true accepts an orbit whose perigee is below the
@@ -64,12 +69,23 @@ from tapp.bplane import REFERENCE_POLES
 from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics import BODIES, ForceModel, Propagator, earth_model, parse_gravity
 from tapp.dynamics.forces import check_parameter_value, default_parameters
+from tapp.ephemeris import tai_minus_utc_s
 from tapp.errors import InputError
+from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.stations import Station
 from tapp.orbits import check_perigee, state_from_elements
-from tapp.schema import Invalid, Schema, Tolerance, Unique, UtcDate, validate
+from tapp.schema import (
+    EarthOrientationName,
+    EopSource,
+    Invalid,
+    Schema,
+    Tolerance,
+    Unique,
+    UtcDate,
+    validate,
+)
 from tapp.stations_file import StationTable
 from tapp.tomlfile import read_toml
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
@@ -229,7 +245,8 @@ class Scenario:
     source : the file (for messages and provenance).
     title, iden : free text and tape identification.
     epoch : UTC of the injection, t = 0.
-    x0 : (6,) injection state, km and km/s, EME2000, Earth-centred.
+    orientation : the Earth orientation (model and EOP) of stations and field.
+    x0 : (6,) injection state, km and km/s, inertial (GCRS; EME2000 with gmst), Earth-centred.
     state_model, var_model : force models of the trajectory and of the variational equations.
     rtol, atol : integrator tolerances.
     dynamic : names of the model parameters in q (``tapp.dynamics.forces``).
@@ -243,6 +260,7 @@ class Scenario:
     title: str
     iden: str
     epoch: Epoch
+    orientation: EarthOrientation
     x0: np.ndarray
     state_model: ForceModel
     var_model: ForceModel
@@ -466,6 +484,8 @@ class ScenarioFile(Schema):
     title: str = ""
     iden: str | None = None
     epoch: UtcDate
+    earth_orientation: EarthOrientationName = "iau2006"
+    eop: EopSource = "iers"
     injection: InjectionTable
     model: ModelTable
     parameters: ParametersTable = ParametersTable()
@@ -505,7 +525,8 @@ class _Parser:
         except InputError as exc:
             raise InputError(self.source, field, exc.expected, value) from None
         days = (when.jd_whole - self.epoch.jd_whole) + (when.jd_fraction - self.epoch.jd_fraction)
-        return days * SECONDS_PER_DAY
+        leaps = tai_minus_utc_s(when.jd, self.source) - tai_minus_utc_s(self.epoch.jd, self.source)
+        return days * SECONDS_PER_DAY + leaps
 
     def times(self, values: list, field: str) -> tuple[float, ...]:
         out = tuple(self.time_s(v, f"{field}[{i}]") for i, v in enumerate(values))
@@ -546,13 +567,14 @@ def _injection(p: _Parser, inj: InjectionTable) -> np.ndarray:
                          how_to_allow="injection.allow_subsurface = true")
 
 
-def _models(p: _Parser, mod: ModelTable) -> tuple[ForceModel, ForceModel, float, float]:
+def _models(p: _Parser, mod: ModelTable, orientation: str
+            ) -> tuple[ForceModel, ForceModel, float, float]:
     var_gravity = mod.gravity if mod.var_gravity is None else mod.var_gravity
     var_bodies = mod.third_bodies if mod.var_third_bodies is None else mod.var_third_bodies
     state = earth_model(mod.gravity, tuple(mod.third_bodies), source=p.source,
-                        field="model.gravity")
+                        field="model.gravity", earth_orientation=orientation)
     var = earth_model(var_gravity, tuple(var_bodies), source=p.source,
-                      field="model.var_gravity")
+                      field="model.var_gravity", earth_orientation=orientation)
     return state, var, mod.rtol, mod.atol
 
 
@@ -717,38 +739,48 @@ def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -
     return MissSpec(kind, t_s, quantities, miss.body, reference)
 
 
-def parse_scenario(data: Mapping, source: str) -> Scenario:
+def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = None
+                   ) -> Scenario:
     """Build a :class:`Scenario` from parsed TOML tables, validating everything.
 
     The tables are first validated against :class:`ScenarioFile` (types, bounds, unknown
     keys); then the cross-table rules and the physics are checked while the scenario is built.
+    ``earth_orientation`` overrides the file's model (the CLI's ``--earth-orientation``).
 
     Raises
     ------
     InputError
         Naming ``source`` and the dotted field for any missing, unknown or invalid entry
         (unknown station, observable or parameter, σ <= 0, times not ascending, an orbit
-        below the surface, a tolerance outside its range, a station height out of its band).
+        below the surface, a tolerance outside its range, a station height out of its band,
+        an epoch outside the EOP table).
     """
     doc = validate(ScenarioFile, data, source)
     p = _Parser(source)
     epoch = _epoch(p, doc.epoch)
     p = _Parser(source, epoch)
+    model = doc.earth_orientation if earth_orientation is None else earth_orientation
+    orientation = orientation_for(model, epoch, doc.eop, Path(source).parent, source)
     iden = Path(source).name.split(".")[0] if doc.iden is None else doc.iden
     x0 = _injection(p, doc.injection)
-    state_model, var_model, rtol, atol = _models(p, doc.model)
+    state_model, var_model, rtol, atol = _models(p, doc.model, model)
     dynamic, values = _dynamic(p, doc.parameters, state_model)
     stations = _stations(p, doc, doc.parameters)
     times = _times(p, doc.times)
     last_s = float(times.t13_s[-1])
     schedule = _schedule(p, doc.tracking, last_s)
     miss = _miss(p, doc.miss, state_model, last_s)
+    orientation.check_covers(np.array([0.0, last_s, schedule.end_s]), source)
     document = json.dumps(data, default=str, sort_keys=True)
     x0.setflags(write=False)
-    return Scenario(source, doc.title, iden, epoch, x0, state_model, var_model, rtol, atol,
+    return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
+                    rtol, atol,
                     dynamic, values, stations, schedule, times, miss, document)
 
 
-def read_scenario(path: Path | str) -> Scenario:
-    """Read and validate a scenario file (TOML); errors name the file and the field."""
-    return parse_scenario(read_toml(path), str(Path(path)))
+def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:
+    """Read and validate a scenario file (TOML); errors name the file and the field.
+
+    ``earth_orientation`` overrides the file's ``earth_orientation`` key.
+    """
+    return parse_scenario(read_toml(path), str(Path(path)), earth_orientation)

@@ -221,7 +221,7 @@ def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.nda
         out = np.unique(np.concatenate([grid[(grid > a) & (grid <= b)],
                                         t13[(t13 > a) & (t13 <= b)]]))
         traj = prop.propagate(x_start, out, t0_s=float(a), stm=True, param_values=values,
-                              theta0_rad=scenario.epoch.gmst_rad(),
+                              orientation=scenario.orientation,
                               epoch_jd_utc=scenario.epoch.jd)
         parts.append(traj)
         x_start = traj.states[-1]
@@ -241,7 +241,7 @@ def _passes(ts: TrackingStation, scenario: Scenario, t: np.ndarray, states: np.n
             ) -> list[tuple[int, int]]:
     """Index ranges [start, stop) into the grid of the station's passes after the limits."""
     sch = scenario.schedule
-    geometric = MeasurementModel(ts.station, scenario.epoch.gmst_rad(), ("elevation",))
+    geometric = MeasurementModel(ts.station, scenario.orientation, ("elevation",))
     visible = is_visible(geometric.elevation_rad(t, states), ts.station.elev_mask_rad)
     for start, end in ts.blackouts_s:
         visible &= ~((t >= start) & (t <= end))
@@ -261,12 +261,12 @@ def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
 
         def state_at(t_s: np.ndarray) -> np.ndarray:
             return prop.propagate(scenario.x0, t_s, stm=False, param_values=values,
-                                  theta0_rad=scenario.epoch.gmst_rad(),
+                                  orientation=scenario.orientation,
                                   epoch_jd_utc=scenario.epoch.jd).states
 
         light_time = LightTime(two_way=scenario.schedule.light_time == "two_way",
                                state_at=state_at)
-    return MeasurementModel(ts.station, scenario.epoch.gmst_rad(), ts.kinds, light_time,
+    return MeasurementModel(ts.station, scenario.orientation, ts.kinds, light_time,
                             ts.range_bias_km, ts.range_rate_bias_km_s)
 
 
@@ -371,7 +371,7 @@ def _miss_function(scenario: Scenario, gm_values: dict[str, float]
     if miss.kind == "bplane":
         program = BPlaneProgram(scenario.epoch, scenario.x0[:3],
                                 Propagator(scenario.state_model), target=miss.body,
-                                reference=miss.reference)
+                                reference=miss.reference, orientation=scenario.orientation)
         body = program.target_state(np.array([miss.t_s]))[0][0]
 
         def bplane(x: np.ndarray, gm: float) -> np.ndarray:
@@ -421,7 +421,7 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     values = dict(scenario.dynamic_values)
     traj = scenario.propagator().propagate(
         scenario.x0, np.array([miss.t_s]), stm=True, param_values=values,
-        theta0_rad=scenario.epoch.gmst_rad(), epoch_jd_utc=scenario.epoch.jd)
+        orientation=scenario.orientation, epoch_jd_utc=scenario.epoch.jd)
     x, phi, sens = traj.states[0], traj.stm[0], traj.sensitivity[0]
     body_gm = f"GM_{miss.body}" if miss.kind == "bplane" else "GM"
     gm_values = default_parameters(scenario.state_model, (body_gm,))
@@ -546,7 +546,11 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                         dJt_parts=np.array([r[5] for r in pair_rows])),
         passes=_pass_table(stations, data),
         raw=_raw(stations, data, n_o) if raw else None,
-        provenance={"scenario": scenario.document_json, "scenario_source": scenario.source},
+        provenance={"scenario": scenario.document_json, "scenario_source": scenario.source,
+                    "earth_orientation": scenario.orientation.model,
+                    "eop": scenario.orientation.eop_note + (
+                        " (predicted values used)" if scenario.orientation.uses_predicted_eop(
+                            t13) else "")},
     )
     t_out = np.concatenate([[0.0], arc.t_s])
     states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])

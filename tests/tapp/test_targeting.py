@@ -17,7 +17,7 @@ from search import solve
 from tapp.bplane import b_plane
 from tapp.constants import SECONDS_PER_DAY, GM_km3_s2
 from tapp.dynamics import Propagator
-from tapp.ephemeris import position_km, utc_to_tdb_jd
+from tapp.ephemeris import position_km
 from tapp.errors import InputError, NotHyperbolicError
 from tapp.targeting import (
     BPlaneProgram,
@@ -98,12 +98,14 @@ def test_targeted_trajectory_flown_again_independently_hits_the_targets(problem,
     t_e = targeted.encounter.t_periapsis_s
     fresh = Propagator(program.propagator.state_model, rtol=1e-14, atol=1e-14)
     t = np.arange(np.floor(t_e) - 120.0, np.floor(t_e) + 121.0, 1.0)
+    orientation = program.orientation
+    assert orientation.model == "iau2006"  # the scenario's default: the Moon is read at TDB
     traj = fresh.propagate(np.concatenate([program.r0_km, result.x]), t, stm=False,
-                           theta0_rad=program.epoch.gmst_rad(), epoch_jd_utc=program.epoch.jd)
-    jd_tdb = utc_to_tdb_jd(program.epoch.jd)
-    moon = position_km("moon", "earth", jd_tdb, t / SECONDS_PER_DAY)
-    moon_v = (position_km("moon", "earth", jd_tdb, (t + 0.5) / SECONDS_PER_DAY)
-              - position_km("moon", "earth", jd_tdb, (t - 0.5) / SECONDS_PER_DAY))
+                           orientation=orientation, epoch_jd_utc=program.epoch.jd)
+    tdb = orientation.scales.tdb
+    moon = position_km("moon", "earth", *tdb(t))
+    moon_v = (position_km("moon", "earth", *tdb(t + 0.5))
+              - position_km("moon", "earth", *tdb(t - 0.5)))
     r = traj.states[:, :3] - moon
     v = traj.states[:, 3:] - moon_v
     rdotv = np.sum(r * v, axis=1)
@@ -224,7 +226,8 @@ def test_scenario_unknown_top_level_keys_and_wrong_types_are_one_line() -> None:
     data = _load()
     data["titel"] = "typo"
     with pytest.raises(InputError, match=r"^bad\.toml: titel: expected no such key \(allowed: "
-                       r"title, epoch, injection, model, target, search\) \(got 'typo'\)$"):
+                       r"title, epoch, earth_orientation, eop, injection, model, target, search\) "
+                       r"\(got 'typo'\)$"):
         scenario_search(data, "bad.toml")
     data = _load()
     data["title"] = 3

@@ -112,7 +112,8 @@ def test_visibility_of_a_hand_checked_geometry() -> None:
 
     The station (radius R = WGS84 a) sees the spacecraft (radius a) above the mask ε while
     their central angle is below λ = arccos(R cos ε / a) - ε; the angle changes at n - ω_E.
-    The pass is centred when n t = lon + θ0 + ω_E t, which fixes the longitude chosen.
+    The pass is centred when n t = lon + θ0 + ω_E t, which fixes the longitude chosen (the
+    gmst Earth orientation: the station rotates about the inertial z axis, in the orbit plane).
     """
     a_km, mask_deg, dt_s, t_centre_s = 7000.0, 10.0, 5.0, 1500.0
     n = math.sqrt(GM_EARTH_km3_s2 / a_km**3)
@@ -122,6 +123,7 @@ def test_visibility_of_a_hand_checked_geometry() -> None:
     base = leo_scenario()
     lon_rad = rate * t_centre_s - base.epoch.gmst_rad()
     doc = leo_document(
+        earth_orientation="gmst",
         injection={"r_km": [a_km, 0.0, 0.0], "v_km_s": [0.0, a_km * n, 0.0]},
         model={"gravity": "J0", "var_gravity": "J0"},
         parameters={"dynamic": [], "station_location": "none", "station_biases": []},
