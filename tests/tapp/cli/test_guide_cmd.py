@@ -110,6 +110,13 @@ def _run_bad(tmp_path: Path, files, guide_text: str | None = None, options=(),
                                              - set(before))
 
 
+def _refused(code: int, err: str, new: list[str], fragment: str) -> None:
+    """Bad input: exit 2, one line on stderr holding ``fragment``, no file written."""
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and fragment in err, err
+    assert new == []
+
+
 @pytest.mark.parametrize(("edit", "fragment"), [
     (lambda t: t.replace("sigma_fixed_mm_s = 1.0", "sigma_fixed_mm_s = -1.0"),
      "bad.toml: execution.sigma_fixed_mm_s: expected a finite number >= 0"),
@@ -143,10 +150,7 @@ def _run_bad(tmp_path: Path, files, guide_text: str | None = None, options=(),
 ])
 def test_bad_guidance_files_are_one_line_exit_2_and_write_nothing(tmp_path, files, edit,
                                                                    fragment):
-    code, err, new = _run_bad(tmp_path, files, edit(GUIDE))
-    assert code == 2, err
-    assert len(err.strip().splitlines()) == 1 and fragment in err, err
-    assert new == []
+    _refused(*_run_bad(tmp_path, files, edit(GUIDE)), fragment)
 
 
 @pytest.mark.parametrize(("options", "fragment"), [
@@ -162,25 +166,19 @@ def test_bad_guidance_files_are_one_line_exit_2_and_write_nothing(tmp_path, file
     (["--samples", "many"], "--samples"),
 ])
 def test_bad_options_are_one_line_exit_2_and_write_nothing(tmp_path, files, options, fragment):
-    code, err, new = _run_bad(tmp_path, files, options=options)
-    assert code == 2, err
-    assert len(err.strip().splitlines()) == 1 and fragment in err, err
-    assert new == []
+    _refused(*_run_bad(tmp_path, files, options=options), fragment)
 
 
 def test_a_scheduler_that_does_not_answer_is_bad_input(tmp_path, files):
     address = f"tcp://127.0.0.1:{_closed_port()}"
-    code, err, new = _run_bad(tmp_path, files, options=["--scheduler", address,
-                                                         "--connect-timeout-s", "0.5"])
-    assert code == 2 and "--scheduler: value: expected a Dask scheduler answering" in err, err
-    assert len(err.strip().splitlines()) == 1 and new == []
+    _refused(*_run_bad(tmp_path, files, options=["--scheduler", address,
+                                                 "--connect-timeout-s", "0.5"]),
+             "--scheduler: value: expected a Dask scheduler answering")
 
 
 def test_a_tape_that_is_not_a_t32_is_refused(tmp_path, files):
     t13 = write_t13(tmp_path / "ds.t13.h5", deep_space_t13())
-    code, err, new = _run_bad(tmp_path, files, tape=t13)
-    assert code == 2 and "ds.t13.h5" in err and len(err.strip().splitlines()) == 1, err
-    assert new == []
+    _refused(*_run_bad(tmp_path, files, tape=t13), "ds.t13.h5")
 
 
 def test_an_output_that_is_an_input_is_refused_before_any_work(files):
