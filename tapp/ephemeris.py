@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import importlib.util
 import math
-from functools import cache
+from collections.abc import Callable
+from functools import cache, lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +26,7 @@ from jplephem.spk import SPK
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
 from tapp.frames.chebyshev import ChebyshevTable, fit_chebyshev
-from tapp.frames.eop import MJD_OFFSET, leap_seconds
+from tapp.frames.eop import MJD_OFFSET, EopTable, leap_seconds
 from tapp.frames.time import Epoch
 from tapp.frames.timescales import TimeScales, TT_MINUS_TAI_s
 
@@ -147,6 +148,13 @@ def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t
     """
     if not bodies:
         return ChebyshevTable.empty()
+    if scales is not None and origin_s is not None:
+        table = fit_chebyshev(lambda t: t[None, :, None] * np.ones(3), t_start_s, t_end_s,
+                              segment_s, 1, origin_s)  # the grid only
+        starts = table.t0_s + segment_s * np.arange(table.n_segments)
+        coeffs = np.concatenate([_tdb_segment(bodies, center, scales.epoch, float(start),
+                                              segment_s, n_coef) for start in starts], axis=1)
+        return ChebyshevTable(np.ascontiguousarray(coeffs), table.t0_s, segment_s)
     if scales is None:
         jd_tdb = utc_to_tdb_jd(epoch_jd_utc)
 
@@ -154,9 +162,25 @@ def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t
             return jd_tdb, t / SECONDS_PER_DAY
     else:
         tdb = scales.tdb
+    return fit_chebyshev(_positions(bodies, center, tdb), t_start_s, t_end_s, segment_s,
+                         n_coef, origin_s)
+
+
+def _positions(bodies: tuple[str, ...], center: str, tdb) -> Callable[[np.ndarray], np.ndarray]:
+    """fn(t) -> (n_bodies, M, 3) km of the bodies at TDB ``tdb(t)``."""
 
     def positions(t: np.ndarray) -> np.ndarray:
         jd, jd2 = tdb(t)
         return np.stack([position_km(body, center, jd, jd2) for body in bodies])
 
-    return fit_chebyshev(positions, t_start_s, t_end_s, segment_s, n_coef, origin_s)
+    return positions
+
+
+@lru_cache(maxsize=8192)
+def _tdb_segment(bodies: tuple[str, ...], center: str, epoch: Epoch, start_s: float,
+                 segment_s: float, n_coef: int) -> np.ndarray:
+    """One segment's coefficients (n_bodies, 1, 3, n_coef) at TDB of ``epoch``'s scales
+    (cached: segments on a common grid are shared by every propagation of a run)."""
+    tdb = TimeScales.of(epoch, EopTable.zero()).tdb
+    return fit_chebyshev(_positions(bodies, center, tdb), start_s, start_s + segment_s,
+                         segment_s, n_coef).coeffs

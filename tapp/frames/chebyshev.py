@@ -77,13 +77,12 @@ class ChebyshevTable:
             raise ValueError("time outside the Chebyshev table")
         seg = np.clip(np.floor(u).astype(int), 0, self.n_segments - 1)
         tau = 2.0 * (u - seg) - 1.0
-        a = self.coeffs[:, seg]  # (n_series, N, 3, n_coef)
-        b1 = np.zeros(a.shape[:3])
-        b2 = np.zeros(a.shape[:3])
+        shape = (self.n_series, t.size, 3)
+        b1, b2 = np.zeros(shape), np.zeros(shape)
         two_tau = (2.0 * tau)[None, :, None]
-        for j in range(self.n_coef - 1, 0, -1):
-            b1, b2 = two_tau * b1 - b2 + a[..., j], b1
-        return tau[None, :, None] * b1 - b2 + a[..., 0]
+        for j in range(self.n_coef - 1, 0, -1):  # one (n_series, N, 3) gather per degree
+            b1, b2 = two_tau * b1 - b2 + self.coeffs[..., j][:, seg], b1
+        return tau[None, :, None] * b1 - b2 + self.coeffs[..., 0][:, seg]
 
 
 def fit_chebyshev(fn: Callable[[np.ndarray], np.ndarray], t_start_s: float, t_end_s: float,
