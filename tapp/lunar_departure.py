@@ -21,6 +21,7 @@ import numpy as np
 from tapp.constants import SECONDS_PER_DAY, GM_EARTH_km3_s2, R_EARTH_km
 from tapp.dynamics import Propagator, earth_model
 from tapp.ephemeris import position_km, utc_to_tdb_jd
+from tapp.frames.orientation import orientation_for
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.targeting import BPlaneProgram, BPlaneSearch, run_search
 
@@ -55,18 +56,22 @@ def first_guess(epoch: Epoch, parking_radius_km: float, flight_days: float = 4.0
 
 def lunar_departure_case(departure_day: float, base_epoch: str = "2026-03-10T12:00:00",
                          b_mag_km: float = 5600.0, arrive_later_s: float = 3600.0,
-                         parking_altitude_km: float = 185.0, analytic_partials: bool = True
-                         ) -> dict[str, float]:
+                         parking_altitude_km: float = 185.0, analytic_partials: bool = True,
+                         earth_orientation: str = "iau2006") -> dict[str, float]:
     """Target the injection of ``departure_day`` days after ``base_epoch``; return its outputs.
 
-    Outputs: injection velocity (km/s, EME2000), ΔV from the parking orbit (km/s), flight
+    ``earth_orientation`` orients the Earth's J2 field (:mod:`tapp.frames.orientation`).
+
+    Outputs: injection velocity (km/s, GCRS), ΔV from the parking orbit (km/s), flight
     time (s), achieved B·R, B·T (km), periapsis altitude (km), SEARCH's cases, and its status
     as a number (1 converged, 2 diverged, 3 singular: the seed's FLAG).
     """
     epoch = shifted_epoch(parse_epoch(base_epoch, source="base_epoch"), departure_day)
     r_park = R_EARTH_km + parking_altitude_km
     r0, v_guess, s_hat = first_guess(epoch, r_park)
-    program = BPlaneProgram(epoch, r0, Propagator(earth_model("J2", ("sun", "moon"))))
+    orientation = orientation_for(earth_orientation, epoch, source="earth_orientation")
+    model = earth_model("J2", ("sun", "moon"), earth_orientation=orientation.model)
+    program = BPlaneProgram(epoch, r0, Propagator(model), orientation=orientation)
     y0 = program(v_guess)
     b_target = y0[:2] * (b_mag_km / np.hypot(y0[0], y0[1]))
     problem = BPlaneSearch(program, v_guess, targets=np.array([*b_target, y0[2]]),
