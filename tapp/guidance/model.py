@@ -55,8 +55,7 @@ class Step:
     number : recycle number i'.
     t_s : t_k, s from the tape epoch.
     transition : (n_o, n_o) T_k = ∂x^k/∂x^{k_prev}.
-    L : (n_o, n_o) L_k, ∂(a posteriori error)/∂(a priori error), in x^k.
-    LT : (n_o, n_o) L_k T_k.
+    LT : (n_o, n_o) L_k T_k, with L_k = ∂(a posteriori error)/∂(a priori error) in x^k.
     Sigma : (n_o, n_o) Σ_k = Λ'J̃Λ', u_a u_b: the positive semi-definite part of the tape's
         (which is PSD only to the rounding of that product: its scaled eigenvalues reach
         −2e-4 on the deep-space tape), the covariance the samples are drawn from.
@@ -67,7 +66,6 @@ class Step:
     number: int
     t_s: float
     transition: np.ndarray
-    L: np.ndarray
     LT: np.ndarray
     Sigma: np.ndarray
     sigma_factor: np.ndarray
@@ -210,7 +208,7 @@ def build_problem(t32: T32, targets: tuple[str, ...], manoeuvres: tuple[int, ...
             bt = rc.B[rows]
             correction = Correction(bt, _gain(bt, velocity, rc.number, targets, guide_source))
         factor = psd_factor(rc.Sigma)
-        steps.append(Step(rc.number, rc.t_s, rc.transition, rc.L, rc.L @ rc.transition,
+        steps.append(Step(rc.number, rc.t_s, rc.transition, rc.L @ rc.transition,
                           factor @ factor.T, factor, correction))
     return Problem(velocity, t32.Lambda0_real, psd_factor(t32.Lambda0_real), tuple(steps),
                    t32.recycles[numbers.index(last)].B, miss, t32.miss_unit, tuple(rows),

@@ -110,7 +110,7 @@ def inflate_after_manoeuvres(problem: Problem, fit: FitWorld) -> Problem:
             T = step.transition
             r = refit(T @ prior @ T.T, fit, fit.J[i], fit.Jt[i])
             F = r.sigma_factor
-            step = dataclasses.replace(step, L=r.L, LT=r.L @ T, Sigma=F @ F.T, sigma_factor=F)
+            step = dataclasses.replace(step, LT=r.L @ T, Sigma=F @ F.T, sigma_factor=F)
             lam = r.Lambda_fit
         Z = recycle(Z, step)
         if step.correction is not None:
