@@ -163,8 +163,7 @@ def guidance_markdown(r: GuidanceResult) -> str:
         "errors scale with |Δv|), so their percentiles are the Gaussian approximation. The "
         "total's σ and percentiles need the joint law of the magnitudes (Monte Carlo only).",
         "", "## Final miss after the last correction", "", _miss_table(r),
-        "The linear model's mean is zero; the Monte Carlo mean is within its sampling error "
-        "of it (σ/√N).", "",
+        "The linear model's mean is zero; the sampling σ of a Monte Carlo mean is σ/√N.", "",
         "## B-plane dispersion (1σ)", "", _ellipse_table(r), *corridor,
     ]
     return "\n".join(lines) + "\n"
