@@ -14,7 +14,13 @@ Exit codes of ``tapp dc`` (the outcomes of :mod:`tapp.od.batch`; the output is p
   the observed contraction factor and the projected iterations to the fit limit are printed
 = ============================================================================================
 
-Bad input (2) includes an arc longer than the data span (``--arc`` and the span named); no
+Earth orientation: every command uses the study file's ``earth_orientation`` and ``eop``
+(:mod:`tapp.od.setup`) for the stations and the geopotential of the data and the estimator;
+``--earth-orientation iau2006|gmst`` overrides the file's model. The outputs say which model
+was used, the EOP source and whether predicted EOP were used (JSON: ``earth_orientation``).
+
+Bad input (2) includes an arc longer than the data span (``--arc`` and the span named), an
+unknown ``--earth-orientation`` and an epoch or span outside the EOP table; no
 measurement in the arc fails like any computation that cannot start (1, "too few
 measurements"), for ``tapp ekf`` too. Observation files (``--obs``, ``--save-obs``): HDF5,
 CSV, or a CCSDS TDM in KVN (``.tdm``; :mod:`tapp.od.obsfile`, :mod:`tapp.ccsds.tdm`).
@@ -33,8 +39,10 @@ from rich.console import Console
 from rich.table import Table
 
 from tapp.cli.common import (
+    EarthOrientationOpt,
     app,
     check_grid_size,
+    earth_orientation_option,
     grid_samples,
     nonnegative_option,
     positive_option,
@@ -43,9 +51,10 @@ from tapp.cli.common import (
     seed_option,
 )
 from tapp.constants import GM_EARTH_km3_s2
-from tapp.dynamics import Propagator, earth_model
+from tapp.dynamics import Propagator
 from tapp.errors import InputError
 from tapp.frames.elements import cartesian_to_elements
+from tapp.frames.orientation import EarthOrientation
 from tapp.od import setup
 from tapp.od.batch import (
     MAX_ITERATIONS,
@@ -95,21 +104,26 @@ def parse_arc_s(text: str, option: str = "--arc") -> float:
     return float(m.group(1)) * _UNIT_S[m.group(2)]
 
 
-def _model_pair(truth: str, stm: str) -> Propagator:
+def _orientation(scenario: Path, earth_orientation: str | None) -> EarthOrientation:
+    """The run's Earth orientation: the study file's, or ``--earth-orientation``'s model."""
+    return setup.orientation(scenario, earth_orientation_option(earth_orientation))
+
+
+def _model_pair(truth: str, stm: str, orient: EarthOrientation) -> Propagator:
     """The estimator's (state model, variational model) pair from the CLI options."""
-    return Propagator(earth_model(truth, source="--truth", field="model"),
-                      earth_model(stm, source="--stm", field="model"))
+    return Propagator(setup.force_model(truth, orient, "--truth", "model"),
+                      setup.force_model(stm, orient, "--stm", "model"))
 
 
 def _observations(x_true: np.ndarray, truth: str, stations: str | None, obs_file: Path | None,
-                  scenario: Path, seed: int | None) -> Observations:
+                  scenario: Path, seed: int | None, orient: EarthOrientation) -> Observations:
     if obs_file is not None:
         data = setup.load_study(scenario)
         return read_observations(obs_file, load_stations(data, str(scenario)),
                                  setup.tracking(scenario).sigma, epoch=setup.epoch(scenario),
                                  sigma_kinds=setup.KINDS)
     return setup.simulated_observations(x_true, truth, _network(x_true, stations, scenario),
-                                        scenario, seed)
+                                        scenario, seed, orient=orient)
 
 
 def _spacecraft(orbit: str) -> str:
@@ -129,12 +143,10 @@ def _settings(scenario: Path, max_iter: int | None) -> DCSettings:
     return DCSettings(**table)
 
 
-def _rate(data: Observations, truth: str, stm: str, x_true: np.ndarray, theta0_rad: float
+def _rate(data: Observations, prop: Propagator, x_true: np.ndarray, orient: EarthOrientation
           ) -> PredictedRate | None:
     try:
-        return predicted_rate(data, earth_model(truth, source="--truth", field="model"),
-                              earth_model(stm, source="--stm", field="model"), x_true,
-                              theta0_rad)
+        return predicted_rate(data, prop.state_model, prop.var_model, x_true, orient)
     except np.linalg.LinAlgError:
         return None
 
@@ -182,6 +194,7 @@ def dc(
                                                   ".csv or .tdm).")] = None,
     scenario: ScenarioOpt = DEFAULT_SCENARIO,
     allow_subsurface: SubsurfaceOpt = False,
+    earth_orientation: EarthOrientationOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
     """Batch differential correction from the brief's offset initial estimate.
@@ -194,26 +207,30 @@ def dc(
         check_paths({"--obs": obs, "--scenario": scenario}, {"--save-obs": save_obs})
         arc_s = parse_arc_s(arc)
         settings = _settings(scenario, max_iter)
+        orient = _orientation(scenario, earth_orientation)
         x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
-        prop = _model_pair(truth, stm)
+        prop = _model_pair(truth, stm, orient)
         data = _observations(x_true, truth, stations, obs, scenario,
-                             seed_option("--seed", seed))
+                             seed_option("--seed", seed), orient)
         window = data.arc(arc_s, "--arc", got=arc)
+        used = setup.orientation_record(orient, window.t_s)
         if save_obs is not None:
+            notes = (f"observations of {orbit} for tapp dc (scenario {scenario.name})",
+                     f"read from {obs.name}" if obs is not None else "simulated with Earth "
+                     f"orientation {setup.describe_orientation(used)}")
             outputs = OutputSet()
             outputs.add("--save-obs", save_obs, observations_file_writer(
                 save_obs, data, epoch=setup.epoch(scenario), spacecraft=_spacecraft(orbit),
-                comments=(f"observations of {orbit} for tapp dc (scenario {scenario.name})",)))
+                comments=notes))
             outputs.commit()
         x_start = setup.initial_estimate(x_true, setup.offset(scenario))
-        theta0 = setup.tracking(scenario).theta0_rad
         try:
-            result = differential_correction(window, prop, x_start, theta0_rad=theta0,
+            result = differential_correction(window, prop, x_start, orientation=orient,
                                              settings=settings)
         except IllConditionedError as exc:
-            _print_ill_conditioned(exc, json_out)
+            _print_ill_conditioned(exc, json_out, used)
             return EXIT_ILL_CONDITIONED
-        rate = _rate(window, truth, stm, x_true, theta0)
+        rate = _rate(window, prop, x_true, orient)
         err_km = float(np.linalg.norm(result.x0[:3] - x_true[:3]))
         code = EXIT_CODE[DCOutcome(result.status)]
         if json_out:
@@ -227,10 +244,11 @@ def dc(
                         "predicted_rate": None if rate is None else rate.rho,
                         "eigenvalues": _eigen_json(rate),
                         "final_elements": _elements_dict(result.x0),
-                        "position_error_km": err_km, "measurements": result.n_measurements})
+                        "position_error_km": err_km, "measurements": result.n_measurements,
+                        "earth_orientation": used})
         else:
-            _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}): {result.status}",
-                      err_km)
+            _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}), {orient.model}: "
+                      f"{result.status}", err_km, used)
         return code
 
     code = run_guarded(body)
@@ -238,7 +256,8 @@ def dc(
         raise typer.Exit(code)
 
 
-def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float) -> None:
+def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float, used: dict
+              ) -> None:
     table = Table(title=title)
     table.add_column("iteration", justify="right")
     table.add_column("RMS", justify="right")
@@ -262,9 +281,10 @@ def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float) -> 
     console.print(f"{predicted}; {observed}")
     console.print(f"{result.n_measurements} measurements; epoch position error "
                   f"{err_km * 1e3:.3f} m")
+    console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
 
-def _print_ill_conditioned(exc: IllConditionedError, json_out: bool) -> None:
+def _print_ill_conditioned(exc: IllConditionedError, json_out: bool, used: dict) -> None:
     if json_out:
         print_json({"converged": False, "status": "ill-conditioned",
                     "exit_code": EXIT_ILL_CONDITIONED, "reason": str(exc),
@@ -273,7 +293,8 @@ def _print_ill_conditioned(exc: IllConditionedError, json_out: bool) -> None:
                     "undetermined_directions": [
                         {"relative_eigenvalue": float(lam),
                          **{n: float(c) for n, c in zip(STATE_NAMES, d, strict=True)}}
-                        for d, lam in zip(exc.directions, exc.eigenvalues, strict=True)]})
+                        for d, lam in zip(exc.directions, exc.eigenvalues, strict=True)],
+                    "earth_orientation": used})
         return
     console = Console(width=100)
     console.print(f"ill-conditioned: the normal matrix of the first iteration has condition "
@@ -283,6 +304,7 @@ def _print_ill_conditioned(exc: IllConditionedError, json_out: bool) -> None:
                   "state, relative eigenvalue):")
     for d, lam in zip(exc.directions, exc.eigenvalues, strict=True):
         console.print(f"  {describe_direction(d)}   ({lam:.3g})")
+    console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
 
 def _apriori(text: str, scenario: Path) -> np.ndarray:
@@ -325,37 +347,42 @@ def ekf(
                                              "TDM .tdm).")] = None,
     scenario: ScenarioOpt = DEFAULT_SCENARIO,
     allow_subsurface: SubsurfaceOpt = False,
+    earth_orientation: EarthOrientationOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
     """Extended Kalman filter from the brief's offset state; largest |O-C| per pass."""
 
     def body() -> None:
         arc_s = parse_arc_s(arc)
+        orient = _orientation(scenario, earth_orientation)
         x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
-        prop = _model_pair(truth, stm)
+        prop = _model_pair(truth, stm, orient)
         p0 = _apriori(apriori, scenario)
         q_km2_s3 = nonnegative_option("--process-noise", process_noise)
         data = _observations(x_true, truth, stations, obs, scenario,
-                             seed_option("--seed", seed)).arc(arc_s, "--arc", got=arc)
+                             seed_option("--seed", seed), orient).arc(arc_s, "--arc", got=arc)
+        used = setup.orientation_record(orient, data.t_s)
         x_start = setup.initial_estimate(x_true, setup.offset(scenario))
-        result = extended_kalman_filter(data, prop, x_start, p0,
-                                        theta0_rad=setup.tracking(scenario).theta0_rad,
+        result = extended_kalman_filter(data, prop, x_start, p0, orientation=orient,
                                         q_km2_s3=q_km2_s3)
         per_pass = [{"range_m": p.max_abs[0] * 1e3, "range_rate_mm_s": p.max_abs[1] * 1e6}
                     for p in result.passes]
         if json_out:
             print_json({"passes": [{"station": p.station, "t_start_s": p.t_start_s,
                                     "t_end_s": p.t_end_s} for p in result.passes],
-                        "max_abs_residual_per_pass": per_pass})
+                        "max_abs_residual_per_pass": per_pass, "earth_orientation": used})
             return
-        table = Table(title=f"EKF {orbit}, {arc}, ({truth},{stm}), a priori {apriori}")
+        table = Table(title=f"EKF {orbit}, {arc}, ({truth},{stm}), a priori {apriori}, "
+                      f"{orient.model}")
         for col in ("pass", "station", "start (h)", "max|O-C| range (m)",
                     "max|O-C| range-rate (mm/s)"):
             table.add_column(col, justify="right")
         for k, (p, r) in enumerate(zip(result.passes, per_pass, strict=True), start=1):
             table.add_row(str(k), p.station, f"{p.t_start_s / 3600:.2f}", f"{r['range_m']:.1f}",
                           f"{r['range_rate_mm_s']:.1f}")
-        Console(width=110).print(table)
+        console = Console(width=110)
+        console.print(table)
+        console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
     run_guarded(body)
 
@@ -369,6 +396,7 @@ def rsig(
     step: Annotated[float, typer.Option(help="Output step, s (> 0).")] = 300.0,
     scenario: ScenarioOpt = DEFAULT_SCENARIO,
     allow_subsurface: SubsurfaceOpt = False,
+    earth_orientation: EarthOrientationOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
     """The error-growth signature R(t) = sqrt(Σ_{i<=3, j<=6} φ_ij²)."""
@@ -377,18 +405,23 @@ def rsig(
         span_s = positive_option("--hours", hours) * 3600.0
         dt = positive_option("--step", step)
         check_grid_size("--hours/--step", grid_samples(span_s, dt))
+        orient = _orientation(scenario, earth_orientation)
         x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
-        prop = _model_pair(truth, stm)
+        prop = _model_pair(truth, stm, orient)
         t = np.arange(0.0, span_s + 0.5 * dt, dt)
-        sig = r_signature(prop, x_true, t, setup.tracking(scenario).theta0_rad)
+        orient.check_covers(t[[0, -1]], "--hours")
+        sig = r_signature(prop, x_true, t, orient)
+        used = setup.orientation_record(orient, t)
         if json_out:
-            print_json({"t_s": sig.t_s, "R": sig.r})
+            print_json({"t_s": sig.t_s, "R": sig.r, "earth_orientation": used})
             return
-        table = Table(title=f"R(t) {orbit} ({truth},{stm})")
+        table = Table(title=f"R(t) {orbit} ({truth},{stm}), {orient.model}")
         table.add_column("t (h)", justify="right")
         table.add_column("R", justify="right")
         for k in np.linspace(0, len(t) - 1, 9).astype(int):
             table.add_row(f"{t[k] / 3600:.1f}", f"{sig.r[k]:.6g}")
-        Console(width=80).print(table)
+        console = Console(width=80)
+        console.print(table)
+        console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
     run_guarded(body)

@@ -65,6 +65,7 @@ import scipy.linalg
 
 from tapp.dynamics import PropagationError, Propagator
 from tapp.errors import InputError, SingularMatrixError, TooFewMeasurementsError
+from tapp.frames.orientation import EarthOrientation
 from tapp.od.observations import Observations, predict, residuals
 
 #: Names of the state components, in order (km, km/s).
@@ -211,11 +212,11 @@ class DCResult:
         return np.array([it.step for it in self.iterations])
 
 
-def _linearise(obs: Observations, prop: Propagator, x0: np.ndarray, theta0_rad: float
-               ) -> tuple[np.ndarray, np.ndarray]:
+def _linearise(obs: Observations, prop: Propagator, x0: np.ndarray,
+               orientation: EarthOrientation) -> tuple[np.ndarray, np.ndarray]:
     """Return prefit residuals y (M k,) and epoch-mapped partials H (M k, 6)."""
-    traj = prop.propagate(x0, obs.t_s, theta0_rad=theta0_rad)
-    h, h_tilde = predict(obs, traj.states, theta0_rad)
+    traj = prop.propagate(x0, obs.t_s, orientation=orientation)
+    h, h_tilde = predict(obs, traj.states, orientation)
     y = residuals(obs, h)
     # H_i = H~_i Φ(t_i, t0)
     big_h = np.einsum("mkj,mjl->mkl", h_tilde, traj.stm)
@@ -295,11 +296,12 @@ def _at_limit(history: list[DCIteration], settings: DCSettings
 
 
 def differential_correction(obs: Observations, prop: Propagator, x_start: np.ndarray, *,
-                            theta0_rad: float = 0.0, settings: DCSettings = DCSettings(),
+                            orientation: EarthOrientation, settings: DCSettings = DCSettings(),
                             apriori: tuple[np.ndarray, np.ndarray] | None = None) -> DCResult:
     """Run the DC from ``x_start`` (6,) at t = 0 on ``obs`` with ``prop``'s (J_N, J_M) pair.
 
-    ``apriori`` = (x̄ (6,), P̄ (6, 6)) adds an a priori estimate and covariance.
+    ``orientation`` places the stations and orients the field (the model of ``prop``'s force
+    models); ``apriori`` = (x̄ (6,), P̄ (6, 6)) adds an a priori estimate and covariance.
 
     Raises
     ------
@@ -319,7 +321,7 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
     status, reason, q, more = DCOutcome.DIVERGED, "", math.nan, None
     for k in range(1, settings.max_iterations + 1):
         try:
-            y, big_h = _linearise(obs, prop, x, theta0_rad)
+            y, big_h = _linearise(obs, prop, x, orientation)
         except PropagationError as exc:
             reason = f"reference trajectory failed at iteration {k}: {exc}"
             break

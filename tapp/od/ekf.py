@@ -25,6 +25,7 @@ from filterpy.kalman import update
 
 from tapp.dynamics import Propagator
 from tapp.errors import InputError, TooFewMeasurementsError
+from tapp.frames.orientation import EarthOrientation
 from tapp.measurements.observables import MeasurementModel
 from tapp.od.observations import Observations
 
@@ -59,8 +60,10 @@ def process_noise(q_km2_s3: float, dt_s: float) -> np.ndarray:
 
 
 def extended_kalman_filter(obs: Observations, prop: Propagator, x0: np.ndarray, P0: np.ndarray,
-                           *, theta0_rad: float = 0.0, q_km2_s3: float = 0.0) -> EKFResult:
-    """Filter ``obs`` from the estimate (x0 (6,), P0 (6, 6)) at t = 0.
+                           *, orientation: EarthOrientation, q_km2_s3: float = 0.0
+                           ) -> EKFResult:
+    """Filter ``obs`` from the estimate (x0 (6,), P0 (6, 6)) at t = 0, the stations placed
+    and the field oriented by ``orientation``.
 
     Raises
     ------
@@ -76,14 +79,14 @@ def extended_kalman_filter(obs: Observations, prop: Propagator, x0: np.ndarray, 
         raise InputError("ekf", "apriori", "a symmetric positive-definite 6x6 covariance")
     if q_km2_s3 < 0:
         raise InputError("ekf", "process_noise", "q >= 0", q_km2_s3)
-    models = [MeasurementModel(s, theta0_rad, obs.kinds) for s in obs.stations]
+    models = [MeasurementModel(s, orientation, obs.kinds) for s in obs.stations]
     R = np.diag(obs.sigma**2)
     x, P, t_prev = np.asarray(x0, dtype=float).copy(), P0.copy(), 0.0
     prefit = np.empty_like(obs.values)
     for row in range(obs.t_s.size):
         t = float(obs.t_s[row])
         if t != t_prev:
-            seg = prop.propagate(x, [t], t0_s=t_prev, theta0_rad=theta0_rad)
+            seg = prop.propagate(x, [t], t0_s=t_prev, orientation=orientation)
             phi = seg.stm[-1]
             x = seg.states[-1]
             # P⁻ = Φ P Φᵀ + Q

@@ -14,6 +14,7 @@ import numpy as np
 
 from tapp.dynamics import Propagator
 from tapp.errors import InputError, TooFewMeasurementsError
+from tapp.frames.orientation import EarthOrientation
 from tapp.measurements.observables import MeasurementModel
 from tapp.measurements.stations import Station
 from tapp.measurements.visibility import find_passes
@@ -108,16 +109,17 @@ class Observations:
         return out
 
 
-def predict(obs: Observations, states: np.ndarray, theta0_rad: float
+def predict(obs: Observations, states: np.ndarray, orientation: EarthOrientation
             ) -> tuple[np.ndarray, np.ndarray]:
-    """Return computed observables h (M, k) and H = ∂h/∂x (M, k, 6) at states (M, 6)."""
+    """Return computed observables h (M, k) and H = ∂h/∂x (M, k, 6) at states (M, 6), the
+    stations placed by ``orientation``."""
     h = np.empty_like(obs.values)
     big_h = np.empty(obs.values.shape + (6,))
     for s, station in enumerate(obs.stations):
         rows = obs.station == s
         if not np.any(rows):
             continue
-        model = MeasurementModel(station, theta0_rad, obs.kinds)
+        model = MeasurementModel(station, orientation, obs.kinds)
         h[rows] = model.compute(obs.t_s[rows], states[rows])
         big_h[rows] = model.state_partials(obs.t_s[rows], states[rows])
     return h, big_h
@@ -125,29 +127,33 @@ def predict(obs: Observations, states: np.ndarray, theta0_rad: float
 
 def residuals(obs: Observations, computed: np.ndarray) -> np.ndarray:
     """Return O - C (M, k), angles wrapped, through the measurement model's residual."""
-    model = MeasurementModel(obs.stations[0], 0.0, obs.kinds)
+    # the residual (O - C, angles wrapped) does not depend on where the station is
+    model = MeasurementModel(obs.stations[0], EarthOrientation.gmst_angle(0.0), obs.kinds)
     return model.residual(obs.values, computed)
 
 
 def simulate(truth: Propagator, x0: np.ndarray, stations: tuple[Station, ...],
              t_grid_s: np.ndarray, sigma: np.ndarray, rng: np.random.Generator | None,
-             theta0_rad: float, kinds: tuple[str, ...] = ("range", "range_rate"),
+             orientation: EarthOrientation,
+             kinds: tuple[str, ...] = ("range", "range_rate"),
              epoch_jd_utc: float | None = None) -> Observations:
     """Simulate tracking: the truth trajectory seen by each station above its mask.
 
     Every grid time at which a station sees the spacecraft gives one row; white Gaussian
     noise of ``sigma`` (k,) is added when ``rng`` is given (noise-free otherwise).
+    ``orientation`` places the stations and orients ``truth``'s field (its model must be
+    that of ``truth``'s force model).
 
     Raises
     ------
     TooFewMeasurementsError
         When no station sees the spacecraft on the grid.
     """
-    traj = truth.propagate(x0, t_grid_s, stm=False, theta0_rad=theta0_rad,
-                           epoch_jd_utc=epoch_jd_utc)
+    traj = truth.propagate(x0, t_grid_s, stm=False, epoch_jd_utc=epoch_jd_utc,
+                           orientation=orientation)
     rows_t, rows_s, rows_v = [], [], []
     for s, station in enumerate(stations):
-        model = MeasurementModel(station, theta0_rad, kinds)
+        model = MeasurementModel(station, orientation, kinds)
         visible = model.elevation_rad(traj.t_s, traj.states) > station.elev_mask_rad
         if not np.any(visible):
             continue

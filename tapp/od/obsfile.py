@@ -4,7 +4,8 @@ scenario).
 HDF5 layout: datasets ``t_s`` (M,), ``station`` (M,) int, ``values`` (M, k) with attribute
 ``kinds`` and ``units``; ``sigma`` (k,); group ``stations`` with ``name``, ``lat_deg``,
 ``lon_deg``, ``h_km``, ``elev_mask_deg``; root attributes format="tapp-observations",
-version, creation time, ``span_s`` (the end of the data span). CSV: a header
+version, creation time, ``span_s`` (the end of the data span), ``comments`` (provenance, e.g.
+the Earth orientation the data were simulated with). CSV: a header
 ``t_s,station,range_km,range_rate_km_s`` (any subset of the kind columns ``range_km``,
 ``range_rate_km_s``, ``azimuth_rad``, ``elevation_rad``) and one row per observation time and
 station. TDM (``.tdm``, or any file whose first line is ``CCSDS_TDM_VERS``): the KVN Tracking
@@ -85,7 +86,7 @@ def observations_file_writer(path: Path, obs: Observations, *, epoch: Epoch | No
     :class:`tapp.outputs.OutputSet`, which passes a temporary beside ``path``.
 
     A TDM needs the ``epoch`` of t = 0 (UTC) and names the ``spacecraft``; ``comments`` go
-    to its header.
+    to its header (HDF5: the root attribute ``comments``; CSV has no place for them).
     """
     path = Path(path)
     kinds = [str(k) for k in obs.kinds]
@@ -109,6 +110,8 @@ def observations_file_writer(path: Path, obs: Observations, *, epoch: Epoch | No
             with h5py.File(tmp, "w") as f:
                 f.attrs.update(format=FORMAT, version=VERSION, tapp_version=__version__,
                                created_utc=datetime.now(UTC).isoformat(), span_s=obs.end_s)
+                if comments:
+                    f.attrs["comments"] = list(comments)
                 f.create_dataset("t_s", data=obs.t_s).attrs["units"] = "s"
                 f.create_dataset("station", data=obs.station)
                 v = f.create_dataset("values", data=obs.values)

@@ -33,6 +33,7 @@ import scipy.linalg
 
 from tapp.dynamics import ForceModel, Propagator
 from tapp.errors import TooFewMeasurementsError
+from tapp.frames.orientation import EarthOrientation
 from tapp.od.observations import Observations, predict
 
 
@@ -55,11 +56,11 @@ class PredictedRate:
         return bool(abs(lead.imag) > 1e-9 * max(abs(lead), 1e-300))
 
 
-def epoch_partials(obs: Observations, prop: Propagator, x0: np.ndarray, theta0_rad: float
-                   ) -> np.ndarray:
+def epoch_partials(obs: Observations, prop: Propagator, x0: np.ndarray,
+                   orientation: EarthOrientation) -> np.ndarray:
     """Return H (M k, 6) = ∂h/∂x(t_i) Φ(t_i, t0) along ``prop``'s trajectory from x0 (6,)."""
-    traj = prop.propagate(x0, obs.t_s, theta0_rad=theta0_rad)
-    _, h_tilde = predict(obs, traj.states, theta0_rad)
+    traj = prop.propagate(x0, obs.t_s, orientation=orientation)
+    _, h_tilde = predict(obs, traj.states, orientation)
     return np.einsum("mkj,mjl->mkl", h_tilde, traj.stm).reshape(-1, 6)
 
 
@@ -82,8 +83,9 @@ def rate_from_matrix(m: np.ndarray) -> PredictedRate:
 
 
 def predicted_rate(obs: Observations, state_model: ForceModel, variational_model: ForceModel,
-                   x_true: np.ndarray, theta0_rad: float = 0.0) -> PredictedRate:
-    """Return ρ of the (J_N, J_M) DC on ``obs`` at the true epoch state x_true (6,).
+                   x_true: np.ndarray, orientation: EarthOrientation) -> PredictedRate:
+    """Return ρ of the (J_N, J_M) DC on ``obs`` at the true epoch state x_true (6,), the
+    stations placed and the field oriented by ``orientation``.
 
     H uses the STM of ``state_model`` (J_N, the model of the data), H̃ that of
     ``variational_model`` (J_M); both along the trajectory of ``state_model`` from x_true.
@@ -98,7 +100,7 @@ def predicted_rate(obs: Observations, state_model: ForceModel, variational_model
     if obs.count < 6:
         raise TooFewMeasurementsError(6, obs.count)
     weights = np.tile(1.0 / obs.sigma**2, obs.t_s.size)
-    h_true = epoch_partials(obs, Propagator(state_model), x_true, theta0_rad)
+    h_true = epoch_partials(obs, Propagator(state_model), x_true, orientation)
     h_approx = epoch_partials(obs, Propagator(state_model, variational_model), x_true,
-                              theta0_rad)
+                              orientation)
     return rate_from_matrix(iteration_matrix(h_true, h_approx, weights))

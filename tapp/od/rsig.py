@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tapp.dynamics import Propagator
+from tapp.frames.orientation import EarthOrientation
 
 
 @dataclass(frozen=True, slots=True)
@@ -32,7 +33,8 @@ def r_of_stm(stm: np.ndarray) -> np.ndarray:
 
 
 def r_signature(propagator: Propagator, x0: np.ndarray, t_s: np.ndarray,
-                theta0_rad: float = 0.0) -> RSignature:
-    """Propagate with the propagator's (state, variational) pair and return R(t)."""
-    traj = propagator.propagate(x0, t_s, theta0_rad=theta0_rad)
+                orientation: EarthOrientation) -> RSignature:
+    """Propagate with the propagator's (state, variational) pair, the field oriented by
+    ``orientation``, and return R(t)."""
+    traj = propagator.propagate(x0, t_s, orientation=orientation)
     return RSignature(traj.t_s, r_of_stm(traj.stm))

@@ -12,6 +12,14 @@ numbers, ...): ``epoch``, ``[orbits.NAME]`` (:class:`tapp.orbits.OrbitTable`),
 ``[initial_offset]``, ``[dc_settings]``, ``[[dc]]``, ``[ekf]`` with ``[ekf.apriori]`` and
 ``[rsig]``. Gravity specs are checked by :func:`tapp.dynamics.parse_gravity`, orbit and
 station names against their tables.
+
+Earth orientation: top-level ``earth_orientation`` ("iau2006", the default, or "gmst"; see
+:mod:`tapp.frames.orientation`) and ``eop`` ("iers", the default, "none" or a finals2000A file
+path relative to the study file). One model serves everything a run computes: the stations of
+the simulated data and of the estimator, and the geopotential of every force model built here
+(:func:`force_model`). :func:`orientation` builds it once per file and model (a CLI's
+``--earth-orientation`` passes its model in place of the file's) and checks that the EOP
+table covers the epoch and the tracking span.
 """
 
 from __future__ import annotations
@@ -27,15 +35,16 @@ import numpy as np
 from pydantic import AfterValidator, Field, model_validator
 
 from tapp.constants import GM_EARTH_km3_s2
-from tapp.dynamics import Propagator, earth_model, parse_gravity
+from tapp.dynamics import ForceModel, Propagator, earth_model, parse_gravity
 from tapp.errors import InputError
 from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
+from tapp.frames.orientation import EarthOrientation, check_model, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements.stations import Station
 from tapp.od.batch import MAX_ITERATIONS
 from tapp.od.observations import Observations, simulate
 from tapp.orbits import DEFAULT_SCENARIO, OrbitTable, parse_orbit
-from tapp.schema import Invalid, Schema, validate
+from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, validate
 from tapp.stations_file import StationTable, load_network
 from tapp.tomlfile import read_toml
 
@@ -187,6 +196,8 @@ class StudyFile(Schema):
     """Schema of the study file (module docstring)."""
 
     epoch: str | dt.datetime
+    earth_orientation: EarthOrientationName = "iau2006"
+    eop: EopSource = "iers"
     orbits: dict[str, OrbitTable] = {}
     stations: dict[str, StationTable] = {}
     networks: dict[str, list[str]] = {}
@@ -227,15 +238,14 @@ class StudyFile(Schema):
 
 @dataclass(frozen=True, slots=True)
 class Tracking:
-    """Simulated tracking: sampling (s), span (s), noise (km, km/s), seed, and the Earth
-    rotation angle at the scenario epoch (GMST, rad) shared by the data and the estimators."""
+    """Simulated tracking: sampling (s), span (s), noise (km, km/s), seed, and the
+    inclination (rad) below which the equatorial network is the default."""
 
     data_interval_s: float
     span_s: float
     sigma: np.ndarray
     seed: int
     equatorial_below_rad: float
-    theta0_rad: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -278,7 +288,58 @@ def tracking(path: Path = DEFAULT_SCENARIO) -> Tracking:
     table = study_file(path).tracking
     sigma = np.array([table.sigma_range_m * 1e-3, table.sigma_range_rate_mm_s * 1e-6])
     return Tracking(table.data_interval_s, table.span_days * 86400.0, sigma, table.seed,
-                    math.radians(table.equatorial_below_deg), epoch(path).gmst_rad())
+                    math.radians(table.equatorial_below_deg))
+
+
+def earth_orientation_name(path: Path = DEFAULT_SCENARIO, model: str | None = None) -> str:
+    """Return the Earth orientation model of a run: ``model`` (a CLI override) or the file's."""
+    if model is not None:
+        return check_model(model, "--earth-orientation", "value")
+    return study_file(path).earth_orientation
+
+
+@cache
+def _orientation(path: Path, model: str) -> EarthOrientation:
+    study = study_file(path)
+    orient = orientation_for(model, epoch(path), study.eop, path.parent, str(path))
+    # the simulated tracking span (observations read from a file are checked as they are used)
+    orient.check_covers(np.array([0.0, tracking(path).span_s]), str(path))
+    return orient
+
+
+def orientation(path: Path = DEFAULT_SCENARIO, model: str | None = None) -> EarthOrientation:
+    """Return the study's Earth orientation (cached per file and model; module docstring).
+
+    ``model`` overrides the file's ``earth_orientation`` (the CLI's ``--earth-orientation``).
+
+    Raises
+    ------
+    InputError
+        An unknown model (naming ``--earth-orientation``), an unreadable EOP file, or an epoch
+        or tracking span outside the EOP table (naming the file and the epoch).
+    """
+    return _orientation(Path(path), earth_orientation_name(path, model))
+
+
+def orientation_record(orient: EarthOrientation, t_s: np.ndarray | None = None) -> dict:
+    """The orientation for reports and JSON: ``model``, ``eop`` (its source, "" for gmst) and
+    ``predicted_eop`` (True if any time t_s, s from the epoch, lies past the measured EOP)."""
+    return {"model": orient.model, "eop": orient.eop_note,
+            "predicted_eop": bool(t_s is not None and orient.uses_predicted_eop(t_s))}
+
+
+def describe_orientation(record: dict) -> str:
+    """One line for reports from an :func:`orientation_record`."""
+    if record["model"] == "gmst":
+        return "gmst (GMST IAU-82 + ω t, UT1 = UTC; no precession, nutation or polar motion)"
+    predicted = "; predicted EOP used" if record["predicted_eop"] else ""
+    return f"iau2006 (IAU 2006/2000A; EOP {record['eop']}{predicted})"
+
+
+def force_model(spec: str, orient: EarthOrientation, source: str, field: str) -> ForceModel:
+    """Return the Earth force model of a gravity spec under the run's Earth orientation (a bad
+    spec names ``source`` and ``field``)."""
+    return earth_model(spec, source=source, field=field, earth_orientation=orient.model)
 
 
 def sigma_by_kind(path: Path = DEFAULT_SCENARIO) -> dict[str, float]:
@@ -332,19 +393,23 @@ def network_for(x_true: np.ndarray, name: str | None, path: Path = DEFAULT_SCENA
 
 def simulated_observations(x_true: np.ndarray, truth_spec: str, stations: tuple[Station, ...],
                            path: Path = DEFAULT_SCENARIO, seed: int | None = None,
-                           span_s: float | None = None, noise: bool = True) -> Observations:
+                           span_s: float | None = None, noise: bool = True,
+                           orient: EarthOrientation | None = None) -> Observations:
     """Simulate the study's 5-day observation file for one orbit and truth model.
 
     ``span_s`` shortens the file (default: the scenario's span); ``noise=False`` gives the
-    noise-free values (for a prediction that needs only the times and the stations).
+    noise-free values (for a prediction that needs only the times and the stations);
+    ``orient`` is the Earth orientation of the stations and of the truth's field (default: the
+    file's, :func:`orientation`).
     """
+    orient = orientation(path) if orient is None else orient
     trk = tracking(path)
     span = trk.span_s if span_s is None else min(span_s, trk.span_s)
     t = np.arange(0.0, span + 0.5 * trk.data_interval_s, trk.data_interval_s)
     t = t[t <= span + 1e-9 * max(span, 1.0)]
     rng = np.random.default_rng(trk.seed if seed is None else seed) if noise else None
-    truth = Propagator(earth_model(truth_spec, source=str(path), field="truth"))
-    return simulate(truth, x_true, stations, t, trk.sigma, rng, theta0_rad=trk.theta0_rad)
+    truth = Propagator(force_model(truth_spec, orient, str(path), "truth"))
+    return simulate(truth, x_true, stations, t, trk.sigma, rng, orient)
 
 
 def named_orbit_names(path: Path = DEFAULT_SCENARIO) -> list[str]:

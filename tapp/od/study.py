@@ -8,20 +8,22 @@ each DC run go the predicted convergence rate ρ of its (J_N, J_M) pair on the s
 observations at the true state (:mod:`tapp.od.rate`) and the study's own predictor, the
 ratio R_M / R_N of the error-growth signatures (:mod:`tapp.od.rsig`) of the variational and
 the state model at the end of the arc. The ρ curves use noise-free observations (ρ depends on
-the times, stations and weights only). The results are plain dataclasses;
+the times, stations and weights only). Every run uses the study's one Earth orientation
+(``earth_orientation`` and ``eop`` of the file, or the model passed in), for the data and the
+estimators alike; the results record it. The results are plain dataclasses;
 :mod:`tapp.report.approx_stm` turns them into the report.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from tapp.constants import GM_EARTH_km3_s2
-from tapp.dynamics import Propagator, earth_model
+from tapp.dynamics import Propagator
 from tapp.errors import TooFewMeasurementsError
 from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.od import setup
@@ -109,6 +111,8 @@ class StudyResults:
     inclination_network: str = ""
     settings: DCSettings = DCSettings()
     offset: setup.Offset | None = None
+    #: :func:`tapp.od.setup.orientation_record` over the tracking span
+    earth_orientation: dict = field(default_factory=dict)
 
 
 def planned_cases(path: Path = DEFAULT_SCENARIO) -> int:
@@ -124,9 +128,9 @@ def planned_cases(path: Path = DEFAULT_SCENARIO) -> int:
     return n + (len(study.rsig.cases) if study.rsig else 0)
 
 
-def _rate_or_none(obs, truth, stm, x_true, theta0) -> PredictedRate | None:
+def _rate_or_none(obs, truth, stm, x_true, orient) -> PredictedRate | None:
     try:
-        return predicted_rate(obs, truth, stm, x_true, theta0)
+        return predicted_rate(obs, truth, stm, x_true, orient)
     except (np.linalg.LinAlgError, TooFewMeasurementsError):
         return None
 
@@ -145,13 +149,24 @@ def with_inclination(x: np.ndarray, inclination_rad: float) -> np.ndarray:
     return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
-def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = lambda _: None
-              ) -> StudyResults:
-    """Run every case of the study; ``advance(label)`` is called after each case."""
+def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = lambda _: None,
+              earth_orientation: str | None = None) -> StudyResults:
+    """Run every case of the study; ``advance(label)`` is called after each case.
+
+    ``earth_orientation`` overrides the file's model ("iau2006" or "gmst").
+
+    Raises
+    ------
+    InputError
+        A bad study file, an unknown model, an epoch or span outside the EOP table.
+    """
     study = setup.study_file(path)
-    src = str(path)
     settings = DCSettings(**study.dc_settings.model_dump())
-    theta0 = setup.tracking(path).theta0_rad
+    orient = setup.orientation(path, earth_orientation)
+
+    def model(spec: str, where: str):
+        return setup.force_model(spec, orient, str(path), where)
+
     off = setup.offset(path)
     network: dict[str, tuple[str, ...]] = {}
     obs_cache: dict[tuple[str, str], object] = {}
@@ -161,7 +176,8 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
             x_true = setup.true_orbit(orbit, path)
             stations = setup.network_for(x_true, None, path)
             network[orbit] = tuple(s.name for s in stations)
-            obs_cache[orbit, truth] = setup.simulated_observations(x_true, truth, stations, path)
+            obs_cache[orbit, truth] = setup.simulated_observations(x_true, truth, stations,
+                                                                   path, orient=orient)
         return obs_cache[orbit, truth]
 
     dc_runs, blocks = [], []
@@ -169,10 +185,9 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
 
     def r_at_end(orbit: str, truth: str, stm: str, arc_h: float) -> float:
         if (orbit, truth, stm, arc_h) not in r_end:
-            prop = Propagator(earth_model(truth, source=src, field="dc.truth"),
-                              earth_model(stm, source=src, field="dc.stm"))
+            prop = Propagator(model(truth, "dc.truth"), model(stm, "dc.stm"))
             sig = r_signature(prop, setup.true_orbit(orbit, path),
-                              np.array([0.0, arc_h * 3600.0]), theta0)
+                              np.array([0.0, arc_h * 3600.0]), orient)
             r_end[orbit, truth, stm, arc_h] = float(sig.r[-1])
         return r_end[orbit, truth, stm, arc_h]
 
@@ -185,15 +200,15 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
             truth = block.truth
             obs = observations(orbit, truth)
             for stm in block.stm:
-                state_model = earth_model(truth, source=src, field="dc.truth")
-                var_model = earth_model(stm, source=src, field="dc.stm")
+                state_model = model(truth, "dc.truth")
+                var_model = model(stm, "dc.stm")
                 prop = Propagator(state_model, var_model)
                 for arc_h in block.arcs_h:
-                    data = obs.arc(arc_h * 3600.0, src, f"dc[{index}].arcs_h", arc_h)
-                    res = differential_correction(data, prop, x_start, theta0_rad=theta0,
+                    data = obs.arc(arc_h * 3600.0, str(path), f"dc[{index}].arcs_h", arc_h)
+                    res = differential_correction(data, prop, x_start, orientation=orient,
                                                   settings=settings)
                     err = float(np.linalg.norm(res.x0[:3] - x_true[:3]))
-                    rate = _rate_or_none(data, state_model, var_model, x_true, theta0)
+                    rate = _rate_or_none(data, state_model, var_model, x_true, orient)
                     ratio = r_at_end(orbit, truth, stm, arc_h) / r_at_end(orbit, truth,
                                                                         truth, arc_h)
                     dc_runs.append(DCRun(title, orbit, truth, stm, float(arc_h), res, err,
@@ -206,13 +221,13 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
         orbit, truth = ekf.orbit, ekf.truth
         x_true = setup.true_orbit(orbit, path)
         x_start = setup.initial_estimate(x_true, off)
-        obs = observations(orbit, truth).arc(ekf.arc_h * 3600.0, src, "ekf.arc_h", ekf.arc_h)
+        obs = observations(orbit, truth).arc(ekf.arc_h * 3600.0, str(path), "ekf.arc_h",
+                                             ekf.arc_h)
         for stm in ekf.stm:
-            prop = Propagator(earth_model(truth, source=src, field="ekf.truth"),
-                              earth_model(stm, source=src, field="ekf.stm"))
+            prop = Propagator(model(truth, "ekf.truth"), model(stm, "ekf.stm"))
             for label, sig in ekf.apriori.items():
                 p0 = np.diag(np.square(np.asarray(sig, dtype=float)))
-                res = extended_kalman_filter(obs, prop, x_start, p0, theta0_rad=theta0)
+                res = extended_kalman_filter(obs, prop, x_start, p0, orientation=orient)
                 ekf_runs.append(EKFRun(orbit, truth, stm, label, res))
                 advance(f"EKF ({truth},{stm}) a priori {label}")
 
@@ -222,9 +237,8 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
         x_true = setup.true_orbit(rs.orbit, path)
         t = np.arange(0.0, rs.hours * 3600.0 + 0.5 * rs.step_s, rs.step_s)
         for truth, stm in rs.cases:
-            prop = Propagator(earth_model(truth, source=src, field="rsig.cases"),
-                              earth_model(stm, source=src, field="rsig.cases"))
-            r_runs.append(RRun(rs.orbit, truth, stm, r_signature(prop, x_true, t, theta0)))
+            prop = Propagator(model(truth, "rsig.cases"), model(stm, "rsig.cases"))
+            r_runs.append(RRun(rs.orbit, truth, stm, r_signature(prop, x_true, t, orient)))
             advance(f"R(t) ({truth},{stm})")
 
     arc_curves = []
@@ -232,15 +246,15 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
     if ra:
         x_true = setup.true_orbit(ra.orbit, path)
         arcs_h = ra.arcs_h.values()
-        state_model = earth_model(ra.truth, source=src, field="rate_vs_arc.truth")
+        state_model = model(ra.truth, "rate_vs_arc.truth")
         obs = setup.simulated_observations(x_true, ra.truth, setup.network_for(x_true, None,
                                                                                path),
                                            path, span_s=float(arcs_h[-1]) * 3600.0,
-                                           noise=False)
+                                           noise=False, orient=orient)
         for stm in ra.stm:
-            var_model = earth_model(stm, source=src, field="rate_vs_arc.stm")
+            var_model = model(stm, "rate_vs_arc.stm")
             rates = [_rate_or_none(obs.window(a * 3600.0), state_model, var_model, x_true,
-                                   theta0) for a in arcs_h]
+                                   orient) for a in arcs_h]
             arc_curves.append(_curve(ra.orbit, ra.truth, stm, arcs_h, rates))
             advance(f"rho vs arc ({ra.truth},{stm})")
 
@@ -248,27 +262,30 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
     ri = study.rate_vs_inclination
     if ri:
         x_orbit = setup.true_orbit(ri.orbit, path)
-        stations = load_network(setup.load_study(path), src, ri.network)
+        stations = load_network(setup.load_study(path), str(path), ri.network)
         incs = ri.inclinations_deg.values()
-        state_model = earth_model(ri.truth, source=src, field="rate_vs_inclination.truth")
+        state_model = model(ri.truth, "rate_vs_inclination.truth")
         data = []
         for inc in incs:
             x_i = with_inclination(x_orbit, np.radians(inc))
             try:
                 o = setup.simulated_observations(x_i, ri.truth, stations, path,
-                                                 span_s=ri.arc_h * 3600.0, noise=False)
+                                                 span_s=ri.arc_h * 3600.0, noise=False,
+                                                 orient=orient)
             except TooFewMeasurementsError:
                 o = None
             data.append((x_i, o))
         for stm in ri.stm:
-            var_model = earth_model(stm, source=src, field="rate_vs_inclination.stm")
+            var_model = model(stm, "rate_vs_inclination.stm")
             rates = [None if o is None else _rate_or_none(o, state_model, var_model, x_i,
-                                                          theta0) for x_i, o in data]
+                                                          orient) for x_i, o in data]
             inc_curves.append(_curve(ri.orbit, ri.truth, stm, incs, rates))
             advance(f"rho vs inclination ({ri.truth},{stm})")
 
+    trk = setup.tracking(path)
     return StudyResults(tuple(dc_runs), tuple(blocks), tuple(ekf_runs),
                         ekf.title if ekf else "", ekf.last_passes if ekf else 0, tuple(r_runs),
-                        setup.tracking(path).sigma, network, tuple(arc_curves),
+                        trk.sigma, network, tuple(arc_curves),
                         tuple(inc_curves), ri.arc_h if ri else float("nan"),
-                        ri.network if ri else "", settings, off)
+                        ri.network if ri else "", settings, off,
+                        setup.orientation_record(orient, np.array([0.0, trk.span_s])))

@@ -14,6 +14,7 @@ import numpy as np  # noqa: E402
 
 from tapp.constants import GM_EARTH_km3_s2  # noqa: E402
 from tapp.frames.elements import cartesian_to_elements  # noqa: E402
+from tapp.od.setup import describe_orientation  # noqa: E402
 from tapp.od.study import DCRun, StudyResults  # noqa: E402
 from tapp.report.markdown import table  # noqa: E402
 
@@ -422,6 +423,7 @@ def write_report(results: StudyResults, out_dir: Path, elapsed_s: float) -> Path
         "limit) and **diverged** (the RMS grew or failed to settle). Each DC iterates to "
         f"convergence or to {results.settings.max_iterations} iterations; the tables keep "
         "the RMS at iterations 1, 6 and 12 of the brief.\n",
+        _orientation_text(results),
         "Stations per orbit:\n\n" + nets + "\n",
         "## Batch differential correction\n",
         dc_section(results),
@@ -438,6 +440,7 @@ def write_report(results: StudyResults, out_dir: Path, elapsed_s: float) -> Path
     report = out_dir / "report.md"
     report.write_text("\n".join(text))
     raw = {
+        "earth_orientation": results.earth_orientation,
         "dc": [{"block": r.block, "orbit": r.orbit, "truth": r.truth, "stm": r.stm,
                 "arc_h": r.arc_h, "status": r.result.status, "reason": r.result.reason,
                 "converged_at": r.result.converged_at, "rms": r.result.rms.tolist(),
@@ -461,6 +464,14 @@ def write_report(results: StudyResults, out_dir: Path, elapsed_s: float) -> Path
     }
     (out_dir / "results.json").write_text(json.dumps(raw))
     return report
+
+
+def _orientation_text(results: StudyResults) -> str:
+    """The Earth orientation of the data and the estimators (stations and field)."""
+    if not results.earth_orientation:
+        return ""
+    return ("Earth orientation of the simulated data and of every estimator (stations and "
+            f"geopotential): {describe_orientation(results.earth_orientation)}.\n")
 
 
 def _offset_text(results: StudyResults) -> str:

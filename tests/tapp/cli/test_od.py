@@ -1,8 +1,11 @@
-"""``tapp dc``, ``tapp ekf``, ``tapp rsig`` and observation files, end to end."""
+"""``tapp dc``, ``tapp ekf``, ``tapp rsig`` and observation files, end to end; the Earth
+orientation switch (the study file's ``earth_orientation`` and ``eop``, ``--earth-orientation``)
+and what the outputs record of it."""
 
 from __future__ import annotations
 
 import json
+from datetime import datetime, timedelta
 from pathlib import Path
 
 import h5py
@@ -172,21 +175,24 @@ def test_a_published_tdm_is_refused_in_one_line_naming_keyword_and_block() -> No
 
 def test_simulate_writes_a_tdm_that_dc_fits_exactly(tmp_path: Path) -> None:
     """TAPP I's noise-free observations of SATORB1 in a 5x5 field, through a TDM, fitted by the
-    DC with the same models: the epoch state comes back to within a millimetre."""
+    DC with the same models and the same Earth orientation (iau2006): the epoch state comes
+    back to within a millimetre."""
     scenario = Path(__file__).resolve().parents[3] / "scenarios" / "leo_equatorial.toml"
     tape, tdm = tmp_path / "run.t13.h5", tmp_path / "run.tdm"
     sim = runner.invoke(app, ["simulate", str(scenario), "-o", str(tape), "--tdm", str(tdm),
-                              "--json"])
+                              "--earth-orientation", "iau2006", "--json"])
     assert sim.exit_code == 0, sim.output
     assert json.loads(sim.stdout)["tdm"] == str(tdm)
     with h5py.File(tape) as f:
         assert "raw" not in f  # the raw rows fed the TDM; the tape is as without --raw
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--obs", str(tdm), "--arc", "24h",
-                              "--truth", "5x5", "--stm", "5x5", "--json"])
+                              "--truth", "5x5", "--stm", "5x5", "--earth-orientation", "iau2006",
+                              "--json"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert out["measurements"] == json.loads(sim.stdout)["observations"]
     assert out["position_error_km"] < 1e-6
+    assert out["earth_orientation"]["model"] == "iau2006"
 
 
 def test_dc_reads_an_observation_file(tmp_path: Path, small_obs) -> None:
@@ -215,3 +221,128 @@ def test_bad_observation_file_names_file_and_field(tmp_path: Path, text: str,
     assert res.exit_code == 2
     line = res.stderr.strip()
     assert str(path) in line and field in line
+
+
+# --- the Earth orientation switch ---------------------------------------------------------
+
+STUDY = Path(__file__).resolve().parents[3] / "scenarios" / "approx_stm.toml"
+
+
+def _study(tmp_path: Path, old: str, new: str) -> Path:
+    text = STUDY.read_text()
+    assert text.count(old) == 1
+    path = tmp_path / "study.toml"
+    path.write_text(text.replace(old, new))
+    return path
+
+
+def _refused(args: list[str], starts: str, tmp_path: Path) -> str:
+    """Exit 2, one line on stderr starting with ``starts``, nothing written in tmp_path."""
+    before = sorted(tmp_path.iterdir())
+    res = runner.invoke(app, args)
+    assert res.exit_code == 2, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(starts), lines
+    assert sorted(tmp_path.iterdir()) == before
+    return lines[0]
+
+
+def test_the_study_file_runs_gmst_and_the_outputs_say_so() -> None:
+    """The shipped study file asks for gmst (the paper's model): the DC's JSON records the
+    model, no EOP and no predictions; the text output names it."""
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["earth_orientation"] == {"model": "gmst", "eop": "",
+                                                          "predicted_eop": False}
+    text = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h"])
+    assert text.exit_code == 0 and "Earth orientation: gmst" in text.stdout
+    assert "), gmst: converged" in text.stdout
+
+
+@pytest.mark.parametrize("command", [
+    ["dc", "--arc", "12h"], ["ekf", "--arc", "3h"], ["rsig", "--hours", "2", "--step", "600"]])
+def test_earth_orientation_option_overrides_the_file(command: list[str]) -> None:
+    """--earth-orientation iau2006 on every OD command: the data (dc, ekf) are simulated and
+    fitted under iau2006 and the JSON records the model and the EOP source; the DC still
+    converges to the truth."""
+    res = runner.invoke(app, [*command, "--orbit", "SATORB1", "--earth-orientation", "iau2006",
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["earth_orientation"]["model"] == "iau2006"
+    assert out["earth_orientation"]["eop"].startswith("finals2000A")
+    assert out["earth_orientation"]["predicted_eop"] is False  # 2026-01-01 is measured
+    if command[0] == "dc":
+        assert out["converged"] and out["position_error_km"] < 0.01
+
+
+def test_predicted_eop_are_reported(tmp_path: Path) -> None:
+    """An epoch ten days past the last measured EOP (the table's predictions, still within
+    it): the DC runs, and its outputs say that predicted EOP were used."""
+    table = setup.orientation(model="iau2006").scales.eop
+    when = datetime(1858, 11, 17) + timedelta(days=table.predicted_from_mjd + 10)  # MJD 0
+    path = _study(tmp_path, 'epoch = "2026-01-01T00:00:00"',
+                  f'epoch = "{when:%Y-%m-%dT00:00:00}"')
+    args = ["dc", "--orbit", "SATORB1", "--arc", "6h", "--scenario", str(path),
+            "--earth-orientation", "iau2006"]
+    res = runner.invoke(app, [*args, "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["earth_orientation"]["predicted_eop"] is True
+    text = runner.invoke(app, args)
+    assert "predicted EOP used" in text.stdout
+
+
+@pytest.mark.parametrize("command", [["dc"], ["ekf"], ["rsig"]])
+def test_an_unknown_earth_orientation_option_is_one_line_naming_the_choices(
+        tmp_path: Path, command: list[str]) -> None:
+    line = _refused([*command, "--orbit", "SATORB1", "--earth-orientation", "itrf"],
+                    "error: --earth-orientation", tmp_path)
+    assert '"iau2006"' in line and '"gmst"' in line and "itrf" in line
+
+
+def test_an_unknown_earth_orientation_in_the_file_is_refused(tmp_path: Path) -> None:
+    path = _study(tmp_path, 'earth_orientation = "gmst"', 'earth_orientation = "gmst82"')
+    line = _refused(["dc", "--orbit", "SATORB1", "--scenario", str(path), "--save-obs",
+                     str(tmp_path / "obs.h5")], f"error: {path}: earth_orientation:", tmp_path)
+    assert "gmst82" in line
+
+
+def test_an_epoch_outside_the_eop_table_is_refused(tmp_path: Path) -> None:
+    """2060 with eop = "iers": outside the IERS table (and its predictions). The file's gmst
+    model needs no EOP; asking for iau2006, in the file or on the CLI, is refused in one line
+    naming the file, the epoch and the way out (eop = "none")."""
+    path = _study(tmp_path, 'epoch = "2026-01-01T00:00:00"', 'epoch = "2060-01-01T00:00:00"')
+    gmst = runner.invoke(app, ["rsig", "--orbit", "SATORB1", "--scenario", str(path),
+                               "--hours", "1"])
+    assert gmst.exit_code == 0, gmst.output
+    save = ["--save-obs", str(tmp_path / "obs.h5")]
+    line = _refused(["dc", "--orbit", "SATORB1", "--scenario", str(path),
+                     "--earth-orientation", "iau2006", *save], f"error: {path}: epoch:",
+                    tmp_path)
+    assert "2060-01-01" in line and 'eop = "none"' in line
+    (tmp_path / "in_file").mkdir()
+    in_file = _study(tmp_path / "in_file", 'earth_orientation = "gmst"',
+                     'earth_orientation = "iau2006"')
+    in_file.write_text(in_file.read_text().replace('epoch = "2026-01-01T00:00:00"',
+                                                   'epoch = "2060-01-01T00:00:00"'))
+    for command in (["dc", *save], ["ekf"], ["rsig"]):
+        _refused([*command, "--orbit", "SATORB1", "--scenario", str(in_file)],
+                 f"error: {in_file}: epoch:", tmp_path)
+    # beyond the predictions, eop = "none" (UT1 = UTC, no polar motion) runs (a new file:
+    # study files are read once per path)
+    no_eop = tmp_path / "in_file" / "no_eop.toml"
+    no_eop.write_text(in_file.read_text().replace('eop = "iers"', 'eop = "none"'))
+    res = runner.invoke(app, ["rsig", "--orbit", "SATORB1", "--scenario", str(no_eop),
+                              "--hours", "1", "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["earth_orientation"]["eop"].startswith("none")
+
+
+def test_saved_observations_record_the_earth_orientation(tmp_path: Path) -> None:
+    path = tmp_path / "obs.h5"
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--save-obs",
+                              str(path), "--earth-orientation", "iau2006", "--json"])
+    assert res.exit_code == 0, res.output
+    with h5py.File(path) as f:
+        comments = [str(c) for c in f.attrs["comments"]]
+    assert any("simulated with Earth orientation iau2006" in c for c in comments)

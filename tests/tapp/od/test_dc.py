@@ -1,6 +1,6 @@
-"""Batch differential correction: the study's contrast, exact recovery, covariance realism,
-the four outcomes, the predicted rate against the observed one, the ill-conditioning
-diagnosis."""
+"""Batch differential correction: the study's contrast (under both Earth orientation models),
+exact recovery, covariance realism, the four outcomes, the predicted rate against the observed
+one, the ill-conditioning diagnosis, and what fitting iau2006 data with gmst does."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from scipy.stats import chi2
 
 from tapp.dynamics import Propagator, earth_model
 from tapp.errors import InputError, TooFewMeasurementsError
+from tapp.frames.orientation import EarthOrientation
 from tapp.od import setup
 from tapp.od.batch import (
     DCIteration,
@@ -19,6 +20,7 @@ from tapp.od.batch import (
     DCSettings,
     IllConditionedError,
     _at_limit,
+    _linearise,
     contraction_factor,
     differential_correction,
 )
@@ -27,6 +29,7 @@ from tapp.od.rate import predicted_rate
 
 TEN_METRES_km = 1e-2
 ONE_CM_km = 1e-5
+TEN_KM_km = 10.0
 #: The issue's bound on |q - ρ| / ρ for a slowly converging DC in its linear regime.
 FIVE_PERCENT = 0.05
 #: ρ of the exact variational model: M = 0 to rounding.
@@ -43,21 +46,59 @@ def _network(x_true):
     return setup.network_for(x_true, None)
 
 
-def test_ci_contrast_j2j2_converges_j2j0_diverges(satorb1) -> None:
+def _models(orient: EarthOrientation, *specs: str):
+    return (earth_model(spec, earth_orientation=orient.model) for spec in specs)
+
+
+@pytest.mark.parametrize("model", ["gmst", "iau2006"])
+def test_ci_contrast_j2j2_converges_j2j0_diverges(satorb1, model: str) -> None:
     """The brief's one outcome: SATORB1, 24 h: (J2,J2) converges (in about 4 iterations)
-    to the true orbit; (J2,J0) diverges."""
+    to the true orbit; (J2,J0) diverges. The same under either Earth orientation model, the
+    data simulated and fitted with it (the study file's gmst, and iau2006)."""
     x_true, x_start = satorb1
-    obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(86400.0)
-    theta0 = setup.tracking().theta0_rad
-    good = differential_correction(obs, Propagator(earth_model("J2"), earth_model("J2")),
-                                   x_start, theta0_rad=theta0)
+    orient = setup.orientation(model=model)
+    assert orient.model == model
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true),
+                                       orient=orient).window(86400.0)
+    j2, j0 = _models(orient, "J2", "J0")
+    good = differential_correction(obs, Propagator(j2, j2), x_start, orientation=orient)
     assert good.converged and len(good.iterations) <= 6
     assert np.linalg.norm(good.x0[:3] - x_true[:3]) < TEN_METRES_km
     assert good.rms[-1] == pytest.approx(1.0, abs=0.1)  # weighted RMS at the noise level
-    bad = differential_correction(obs, Propagator(earth_model("J2"), earth_model("J0")),
-                                  x_start, theta0_rad=theta0)
+    bad = differential_correction(obs, Propagator(j2, j0), x_start, orientation=orient)
     assert bad.status == DCOutcome.DIVERGED
     assert bad.rms[-1] > bad.rms[0]
+
+
+def _chi2_bound(n_measurements: int) -> float:
+    """The RMS a correct model exceeds with probability 0.1 %: m RMS² ~ χ²(m - 6)."""
+    return math.sqrt(chi2.ppf(0.999, n_measurements - 6) / n_measurements)
+
+
+def test_gmst_does_not_fit_iau2006_data(satorb1) -> None:
+    """Why the switch exists. SATORB1, 24 h, data simulated under iau2006 (precession and
+    nutation since J2000, EOP). Seen from the true orbit, the gmst model's stations are tens
+    of km off (31.5 km at Goldstone): residuals of thousands of σ. The gmst DC "fits" only by
+    rotating the orbit with the frame: it ends 41 km from the true state, and the residual
+    RMS stays above the noise by more than a χ² test allows (the polar motion and the
+    rotation rates are not absorbed), though under the fit limit. The iau2006 DC on the same
+    data converges to the truth and passes the χ² test."""
+    x_true, x_start = satorb1
+    iau, gmst = setup.orientation(model="iau2006"), setup.orientation(model="gmst")
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true),
+                                       orient=iau).window(86400.0)
+    w = np.tile(1.0 / obs.sigma**2, obs.t_s.size)
+    (j2_gmst,) = _models(gmst, "J2")
+    y, _ = _linearise(obs, Propagator(j2_gmst), x_true, gmst)
+    assert np.sqrt(np.mean(w * y**2)) > 1000  # the 31 km station error, in σ
+    (j2_iau,) = _models(iau, "J2")
+    right = differential_correction(obs, Propagator(j2_iau), x_start, orientation=iau)
+    assert right.converged
+    assert np.linalg.norm(right.x0[:3] - x_true[:3]) < TEN_METRES_km
+    assert right.rms[-1] < _chi2_bound(obs.count)
+    wrong = differential_correction(obs, Propagator(j2_gmst), x_start, orientation=gmst)
+    assert wrong.rms[-1] > _chi2_bound(obs.count) * 1.2
+    assert np.linalg.norm(wrong.x0[:3] - x_true[:3]) > TEN_KM_km
 
 
 def test_predicted_rate_separates_the_contrast(satorb1) -> None:
@@ -65,12 +106,12 @@ def test_predicted_rate_separates_the_contrast(satorb1) -> None:
     exact (J2,J2) one (M = 0 when H̃ = H)."""
     x_true, _ = satorb1
     obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(86400.0)
-    theta0 = setup.tracking().theta0_rad
-    diverging = predicted_rate(obs, earth_model("J2"), earth_model("J0"), x_true, theta0)
+    orient = setup.orientation()
+    diverging = predicted_rate(obs, earth_model("J2"), earth_model("J0"), x_true, orient)
     assert diverging.rho > 1 and not diverging.oscillating
     assert diverging.eigenvalues.shape == (6,)
     assert abs(diverging.eigenvalues[0]) == pytest.approx(diverging.rho)
-    exact = predicted_rate(obs, earth_model("J2"), earth_model("J2"), x_true, theta0)
+    exact = predicted_rate(obs, earth_model("J2"), earth_model("J2"), x_true, orient)
     assert exact.rho < ROUNDING
 
 
@@ -80,12 +121,12 @@ def test_slow_convergence_pace_matches_the_predicted_rate() -> None:
     the linear regime is ρ within 5 %; the projection counts the iterations left."""
     x_true = setup.true_orbit("SATORB3")
     obs = setup.simulated_observations(x_true, "J2", _network(x_true), span_s=86400.0)
-    theta0 = setup.tracking().theta0_rad
-    rate = predicted_rate(obs, earth_model("J2"), earth_model("J0"), x_true, theta0)
+    orient = setup.orientation()
+    rate = predicted_rate(obs, earth_model("J2"), earth_model("J0"), x_true, orient)
     assert 0.5 < rate.rho < 1
     res = differential_correction(obs, Propagator(earth_model("J2"), earth_model("J0")),
                                   setup.initial_estimate(x_true, setup.offset()),
-                                  theta0_rad=theta0,
+                                  orientation=orient,
                                   settings=DCSettings(max_iterations=30, divergence_ratio=1e3))
     assert res.status == DCOutcome.CONVERGING and res.converged_at is None
     assert abs(res.contraction_factor - rate.rho) < FIVE_PERCENT * rate.rho
@@ -104,7 +145,7 @@ def test_a_short_arc_is_diagnosed_not_iterated(satorb1) -> None:
     obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(600.0)
     with pytest.raises(IllConditionedError) as info:
         differential_correction(obs, Propagator(earth_model("J2")), x_start,
-                                theta0_rad=setup.tracking().theta0_rad)
+                                orientation=setup.orientation())
     err = info.value
     assert err.condition > err.limit == DCSettings().max_condition
     assert err.directions.shape == (1, 6) and err.n_measurements == obs.count
@@ -121,7 +162,7 @@ def test_eccentric_orbits_start_a_few_hundred_sigma_off(orbit: str, largest: flo
     obs = setup.simulated_observations(x_true, "J2", _network(x_true), span_s=6 * 3600.0)
     res = differential_correction(obs, Propagator(earth_model("J2")),
                                   setup.initial_estimate(x_true, setup.offset()),
-                                  theta0_rad=setup.tracking().theta0_rad,
+                                  orientation=setup.orientation(),
                                   settings=DCSettings(max_iterations=2))
     assert 10 < res.rms[0] < largest
 
@@ -130,7 +171,8 @@ def test_no_measurement_in_the_arc_is_too_few(satorb1) -> None:
     x_true, x_start = satorb1
     obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(60.0)
     with pytest.raises(TooFewMeasurementsError):
-        differential_correction(obs, Propagator(earth_model("J2")), x_start)
+        differential_correction(obs, Propagator(earth_model("J2")), x_start,
+                                orientation=setup.orientation())
 
 
 def _history(rms: list[float], steps: list[float]) -> list[DCIteration]:
@@ -173,8 +215,9 @@ def test_noise_free_matching_models_recover_truth(satorb1) -> None:
     x_true, x_start = satorb1
     prop = Propagator(earth_model("J2"))
     t = np.arange(0.0, 86400.0 + 1, 30.0)
-    obs = simulate(prop, x_true, _network(x_true), t, setup.tracking().sigma, None, 0.4)
-    result = differential_correction(obs, prop, x_start, theta0_rad=0.4,
+    orient = EarthOrientation.gmst_angle(0.4)
+    obs = simulate(prop, x_true, _network(x_true), t, setup.tracking().sigma, None, orient)
+    result = differential_correction(obs, prop, x_start, orientation=orient,
                                      settings=DCSettings(rms_rel_tol=1e-6))
     assert result.converged
     assert np.linalg.norm(result.x0[:3] - x_true[:3]) < ONE_CM_km
@@ -191,9 +234,11 @@ def test_formal_covariance_matches_scatter_of_noisy_runs() -> None:
     root = np.random.SeedSequence(2024)
     n_runs = 120
     nees = 0.0
+    orient = EarthOrientation.gmst_angle(0.0)
     for child in root.spawn(n_runs):
-        obs = simulate(prop, x_true, stations, t, sigma, np.random.default_rng(child), 0.0)
-        res = differential_correction(obs, prop, x_true, settings=DCSettings(rms_rel_tol=1e-4))
+        obs = simulate(prop, x_true, stations, t, sigma, np.random.default_rng(child), orient)
+        res = differential_correction(obs, prop, x_true, orientation=orient,
+                                      settings=DCSettings(rms_rel_tol=1e-4))
         err = res.iterations[-1].x0 - x_true
         nees += err @ np.linalg.solve(res.covariance, err)
     lo, hi = chi2.ppf([0.0005, 0.9995], 6 * n_runs)

@@ -20,7 +20,7 @@ def test_ekf_with_matching_models_reaches_the_noise_level() -> None:
     obs = obs.window(18 * 3600.0)
     res = extended_kalman_filter(obs, Propagator(earth_model("J2")), x_start,
                                  np.diag(np.square(apriori)),
-                                 theta0_rad=setup.tracking().theta0_rad)
+                                 orientation=setup.orientation())
     late = obs.t_s > 9 * 3600.0
     normalised = res.prefit[late] / obs.sigma
     rms = np.sqrt(np.mean(normalised**2, axis=0))
@@ -34,7 +34,7 @@ def test_r_signature_j0_matches_analytic_kepler_stm_and_grows_linearly() -> None
     x0 = setup.true_orbit("SATORB1")
     period = 2 * np.pi * np.sqrt(6550.524**3 / GM_EARTH_km3_s2)
     t = np.arange(0.0, 48 * 3600.0, period)  # same orbital phase: the periodic part drops out
-    sig = r_signature(Propagator(earth_model("J0")), x0, t)
+    sig = r_signature(Propagator(earth_model("J0")), x0, t, setup.orientation())
     # analytic STM: central differences of the closed-form Kepler solution (Kepler's equation)
     el0 = np.asarray(cartesian_to_elements(x0, GM_EARTH_km3_s2))
     delta = np.array([1e-3] * 3 + [1e-6] * 3)

@@ -3,6 +3,7 @@ every outcome, and the report it writes."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -43,3 +44,8 @@ def test_the_study_rho_predicts_every_outcome(tmp_path: Path) -> None:
     assert f"ρ predicts the outcome of {len(truncated)} of the {len(truncated)}" in text
     for png in ("rsig.png", "dc_rms.png", "rho_vs_arc.png", "rho_vs_inclination.png"):
         assert (tmp_path / png).stat().st_size > 10_000
+    # the study file's Earth orientation (the paper's model), recorded in the report and JSON
+    assert results.earth_orientation == {"model": "gmst", "eop": "", "predicted_eop": False}
+    assert "every estimator (stations and geopotential): gmst (GMST IAU-82" in text
+    raw = json.loads((tmp_path / "results.json").read_text())
+    assert raw["earth_orientation"]["model"] == "gmst"

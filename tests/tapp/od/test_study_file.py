@@ -3,6 +3,7 @@ a boolean or a string where a number belongs is one line naming the file and the
 
 from __future__ import annotations
 
+import datetime as dt
 import math
 from pathlib import Path
 
@@ -39,6 +40,9 @@ def test_the_shipped_study_file_validates() -> None:
     assert study.ekf.apriori["1"][0] == 0.68 and study.rsig.cases[0] == ["J0", "J0"]
     assert setup.tracking().seed == 1969 and setup.load_study()["tracking"]["seed"] == 1969
     assert study.dc_settings.max_iterations == 100
+    # the paper's model (see the file's comment); iau2006 is the default for new files
+    assert (study.earth_orientation, study.eop) == ("gmst", "iers")
+    assert setup.StudyFile.model_fields["earth_orientation"].default == "iau2006"
     arcs = study.rate_vs_arc.arcs_h.values()
     assert (arcs[0], arcs[-1]) == (6.0, 48.0)
     incs = study.rate_vs_inclination.inclinations_deg.values()
@@ -119,6 +123,9 @@ def test_an_unknown_section_is_refused(tmp_path: Path) -> None:
     ('equatorial = ["QUITO",', 'equatorial = ["QUITOO",', "networks.equatorial[0]",
      "names of [stations.*] tables"),
     ('epoch = "2026-01-01T00:00:00"', "epoch = 2026", "epoch", "text (a quoted string)"),
+    ('earth_orientation = "gmst"', 'earth_orientation = "GMST"', "earth_orientation",
+     "one of"),
+    ('eop = "iers"', 'eop = ""', "eop", '"iers" (the shipped IERS table)'),
 ])
 def test_bad_entries_name_file_and_field(tmp_path: Path, old: str, new: str, field: str,
                                          expected: str) -> None:
@@ -134,3 +141,36 @@ def test_the_runner_and_the_commands_read_the_validated_file(tmp_path: Path) -> 
             read(path)
     with pytest.raises(InputError, match=r"tracking\.sed: expected no such key"):
         setup.true_orbit("SATORB1", path)
+
+
+def test_the_orientation_follows_the_file_or_the_override() -> None:
+    """One EarthOrientation per file and model (cached: its slow-term series are fitted once
+    per run); the override names --earth-orientation when it is unknown."""
+    assert setup.orientation().model == "gmst"
+    assert setup.orientation().theta0_rad == setup.epoch().gmst_rad()  # the study's angle
+    iau = setup.orientation(model="iau2006")
+    assert iau.model == "iau2006" and iau is setup.orientation(model="iau2006")
+    with pytest.raises(InputError) as info:
+        setup.orientation(model="itrf")
+    assert (info.value.source, info.value.got) == ("--earth-orientation", "itrf")
+
+
+def _two_days_before_the_table_ends() -> str:
+    last_mjd = float(setup.orientation(model="iau2006").scales.eop.mjd[-1])
+    when = dt.datetime(1858, 11, 17) + dt.timedelta(days=last_mjd - 2)  # MJD 0
+    return f"{when:%Y-%m-%dT%H:%M:%S}"
+
+
+@pytest.mark.parametrize("outside", ["the epoch", "the 5-day tracking span"])
+def test_an_epoch_or_span_outside_the_eop_table_names_file_and_epoch(
+        tmp_path: Path, outside: str) -> None:
+    epoch = "2060-01-01T00:00:00" if outside == "the epoch" else _two_days_before_the_table_ends()
+    path = _study(tmp_path, 'epoch = "2026-01-01T00:00:00"', f'epoch = "{epoch}"')
+    path.write_text(path.read_text().replace('earth_orientation = "gmst"',
+                                             'earth_orientation = "iau2006"'))
+    with pytest.raises(InputError) as info:
+        setup.orientation(path)
+    err = info.value
+    assert (err.source, err.field) == (str(path), "epoch") and "\n" not in str(err)
+    assert "IERS EOP table" in err.expected
+    assert setup.orientation(path, "gmst").model == "gmst"  # gmst needs no EOP
