@@ -209,12 +209,13 @@ class Checker:
             self.fail(dataset, "finite values", f"{a[bad]} at index {bad}")
 
     def symmetric(self, dataset: str, m: np.ndarray, *, what: str = "normal matrices",
-                  label: str | None = "pair", offset: int = 0, tol: float = SYMMETRY_TOL
-                  ) -> None:
+                  label: str | None = "pair", offset: int = 0, tol: float = SYMMETRY_TOL,
+                  floor: np.ndarray | None = None) -> None:
         """Check symmetric matrices (..., n, n) with a non-negative diagonal.
 
         ``label`` names the leading index in the message ("pair 3"), with ``offset`` added
-        (a slice of a larger stack); None for a single matrix.
+        (a slice of a larger stack); None for a single matrix. ``floor`` (n,), >= 0, accepts
+        diagonal entries down to −floor (the rounding of a variance that cancels to ~0).
         """
         stack = m.reshape(-1, *m.shape[-2:])
 
@@ -227,8 +228,9 @@ class Checker:
             self.fail(dataset, f"symmetric {what} (relative asymmetry <= {tol:g})",
                       f"{defect[first]:.3g}{where(first)}")
         diag = np.diagonal(stack, axis1=-2, axis2=-1)
-        if np.any(diag < 0):
-            i, col = (int(v) for v in np.argwhere(diag < 0)[0])
+        low = diag < (0.0 if floor is None else -floor)
+        if np.any(low):
+            i, col = (int(v) for v in np.argwhere(low)[0])
             self.fail(dataset, f"a non-negative diagonal ({what})",
                       f"{diag[i, col]:.3g}{where(i)}, row {col}")
 

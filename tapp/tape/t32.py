@@ -113,6 +113,10 @@ CHAINED = ("common", "fit", "real")
 SYMMETRIC = (("S_fit", "normal", "1/(u_a u_b)"), ("Lambda_fit", "covariance", "u_a u_b"),
              ("Lambda_real", "covariance", "u_a u_b"), ("Sigma", "covariance", "u_a u_b"),
              ("J", "normal", "1/(u_a u_b)"), ("Jt", "normal", "1/(u_a u_b)"))
+#: Σ = Λ' J̃ Λ' is a covariance, but the variance of a parameter the data barely reach
+#: cancels to ~0 and its rounding can come out negative (−1.5e-9 Λ̄'_ii seen when a station
+#: is switched off); since Σ <= Λ̄' in exact arithmetic, Σ_ii down to −1e-6 Λ̄'_ii is rounding.
+SIGMA_ROUNDING = 1e-6
 #: Provenance the writer stamps itself (a value given for these is replaced).
 STAMPED = ("tapp_version", "git_commit", "created_utc")
 #: Root attributes of the schema: not available as provenance names.
@@ -299,9 +303,10 @@ def _matrix(c: Checker, name: str, m: np.ndarray, shape: tuple[int, ...]) -> Non
     c.finite(name, m)
 
 
-def _symmetric(c: Checker, name: str, m: np.ndarray, n: int, what: str) -> None:
+def _symmetric(c: Checker, name: str, m: np.ndarray, n: int, what: str,
+               floor: np.ndarray | None = None) -> None:
     _matrix(c, name, m, (n, n))
-    c.symmetric(name, m, what=f"{what} matrix", label=None)
+    c.symmetric(name, m, what=f"{what} matrix", label=None, floor=floor)
 
 
 def validate(t32: T32, source: str = "T32") -> None:
@@ -379,7 +384,10 @@ def validate(t32: T32, source: str = "T32") -> None:
                                                f"{rc.number}")
         _matrix(c, "recycles/info", rc.info, (6,))
         for name, what, _ in SYMMETRIC:
-            _symmetric(c, f"{base}/{name}", getattr(rc, name), n_o, what)
+            floor = None
+            if name == "Sigma" and np.shape(rc.Lambda_real) == (n_o, n_o):
+                floor = SIGMA_ROUNDING * np.clip(np.diagonal(rc.Lambda_real), 0.0, None)
+            _symmetric(c, f"{base}/{name}", getattr(rc, name), n_o, what, floor)
         for name in ("L", "transition"):
             _matrix(c, f"{base}/{name}", getattr(rc, name), (n_o, n_o))
         _matrix(c, f"{base}/B", rc.B, (n_m, n_o))

@@ -355,3 +355,22 @@ def test_describe_and_text_summary(written: Path, tape: T32) -> None:
                      "2026-03-10T12:40:00.000", "from deck.toml and run.t13.h5"):
         assert expected in text, expected
     assert f"{rc['sigma_position_km']['fit']:10.4g}" in text
+
+
+def _sigma_with_diagonal(tape: T32, row: int, relative: float) -> T32:
+    """Σ of recycle 1 with entry (row, row) set to ``relative`` times Λ̄'_row,row."""
+    rc = tape.recycles[0]
+    sigma = np.array(rc.Sigma)
+    sigma[row, row] = relative * rc.Lambda_real[row, row]
+    return _recycle(tape, 0, Sigma=sigma)
+
+
+def test_sigma_accepts_a_rounding_negative_variance_and_no_more(tmp_path: Path,
+                                                              tape: T32) -> None:
+    """Σ <= Λ̄' in exact arithmetic: Σ_ii down to −1e-6 Λ̄'_ii is rounding of a variance
+    that cancels (measured −1.5e-9 with a station switched off), below is refused."""
+    row = int(np.argmax(np.diagonal(tape.recycles[0].Lambda_real) > 0))
+    rounding = _sigma_with_diagonal(tape, row, -1e-9)
+    assert read_t32(write_t32(tmp_path / "ok.t32.h5", rounding)).recycles[0].Sigma[row, row] < 0
+    with pytest.raises(TapeError, match=r"recycles/1/Sigma: expected a non-negative diagonal"):
+        t32.validate(_sigma_with_diagonal(tape, row, -1e-3))
