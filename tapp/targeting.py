@@ -302,7 +302,8 @@ class BPlaneProgram:
         t = np.array([t_s], dtype=np.float64)
         rb = [self._position_km(body, t)[0] for body in eqs.bodies]
         if eqs.oriented:
-            rb.append(self.orientation.slow_terms(t).ravel())
+            rb.append((self.orientation.slow_terms(t) if eqs.oriented == "full"
+                       else self.orientation.pole(t)).ravel())
         xdot = eqs.f_state(t_s, state, np.zeros(0), [self.orientation.theta0_rad],
                            np.concatenate([np.zeros(0), *rb]))
         return np.asarray(xdot, dtype=np.float64).ravel()[3:6]

@@ -19,7 +19,8 @@ column-major. Nobody slices it by hand: use :func:`split_augmented`.
 Both CasADi functions share the signature ``f(t, y, q, c, rb) -> ydot`` with c = [θ0] (Earth
 rotation angle at the epoch, rad) and rb the stacked third-body positions relative to the
 centre (km), in the order of :attr:`Equations.bodies`, followed, when the field is oriented by
-the iau2006 model (:attr:`Equations.oriented`), by its nine slow terms (the three series of
+the iau2006 model (:attr:`Equations.oriented`), by the series that orient it: the ITRS pole
+("pole", 3 entries: enough when every oriented field is zonal) or the nine slow terms ("full",
 :meth:`tapp.frames.orientation.EarthOrientation.slow_terms`). The driver evaluates all of rb
 from one Chebyshev table.
 """
@@ -44,7 +45,7 @@ class Equations:
     f_var: ca.Function
     bodies: tuple[str, ...]
     params: tuple[str, ...]
-    oriented: bool = False
+    oriented: str = ""
 
     @property
     def n_aug(self) -> int:
@@ -69,12 +70,14 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
                          "state and variational models", f"{state_model.earth_orientation} vs "
                          f"{var_model.earth_orientation}")
     bodies = tuple(sorted(set(state_model.third_bodies) | set(var_model.third_bodies)))
-    oriented = state_model.oriented_field or var_model.oriented_field
+    models = [m for m in (state_model, var_model) if m.oriented_field]
+    oriented = "" if not models else (
+        "pole" if all(m.gravity.order == 0 for m in models) else "full")
     nq = len(params)
     t = ca.SX.sym("t")
     c = ca.SX.sym("c", 1)
     q = ca.SX.sym("q", nq)
-    rb = ca.SX.sym("rb", 3 * len(bodies) + (9 if oriented else 0))
+    rb = ca.SX.sym("rb", 3 * len(bodies) + {"": 0, "pole": 3, "full": 9}[oriented])
     r_bodies = {b: rb[3 * i:3 * i + 3] for i, b in enumerate(bodies)}
     slow = rb[3 * len(bodies):] if oriented else None
     q_map = {name: q[i] for i, name in enumerate(params)}

@@ -126,8 +126,10 @@ def _recursion_factors(n: int, m: int) -> tuple[float, float]:
 
 
 def central_potential(model: ForceModel, r_fixed, gm, coefficients: Mapping[tuple[str, int, int],
-                      object], sqrt: Callable = ca.sqrt):
+                      object], sqrt: Callable = ca.sqrt, r2=None):
     """Return U(r) (km^2/s^2) of the centre's truncated field at body-fixed position r (km).
+
+    ``r2`` is |r|² when given (a zonal field then needs only r_fixed's z: pass (0, 0, z)).
 
     ``coefficients`` maps ('C'|'S', n, m) to the value or symbol of each normalised
     coefficient present in the truncation (degree >= 2); missing entries are zero. The
@@ -136,7 +138,8 @@ def central_potential(model: ForceModel, r_fixed, gm, coefficients: Mapping[tupl
     """
     deg, order = model.gravity.degree, model.gravity.order
     x, y, z = r_fixed[0], r_fixed[1], r_fixed[2]
-    r2 = x * x + y * y + z * z
+    if r2 is None:
+        r2 = x * x + y * y + z * z
     if deg < 2:
         return gm / sqrt(r2)
     radius = R_EARTH_km
@@ -193,10 +196,14 @@ def body_fixed_position(model: ForceModel, r: ca.SX, t: ca.SX, theta0: ca.SX,
                         slow: ca.SX | None = None) -> ca.SX:
     """Rotate inertial r (km) into the body-fixed frame (module docstring).
 
-    ``slow`` holds the iau2006 slow terms (X, Y, s, x_p, y_p, s', Δ, 0, 0) at t; ``theta0``
-    is ERA (iau2006) or GMST (gmst) at t = 0, rad. A gmst zonal field is symmetric about the
-    inertial z axis, so no rotation is applied (and the model stays autonomous).
+    ``slow`` holds the iau2006 slow terms (X, Y, s, x_p, y_p, s', Δ, 0, 0) at t, or, with 3
+    entries, the ITRS pole k in the GCRS (all a zonal field needs: r_fixed = (0, 0, k·r),
+    with |r| passed separately); ``theta0`` is ERA (iau2006) or GMST (gmst) at t = 0, rad.
+    A gmst zonal field is symmetric about the inertial z axis, so no rotation is applied
+    (and the model stays autonomous).
     """
+    if model.oriented_field and slow.numel() == 3:
+        return ca.vertcat(0.0, 0.0, slow[0] * r[0] + slow[1] * r[1] + slow[2] * r[2])
     if model.oriented_field:
         era = theta0 + OMEGA_ERA_rad_s * (t + slow[6])
         m = itrs_from_gcrs_elements(slow[0], slow[1], slow[2], slow[3], slow[4], slow[5], era,
@@ -225,7 +232,9 @@ def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mappin
     """
     gm = q.get("GM", model.gm_center_km3_s2)
     r_fixed = body_fixed_position(model, r, t, theta0, slow)
-    u = central_potential(model, r_fixed, gm, field_coefficients(model, q))
+    pole_only = model.oriented_field and slow.numel() == 3
+    u = central_potential(model, r_fixed, gm, field_coefficients(model, q),
+                          r2=ca.dot(r, r) if pole_only else None)
     acc = ca.gradient(u, r)
     for body in model.third_bodies:
         s = r_bodies[body]

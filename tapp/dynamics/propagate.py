@@ -208,7 +208,7 @@ class Propagator:
                 raise InputError("propagate", "orientation", "the scenario's iau2006 Earth "
                                  "orientation for a model with earth_orientation = 'iau2006'",
                                  None if orientation is None else orientation.model)
-            table = orientation.series(lo, hi)
+            table = orientation.series(lo, hi, eqs.oriented)
             lo, hi, origin = table.t0_s, table.t_end_s, table.t0_s  # the same segments
         elif scales is not None:
             origin = orientation.segment_origin_s

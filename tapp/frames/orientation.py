@@ -69,7 +69,7 @@ N_SLOW_SERIES = 3
 #: Node spacing of the stations' linear interpolation of the slow terms, s (divides 12 h).
 NODE_STEP_s = 60.0
 
-_NUMPY_OPS = SimpleNamespace(sin=np.sin, cos=np.cos, sqrt=np.sqrt)
+_NUMPY_OPS = SimpleNamespace(sin=np.sin, cos=np.cos)
 
 
 def check_model(name: str, source: str = "scenario", field_name: str = "earth_orientation"
@@ -96,18 +96,39 @@ def _rot(axis: int, angle, ops) -> list:
     return m
 
 
+def _c2i_core(x, y) -> list:
+    """The CIP part of C (before R3(−s)): [[1 − aX², −aXY, −X], [−aXY, 1 − aY², −Y],
+    [X, Y, Z]], Z = √(1 − X² − Y²), a = 1/(1 + Z) (IERS Conventions eq. 5.10)."""
+    z = (1.0 - x * x - y * y) ** 0.5
+    a = 1.0 / (1.0 + z)
+    return [[1.0 - a * x * x, -a * x * y, -x], [-a * x * y, 1.0 - a * y * y, -y], [x, y, z]]
+
+
 def itrs_from_gcrs_elements(x, y, s, xp, yp, sp, era, ops=_NUMPY_OPS) -> list:
     """Return the GCRS → ITRS matrix as nested 3x3 lists of expressions (module docstring).
 
-    Any arithmetic with ``ops.sin``, ``ops.cos`` and ``ops.sqrt`` works: NumPy arrays (one
-    matrix per element) or CasADi symbols (the integrator's geopotential).
+    W R3(ERA) C = R1(−y_p) R2(−x_p) R3(s' + ERA − s) C₀ (the three rotations about z add).
+    Any arithmetic with ``ops.sin`` and ``ops.cos`` works: CasADi symbols (the integrator's
+    geopotential) or NumPy scalars; :func:`itrs_from_gcrs_stack` is the vectorised NumPy form.
     """
-    z = ops.sqrt(1.0 - x * x - y * y)
-    a = 1.0 / (1.0 + z)
-    c2i = _mul(_rot(3, -s, ops), [[1.0 - a * x * x, -a * x * y, -x],
-                                  [-a * x * y, 1.0 - a * y * y, -y], [x, y, z]])
-    pom = _mul(_rot(1, -yp, ops), _mul(_rot(2, -xp, ops), _rot(3, sp, ops)))
-    return _mul(pom, _mul(_rot(3, era, ops), c2i))
+    return _mul(_rot(1, -yp, ops), _mul(_rot(2, -xp, ops),
+                                        _mul(_rot(3, sp + era - s, ops), _c2i_core(x, y))))
+
+
+def _rot_stack(axis: int, angle: np.ndarray) -> np.ndarray:
+    """Frame rotations R_axis(angle), (N, 3, 3), SOFA sense (as :func:`_rot`)."""
+    c, s = np.cos(angle), np.sin(angle)
+    i, j = [(1, 2), (2, 0), (0, 1)][axis - 1]
+    m = np.zeros(angle.shape + (3, 3))
+    m[..., axis - 1, axis - 1] = 1.0
+    m[..., i, i], m[..., i, j], m[..., j, i], m[..., j, j] = c, s, -s, c
+    return m
+
+
+def itrs_from_gcrs_stack(x, y, s, xp, yp, sp, era) -> np.ndarray:
+    """:func:`itrs_from_gcrs_elements` for arrays (N,): the matrices (N, 3, 3)."""
+    core = np.moveaxis(np.array(_c2i_core(x, y)), (0, 1), (-2, -1))
+    return _rot_stack(1, -yp) @ _rot_stack(2, -xp) @ _rot_stack(3, sp + era - s) @ core
 
 
 @dataclass(frozen=True, slots=True)
@@ -145,7 +166,8 @@ class EarthOrientation:
     model: str
     theta0_rad: float
     scales: TimeScales | None = None
-    _segments: dict = field(default_factory=dict, compare=False, repr=False)
+    #: Fitted segments, their 60 s nodes and the last attitude asked for (per instance).
+    _cache: dict = field(default_factory=dict, compare=False, repr=False)
 
     @classmethod
     def gmst(cls, epoch: Epoch) -> EarthOrientation:
@@ -232,13 +254,17 @@ class EarthOrientation:
             return 0.0
         return -float(np.mod(self.scales.epoch.jd_fraction * 86400.0, SERIES_SEGMENT_s))
 
-    def series(self, t_start_s: float, t_end_s: float) -> ChebyshevTable:
-        """Chebyshev series of the slow terms covering [t_start, t_end]: the cached 12 h
-        segments on the UTC grid (:attr:`segment_origin_s`), fitted on first use."""
+    def series(self, t_start_s: float, t_end_s: float, kind: str = "full") -> ChebyshevTable:
+        """Chebyshev series covering [t_start, t_end]: the cached 12 h segments on the UTC
+        grid (:attr:`segment_origin_s`), fitted on first use.
+
+        ``kind``: "full", the slow terms (:meth:`slow_terms`, 3 series); "pole", the ITRS pole
+        in the GCRS (:meth:`pole`, 1 series: all a zonal field needs).
+        """
         self.check_covers(np.array([t_start_s, t_end_s]))
         lo, hi = sorted((t_start_s, t_end_s))
         first, last = self._segment_index(np.array([lo, hi]))
-        segments = [self._segment(k) for k in range(first, last + 1)]
+        segments = [self._segment(k, kind) for k in range(first, last + 1)]
         return ChebyshevTable(np.ascontiguousarray(np.concatenate(
             [seg.coeffs for seg in segments], axis=1)),
             segments[0].t0_s, SERIES_SEGMENT_s)
@@ -248,13 +274,29 @@ class EarthOrientation:
         time on a boundary takes the segment that ends there (the last EOP row is usable)."""
         return (np.ceil((t - self.segment_origin_s) / SERIES_SEGMENT_s) - 1).astype(int)
 
-    def _segment(self, k: int) -> ChebyshevTable:
-        """The fitted segment k (cached)."""
-        if k not in self._segments:
+    def _segment(self, k: int, kind: str = "full") -> ChebyshevTable:
+        """The fitted segment k of the slow terms or of the pole (cached)."""
+        key = k if kind == "full" else (kind, k)
+        if key not in self._cache:
             start = self.segment_origin_s + k * SERIES_SEGMENT_s
-            self._segments[k] = fit_chebyshev(self.slow_terms, start, start + SERIES_SEGMENT_s,
-                                              SERIES_SEGMENT_s, SERIES_N_COEF)
-        return self._segments[k]
+            fn = self.slow_terms if kind == "full" else self.pole
+            self._cache[key] = fit_chebyshev(fn, start, start + SERIES_SEGMENT_s,
+                                             SERIES_SEGMENT_s, SERIES_N_COEF)
+        return self._cache[key]
+
+    def pole(self, t_s) -> np.ndarray:
+        """The ITRS z axis in the GCRS (the third row of M) at t_s (M,), (1, M, 3), from the
+        cached slow-term series (no further ERFA calls).
+
+        It carries polar motion, which the Earth rotation turns once a day: a 12 h series of
+        14 terms follows that daily wobble (1.5e-6 rad) to ~1e-15 rad.
+        """
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        k = self._segment_index(t)
+        segments = [self._segment(j) for j in range(int(k.min()), int(k.max()) + 1)]
+        table = ChebyshevTable(np.concatenate([seg.coeffs for seg in segments], axis=1),
+                               segments[0].t0_s, SERIES_SEGMENT_s)
+        return self._attitude_of(t, table.evaluate(t)).itrs_from_gcrs[None, :, 2, :]
 
     def _require_scales(self) -> TimeScales:
         if self.scales is None:
@@ -277,11 +319,11 @@ class EarthOrientation:
     def _segment_nodes(self, k: int) -> np.ndarray:
         """Slow terms of segment k at its nodes every NODE_STEP_s, (n + 1, 9) (cached)."""
         key = ("nodes", k)
-        if key not in self._segments:
+        if key not in self._cache:
             seg = self._segment(k)
             t = seg.t0_s + NODE_STEP_s * np.arange(int(SERIES_SEGMENT_s / NODE_STEP_s) + 1)
-            self._segments[key] = np.moveaxis(seg.evaluate(t), 0, 1).reshape(t.size, -1)
-        return self._segments[key]
+            self._cache[key] = np.moveaxis(seg.evaluate(t), 0, 1).reshape(t.size, -1)
+        return self._cache[key]
 
     # --- the attitude --------------------------------------------------------------------
 
@@ -310,8 +352,13 @@ class EarthOrientation:
             axis = np.zeros(t.shape + (3,))
             axis[..., 2] = 1.0
             return EarthAttitude(r3(self.angle_rad(t)), axis, OMEGA_EARTH_rad_s)
-        self.check_covers(t, source)
-        return self._attitude_of(t, self._cached_slow_terms(t.ravel()))
+        key = ("attitude", t.shape, t.tobytes())
+        if key not in self._cache:  # the last grid asked for: observables and partials
+            self.check_covers(t, source)  # of one geometry ask for the same times in turn
+            self._cache.pop(self._cache.pop("last attitude", None), None)
+            self._cache[key] = self._attitude_of(t, self._cached_slow_terms(t.ravel()))
+            self._cache["last attitude"] = key
+        return self._cache[key]
 
     def attitude_exact(self, t_s, source: str = "epoch") -> EarthAttitude:
         """As :meth:`attitude`, with the slow terms straight from ERFA (no series)."""
@@ -324,8 +371,7 @@ class EarthOrientation:
         (x, y, s), (xp, yp, sp), (drift, _, _) = (np.moveaxis(slow[i], -1, 0)
                                                   for i in range(N_SLOW_SERIES))
         era = self.angle_rad(t.ravel(), drift)
-        m = itrs_from_gcrs_elements(x, y, s, xp, yp, sp, era)
-        matrix = np.stack([np.stack(row, -1) for row in m], -2).reshape(t.shape + (3, 3))
+        matrix = itrs_from_gcrs_stack(x, y, s, xp, yp, sp, era).reshape(t.shape + (3, 3))
         axis = np.stack([x, y, np.sqrt(1.0 - x * x - y * y)], -1).reshape(t.shape + (3,))
         return EarthAttitude(matrix, axis, OMEGA_ERA_rad_s)
 
