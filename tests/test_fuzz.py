@@ -278,6 +278,43 @@ def _process(path: Path, out: Path) -> list[str]:
             "--tape", str(out / "t32.h5")]
 
 
+@functools.cache
+def _t32_for_guide() -> Path:
+    """The deep-space T32 tape a guidance file is written for, made once."""
+    path = Path(tempfile.mkdtemp()) / "run.t32.h5"
+    res = runner.invoke(app, ["process", str(_tape_for("tapp3_deep_space.toml")),
+                              str(SCENARIOS / "tapp3_deep_space.toml"), "--tape", str(path),
+                              "--print", str(path.with_suffix(".txt"))])
+    assert res.exit_code == 0, res.output
+    return path
+
+
+def _guide(path: Path, out: Path) -> list[str]:
+    return ["guide", str(_t32_for_guide()), str(path), "--samples", "1000", "--seed", "1",
+            "--serial", "--json", str(out / "g.json")]
+
+
+def _pipeline(path: Path, out: Path) -> list[str]:
+    return ["pipeline", str(path), "-o", str(out / "run"), "--serial", "--json"]
+
+
+def _pipeline_parts_absolute(document: dict) -> dict:
+    """The pipeline file with its parts named by absolute paths (the fuzz writes it to a
+    temporary folder) and a small Monte Carlo."""
+    for part in ("scenario", "deck", "guidance"):
+        document[part] = str(SCENARIOS / document[part])
+    document.setdefault("guide", {})["samples"] = 1000
+    return document
+
+
+def _one_case(document: dict) -> dict:
+    """The tracking sweep cut to one case of 1,000 samples."""
+    for loop in document["loop"]:
+        loop["sets"], loop["vary"] = 1, loop["vary"][:1]
+    document["body"]["constants"]["samples"] = 1000
+    return document
+
+
 def _two_days(document: dict) -> dict:
     """The lunar-departure sweep on 2 days instead of 30 (the same file, faster to run)."""
     document["loop"][0]["sets"] = 2
@@ -298,6 +335,10 @@ FILE_CASES = [
     FileCase("tapp1_table_d1.toml", _simulate, ("run.oem", "run.t13.h5"), 20),
     *(FileCase(deck.name, _process, ("o3.txt", "t32.h5"), 8)
       for deck in sorted(SCENARIOS.glob("tapp3_*.toml"))),
+    FileCase("tapp2_deep_space.toml", _guide, ("g.json",), 8),
+    FileCase("pipeline_deep_space.toml", _pipeline, ("run",), 4,
+             shrink=_pipeline_parts_absolute),
+    FileCase("iter_pipeline_tracking.toml", _iter, ("r.csv", "r.h5"), 4, shrink=_one_case),
 ]
 
 
@@ -341,6 +382,8 @@ def test_mutated_scenario_files_keep_the_contract(case: FileCase, group: str) ->
             out = folder_path / "out"
             out.mkdir()
             inputs = [path, _tape_for(path.name)] if case.command is _process else [path]
+            if case.command is _guide:
+                inputs.append(_t32_for_guide())
             check_contract(case.command(path, out), inputs=inputs, out_dir=out,
                            outputs=case.outputs, codes=case.codes, what=mutation.what,
                            must_refuse=mutation.must_refuse)

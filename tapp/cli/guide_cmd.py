@@ -44,9 +44,11 @@ SCATTER_PNG = "bplane_scatter.png"
 HISTOGRAM_PNG = "dv_histograms.png"
 
 
-def _execution(scheduler: str | None, workers: int | None, timeout_s: float) -> Execution:
+def _execution(scheduler: str | None, workers: int | None, timeout_s: float,
+               serial: bool = False) -> Execution:
     try:
-        return Execution(scheduler=scheduler, workers=workers, connect_timeout_s=timeout_s)
+        return Execution(serial=serial, scheduler=scheduler, workers=workers,
+                         connect_timeout_s=timeout_s)
     except SweepInputError as exc:
         raise InputError(f"--{exc.field.replace('_', '-')}", "value", exc.expected,
                          exc.got) from None
@@ -88,6 +90,9 @@ def guide_cmd(
                             "start a local cluster].")] = None,
     workers: Annotated[int | None, typer.Option(
         "--workers", help="Local-cluster worker processes [default: one per core].")] = None,
+    serial: Annotated[bool, typer.Option(
+        "--serial", help="Run the shards in this process, no Dask (small studies; the "
+                         "numbers are the same).")] = False,
     connect_timeout_s: Annotated[float, typer.Option(
         "--connect-timeout-s", help="Wait for the scheduler, s.")] = CONNECT_TIMEOUT_S,
     shard_size: Annotated[int | None, typer.Option(
@@ -108,7 +113,7 @@ def guide_cmd(
         check_samples(samples, "--samples")
         check_seed(seed, "--seed")
         check_shard_samples(shard_size, "--shard-size")
-        execution = _execution(scheduler, workers, connect_timeout_s)
+        execution = _execution(scheduler, workers, connect_timeout_s, serial)
         quiet = json_path is not None and json_file is None
         result = _study(tape, guide, samples, seed, execution, shard_size, quiet)
         content = guidance_dict(result)

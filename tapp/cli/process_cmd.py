@@ -18,10 +18,10 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from tapp.cli.common import app, print_json, run_guarded
 from tapp.outputs import OutputSet, check_paths
-from tapp.processor.deck import bind, deck_json, read_deck
+from tapp.processor.deck import bind, read_deck
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.sequencing import Run, process
-from tapp.processor.tape32 import build_t32
+from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.tape.t13 import open_t13
 from tapp.tape.t32 import t32_file_writer
 
@@ -82,11 +82,8 @@ def process_cmd(
             outputs.add("--json", json_file,
                         lambda tmp: tmp.write_text(json.dumps(content), "utf-8"))
         if tape_out is not None:
-            t32 = build_t32(run, plan, header, {
-                "deck": deck_json(deck_obj), "deck_source": str(deck),
-                "t13_source": str(tape), "t13_iden": header.iden,
-                **{f"t13_{key}": header.provenance[key] for key in ("earth_orientation", "eop")
-                   if key in header.provenance}})
+            t32 = build_t32(run, plan, header,
+                            t32_provenance(header, deck_obj, str(deck), str(tape)))
             outputs.add("--tape", tape_out, t32_file_writer(t32, source=str(tape_out)))
         if plots is not None:
             # matplotlib only when plots are asked for (it costs ~0.5 s to import)

@@ -8,6 +8,7 @@ the representation of the recycle time, the system chains and the names of every
 
 from __future__ import annotations
 
+from tapp.processor.deck import deck_json
 from tapp.processor.plan import Plan
 from tapp.processor.representations import ISOLATED_SETS, SYSTEM_PARTITIONS, SYSTEMS
 from tapp.processor.sequencing import Run
@@ -41,4 +42,13 @@ def build_t32(run: Run, plan: Plan, header, provenance: dict[str, str]) -> T32:
                provenance)
 
 
-__all__ = ["ISOLATED_SETS", "build_t32"]
+def t32_provenance(header, deck, deck_source: str, t13_source: str) -> dict[str, str]:
+    """The provenance a T32 tape carries: the deck (JSON) and its file, the T13 tape's file
+    and identification, and the T13's Earth orientation model and EOP source."""
+    return {"deck": deck_json(deck), "deck_source": deck_source, "t13_source": t13_source,
+            "t13_iden": header.iden,
+            **{f"t13_{key}": header.provenance[key] for key in ("earth_orientation", "eop")
+               if key in header.provenance}}
+
+
+__all__ = ["ISOLATED_SETS", "build_t32", "t32_provenance"]

@@ -1,0 +1,90 @@
+"""``tapp pipeline``: simulate -> process -> guide from one pipeline file into one directory.
+
+The pipeline file names (or inlines) the TAPP I scenario, the TAPP III deck and the TAPP II
+guidance file (:mod:`tapp.pipeline.spec`); the run writes the T13 and T32 tapes, the O3
+printout, the JSON of both studies, the plots and ``report.md`` into ``-o DIR``, which must be
+new or empty and appears only when the run is complete. Bad input in any part is one line
+naming the file (or the pipeline file and the part) and the field, exit 2.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from iter import SchedulerError
+from iter.execute import CONNECT_TIMEOUT_S
+from tapp.cli.common import (
+    EarthOrientationOpt,
+    app,
+    earth_orientation_option,
+    print_json,
+    run_guarded,
+)
+from tapp.cli.guide_cmd import _execution
+from tapp.errors import InputError
+from tapp.outputs import check_paths
+from tapp.pipeline.run import OUTPUTS, check_out_dir, run_pipeline, trade_outputs
+from tapp.pipeline.spec import read_pipeline
+
+
+@app.command("pipeline")
+def pipeline_cmd(
+    pipeline: Annotated[Path, typer.Argument(help="Pipeline file (TOML): scenario, deck, "
+                                             "guidance, [simulate], [guide].")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="Directory to create (new or "
+                                         "empty).")],
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", help="Address tcp://HOST:PORT of a running Dask scheduler for the "
+                            "Monte Carlo [default: start a local cluster].")] = None,
+    workers: Annotated[int | None, typer.Option(
+        "--workers", help="Local-cluster worker processes [default: one per core].")] = None,
+    serial: Annotated[bool, typer.Option(
+        "--serial", help="Run the Monte Carlo in this process, no Dask (the numbers are the "
+                         "same).")] = False,
+    connect_timeout_s: Annotated[float, typer.Option(
+        "--connect-timeout-s", help="Wait for the scheduler, s.")] = CONNECT_TIMEOUT_S,
+    earth_orientation: EarthOrientationOpt = None,
+    json_out: Annotated[bool, typer.Option("--json", help="Print the trade-study numbers as "
+                                           "one JSON object.")] = False,
+) -> None:
+    """TAPP I -> TAPP III -> TAPP II in one run, with DIR/report.md."""
+
+    def body() -> None:
+        check_paths({"PIPELINE": pipeline}, {})
+        check_out_dir(output)
+        pipe = read_pipeline(pipeline)
+        override = earth_orientation_option(earth_orientation)
+        if override is not None:
+            from dataclasses import replace
+
+            pipe = replace(pipe, earth_orientation=override)
+        execution = _execution(scheduler, workers, connect_timeout_s, serial)
+        columns = (TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(),
+                   TimeElapsedColumn())
+        with Progress(*columns, console=Console(stderr=True), disable=json_out,
+                      transient=True) as bar:
+            task = bar.add_task("pipeline", total=None)
+
+            def progress(stage: str, done: int, total: int) -> None:
+                bar.update(task, description=stage, completed=done, total=total)
+
+            try:
+                result = run_pipeline(pipe, output, execution=execution, progress=progress)
+            except SchedulerError as exc:
+                raise InputError("--scheduler", "value", f"a Dask scheduler answering within "
+                                 f"{exc.timeout_s:g} s ({exc.reason})", exc.address) from None
+        numbers = trade_outputs(result)
+        if json_out:
+            print_json({"directory": str(output), **numbers, "wall_s": result.wall_s})
+            return
+        console = Console(width=100)
+        console.print(f"pipeline {pipeline} -> {output}/{OUTPUTS['report']} ("
+                      + ", ".join(f"{k} {v:.1f} s" for k, v in result.wall_s.items()) + ")")
+        console.print(", ".join(f"{k} = {v:.4g}" for k, v in numbers.items()))
+
+    run_guarded(body)

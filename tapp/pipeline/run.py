@@ -1,0 +1,221 @@
+"""Run a pipeline: TAPP I (simulate) -> TAPP III (process) -> TAPP II (guide), one directory.
+
+The steps are those of ``tapp simulate``, ``tapp process --tape`` and ``tapp guide``, on the
+same library calls, and the hand-over between them goes through the tapes on disk exactly as
+between the three commands (the T13 tape is written, then read lazily by the processor; the
+T32 tape is written, then read back by the guidance study), so the pipeline gives the same
+numbers as the three commands run one after another (tested).
+
+Outputs (:data:`OUTPUTS`) are written into a hidden directory beside ``out_dir`` and renamed
+to it at the end: a failed or interrupted run leaves no partial directory.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from iter.execute import Execution
+from tapp.errors import InputError
+from tapp.guidance.guidefile import GuideFile
+from tapp.guidance.study import GuidanceResult, check_samples, check_seed, guidance_study
+from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
+from tapp.processor.deck import Deck, bind
+from tapp.processor.printout import o3_text, run_dict
+from tapp.processor.sequencing import Run, process
+from tapp.processor.tape32 import build_t32, t32_provenance
+from tapp.schema import validate
+from tapp.tape import write_t13
+from tapp.tape.t13 import open_t13
+from tapp.tape.t32 import read_t32, write_t32
+from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.simulate import simulate
+
+#: What a pipeline directory holds.
+OUTPUTS = {
+    "t13": "run.t13.h5",
+    "o3": "o3.txt",
+    "process_json": "process.json",
+    "t32": "run.t32.h5",
+    "guide_json": "guide.json",
+    "guide_md": "guide.md",
+    "report": "report.md",
+    "plots": "plots",
+}
+
+#: Progress callback: (stage, done, total).
+Progress = Callable[[str, int, int], None]
+
+
+@dataclass(frozen=True, slots=True)
+class PipelineResult:
+    """What a pipeline run produced (paths are inside the run's directory)."""
+
+    directory: Path
+    observations: int
+    process: dict
+    guidance: GuidanceResult
+    wall_s: dict[str, float]
+
+
+def _nothing(stage: str, done: int, total: int) -> None:
+    """The default progress callback."""
+
+
+def check_out_dir(out_dir: Path) -> Path:
+    """Return ``out_dir`` if it does not exist or is an empty directory, else raise.
+
+    Raises
+    ------
+    InputError
+        Naming ``-o`` : a file, or a directory with something in it (never overwritten).
+    """
+    out_dir = Path(out_dir)
+    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
+        raise InputError("-o/--output", "directory", "a new or empty directory (a pipeline "
+                         "never overwrites an earlier run)", str(out_dir))
+    return out_dir
+
+
+def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | None = None,
+                 plots: bool = True, progress: Progress = _nothing) -> PipelineResult:
+    """Run the three steps into ``out_dir`` (new or empty); return the result.
+
+    Raises
+    ------
+    InputError
+        From any part (naming its file or the pipeline file and the part), or ``out_dir``.
+    """
+    out_dir = check_out_dir(out_dir)
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
+    try:
+        result = _run(pipeline, work, execution, plots, progress)
+        if out_dir.exists():
+            out_dir.rmdir()
+        work.rename(out_dir)
+    except BaseException:
+        shutil.rmtree(work, ignore_errors=True)
+        raise
+    return PipelineResult(out_dir, result.observations, result.process, result.guidance,
+                          result.wall_s)
+
+
+def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: bool,
+         progress: Progress) -> PipelineResult:
+    wall: dict[str, float] = {}
+    start = time.perf_counter()
+    part = pipeline.scenario
+    scenario = parse_scenario(part.document, part.source, pipeline.earth_orientation)
+    deck = validate(Deck, pipeline.deck.document, pipeline.deck.source)
+    guide = validate(GuideFile, pipeline.guidance.document, pipeline.guidance.source)
+    sim = simulate(scenario, progress=lambda stage, done, total: progress(
+        f"TAPP I: {stage}", done, total))
+    t13_path = work / OUTPUTS["t13"]
+    write_t13(t13_path, sim.tape)
+    wall["simulate"] = time.perf_counter() - start
+
+    start = time.perf_counter()
+    run, header, content = _process(t13_path, deck, pipeline.deck.source, progress)
+    (work / OUTPUTS["o3"]).write_text(o3_text(run, header, pipeline.deck.source,
+                                              str(t13_path.name)), "utf-8")
+    (work / OUTPUTS["process_json"]).write_text(json.dumps(content), "utf-8")
+    t32_path = work / OUTPUTS["t32"]
+    plan = bind(deck, header, pipeline.deck.source)
+    write_t32(t32_path, build_t32(run, plan, header, t32_provenance(
+        header, deck, pipeline.deck.source, t13_path.name)))
+    wall["process"] = time.perf_counter() - start
+
+    start = time.perf_counter()
+    guidance = guidance_study(
+        read_t32(t32_path), guide, samples=pipeline.samples, seed=pipeline.seed,
+        execution=execution, shard_samples=pipeline.shard_size,
+        progress=lambda done, total: progress("TAPP II", done, total),
+        guide_source=pipeline.guidance.source, tape_source=t32_path.name)
+    wall["guide"] = time.perf_counter() - start
+
+    from tapp.report.pipeline import write_report
+    from tapp.report.tapp2 import guidance_dict, guidance_markdown
+
+    (work / OUTPUTS["guide_json"]).write_text(json.dumps(guidance_dict(guidance)), "utf-8")
+    (work / OUTPUTS["guide_md"]).write_text(guidance_markdown(guidance), "utf-8")
+    observations = int(sim.tape.pairs.n_obs.sum())
+    write_report(work, pipeline, run, header, content, guidance, observations, wall, plots)
+    return PipelineResult(work, observations, content, guidance, wall)
+
+
+def _process(t13_path: Path, deck: Deck, deck_source: str, progress: Progress
+             ) -> tuple[Run, object, dict]:
+    """TAPP III on the tape as ``tapp process`` runs it (lazy reading)."""
+    with open_t13(t13_path) as data:
+        plan = bind(deck, data.header, deck_source)
+        run = process(data, plan, source=deck_source,
+                      progress=lambda k, n: progress("TAPP III", k, n))
+        header = data.header
+    return run, header, run_dict(run, header, deck_source, t13_path.name)
+
+
+def tracking_case(pipeline: str, data_interval_s: float, network: float, networks: str,
+                  samples: int = 5000, seed: int = 1) -> dict[str, float]:
+    """ITER body: the pipeline with the tracking varied; return the trade-study outputs.
+
+    ``network`` (a whole number, 0-based) picks a station set from ``networks``, sets of
+    station names separated by ``;`` (``"GOLDSTONE CANBERRA MADRID; GOLDSTONE"``); the
+    stations of the scenario outside the set are switched off in the deck for the whole run
+    (TAPP III's time-station flags: the tape and the parameter vector stay the same), and the
+    scenario's data interval is ``data_interval_s``. The run is serial (it is one case of a
+    sweep that is itself spread over workers) in a temporary directory.
+
+    Outputs: σ of each final-miss component (Monte Carlo) and the semi-axes of the 1σ
+    B-plane dispersion ellipse, the 99 % and mean total ΔV (m/s), the fraction outside the
+    corridor, and the observations simulated.
+    """
+    sets = [s.split() for s in networks.split(";")]
+    index = int(network)
+    if index != network or not 0 <= index < len(sets) or not sets[index]:
+        raise InputError("network", "value", f"a whole number 0..{len(sets) - 1} picking a "
+                         "station set of networks", network)
+    base = read_pipeline(pipeline)
+    stations = base.scenario.document.get("tracking", {}).get("stations", [])
+    off = [{"station": name} for name in stations if name not in sets[index]]
+    unknown = [name for name in sets[index] if name not in stations]
+    if unknown:
+        raise InputError("networks", "stations", f"stations of the scenario {stations}",
+                         unknown)
+    pipe = with_overrides(base, {
+        "scenario.tracking.data_interval_s": float(data_interval_s),
+        "deck.stations_off": [*base.deck.document.get("stations_off", []), *off],
+    })
+    pipe = replace(pipe, samples=check_samples(int(samples), "samples"),
+                   seed=check_seed(int(seed), "seed"))
+    with tempfile.TemporaryDirectory() as tmp:
+        result = run_pipeline(pipe, Path(tmp) / "run", execution=Execution(serial=True),
+                              plots=False)
+    return trade_outputs(result)
+
+
+def trade_outputs(result: PipelineResult) -> dict[str, float]:
+    """The numbers a tracking trade study tabulates (Monte Carlo; ΔV in m/s).
+
+    σ of each final-miss component (``sigma_<name>``), the 1σ B-plane ellipse's semi-axes
+    (km), the mean and 99 % total ΔV, the fraction of samples outside the corridor (NaN
+    without one) and the observations simulated.
+    """
+    mc = result.guidance.monte_carlo
+    out = {"observations": float(result.observations)}
+    for i, name in enumerate(result.guidance.miss_name):
+        out[f"sigma_{name}"] = float(np.sqrt(mc.miss_cov[i, i]))
+    if mc.ellipse is not None:
+        out["bplane_semi_major_km"] = mc.ellipse.semi_major_km
+        out["bplane_semi_minor_km"] = mc.ellipse.semi_minor_km
+    out["dv_total_mean_m_s"] = mc.total.mean_km_s * 1e3
+    out["dv_total_99_m_s"] = dict(mc.total.percentiles_km_s)[99.0] * 1e3
+    out["outside_corridor"] = float("nan") if mc.outside is None else mc.outside.either
+    return out

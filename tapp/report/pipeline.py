@@ -1,0 +1,82 @@
+"""The report of a pipeline run (``DIR/report.md``) and its plots (``DIR/plots/``).
+
+Sections: the inputs and the Earth orientation; TAPP I (what was simulated); TAPP III (the
+fit- and real-world σ of the miss at each recycle, i.e. at each midcourse time, and an excerpt
+of the O3 printout); TAPP II (the guidance study's tables, Monte Carlo beside linear
+covariance); the plots (σ against time and the B-plane ellipses of TAPP III, the final-miss
+scatter and the ΔV histograms of TAPP II).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from tapp.report.markdown import table
+
+#: Lines of the O3 printout quoted in the report (the whole printout is o3.txt).
+O3_EXCERPT_LINES = 40
+_DAY_S = 86400.0
+
+
+def recycle_sigma_table(content: dict) -> str:
+    """Markdown table of the miss σ, fit / real, at each recycle of a ``run_dict``."""
+    miss = content["history"]["miss"]
+    rows = [[r["number"], r["k"], f"{r['t_s'] / _DAY_S:.3f}",
+             *(f"{f:.4g} / {g:.4g}" for f, g in zip(r["miss_sigma_fit"], r["miss_sigma_real"],
+                                                     strict=True))]
+            for r in content["recycles"]]
+    return table(["recycle", "k", "t (d)", *(f"σ {m} fit / real" for m in miss)], rows)
+
+
+def _plots(folder: Path, run, header, guidance, title: str) -> list[Path]:
+    from tapp.report.tapp2 import plot_bplane_scatter, plot_dv_histograms
+    from tapp.report.tapp3 import bplane_rows, plot_bplane_ellipses, plot_sigma_history
+
+    folder.mkdir(exist_ok=True)
+    miss = tuple(header.miss.name)
+    out = [plot_sigma_history(run.history, run.history_labels, folder / "sigma_history.png",
+                              f"{title}: σ, fit vs real world")]
+    if bplane_rows(run.history, miss):
+        out.append(plot_bplane_ellipses(run.history, miss, folder / "bplane_ellipses.png",
+                                        f"{title}: B-plane 1σ/3σ, fit vs real"))
+        out.append(plot_bplane_scatter(guidance, folder / "bplane_scatter.png",
+                                       f"{title}: final B-plane miss"))
+    out.append(plot_dv_histograms(guidance, folder / "dv_histograms.png",
+                                  f"{title}: ΔV per manoeuvre"))
+    return out
+
+
+def write_report(folder: Path, pipeline, run, header, content: dict, guidance,
+                 observations: int, wall_s: dict[str, float], plots: bool = True) -> Path:
+    """Write ``folder/report.md`` (and the plots into ``folder/plots`` when asked)."""
+    from tapp.report.tapp2 import guidance_markdown
+
+    title = pipeline.title or header.iden
+    prov = header.provenance
+    o3 = (folder / "o3.txt").read_text("utf-8").splitlines()[:O3_EXCERPT_LINES]
+    images = _plots(folder / "plots", run, header, guidance, title) if plots else []
+    tapp2 = guidance_markdown(guidance).replace("\n## ", "\n### ").replace(
+        "# TAPP II", "## TAPP II", 1)
+    lines = [
+        f"# Pipeline: {title}", "",
+        f"Pipeline file `{pipeline.source}`: scenario `{pipeline.scenario.source}`, deck "
+        f"`{pipeline.deck.source}`, guidance `{pipeline.guidance.source}`. Earth orientation "
+        f"{prov.get('earth_orientation', 'gmst')}"
+        + (f" (EOP {prov['eop']})" if prov.get("eop") else "") + ". Wall time: "
+        + ", ".join(f"{k} {v:.2f} s" for k, v in wall_s.items()) + ".", "",
+        "## TAPP I: tracking simulation (`run.t13.h5`)", "",
+        f"{header.iden}: n_o = {header.n_o}, n_p = {header.n_p}, n_m = {header.n_m}, "
+        f"{observations} observations in {header.passes.station.size} passes by "
+        f"{header.n_ts} stations.", "",
+        "## TAPP III: fit world vs real world (`o3.txt`, `process.json`, `run.t32.h5`)", "",
+        "σ of the miss at each recycle (the midcourse times handed to TAPP II), fit world / "
+        "real world:", "", recycle_sigma_table(content), "",
+        f"The first {O3_EXCERPT_LINES} lines of the O3 printout:", "", "```",
+        *o3, "```", "",
+        tapp2.rstrip(), "",
+    ]
+    if images:
+        lines += ["## Plots", "", *(f"![{p.stem}](plots/{p.name})" for p in images), ""]
+    path = folder / "report.md"
+    path.write_text("\n".join(lines), "utf-8")
+    return path

@@ -1,0 +1,169 @@
+"""``tapp pipeline``: simulate -> process -> guide in one run, against the three commands.
+
+The scenario is deep_space.toml cut to 3 days (as in the TAPP II tests), the deck
+tapp3_deep_space.toml with its print times inside those days, the guidance file
+tapp2_deep_space.toml: the shipped study, made small.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tomli_w
+from typer.testing import CliRunner
+
+import tapp.cli  # noqa: F401  (registers every command)
+from tapp.cli.common import app
+from tapp.pipeline.run import OUTPUTS, tracking_case
+
+runner = CliRunner()
+SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+DAY_S = 86400.0
+SAMPLES, SEED = 3000, 7
+
+
+@pytest.fixture(scope="module")
+def parts(tmp_path_factory) -> dict[str, Path]:
+    """The three part files of a 3-day pipeline, and the pipeline file naming them."""
+    folder = tmp_path_factory.mktemp("pipeline")
+    scenario = tomllib.loads((SCENARIOS / "deep_space.toml").read_text())
+    scenario["tracking"]["end"] = 3 * DAY_S
+    scenario["times"]["end"] = 3 * DAY_S
+    scenario["times"]["epochs"] = []
+    deck = tomllib.loads((SCENARIOS / "tapp3_deep_space.toml").read_text())
+    deck["times"]["print"] = [1, 2, 3]
+    out = {"scenario": folder / "scenario.toml", "deck": folder / "deck.toml",
+           "guidance": folder / "guide.toml", "pipeline": folder / "pipe.toml"}
+    out["scenario"].write_text(tomli_w.dumps(scenario))
+    out["deck"].write_text(tomli_w.dumps(deck))
+    out["guidance"].write_text((SCENARIOS / "tapp2_deep_space.toml").read_text())
+    out["pipeline"].write_text(tomli_w.dumps({
+        "title": "three days", "scenario": "scenario.toml", "deck": "deck.toml",
+        "guidance": "guide.toml", "guide": {"samples": SAMPLES, "seed": SEED}}))
+    return out
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """A running Dask cluster of two worker threads (``--scheduler``)."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, protocol="tcp://",
+                      dashboard_address=":0", silence_logs=logging.ERROR) as cluster:
+        yield cluster.scheduler_address
+
+
+def _ok(args: list[str]) -> str:
+    res = runner.invoke(app, args)
+    assert res.exit_code == 0, (res.output, res.exception)
+    return res.stdout
+
+
+@pytest.fixture(scope="module")
+def piped(parts, scheduler, tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("piped") / "run"
+    _ok(["pipeline", str(parts["pipeline"]), "-o", str(out), "--scheduler", scheduler])
+    return out
+
+
+def _numbers(content: object) -> object:
+    """The numbers of a JSON document, without wall times, paths and provenance."""
+    if isinstance(content, dict):
+        return {k: _numbers(v) for k, v in content.items()
+                if k not in ("wall_s", "tape", "deck", "guide", "where", "shard_samples")}
+    if isinstance(content, list):
+        return [_numbers(v) for v in content]
+    return content
+
+
+def test_the_pipeline_gives_the_numbers_of_the_three_commands(parts, piped, scheduler,
+                                                              tmp_path: Path) -> None:
+    t13, t32 = tmp_path / "run.t13.h5", tmp_path / "run.t32.h5"
+    _ok(["simulate", str(parts["scenario"]), "-o", str(t13)])
+    _ok(["process", str(t13), str(parts["deck"]), "--tape", str(t32), "--json",
+         str(tmp_path / "p.json"), "--print", str(tmp_path / "o3.txt")])
+    _ok(["guide", str(t32), str(parts["guidance"]), "--samples", str(SAMPLES), "--seed",
+         str(SEED), "--json", str(tmp_path / "g.json"), "--scheduler", scheduler])
+    for mine, theirs in (("process_json", "p.json"), ("guide_json", "g.json")):
+        a = json.loads((piped / OUTPUTS[mine]).read_text())
+        b = json.loads((tmp_path / theirs).read_text())
+        assert _numbers(a) == _numbers(b), mine
+    assert json.loads((piped / OUTPUTS["guide_json"]).read_text())["samples"] == SAMPLES
+
+
+def test_the_directory_holds_every_output_and_a_report(piped) -> None:
+    names = {p.name for p in piped.iterdir()}
+    assert names == set(OUTPUTS.values())
+    assert {p.name for p in (piped / "plots").iterdir()} == {
+        "sigma_history.png", "bplane_ellipses.png", "bplane_scatter.png", "dv_histograms.png"}
+    report = (piped / OUTPUTS["report"]).read_text()
+    for heading in ("# Pipeline: three days", "## TAPP I", "## TAPP III", "## TAPP II",
+                    "## Plots", "σ b_dot_r_km fit / real", "ΔV magnitude per manoeuvre"):
+        assert heading in report, heading
+    assert "Earth orientation iau2006" in report
+
+
+def test_an_inline_part_is_the_same_as_its_file(parts, piped, tmp_path: Path) -> None:
+    doc = tomllib.loads(parts["pipeline"].read_text())
+    doc["deck"] = tomllib.loads(parts["deck"].read_text())
+    doc["scenario"] = str(parts["scenario"])
+    doc["guidance"] = str(parts["guidance"])
+    pipe = tmp_path / "inline.toml"
+    pipe.write_text(tomli_w.dumps(doc))
+    out = tmp_path / "run"
+    _ok(["pipeline", str(pipe), "-o", str(out), "--workers", "1"])
+    a = json.loads((out / OUTPUTS["guide_json"]).read_text())
+    b = json.loads((piped / OUTPUTS["guide_json"]).read_text())
+    assert _numbers(a) == _numbers(b)
+
+
+@pytest.mark.parametrize(("edit", "fragment"), [
+    (lambda d: d.update(guide={"samples": 1}), "pipe.toml: guide.samples: expected"),
+    (lambda d: d.update(deck={**d["deck"], "times": {"print": [99]}})
+     if isinstance(d["deck"], dict) else d.update(deck={"times": {"print": [99]}}),
+     "pipe.toml [deck]"),
+    (lambda d: d.update(scenario="missing.toml"), "missing.toml: file: expected"),
+    (lambda d: d.update(extra=1), "pipe.toml: extra: expected no such key"),
+    (lambda d: d.update(simulate={"earth_orientation": "itrf"}),
+     "pipe.toml: simulate.earth_orientation: expected"),
+])
+def test_bad_input_is_one_line_exit_2_and_no_directory(parts, tmp_path: Path, edit,
+                                                       fragment: str) -> None:
+    doc = tomllib.loads(parts["pipeline"].read_text())
+    for key in ("scenario", "deck", "guidance"):
+        doc[key] = str(parts[key])
+    edit(doc)
+    pipe = tmp_path / "pipe.toml"
+    pipe.write_text(tomli_w.dumps(doc))
+    out = tmp_path / "run"
+    res = runner.invoke(app, ["pipeline", str(pipe), "-o", str(out), "--workers", "1"])
+    lines = res.stderr.strip().splitlines()
+    assert res.exit_code == 2, (res.output, res.exception)
+    assert len(lines) == 1 and fragment in lines[0], lines
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.toml"]
+
+
+def test_an_earlier_run_is_never_overwritten(parts, piped) -> None:
+    before = {p.name: p.stat().st_mtime_ns for p in piped.iterdir()}
+    res = runner.invoke(app, ["pipeline", str(parts["pipeline"]), "-o", str(piped)])
+    assert res.exit_code == 2
+    assert "-o/--output: directory: expected a new or empty directory" in res.stderr
+    assert {p.name: p.stat().st_mtime_ns for p in piped.iterdir()} == before
+
+
+def test_the_tracking_sweep_body_switches_stations_off(parts) -> None:
+    """Fewer stations in the sweep's network: the same tape, more final-miss dispersion."""
+    common = {"pipeline": str(parts["pipeline"]), "data_interval_s": 600.0,
+              "networks": "GOLDSTONE CANBERRA MADRID; GOLDSTONE", "samples": 2000, "seed": 1}
+    all3 = tracking_case(network=0.0, **common)
+    one = tracking_case(network=1.0, **common)
+    assert all3["observations"] == one["observations"]  # the tape is the same
+    assert one["bplane_semi_major_km"] > all3["bplane_semi_major_km"]
+    assert np.isfinite(all3["dv_total_99_m_s"]) and all3["dv_total_99_m_s"] > 0
+    with pytest.raises(Exception, match="network: value: expected a whole number 0..1"):
+        tracking_case(network=2.0, **common)
