@@ -260,14 +260,15 @@ def probe_scheduler(address: str, timeout_s: float) -> Mapping[str, object]:
 def local_cluster(workers: int | None = None) -> Iterator[str]:
     """Start a dask.distributed LocalCluster; yield its scheduler address; stop it on exit.
 
-    One process per worker (``workers``, default one per core), one thread each, no
-    dashboard. Scripts that call this must guard their entry point with
+    One process per worker (``workers``, default one per core), one thread each; the
+    dashboard, which Dask starts even when asked for none, on a free port (``":0"``), so a
+    second cluster on the machine does not clash with the first on 8787. Scripts that call this must guard their entry point with
     ``if __name__ == "__main__":`` (workers are spawned).
     """
     from distributed import LocalCluster
 
     with LocalCluster(n_workers=workers or available_cores(), threads_per_worker=1,
-                      processes=True, dashboard_address=None,
+                      processes=True, dashboard_address=":0",
                       silence_logs=logging.ERROR) as cluster:
         yield cluster.scheduler_address
 
