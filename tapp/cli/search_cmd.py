@@ -17,7 +17,13 @@ from typing import Annotated
 import typer
 
 from search import EXIT_FLAG, format_report
-from tapp.cli.common import app, print_json, run_guarded
+from tapp.cli.common import (
+    EarthOrientationOpt,
+    app,
+    earth_orientation_option,
+    print_json,
+    run_guarded,
+)
 from tapp.constants import SECONDS_PER_DAY, RADIUS_km
 from tapp.frames.time import Epoch
 from tapp.targeting import (
@@ -39,9 +45,15 @@ _X_LABELS = ("VX (KM/S)", "VY (KM/S)", "VZ (KM/S)")
 _Y_LABELS = ("B.R (KM)", "B.T (KM)", "TF (S)")
 
 
-def read_scenario(path: Path) -> BPlaneSearch:
-    """Read and validate a B-plane search scenario (TOML); errors name the file and field."""
-    return scenario_search(read_toml(path), str(path))
+def read_scenario(path: Path, earth_orientation: str | None = None) -> BPlaneSearch:
+    """Read and validate a B-plane search scenario (TOML); errors name the file and field.
+
+    ``earth_orientation`` overrides the file's model (``--earth-orientation``).
+    """
+    data = read_toml(path)
+    if earth_orientation is not None:
+        data["earth_orientation"] = earth_orientation
+    return scenario_search(data, str(path))
 
 
 def _periapsis_utc(problem: BPlaneSearch, t_s: float) -> str:
@@ -126,6 +138,7 @@ def search_command(
     analytic_partials: Annotated[bool, typer.Option(
         "--analytic-partials",
         help="Partials from the variational equations (overrides the scenario).")] = False,
+    earth_orientation: EarthOrientationOpt = None,
 ) -> None:
     """Target the injection velocity to B·R, B·T and flight time at the target body.
 
@@ -134,7 +147,7 @@ def search_command(
     """
 
     def body() -> int:
-        problem = read_scenario(scenario)
+        problem = read_scenario(scenario, earth_orientation_option(earth_orientation))
         analytic = analytic_partials or problem.analytic_partials
         start = time.perf_counter()
         run = run_search(problem, analytic_partials=analytic)

@@ -107,3 +107,19 @@ def test_case_that_misses_the_moon_fails_with_one_line(tmp_path: Path) -> None:
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "search case 1 at v0" in lines[0]
     assert "sphere of influence" in lines[0]
+
+
+def test_earth_orientation_option_overrides_the_file() -> None:
+    """The J2 pole differs by 0.36 deg between the models: the targeted injection velocity
+    moves (by about 0.5 m/s here), both converge; an unknown model is one line, exit 2."""
+    runs = {}
+    for model in ("iau2006", "gmst"):
+        res = runner.invoke(app, ["search", str(SCENARIO), "--json", "--earth-orientation",
+                                  model])
+        assert res.exit_code == 0, res.output
+        runs[model] = np.array(json.loads(res.stdout)["x"])
+    assert 1e-5 < np.linalg.norm(runs["iau2006"] - runs["gmst"]) < 1e-2  # km/s
+    res = runner.invoke(app, ["search", str(SCENARIO), "--earth-orientation", "iau1980"])
+    assert res.exit_code == 2
+    assert res.stderr.strip() == ('error: --earth-orientation: value: expected "iau2006" or '
+                                  '"gmst" (got \'iau1980\')')
