@@ -171,6 +171,21 @@ def earth_orientation_option(value: str | None) -> str | None:
     return check_model(value, "--earth-orientation", "value")
 
 
+def execution_options(scheduler: str | None, workers: int | None, timeout_s: float,
+                      serial: bool = False):
+    """Return the ``iter.Execution`` of ``--scheduler``/``--workers``/``--serial`` options, or
+    raise InputError naming the option at fault (a Monte Carlo's shards run as ITER's cases)."""
+    from iter import SweepInputError
+    from iter.execute import Execution
+
+    try:
+        return Execution(serial=serial, scheduler=scheduler, workers=workers,
+                         connect_timeout_s=timeout_s)
+    except SweepInputError as exc:
+        raise InputError(f"--{exc.field.replace('_', '-')}", "value", exc.expected,
+                         exc.got) from None
+
+
 def check_grid_size(option: str, n: float, limit: int = MAX_GRID_SAMPLES,
                     what: str = "output samples") -> int:
     """Return ``n`` as an int if it is at most ``limit``, else raise InputError naming

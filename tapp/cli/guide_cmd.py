@@ -18,9 +18,9 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from iter import SchedulerError, SweepInputError
+from iter import SchedulerError
 from iter.execute import CONNECT_TIMEOUT_S, Execution
-from tapp.cli.common import app, print_json, run_guarded
+from tapp.cli.common import app, execution_options, print_json, run_guarded
 from tapp.errors import InputError
 from tapp.guidance.guidefile import read_guide
 from tapp.guidance.statistics import bplane_rows
@@ -42,16 +42,6 @@ from tapp.tape.t32 import read_t32
 
 SCATTER_PNG = "bplane_scatter.png"
 HISTOGRAM_PNG = "dv_histograms.png"
-
-
-def _execution(scheduler: str | None, workers: int | None, timeout_s: float,
-               serial: bool = False) -> Execution:
-    try:
-        return Execution(serial=serial, scheduler=scheduler, workers=workers,
-                         connect_timeout_s=timeout_s)
-    except SweepInputError as exc:
-        raise InputError(f"--{exc.field.replace('_', '-')}", "value", exc.expected,
-                         exc.got) from None
 
 
 def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Execution,
@@ -113,7 +103,7 @@ def guide_cmd(
         check_samples(samples, "--samples")
         check_seed(seed, "--seed")
         check_shard_samples(shard_size, "--shard-size")
-        execution = _execution(scheduler, workers, connect_timeout_s, serial)
+        execution = execution_options(scheduler, workers, connect_timeout_s, serial)
         quiet = json_path is not None and json_file is None
         result = _study(tape, guide, samples, seed, execution, shard_size, quiet)
         content = guidance_dict(result)

@@ -22,10 +22,10 @@ from tapp.cli.common import (
     EarthOrientationOpt,
     app,
     earth_orientation_option,
+    execution_options,
     print_json,
     run_guarded,
 )
-from tapp.cli.guide_cmd import _execution
 from tapp.errors import InputError
 from tapp.outputs import check_paths
 from tapp.pipeline.run import OUTPUTS, check_out_dir, run_pipeline, trade_outputs
@@ -63,7 +63,7 @@ def pipeline_cmd(
             from dataclasses import replace
 
             pipe = replace(pipe, earth_orientation=override)
-        execution = _execution(scheduler, workers, connect_timeout_s, serial)
+        execution = execution_options(scheduler, workers, connect_timeout_s, serial)
         columns = (TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(),
                    TimeElapsedColumn())
         with Progress(*columns, console=Console(stderr=True), disable=json_out,
