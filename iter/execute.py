@@ -262,8 +262,9 @@ def local_cluster(workers: int | None = None) -> Iterator[str]:
 
     One process per worker (``workers``, default one per core), one thread each; the
     dashboard, which Dask starts even when asked for none, on a free port (``":0"``), so a
-    second cluster on the machine does not clash with the first on 8787. Scripts that call this must guard their entry point with
-    ``if __name__ == "__main__":`` (workers are spawned).
+    second cluster on the machine does not clash with the first on 8787. Scripts that call
+    this must guard their entry point with ``if __name__ == "__main__":`` (workers are
+    spawned).
     """
     from distributed import LocalCluster
 
