@@ -1,8 +1,10 @@
 """Time, Earth rotation, orbital elements and geodesy: the reference-frame kernels of tapp.
 
-Units are km, km/s, s and rad; time is seconds from the scenario epoch (a UTC calendar date);
-the inertial frame is EME2000 and the Earth-fixed frame is reached by R3(GMST IAU-82 + omega t)
-with UT1 = UTC (see :mod:`tapp.frames.rotation` for what this neglects).
+Units are km, km/s, s and rad; time is SI seconds from the scenario epoch (a UTC calendar
+date; :mod:`tapp.frames.timescales`). The Earth-fixed frame is reached from the inertial one by
+the scenario's Earth orientation (:mod:`tapp.frames.orientation`): the IAU 2006/2000A GCRS ->
+ITRS rotation with IERS EOP, or the gmst model R3(GMST IAU-82 + omega t) with UT1 = UTC of
+:mod:`tapp.frames.rotation`.
 """
 
 from tapp.frames.elements import (

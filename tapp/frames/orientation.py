@@ -44,7 +44,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import SimpleNamespace
 
 import erfa
 import numpy as np
@@ -53,7 +52,7 @@ from tapp.constants import OMEGA_EARTH_rad_s
 from tapp.errors import InputError
 from tapp.frames.chebyshev import ChebyshevTable, fit_chebyshev
 from tapp.frames.eop import EopTable, finals2000a
-from tapp.frames.rotation import r3
+from tapp.frames.rotation import earth_rotation_angle_rad, r3
 from tapp.frames.time import Epoch
 from tapp.frames.timescales import TimeScales
 
@@ -68,9 +67,6 @@ SERIES_N_COEF = 14
 N_SLOW_SERIES = 3
 #: Node spacing of the stations' linear interpolation of the slow terms, s (divides 12 h).
 NODE_STEP_s = 60.0
-
-_NUMPY_OPS = SimpleNamespace(sin=np.sin, cos=np.cos)
-
 
 def check_model(name: str, source: str = "scenario", field_name: str = "earth_orientation"
                 ) -> str:
@@ -104,12 +100,12 @@ def _c2i_core(x, y) -> list:
     return [[1.0 - a * x * x, -a * x * y, -x], [-a * x * y, 1.0 - a * y * y, -y], [x, y, z]]
 
 
-def itrs_from_gcrs_elements(x, y, s, xp, yp, sp, era, ops=_NUMPY_OPS) -> list:
+def itrs_from_gcrs_elements(x, y, s, xp, yp, sp, era, ops) -> list:
     """Return the GCRS → ITRS matrix as nested 3x3 lists of expressions (module docstring).
 
     W R3(ERA) C = R1(−y_p) R2(−x_p) R3(s' + ERA − s) C₀ (the three rotations about z add).
-    Any arithmetic with ``ops.sin`` and ``ops.cos`` works: CasADi symbols (the integrator's
-    geopotential) or NumPy scalars; :func:`itrs_from_gcrs_stack` is the vectorised NumPy form.
+    Any arithmetic with ``ops.sin`` and ``ops.cos`` works (``ops`` = casadi for the
+    integrator's geopotential); :func:`itrs_from_gcrs_stack` is the vectorised NumPy form.
     """
     return _mul(_rot(1, -yp, ops), _mul(_rot(2, -xp, ops),
                                         _mul(_rot(3, sp + era - s, ops), _c2i_core(x, y))))
@@ -262,12 +258,14 @@ class EarthOrientation:
         in the GCRS (:meth:`pole`, 1 series: all a zonal field needs).
         """
         self.check_covers(np.array([t_start_s, t_end_s]))
-        lo, hi = sorted((t_start_s, t_end_s))
-        first, last = self._segment_index(np.array([lo, hi]))
-        segments = [self._segment(k, kind) for k in range(first, last + 1)]
+        return self._table(np.array([t_start_s, t_end_s]), kind)
+
+    def _table(self, t: np.ndarray, kind: str = "full") -> ChebyshevTable:
+        """The cached segments holding every time of t, joined into one table."""
+        k = self._segment_index(t)
+        segments = [self._segment(j, kind) for j in range(int(k.min()), int(k.max()) + 1)]
         return ChebyshevTable(np.ascontiguousarray(np.concatenate(
-            [seg.coeffs for seg in segments], axis=1)),
-            segments[0].t0_s, SERIES_SEGMENT_s)
+            [seg.coeffs for seg in segments], axis=1)), segments[0].t0_s, SERIES_SEGMENT_s)
 
     def _segment_index(self, t: np.ndarray) -> np.ndarray:
         """Index k of the 12 h segment [origin + k h, origin + (k+1) h] holding each time; a
@@ -292,11 +290,8 @@ class EarthOrientation:
         14 terms follows that daily wobble (1.5e-6 rad) to ~1e-15 rad.
         """
         t = np.atleast_1d(np.asarray(t_s, dtype=float))
-        k = self._segment_index(t)
-        segments = [self._segment(j) for j in range(int(k.min()), int(k.max()) + 1)]
-        table = ChebyshevTable(np.concatenate([seg.coeffs for seg in segments], axis=1),
-                               segments[0].t0_s, SERIES_SEGMENT_s)
-        return self._attitude_of(t, table.evaluate(t)).itrs_from_gcrs[None, :, 2, :]
+        slow = self._table(t).evaluate(t)
+        return self._attitude_of(t, slow).itrs_from_gcrs[None, :, 2, :]
 
     def _require_scales(self) -> TimeScales:
         if self.scales is None:
@@ -329,10 +324,9 @@ class EarthOrientation:
 
     def angle_rad(self, t_s, drift_s=0.0) -> np.ndarray:
         """The rotation angle at t_s: GMST_0 + ω_E t, or ERA_0 + ω_ERA (t + Δ), rad."""
-        t = np.asarray(t_s, dtype=float)
         if self.model == "gmst":
-            return self.theta0_rad + OMEGA_EARTH_rad_s * t
-        return self.theta0_rad + OMEGA_ERA_rad_s * (t + drift_s)
+            return earth_rotation_angle_rad(self.theta0_rad, t_s)
+        return self.theta0_rad + OMEGA_ERA_rad_s * (np.asarray(t_s, dtype=float) + drift_s)
 
     @property
     def omega_rad_s(self) -> float:
@@ -396,15 +390,11 @@ def orientation_for(model: str, epoch: Epoch, eop: str = "iers", base_dir: Path 
     InputError
         Naming ``source``: an unknown model, an unreadable EOP file, an epoch outside the table.
     """
-    check_model(model, source)
-    if model == "gmst":
-        return EarthOrientation.gmst(epoch)
-    if eop == "iers":
-        table = finals2000a()
-    elif eop == "none":
+    table = None
+    if check_model(model, source) == "iau2006" and eop == "none":
         table = EopTable.zero()
-    else:
+    elif model == "iau2006" and eop != "iers":
         path = Path(eop)
         table = finals2000a((base_dir / path) if base_dir and not path.is_absolute() else path)
-    return EarthOrientation.iau2006(epoch, table, source)
+    return EarthOrientation.of(model, epoch, table, source)
 

@@ -1,18 +1,18 @@
-"""Earth rotation: the one angle model, and the ECI <-> ECEF rotations with their rates.
+"""The gmst Earth rotation model's angle, and its ECI <-> ECEF rotations with their rates.
 
-The project's Earth rotation is
+The ``"gmst"`` Earth orientation (:mod:`tapp.frames.orientation`, the approximate-STM study's)
+turns the Earth by
 
 .. math:: \\theta(t) = \\theta_0 + \\omega_\\oplus t,
 
 with :math:`\\theta_0` the GMST IAU-82 at the scenario epoch (UT1 = UTC, see
-:mod:`tapp.frames.time`) and :math:`\\omega_\\oplus` = ``OMEGA_EARTH_rad_s``. The dynamics
-(tesseral harmonics) and the measurements (station positions) both call
-:func:`earth_rotation_angle_rad`, so the two stay consistent.
+:mod:`tapp.frames.time`) and :math:`\\omega_\\oplus` = ``OMEGA_EARTH_rad_s``
+(:func:`earth_rotation_angle_rad`; the compiled dynamics write the same line symbolically).
 
 Frames: "ECI" is EME2000; "ECEF" is the frame turned from it by :math:`R_3(\\theta)` about the
 EME2000 z axis. Precession and nutation since J2000 (about 0.36 deg of longitude by 2026) and
-polar motion are neglected, as DESIGN.md allows: the ECEF here is a pseudo Earth-fixed frame,
-consistent between dynamics and measurements, not ITRF.
+polar motion are neglected: this ECEF is a pseudo Earth-fixed frame, consistent between
+dynamics and measurements, not the ITRS (the ``"iau2006"`` model is).
 """
 
 from __future__ import annotations
@@ -25,8 +25,8 @@ from tapp.constants import OMEGA_EARTH_rad_s
 def earth_rotation_angle_rad(theta0_rad, t_s, omega_rad_s: float = OMEGA_EARTH_rad_s):
     """Return the Earth rotation angle theta(t) = theta0 + omega t, rad (not wrapped).
 
-    This is THE Earth rotation model of the project (GMST at the epoch, uniform rotation after),
-    not the IAU 2000 Earth rotation angle.
+    The gmst model's angle (GMST at the epoch, uniform rotation after), not the IAU 2000
+    Earth rotation angle of the iau2006 model.
 
     Parameters
     ----------
