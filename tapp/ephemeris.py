@@ -25,7 +25,7 @@ from jplephem.spk import SPK
 
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
-from tapp.frames.chebyshev import ChebyshevTable, fit_chebyshev
+from tapp.frames.chebyshev import ChebyshevTable, fit_chebyshev, segment_starts
 from tapp.frames.eop import MJD_OFFSET, EopTable, leap_seconds
 from tapp.frames.time import Epoch
 from tapp.frames.timescales import TimeScales, TT_MINUS_TAI_s
@@ -149,12 +149,10 @@ def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t
     if not bodies:
         return ChebyshevTable.empty()
     if scales is not None and origin_s is not None:
-        table = fit_chebyshev(lambda t: t[None, :, None] * np.ones(3), t_start_s, t_end_s,
-                              segment_s, 1, origin_s)  # the grid only
-        starts = table.t0_s + segment_s * np.arange(table.n_segments)
+        starts = segment_starts(t_start_s, t_end_s, segment_s, origin_s)
         coeffs = np.concatenate([_tdb_segment(bodies, center, scales.epoch, float(start),
                                               segment_s, n_coef) for start in starts], axis=1)
-        return ChebyshevTable(np.ascontiguousarray(coeffs), table.t0_s, segment_s)
+        return ChebyshevTable(np.ascontiguousarray(coeffs), float(starts[0]), segment_s)
     if scales is None:
         jd_tdb = utc_to_tdb_jd(epoch_jd_utc)
 

@@ -193,28 +193,28 @@ def field_coefficients(model: ForceModel, q: Mapping[str, ca.SX]
 
 
 def body_fixed_position(model: ForceModel, r: ca.SX, t: ca.SX, theta0: ca.SX,
-                        slow: ca.SX | None = None) -> ca.SX:
-    """Rotate inertial r (km) into the body-fixed frame (module docstring).
+                        slow: ca.SX | None = None) -> tuple[ca.SX, ca.SX | None]:
+    """Rotate inertial r (km) into the body-fixed frame (module docstring): (r_fixed, r2).
 
     ``slow`` holds the iau2006 slow terms (X, Y, s, x_p, y_p, s', Δ, 0, 0) at t, or, with 3
-    entries, the ITRS pole k in the GCRS (all a zonal field needs: r_fixed = (0, 0, k·r),
-    with |r| passed separately); ``theta0`` is ERA (iau2006) or GMST (gmst) at t = 0, rad.
-    A gmst zonal field is symmetric about the inertial z axis, so no rotation is applied
-    (and the model stays autonomous).
+    entries, the ITRS pole k in the GCRS (all a zonal field needs: r_fixed = (0, 0, k·r) and
+    r2 = |r|²; r2 is None when r_fixed is the whole position); ``theta0`` is ERA (iau2006) or
+    GMST (gmst) at t = 0, rad. A gmst zonal field is symmetric about the inertial z axis, so no
+    rotation is applied (and the model stays autonomous).
     """
     if model.oriented_field and slow.numel() == 3:
-        return ca.vertcat(0.0, 0.0, slow[0] * r[0] + slow[1] * r[1] + slow[2] * r[2])
+        return ca.vertcat(0.0, 0.0, ca.dot(slow, r)), ca.dot(r, r)
     if model.oriented_field:
         era = theta0 + OMEGA_ERA_rad_s * (t + slow[6])
         m = itrs_from_gcrs_elements(slow[0], slow[1], slow[2], slow[3], slow[4], slow[5], era,
                                     ca)
         return ca.vertcat(*(m[i][0] * r[0] + m[i][1] * r[1] + m[i][2] * r[2]
-                            for i in range(3)))
+                            for i in range(3))), None
     if model.gravity.order == 0:
-        return r
+        return r, None
     theta = theta0 + OMEGA_EARTH_rad_s * t
     c, s = ca.cos(theta), ca.sin(theta)
-    return ca.vertcat(c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2])
+    return ca.vertcat(c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2]), None
 
 
 def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mapping[str, ca.SX],
@@ -228,13 +228,12 @@ def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mappin
     theta0 : SX (1,)  Earth rotation angle at the epoch, rad.
     q : mapping of parameter name to symbol; absent names take their nominal values.
     r_bodies : mapping of third-body name to its position relative to the centre (km).
-    slow : SX (9,) the iau2006 slow terms at t (:func:`body_fixed_position`), if oriented.
+    slow : SX (9,) or (3,), the iau2006 slow terms or the pole at t
+        (:func:`body_fixed_position`), if oriented.
     """
     gm = q.get("GM", model.gm_center_km3_s2)
-    r_fixed = body_fixed_position(model, r, t, theta0, slow)
-    pole_only = model.oriented_field and slow.numel() == 3
-    u = central_potential(model, r_fixed, gm, field_coefficients(model, q),
-                          r2=ca.dot(r, r) if pole_only else None)
+    r_fixed, r2 = body_fixed_position(model, r, t, theta0, slow)
+    u = central_potential(model, r_fixed, gm, field_coefficients(model, q), r2=r2)
     acc = ca.gradient(u, r)
     for body in model.third_bodies:
         s = r_bodies[body]

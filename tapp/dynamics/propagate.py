@@ -202,16 +202,14 @@ class Propagator:
         lo, hi = min(t0_s, t_s.min()), max(t0_s, t_s.max())
         table = ChebyshevTable.empty()
         scales = orientation.scales if orientation is not None else None
-        origin = None
+        origin = None if scales is None else orientation.segment_origin_s  # one grid for both
         if eqs.oriented:
-            if orientation is None or orientation.model != "iau2006":
+            if scales is None:
                 raise InputError("propagate", "orientation", "the scenario's iau2006 Earth "
                                  "orientation for a model with earth_orientation = 'iau2006'",
                                  None if orientation is None else orientation.model)
             table = orientation.series(lo, hi, eqs.oriented)
-            lo, hi, origin = table.t0_s, table.t_end_s, table.t0_s  # the same segments
-        elif scales is not None:
-            origin = orientation.segment_origin_s
+            lo, hi = table.t0_s, table.t_end_s  # the same segments for the ephemeris
         if eqs.bodies:
             if epoch_jd_utc is None:
                 raise InputError("propagate", "epoch", "an epoch (UTC) when third bodies are "

@@ -85,6 +85,17 @@ class ChebyshevTable:
         return tau[None, :, None] * b1 - b2 + self.coeffs[..., 0][:, seg]
 
 
+def segment_starts(t_start_s: float, t_end_s: float, segment_s: float,
+                   origin_s: float | None = None) -> np.ndarray:
+    """Start times (n_seg,) of the segments covering [min, max] of the two times: from the
+    first time, or, with ``origin_s``, on the grid origin_s + k segment_s."""
+    lo, hi = min(t_start_s, t_end_s), max(t_start_s, t_end_s)
+    if origin_s is not None:
+        lo = origin_s + segment_s * np.floor((lo - origin_s) / segment_s + 1e-12)
+    n_seg = max(1, int(np.ceil((hi - lo) / segment_s - 1e-12)))
+    return lo + segment_s * np.arange(n_seg)
+
+
 def fit_chebyshev(fn: Callable[[np.ndarray], np.ndarray], t_start_s: float, t_end_s: float,
                   segment_s: float, n_coef: int, origin_s: float | None = None
                   ) -> ChebyshevTable:
@@ -95,12 +106,9 @@ def fit_chebyshev(fn: Callable[[np.ndarray], np.ndarray], t_start_s: float, t_en
     linearly, falls on a segment boundary). ``fn(t)`` takes times (M,) in s from the epoch
     and returns (n_series, M, 3).
     """
-    lo, hi = min(t_start_s, t_end_s), max(t_start_s, t_end_s)
-    if origin_s is not None:
-        lo = origin_s + segment_s * np.floor((lo - origin_s) / segment_s + 1e-12)
-    n_seg = max(1, int(np.ceil((hi - lo) / segment_s - 1e-12)))
+    seg_start = segment_starts(t_start_s, t_end_s, segment_s, origin_s)
+    n_seg = seg_start.size
     tau = np.cos(np.pi * (np.arange(n_coef) + 0.5) / n_coef)  # first-kind nodes in (-1, 1)
-    seg_start = lo + segment_s * np.arange(n_seg)
     t_nodes = seg_start[:, None] + 0.5 * (tau[None, :] + 1.0) * segment_s  # (n_seg, n_coef)
     values = np.asarray(fn(t_nodes.ravel()), dtype=float)
     n_series = values.shape[0]
@@ -109,4 +117,4 @@ def fit_chebyshev(fn: Callable[[np.ndarray], np.ndarray], t_start_s: float, t_en
     for b in range(n_series):
         for k in range(n_seg):
             coeffs[b, k] = np.polynomial.chebyshev.chebfit(tau, values[b, k], n_coef - 1).T
-    return ChebyshevTable(np.ascontiguousarray(coeffs), float(lo), float(segment_s))
+    return ChebyshevTable(np.ascontiguousarray(coeffs), float(seg_start[0]), float(segment_s))
