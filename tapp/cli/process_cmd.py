@@ -18,11 +18,10 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from tapp.cli.common import app, print_json, run_guarded
 from tapp.outputs import OutputSet, check_paths
-from tapp.processor.deck import bind, read_deck
+from tapp.processor.deck import read_deck
 from tapp.processor.printout import o3_text, run_dict
-from tapp.processor.sequencing import Run, process
+from tapp.processor.sequencing import Run, process_tape
 from tapp.processor.tape32 import build_t32, t32_provenance
-from tapp.tape.t13 import open_t13
 from tapp.tape.t32 import t32_file_writer
 
 SIGMA_PNG = "sigma_history.png"
@@ -32,19 +31,15 @@ BPLANE_PNG = "bplane_ellipses.png"
 def _run(tape: Path, deck_path: Path, quiet: bool) -> tuple[Run, object, object, float]:
     deck = read_deck(deck_path)
     start = time.perf_counter()
-    with open_t13(tape) as data:
-        plan = bind(deck, data.header, str(deck_path))
-        columns = (TextColumn("{task.description:<12}"), BarColumn(),
-                   TextColumn("record {task.completed}/{task.total}"), TimeElapsedColumn())
-        with Progress(*columns, console=Console(stderr=True), disable=quiet,
-                      transient=True) as bar:
-            task = bar.add_task("TAPP III", total=data.header.records.k.size)
+    columns = (TextColumn("{task.description:<12}"), BarColumn(),
+               TextColumn("record {task.completed}/{task.total}"), TimeElapsedColumn())
+    with Progress(*columns, console=Console(stderr=True), disable=quiet, transient=True) as bar:
+        task = bar.add_task("TAPP III", total=None)
 
-            def progress(k: int, n_it: int) -> None:
-                bar.update(task, completed=k, total=n_it)
+        def progress(k: int, n_it: int) -> None:
+            bar.update(task, completed=k, total=n_it)
 
-            run = process(data, plan, source=str(deck_path), progress=progress)
-        header = data.header
+        run, plan, header = process_tape(tape, deck, str(deck_path), progress)
     return run, plan, (header, deck), time.perf_counter() - start
 
 

@@ -27,13 +27,12 @@ from tapp.errors import InputError
 from tapp.guidance.guidefile import GuideFile
 from tapp.guidance.study import GuidanceResult, check_samples, check_seed, guidance_study
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
-from tapp.processor.deck import Deck, bind
+from tapp.processor.deck import Deck
 from tapp.processor.printout import o3_text, run_dict
-from tapp.processor.sequencing import Run, process
+from tapp.processor.sequencing import process_tape
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.schema import validate
 from tapp.tape import write_t13
-from tapp.tape.t13 import open_t13
 from tapp.tape.t32 import read_t32, write_t32
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import simulate
@@ -123,12 +122,13 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
     wall["simulate"] = time.perf_counter() - start
 
     start = time.perf_counter()
-    run, header, content = _process(t13_path, deck, pipeline.deck.source, progress)
+    run, plan, header = process_tape(t13_path, deck, pipeline.deck.source,
+                                     lambda k, n: progress("TAPP III", k, n))
+    content = run_dict(run, header, pipeline.deck.source, t13_path.name)
     (work / OUTPUTS["o3"]).write_text(o3_text(run, header, pipeline.deck.source,
                                               str(t13_path.name)), "utf-8")
     (work / OUTPUTS["process_json"]).write_text(json.dumps(content), "utf-8")
     t32_path = work / OUTPUTS["t32"]
-    plan = bind(deck, header, pipeline.deck.source)
     write_t32(t32_path, build_t32(run, plan, header, t32_provenance(
         header, deck, pipeline.deck.source, t13_path.name)))
     wall["process"] = time.perf_counter() - start
@@ -149,17 +149,6 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
     observations = int(sim.tape.pairs.n_obs.sum())
     write_report(work, pipeline, run, header, content, guidance, observations, wall, plots)
     return PipelineResult(work, observations, content, guidance, wall)
-
-
-def _process(t13_path: Path, deck: Deck, deck_source: str, progress: Progress
-             ) -> tuple[Run, object, dict]:
-    """TAPP III on the tape as ``tapp process`` runs it (lazy reading)."""
-    with open_t13(t13_path) as data:
-        plan = bind(deck, data.header, deck_source)
-        run = process(data, plan, source=deck_source,
-                      progress=lambda k, n: progress("TAPP III", k, n))
-        header = data.header
-    return run, header, run_dict(run, header, deck_source, t13_path.name)
 
 
 def tracking_case(pipeline: str, data_interval_s: float, network: float, networks: str,
