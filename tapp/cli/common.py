@@ -171,6 +171,25 @@ def earth_orientation_option(value: str | None) -> str | None:
     return check_model(value, "--earth-orientation", "value")
 
 
+#: The Dask options of every command that runs on a cluster (iter, guide, pipeline).
+SchedulerOpt = Annotated[str | None, typer.Option(
+    "--scheduler", help="Address tcp://HOST:PORT of a running Dask scheduler [default: start a "
+                        "local cluster].")]
+WorkersOpt = Annotated[int | None, typer.Option(
+    "--workers", help="Local-cluster worker processes [default: one per core].")]
+SerialOpt = Annotated[bool, typer.Option(
+    "--serial", help="Run in this process, no Dask (the results are the same).")]
+ConnectTimeoutOpt = Annotated[float, typer.Option(
+    "--connect-timeout-s", help="Wait for the scheduler, s.")]
+
+
+def scheduler_error(exc, source: str = "--scheduler", field: str = "value") -> InputError:
+    """The one-line InputError of a Dask scheduler that does not answer (``iter``'s
+    SchedulerError)."""
+    return InputError(source, field, f"a Dask scheduler answering within {exc.timeout_s:g} s "
+                      f"({exc.reason})", exc.address)
+
+
 def execution_options(scheduler: str | None, workers: int | None, timeout_s: float,
                       serial: bool = False):
     """Return the ``iter.Execution`` of ``--scheduler``/``--workers``/``--serial`` options, or

@@ -20,8 +20,17 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from iter import SchedulerError
 from iter.execute import CONNECT_TIMEOUT_S, Execution
-from tapp.cli.common import app, execution_options, print_json, run_guarded
-from tapp.errors import InputError
+from tapp.cli.common import (
+    ConnectTimeoutOpt,
+    SchedulerOpt,
+    SerialOpt,
+    WorkersOpt,
+    app,
+    execution_options,
+    print_json,
+    run_guarded,
+    scheduler_error,
+)
 from tapp.guidance.guidefile import read_guide
 from tapp.guidance.statistics import bplane_rows
 from tapp.guidance.study import (
@@ -63,8 +72,7 @@ def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Executio
                                   progress=progress, guide_source=str(guide),
                                   tape_source=str(tape))
         except SchedulerError as exc:
-            raise InputError("--scheduler", "value", f"a Dask scheduler answering within "
-                             f"{exc.timeout_s:g} s ({exc.reason})", exc.address) from None
+            raise scheduler_error(exc) from None
 
 
 @app.command("guide")
@@ -75,16 +83,10 @@ def guide_cmd(
                                           "execution errors, corridor.")],
     samples: Annotated[int, typer.Option("--samples", help="Monte Carlo samples.")],
     seed: Annotated[int, typer.Option("--seed", help="Root seed (numpy SeedSequence).")],
-    scheduler: Annotated[str | None, typer.Option(
-        "--scheduler", help="Address tcp://HOST:PORT of a running Dask scheduler [default: "
-                            "start a local cluster].")] = None,
-    workers: Annotated[int | None, typer.Option(
-        "--workers", help="Local-cluster worker processes [default: one per core].")] = None,
-    serial: Annotated[bool, typer.Option(
-        "--serial", help="Run the shards in this process, no Dask (small studies; the "
-                         "numbers are the same).")] = False,
-    connect_timeout_s: Annotated[float, typer.Option(
-        "--connect-timeout-s", help="Wait for the scheduler, s.")] = CONNECT_TIMEOUT_S,
+    scheduler: SchedulerOpt = None,
+    workers: WorkersOpt = None,
+    serial: SerialOpt = False,
+    connect_timeout_s: ConnectTimeoutOpt = CONNECT_TIMEOUT_S,
     shard_size: Annotated[int | None, typer.Option(
         "--shard-size", help="Samples per Dask task, a multiple of 1,000 [default: auto]; "
                              "the results do not depend on it.")] = None,

@@ -19,14 +19,18 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from iter import SchedulerError
 from iter.execute import CONNECT_TIMEOUT_S
 from tapp.cli.common import (
+    ConnectTimeoutOpt,
     EarthOrientationOpt,
+    SchedulerOpt,
+    SerialOpt,
+    WorkersOpt,
     app,
     earth_orientation_option,
     execution_options,
     print_json,
     run_guarded,
+    scheduler_error,
 )
-from tapp.errors import InputError
 from tapp.outputs import check_paths
 from tapp.pipeline.run import OUTPUTS, check_out_dir, run_pipeline, trade_outputs
 from tapp.pipeline.spec import read_pipeline
@@ -38,16 +42,10 @@ def pipeline_cmd(
                                              "guidance, [simulate], [guide].")],
     output: Annotated[Path, typer.Option("--output", "-o", help="Directory to create (new or "
                                          "empty).")],
-    scheduler: Annotated[str | None, typer.Option(
-        "--scheduler", help="Address tcp://HOST:PORT of a running Dask scheduler for the "
-                            "Monte Carlo [default: start a local cluster].")] = None,
-    workers: Annotated[int | None, typer.Option(
-        "--workers", help="Local-cluster worker processes [default: one per core].")] = None,
-    serial: Annotated[bool, typer.Option(
-        "--serial", help="Run the Monte Carlo in this process, no Dask (the numbers are the "
-                         "same).")] = False,
-    connect_timeout_s: Annotated[float, typer.Option(
-        "--connect-timeout-s", help="Wait for the scheduler, s.")] = CONNECT_TIMEOUT_S,
+    scheduler: SchedulerOpt = None,
+    workers: WorkersOpt = None,
+    serial: SerialOpt = False,
+    connect_timeout_s: ConnectTimeoutOpt = CONNECT_TIMEOUT_S,
     earth_orientation: EarthOrientationOpt = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print the trade-study numbers as "
                                            "one JSON object.")] = False,
@@ -76,8 +74,7 @@ def pipeline_cmd(
             try:
                 result = run_pipeline(pipe, output, execution=execution, progress=progress)
             except SchedulerError as exc:
-                raise InputError("--scheduler", "value", f"a Dask scheduler answering within "
-                                 f"{exc.timeout_s:g} s ({exc.reason})", exc.address) from None
+                raise scheduler_error(exc) from None
         numbers = trade_outputs(result)
         if json_out:
             print_json({"directory": str(output), **numbers, "wall_s": result.wall_s})

@@ -28,8 +28,18 @@ from iter import (
     load_sweep,
     run_sweep,
 )
+from iter.execute import CONNECT_TIMEOUT_S
 from iter.table import CaseStatus
-from tapp.cli.common import app, print_json, run_guarded
+from tapp.cli.common import (
+    ConnectTimeoutOpt,
+    SchedulerOpt,
+    SerialOpt,
+    WorkersOpt,
+    app,
+    print_json,
+    run_guarded,
+    scheduler_error,
+)
 from tapp.errors import InputError, TappError
 from tapp.outputs import check_paths
 
@@ -48,24 +58,13 @@ def iter_command(
     ] = None,
     csv: Annotated[Path | None, typer.Option("--csv", help="Also write the table as CSV.")]
     = None,
-    scheduler: Annotated[
-        str | None,
-        typer.Option("--scheduler", help="Address tcp://HOST:PORT of a running Dask "
-                                         "scheduler [default: start a local cluster]."),
-    ] = None,
-    workers: Annotated[
-        int | None,
-        typer.Option("--workers", help="Local-cluster worker processes [default: one per "
-                                       "core]."),
-    ] = None,
-    serial: Annotated[bool, typer.Option("--serial", help="Run in this process, no Dask.")]
-    = False,
+    scheduler: SchedulerOpt = None,
+    workers: WorkersOpt = None,
+    serial: SerialOpt = False,
     chunk_size: Annotated[
         int | None, typer.Option("--chunk-size", help="Cases per Dask task [default: auto].")
     ] = None,
-    connect_timeout_s: Annotated[
-        float, typer.Option("--connect-timeout-s", help="Wait for the scheduler, s.")
-    ] = 5.0,
+    connect_timeout_s: ConnectTimeoutOpt = CONNECT_TIMEOUT_S,
     json_output: Annotated[
         bool, typer.Option("--json", help="Print the summary as one JSON object.")
     ] = False,
@@ -90,9 +89,7 @@ def iter_command(
             field = f"--{exc.field.replace('_', '-')}" if exc.source == "options" else exc.field
             raise InputError(source, field, exc.expected, exc.got) from exc
         except SchedulerError as exc:
-            raise InputError("command line", "--scheduler",
-                             f"a Dask scheduler answering within {exc.timeout_s:g} s "
-                             f"({exc.reason})", exc.address) from exc
+            raise scheduler_error(exc, "command line", "--scheduler") from exc
         except ResultFileError as exc:
             raise InputError(exc.path, exc.field, exc.expected, exc.got) from exc
         except IterError as exc:
