@@ -41,6 +41,7 @@ from tapp.guidance.study import (
     guidance_study,
 )
 from tapp.outputs import OutputSet, check_paths
+from tapp.report import HISTOGRAM_PNG, SCATTER_PNG
 from tapp.report.tapp2 import (
     guidance_dict,
     guidance_markdown,
@@ -48,9 +49,6 @@ from tapp.report.tapp2 import (
     plot_dv_histograms,
 )
 from tapp.tape.t32 import read_t32
-
-SCATTER_PNG = "bplane_scatter.png"
-HISTOGRAM_PNG = "dv_histograms.png"
 
 
 def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Execution,

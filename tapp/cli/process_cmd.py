@@ -22,10 +22,8 @@ from tapp.processor.deck import read_deck
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.sequencing import Run, process_tape
 from tapp.processor.tape32 import build_t32, t32_provenance
+from tapp.report import BPLANE_PNG, SIGMA_PNG
 from tapp.tape.t32 import t32_file_writer
-
-SIGMA_PNG = "sigma_history.png"
-BPLANE_PNG = "bplane_ellipses.png"
 
 
 def _run(tape: Path, deck_path: Path, quiet: bool) -> tuple[Run, object, object, float]:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from tapp.report import BPLANE_PNG, HISTOGRAM_PNG, SCATTER_PNG, SIGMA_PNG
 from tapp.report.markdown import table
 
 #: Lines of the O3 printout quoted in the report (the whole printout is o3.txt).
@@ -34,14 +35,14 @@ def _plots(folder: Path, run, header, guidance, title: str) -> list[Path]:
 
     folder.mkdir(exist_ok=True)
     miss = tuple(header.miss.name)
-    out = [plot_sigma_history(run.history, run.history_labels, folder / "sigma_history.png",
+    out = [plot_sigma_history(run.history, run.history_labels, folder / SIGMA_PNG,
                               f"{title}: σ, fit vs real world")]
     if bplane_rows(run.history, miss):
-        out.append(plot_bplane_ellipses(run.history, miss, folder / "bplane_ellipses.png",
+        out.append(plot_bplane_ellipses(run.history, miss, folder / BPLANE_PNG,
                                         f"{title}: B-plane 1σ/3σ, fit vs real"))
-        out.append(plot_bplane_scatter(guidance, folder / "bplane_scatter.png",
+        out.append(plot_bplane_scatter(guidance, folder / SCATTER_PNG,
                                        f"{title}: final B-plane miss"))
-    out.append(plot_dv_histograms(guidance, folder / "dv_histograms.png",
+    out.append(plot_dv_histograms(guidance, folder / HISTOGRAM_PNG,
                                   f"{title}: ΔV per manoeuvre"))
     return out
 
