@@ -103,8 +103,7 @@ def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | No
     except BaseException:
         shutil.rmtree(work, ignore_errors=True)
         raise
-    return PipelineResult(out_dir, result.observations, result.process, result.guidance,
-                          result.wall_s)
+    return replace(result, directory=out_dir)
 
 
 def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: bool,

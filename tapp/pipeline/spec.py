@@ -74,12 +74,11 @@ class Part:
     """One part of a pipeline: its parsed TOML document and where it came from.
 
     ``source`` is the file (a referenced part) or ``"<pipeline> [part]"`` (an inlined one);
-    ``base`` is the directory its relative paths are taken from.
+    relative paths inside the part are taken from the directory of ``source``.
     """
 
     document: dict
     source: str
-    base: Path
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,13 +98,13 @@ class Pipeline:
 
 def _part(value: str | dict, name: str, path: Path) -> Part:
     if isinstance(value, dict):
-        return Part(copy.deepcopy(value), f"{path} [{name}]", path.parent)
+        return Part(copy.deepcopy(value), f"{path} [{name}]")
     if not value.strip():
         raise InputError(str(path), name, f"the path of the {name} file or an inline "
                          f"[{name}] table", value)
     target = Path(value)
     target = target if target.is_absolute() else path.parent / target
-    return Part(read_toml(target), str(target), target.parent)
+    return Part(read_toml(target), str(target))
 
 
 def read_pipeline(path: Path | str) -> Pipeline:
@@ -164,6 +163,6 @@ def with_overrides(pipeline: Pipeline, overrides: Mapping[str, object]) -> Pipel
         table[path[-1]] = value
         changed.setdefault(part, []).append(".".join(path))
     new = {name: Part(documents[name], f"{parts[name].source} (overridden: "
-                      f"{', '.join(changed[name])})", parts[name].base)
+                      f"{', '.join(changed[name])})")
            if name in changed else parts[name] for name in PARTS}
     return replace(pipeline, **new)
