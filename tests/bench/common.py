@@ -11,7 +11,9 @@ import json
 import os
 import platform
 import statistics
+import sys
 import time
+import tracemalloc
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
@@ -63,6 +65,26 @@ def timed_once(fn: Callable[[], Any]) -> tuple[float, Any]:
     t0 = time.perf_counter()
     result = fn()
     return time.perf_counter() - t0, result
+
+
+def traced_peak_mb(fn: Callable[[], Any]) -> float:
+    """Return the peak of the memory allocated during one call of ``fn``, MB (tracemalloc:
+    Python objects and NumPy buffers; it slows the call, so time it elsewhere)."""
+    tracemalloc.start()
+    try:
+        fn()
+        return tracemalloc.get_traced_memory()[1] / 1e6
+    finally:
+        tracemalloc.stop()
+
+
+def logger(section: str) -> Callable[[str], None]:
+    """Return a function that writes a progress line ``[section] message`` to stderr."""
+
+    def log(message: str) -> None:
+        print(f"[{section}] {message}", file=sys.stderr, flush=True)
+
+    return log
 
 
 def machine_info() -> dict[str, Any]:

@@ -28,7 +28,6 @@ import subprocess
 import sys
 import tempfile
 import time
-import tracemalloc
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -52,7 +51,14 @@ from tapp.tape.t13 import (
     open_t13,
     write_t13,
 )
-from tests.bench.common import REPO_ROOT, Section, markdown_table, time_calls
+from tests.bench.common import (
+    REPO_ROOT,
+    Section,
+    logger,
+    markdown_table,
+    time_calls,
+    traced_peak_mb,
+)
 
 NAME = "processor"
 N_O = 50
@@ -91,10 +97,7 @@ ORBIT = (("x_km", "km"), ("y_km", "km"), ("z_km", "km"), ("vx_km_s", "km/s"),
 MISS = (("a_km", "km"), ("ex", "1"), ("ey", "1"), ("hx", "1"), ("hy", "1"),
         ("lambda_m_rad", "rad"))
 _GAMMA = np.block([[np.zeros((3, 3)), np.eye(3)], [-np.eye(3), np.zeros((3, 3))]])
-
-
-def log(message: str) -> None:
-    print(f"[{NAME}] {message}", file=sys.stderr, flush=True)
+log = logger(NAME)
 
 
 # ---------------------------------------------------------------- the synthetic tape
@@ -325,15 +328,6 @@ def _best_s(fn) -> float:
     return time_calls(fn, REPEATS)[0].best_s
 
 
-def _traced_peak_mb(fn) -> float:
-    tracemalloc.start()
-    try:
-        fn()
-        return tracemalloc.get_traced_memory()[1] / 1e6
-    finally:
-        tracemalloc.stop()
-
-
 def _agreement(run: Run, peer: PeerResult) -> float:
     """Max relative difference of the fit covariance of f1 at the first print time (before
     the first epoch change and recycle, where both use the same representation)."""
@@ -367,7 +361,7 @@ def measure(n_o: int, folder: Path, rng: np.random.Generator, *, dense: bool = F
     io_s = _best_s(lambda: read_all_blocks(tape_path))
     peer_s = _best_s(lambda: numpy_peer(tape_path, names))
     check = _agreement(run, numpy_peer(tape_path, names))
-    peak_mb = _traced_peak_mb(lambda: process_tape(tape_path, decks["full"]))
+    peak_mb = traced_peak_mb(lambda: process_tape(tape_path, decks["full"]))
     result = {
         "label": label, "n_o": n_o, "dense": dense, "n_records": N_RECORDS, "n_pairs": n_pairs,
         "tape_mb": tape_path.stat().st_size / 1e6, "packed_mb": packed_mb,

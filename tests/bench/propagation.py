@@ -45,7 +45,15 @@ from tests.bench.baselines import (
     numpy_j2_rhs,
     scipy_propagate,
 )
-from tests.bench.common import REPO_ROOT, Section, Timing, markdown_table, time_calls, timed_once
+from tests.bench.common import (
+    REPO_ROOT,
+    Section,
+    Timing,
+    logger,
+    markdown_table,
+    time_calls,
+    timed_once,
+)
 
 NAME = "propagation"
 
@@ -75,10 +83,7 @@ HEYOKA_MODES = {("J2", False): (False, True), ("J2", True): (False, True),
 # One-off trial (not re-run by the bench): non-compact 5x5 + STM, tol 1e-12, 2-CPU AMD EPYC,
 # heyoka 7.13.2: JIT 861 s, best run 55.8 ms (i = 0°) and 55.0 ms (i = 30°), 291/286 steps.
 HEYOKA_5X5_STM_NONCOMPACT_TRIAL = {"jit_s": 861.0, "run_ms": 55.0}
-
-
-def log(message: str) -> None:
-    print(f"[{NAME}] {message}", file=sys.stderr, flush=True)
+log = logger(NAME)
 
 
 def output_grid_s() -> np.ndarray:

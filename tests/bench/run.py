@@ -18,6 +18,7 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 
 from tests.bench import (  # noqa: E402
     common,
+    guidance,
     od,
     processor,
     propagation,
@@ -27,7 +28,8 @@ from tests.bench import (  # noqa: E402
 )
 
 SECTIONS = {module.NAME: module
-            for module in (propagation, tracking, od, targeting, sweeps, processor)}
+            for module in (propagation, tracking, od, targeting, sweeps, processor,
+                           guidance)}
 
 
 def main(argv: list[str] | None = None) -> int:
