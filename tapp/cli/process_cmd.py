@@ -23,7 +23,7 @@ from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.sequencing import Run, process_tape
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.report import BPLANE_PNG, SIGMA_PNG
-from tapp.tape.t32 import t32_file_writer
+from tapp.tape.t32_hdf5 import t32_file_writer
 
 
 def _run(tape: Path, deck_path: Path, quiet: bool) -> tuple[Run, object, object, float]:

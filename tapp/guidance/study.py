@@ -23,7 +23,8 @@ from tapp.guidance.linear import linear_covariance
 from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples
 from tapp.guidance.shards import run_shards
 from tapp.guidance.statistics import Corridor, Outcome, linear_outcome, sample_outcome
-from tapp.tape.t32 import T32, read_t32
+from tapp.tape.t32 import T32
+from tapp.tape.t32_hdf5 import read_t32
 
 #: Fewest samples (a covariance needs two).
 MIN_SAMPLES = 2

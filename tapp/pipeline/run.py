@@ -32,8 +32,8 @@ from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.sequencing import process_tape
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.schema import validate
-from tapp.tape import write_t13
-from tapp.tape.t32 import read_t32, write_t32
+from tapp.tape.t13_hdf5 import write_t13
+from tapp.tape.t32_hdf5 import read_t32, write_t32
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import simulate
 
