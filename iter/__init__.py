@@ -8,7 +8,10 @@ written to HDF5 and CSV. See :mod:`iter.sweepfile` for the sweep-file format.
 
 This package knows nothing of ``tapp`` and never imports it. Inside it, use relative imports:
 ``import iter`` would shadow the builtin ``iter()``; from outside, ``from iter import ...`` or
-``import iter as sweeps``.
+``import iter as sweeps``. The names of the modules that read and write the results files
+(:mod:`iter.results`, :mod:`iter.run`: the only ones that load h5py) are imported on first
+use, so that a program using only part of the package (say :mod:`iter.schema` or the executors
+of :mod:`iter.execute`) does not load h5py.
 
 >>> from iter import Loop, generate_cases
 >>> azimuths = Loop(type=2, names=("azimuth_deg",), sets=5, vary=(96.0,), delta=(3.0,))
@@ -16,11 +19,12 @@ This package knows nothing of ``tapp`` and never imports it. Inside it, use rela
 [96.0, 99.0, 102.0, 105.0, 108.0]
 """
 
+import importlib
+
 from .body import CallableBody, ProgramBody, resolve_callable, run_case
 from .errors import IterError, ResultFileError, SchedulerError, SweepInputError
-from .execute import Execution, SweepResult, SweepSummary, probe_scheduler, run_sweep
+from .execute import Execution, probe_scheduler
 from .loops import Case, Loop, case_count, generate_cases
-from .results import read_hdf5, write_csv, write_hdf5
 from .sweep import Sweep
 from .sweepfile import load_sweep, parse_sweep
 from .table import CaseResult, CaseStatus, ResultTable
@@ -32,3 +36,13 @@ __all__ = [
     "load_sweep", "parse_sweep", "probe_scheduler", "read_hdf5", "resolve_callable",
     "run_case", "run_sweep", "write_csv", "write_hdf5",
 ]
+
+#: Public names imported on first use, and their modules (which load h5py).
+_ON_FIRST_USE = {"SweepResult": "run", "SweepSummary": "run", "run_sweep": "run",
+                 "read_hdf5": "results", "write_csv": "results", "write_hdf5": "results"}
+
+
+def __getattr__(name: str) -> object:
+    if name in _ON_FIRST_USE:
+        return getattr(importlib.import_module(f".{_ON_FIRST_USE[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

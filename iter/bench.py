@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 from .body import CallableBody
 from .errors import IterError
-from .execute import Execution, local_cluster, run_sweep
+from .execute import Execution, local_cluster
 from .loops import Loop
+from .run import run_sweep
 from .sweep import Sweep
 
 #: Default work of :func:`cpu_bound_body`, loop iterations (about 0.1 s of CPython).

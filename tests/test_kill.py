@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from tapp.tape import read_t13
+from tapp.tape.t13_hdf5 import read_t13
 
 ROOT = Path(__file__).resolve().parents[1]
 LEO = ROOT / "scenarios" / "leo_equatorial.toml"

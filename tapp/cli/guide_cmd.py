@@ -48,7 +48,7 @@ from tapp.report.tapp2 import (
     plot_bplane_scatter,
     plot_dv_histograms,
 )
-from tapp.tape.t32 import read_t32
+from tapp.tape.t32_hdf5 import read_t32
 
 
 def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Execution,

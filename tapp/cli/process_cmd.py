@@ -18,12 +18,13 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from tapp.cli.common import app, print_json, run_guarded
 from tapp.outputs import OutputSet, check_paths
+from tapp.pipeline.steps import process_tape
 from tapp.processor.deck import read_deck
 from tapp.processor.printout import o3_text, run_dict
-from tapp.processor.sequencing import Run, process_tape
+from tapp.processor.sequencing import Run
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.report import BPLANE_PNG, SIGMA_PNG
-from tapp.tape.t32 import t32_file_writer
+from tapp.tape.t32_hdf5 import t32_file_writer
 
 
 def _run(tape: Path, deck_path: Path, quiet: bool) -> tuple[Run, object, object, float]:

@@ -27,7 +27,8 @@ from tapp.cli.common import (
     run_guarded,
 )
 from tapp.outputs import OutputSet, check_paths
-from tapp.tape import describe, write_t13
+from tapp.tape.files import describe
+from tapp.tape.t13_hdf5 import write_t13
 from tapp.tape.t32 import format_t32_summary
 from tapp.tracking.oem import format_oem
 from tapp.tracking.scenario import read_scenario

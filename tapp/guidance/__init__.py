@@ -53,8 +53,9 @@ into ΔV and miss statistics.
 
 Public API
 ----------
-:func:`run_guidance` runs a study from a T32 path and a guidance-file path and returns a
-:class:`GuidanceResult`; :func:`tapp.report.tapp2.guidance_markdown` renders it.
+:func:`guidance_study` runs a study on a T32 tape and a guidance file in memory and returns a
+:class:`GuidanceResult` (:func:`tapp.pipeline.steps.run_guidance` runs one from their paths:
+this package reads no tape file); :func:`tapp.report.tapp2.guidance_markdown` renders it.
 """
 
 from tapp.guidance.execution import ExecutionErrors, error_second_moment, sample_errors
@@ -64,10 +65,10 @@ from tapp.guidance.model import Problem, Step, build_problem
 from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples, propagate, simulate_blocks
 from tapp.guidance.shards import run_shards
 from tapp.guidance.statistics import Corridor, Outcome, linear_outcome, sample_outcome
-from tapp.guidance.study import GuidanceResult, guidance_study, run_guidance
+from tapp.guidance.study import GuidanceResult, guidance_study
 
 __all__ = ["BLOCK_SAMPLES", "Corridor", "ExecutionErrors", "GuidanceResult", "GuideFile",
            "LinearCovariance", "Outcome", "Problem", "Samples", "Step", "Study", "bind",
            "build_problem", "error_second_moment", "guidance_study", "linear_covariance",
-           "linear_outcome", "propagate", "read_guide", "run_guidance", "run_shards",
+           "linear_outcome", "propagate", "read_guide", "run_shards",
            "sample_errors", "sample_outcome", "simulate_blocks"]

@@ -1,9 +1,9 @@
 """A TAPP II study: a T32 tape and a guidance file in, ΔV and miss statistics out.
 
-:func:`run_guidance` (paths) and :func:`guidance_study` (objects) bind the guidance file to
-the tape (:func:`tapp.guidance.guidefile.bind`), run the Monte Carlo in shards
-(:func:`tapp.guidance.shards.run_shards`), propagate the linear covariance
-(:func:`tapp.guidance.linear.linear_covariance`) and return both sets of statistics
+:func:`guidance_study` (objects; :func:`tapp.pipeline.steps.run_guidance` from the files) binds
+the guidance file to the tape (:func:`tapp.guidance.guidefile.bind`), runs the Monte Carlo in
+shards (:func:`tapp.guidance.shards.run_shards`), propagates the linear covariance
+(:func:`tapp.guidance.linear.linear_covariance`) and returns both sets of statistics
 (:mod:`tapp.guidance.statistics`) with the per-sample outcomes, in one
 :class:`GuidanceResult`.
 """
@@ -13,17 +13,16 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 from iter.execute import Execution
 from tapp.errors import InputError
 from tapp.guidance.execution import ExecutionErrors
-from tapp.guidance.guidefile import GuideFile, bind, read_guide
+from tapp.guidance.guidefile import GuideFile, bind
 from tapp.guidance.linear import linear_covariance
 from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples
 from tapp.guidance.shards import run_shards
 from tapp.guidance.statistics import Corridor, Outcome, linear_outcome, sample_outcome
-from tapp.tape.t32 import T32, read_t32
+from tapp.tape.t32 import T32
 
 #: Fewest samples (a covariance needs two).
 MIN_SAMPLES = 2
@@ -146,20 +145,5 @@ def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
         linear_outcome(problem, lin, study.corridor), run.samples)
 
 
-def run_guidance(t32_path: Path | str, guide_path: Path | str, *, samples: int, seed: int,
-                 execution: Execution | None = None, shard_samples: int | None = None,
-                 progress: Callable[[int, int], None] | None = None) -> GuidanceResult:
-    """Run a guidance study from a T32 tape file and a guidance file (module docstring).
-
-    See :func:`guidance_study` for the parameters and errors; the tape and the guidance file
-    are read and validated first (errors name them).
-    """
-    guide = read_guide(guide_path)
-    t32 = read_t32(t32_path)
-    return guidance_study(t32, guide, samples=samples, seed=seed, execution=execution,
-                          shard_samples=shard_samples, progress=progress,
-                          guide_source=str(guide_path), tape_source=str(t32_path))
-
-
 __all__ = ["MAX_SAMPLES", "MIN_SAMPLES", "GuidanceResult", "check_samples",
-           "check_shard_samples", "check_seed", "guidance_study", "run_guidance"]
+           "check_shard_samples", "check_seed", "guidance_study"]

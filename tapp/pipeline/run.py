@@ -27,13 +27,13 @@ from tapp.errors import InputError
 from tapp.guidance.guidefile import GuideFile
 from tapp.guidance.study import GuidanceResult, check_samples, check_seed, guidance_study
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
+from tapp.pipeline.steps import process_tape
 from tapp.processor.deck import Deck
 from tapp.processor.printout import o3_text, run_dict
-from tapp.processor.sequencing import process_tape
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.schema import validate
-from tapp.tape import write_t13
-from tapp.tape.t32 import read_t32, write_t32
+from tapp.tape.t13_hdf5 import write_t13
+from tapp.tape.t32_hdf5 import read_t32, write_t32
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import simulate
 

@@ -61,7 +61,7 @@ NOISE_PARTS = ("white", "bias", "correlated")
 
 class TrackingData(Protocol):
     """What the processor reads: a T13 header and its pair matrices by record range
-    (:func:`tapp.tape.t13.open_t13` or :func:`tapp.tape.t13.memory_pairs`)."""
+    (:func:`tapp.tape.t13_hdf5.open_t13` or :func:`tapp.tape.t13.memory_pairs`)."""
 
     header: object
 
@@ -449,21 +449,5 @@ def process(data: TrackingData, plan: Plan, *, source: str = "deck",
     return Processor(data, plan, source, progress).run()
 
 
-def process_tape(path, deck, source: str, progress: Callable[[int, int], None] | None = None
-                 ) -> tuple[Run, Plan, object]:
-    """Run TAPP III on a T13 tape file with a validated deck: (run, plan, the tape header).
-
-    The tape is read lazily (:func:`tapp.tape.t13.open_t13`) and the deck bound to it
-    (:func:`tapp.processor.deck.bind`): what ``tapp process`` and the pipeline both do.
-    ``source`` (the deck file) is named in errors.
-    """
-    from tapp.processor.deck import bind
-    from tapp.tape.t13 import open_t13
-
-    with open_t13(path) as data:
-        plan = bind(deck, data.header, source)
-        return process(data, plan, source=source, progress=progress), plan, data.header
-
-
 __all__ = ["ISOLATED_SETS", "SYSTEMS", "SYSTEM_PARTITIONS", "Block", "HistoryRow", "Processor",
-           "Run", "TrackingData", "process", "process_tape"]
+           "Run", "TrackingData", "process"]

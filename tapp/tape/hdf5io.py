@@ -1,6 +1,6 @@
 """How the tapes store and check their HDF5 datasets: one writer and one validating reader.
 
-Shared by the T13 (:mod:`tapp.tape.t13`) and T32 (:mod:`tapp.tape.t32`) tapes.
+Shared by the T13 (:mod:`tapp.tape.t13_hdf5`) and T32 (:mod:`tapp.tape.t32_hdf5`) tapes.
 
 Storage (tapes with checksums: T13 version >= 2, every T32):
 
@@ -17,9 +17,9 @@ Storage (tapes with checksums: T13 version >= 2, every T32):
 Reading: :class:`Reader` reads a dataset or an attribute and checks its kind, and turns every
 failure into a :class:`~tapp.errors.TapeError` ``"{file}: {dataset}: expected ... (got ...)"``:
 a checksum mismatch, an unreadable (truncated) chunk, text that is not UTF-8, a dataset
-without a checksum in a tape whose version promises one. :class:`Checker` holds the checks of
-values (shape, finite, symmetric). :func:`verify` reads every dataset and attribute of any
-tape, chunk by chunk.
+without a checksum in a tape whose version promises one. The checks of values (shape,
+finite, symmetric) are those of :class:`tapp.tape.checks.Checker`;
+:func:`tapp.tape.files.verify` reads every dataset and attribute of any tape, chunk by chunk.
 """
 
 from __future__ import annotations
@@ -36,7 +36,8 @@ import numpy as np
 
 from tapp import __version__
 from tapp.errors import InputError, TapeError
-from tapp.tape.packing import pack_tr, symmetry_defect, tr_size, unpack_tr
+from tapp.tape.checks import PACKINGS, Checker, frozen
+from tapp.tape.packing import pack_tr, tr_size, unpack_tr
 
 #: Target size of a chunk (bytes): whole rows of axis 0 up to this size.
 CHUNK_BYTES = 1 << 18
@@ -44,21 +45,9 @@ CHUNK_BYTES = 1 << 18
 GZIP = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
 #: Lowest HDF5 object-format version written: 1.8 (object headers with checksums).
 LIBVER = "v108"
-#: Storage of symmetric matrices: "TR" (upper triangle by rows) or "full" (n² entries).
-PACKINGS = ("TR", "full")
 #: What h5py raises on corrupt metadata (a checksum mismatch in an object header, a B-tree, a
 #: heap), depending on the call: each is turned into a TapeError naming the object.
 HDF5_ERRORS = (OSError, KeyError, RuntimeError, ValueError, TypeError)
-#: Relative asymmetry max |M_ij - M_ji| / sqrt(M_ii M_jj) above which a symmetric matrix is
-#: rejected (:func:`tapp.tape.packing.symmetry_defect`).
-SYMMETRY_TOL = 1e-12
-
-
-def frozen(a, dtype=float) -> np.ndarray:
-    """Return a read-only copy of ``a`` as ``dtype``."""
-    out = np.array(a, dtype=dtype)
-    out.setflags(write=False)
-    return out
 
 
 def git_commit() -> str:
@@ -179,74 +168,6 @@ def write_symmetric(group: h5py.Group, name: str, matrices, units: str, packing:
     ds = write_numbers(group, name, stored, units, big=big, checksums=checksums)
     write_attrs(ds, {"packing": packing, "order": n}, checksums=checksums)
     return ds
-
-
-# ---------------------------------------------------------------------------------------------
-# Checking values
-# ---------------------------------------------------------------------------------------------
-
-
-class Checker:
-    """Checks of values; every failure raises TapeError naming the file and the dataset."""
-
-    def __init__(self, source: str):
-        self.source = source
-
-    def fail(self, dataset: str, expected: str, got: object = None):
-        """Raise ``TapeError("{source}: {dataset}: expected {expected} (got {got})")``."""
-        detail = "" if got is None else f" (got {got})"
-        raise TapeError(f"{self.source}: {dataset}: expected {expected}{detail}")
-
-    def shape(self, dataset: str, a: np.ndarray | None, shape: tuple[int, ...]) -> None:
-        if a is None:
-            self.fail(dataset, f"an array of shape {shape}", "None")
-        if a.shape != shape:
-            self.fail(dataset, f"shape {shape}", a.shape)
-
-    def finite(self, dataset: str, a: np.ndarray) -> None:
-        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
-            bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
-            self.fail(dataset, "finite values", f"{a[bad]} at index {bad}")
-
-    def symmetric(self, dataset: str, m: np.ndarray, *, what: str = "normal matrices",
-                  label: str | None = "pair", offset: int = 0, tol: float = SYMMETRY_TOL,
-                  floor: np.ndarray | None = None) -> None:
-        """Check symmetric matrices (..., n, n) with a non-negative diagonal.
-
-        ``label`` names the leading index in the message ("pair 3"), with ``offset`` added
-        (a slice of a larger stack); None for a single matrix. ``floor`` (n,), >= 0, accepts
-        diagonal entries down to −floor (the rounding of a variance that cancels to ~0).
-        """
-        stack = m.reshape(-1, *m.shape[-2:])
-
-        def where(i: int) -> str:
-            return "" if label is None else f" in {label} {i + offset}"
-
-        defect = symmetry_defect(stack) if stack.size else np.zeros(0)
-        if np.any(defect > tol):
-            first = int(np.argmax(defect > tol))
-            self.fail(dataset, f"symmetric {what} (relative asymmetry <= {tol:g})",
-                      f"{defect[first]:.3g}{where(first)}")
-        diag = np.diagonal(stack, axis1=-2, axis2=-1)
-        low = diag < (0.0 if floor is None else -floor)
-        if np.any(low):
-            i, col = (int(v) for v in np.argwhere(low)[0])
-            self.fail(dataset, f"a non-negative diagonal ({what})",
-                      f"{diag[i, col]:.3g}{where(i)}, row {col}")
-
-    def text(self, where: str, value: object) -> str:
-        """Return ``value`` (bytes or str) as text; fail unless it is valid UTF-8."""
-        if isinstance(value, bytes | np.bytes_):
-            try:
-                return bytes(value).decode("utf-8")
-            except UnicodeDecodeError:
-                self.fail(where, "UTF-8 text", repr(bytes(value)[:40]))
-        text = str(value)
-        try:  # h5py hands undecodable bytes of a UTF-8 attribute back as lone surrogates
-            text.encode("utf-8")
-        except UnicodeEncodeError:
-            self.fail(where, "UTF-8 text", repr(text.encode("utf-8", "surrogateescape")[:40]))
-        return text
 
 
 # ---------------------------------------------------------------------------------------------
@@ -434,66 +355,3 @@ def attr_value(check: Checker, where: str, value: object) -> object:
             return [check.text(where, v) for v in value.ravel()]
         return value.tolist()
     return value
-
-
-def _rows(ds: h5py.Dataset) -> int:
-    """Rows of axis 0 read at once by :func:`verify` (whole chunks, about CHUNK_BYTES)."""
-    if ds.chunks:
-        chunk_bytes = ds.dtype.itemsize * math.prod(ds.chunks)
-        return ds.chunks[0] * max(1, CHUNK_BYTES // max(1, chunk_bytes))
-    row = ds.dtype.itemsize * math.prod(ds.shape[1:])
-    return max(1, CHUNK_BYTES // max(1, row))
-
-
-def verify(path: Path | str) -> list[str]:
-    """Read every dataset and attribute of a tape (any HDF5 file); return the dataset names.
-
-    Each dataset is read whole-chunk by whole-chunk, so its Fletcher-32 checksums are
-    checked, and text (datasets and attributes) must be valid UTF-8. A dataset without a
-    checksum is read all the same (a T13 version-1 tape, another HDF5 file): corruption of
-    its data cannot be detected.
-
-    Raises
-    ------
-    InputError
-        If the file does not exist.
-    TapeError
-        On the first failure: an unreadable file or object, a checksum mismatch, text that
-        is not UTF-8; the message names the file and the dataset (or attribute).
-    """
-    path = Path(path)
-    with open_tape(path) as f:
-        r = Reader(f, str(path), checksums=False)
-        names: list[str] = []
-        owners: list[str] = [""]
-
-        def visit(name: str, obj) -> None:
-            (names if isinstance(obj, h5py.Dataset) else owners).append(name)
-
-        with r.guard("file", "a readable group structure"):
-            f.visititems(visit)
-        for owner in owners + names:
-            attrs = r._attrs(owner)
-            with r.guard(owner or "attrs", "readable attributes"):
-                keys = list(attrs.keys())
-            for key in keys:
-                where = f"{owner}.attrs/{key}" if owner else f"attrs/{key}"
-                with r.guard(where, "a readable attribute"):
-                    value = attrs[key]
-                attr_value(r.check, where, value)
-        for name in names:
-            ds = r.dataset(name)
-            with r.guard(name, "a readable dataset header"):
-                shape = ds.shape
-            if shape is None:  # an empty (null) dataspace: nothing stored
-                continue
-            if len(shape) == 0:
-                data = [r.raw(name)]
-            else:
-                step = _rows(ds)
-                data = (r.raw(name, np.s_[a:a + step]) for a in range(0, ds.shape[0], step))
-            for block in data:
-                if block.dtype.kind in "OS":
-                    for v in np.ravel(block):
-                        r.check.text(name, v)
-    return names

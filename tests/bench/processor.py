@@ -8,8 +8,8 @@ parameters, as in a tracking tape; a dense variant fills every column), ΔJ̃ = 
 its white, bias and correlated parts (1, 0.6, 0.4 of ΔJ, so the error budget has its input),
 3 of the 10 stations per record, epochs at 3 times, the orbit block of U the exponential of
 a Hamiltonian matrix (exactly symplectic, as a TAPP I STM is to its integration error). They
-are written with :func:`tapp.tape.t13.write_t13` to a temporary folder (not timed) and
-processed through the lazy reader :func:`tapp.tape.t13.open_t13`.
+are written with :func:`tapp.tape.t13_hdf5.write_t13` to a temporary folder (not timed) and
+processed through the lazy reader :func:`tapp.tape.t13_hdf5.open_t13`.
 
 Measured (wall clock, best of :data:`REPEATS` after a warm-up): open + bind + process of the
 full deck; the same with one print (at the end) and no recycles (per record = that time /
@@ -48,9 +48,8 @@ from tapp.tape.t13 import (
     TapePasses,
     TapeRecords,
     TapeStations,
-    open_t13,
-    write_t13,
 )
+from tapp.tape.t13_hdf5 import open_t13, write_t13
 from tests.bench.common import (
     REPO_ROOT,
     Section,

@@ -15,7 +15,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from tapp.tape import T13, write_t13
+from tapp.tape import T13
+from tapp.tape.t13_hdf5 import write_t13
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 import tapp.cli.tracking_cmd  # noqa: F401  (registers the commands until tapp.cli imports it)
 from tapp.cli.common import app
-from tapp.tape import read_t13
+from tapp.tape.t13_hdf5 import read_t13
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
 LEO = SCENARIOS / "leo_equatorial.toml"

@@ -19,7 +19,8 @@ from tapp.cli.common import app
 from tapp.processor.deck import bind, read_deck
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.sequencing import Processor, Run
-from tapp.tape.t13 import memory_pairs, write_t13
+from tapp.tape.t13 import memory_pairs
+from tapp.tape.t13_hdf5 import write_t13
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 

@@ -10,8 +10,11 @@ import numpy as np
 import pytest
 
 from tapp.errors import InputError, TapeError
-from tapp.tape import hdf5io, read_t13, read_t32, verify, write_t13, write_t32
+from tapp.tape import hdf5io
+from tapp.tape.files import verify
 from tapp.tape.hdf5io import Reader
+from tapp.tape.t13_hdf5 import read_t13, write_t13
+from tapp.tape.t32_hdf5 import read_t32, write_t32
 from tests.tapp.tape.synthetic import t13_tape, t32_tape
 
 

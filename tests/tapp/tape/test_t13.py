@@ -11,10 +11,12 @@ import numpy as np
 import pytest
 
 from tapp.errors import InputError, TapeError
-from tapp.tape import describe, read_t13, t13, verify, write_t13
+from tapp.tape import t13, t13_hdf5
+from tapp.tape.files import describe, verify
 from tapp.tape.hdf5io import write_numbers
 from tapp.tape.packing import tr_size
 from tapp.tape.t13 import PARTS, T13
+from tapp.tape.t13_hdf5 import read_t13, write_t13
 from tapp.tracking.noise import PARTS as NOISE_PARTS
 from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import leo_scenario, scaled_close
@@ -269,7 +271,7 @@ def test_attribute_that_is_not_utf8_is_a_tape_error(written: Path) -> None:
 
 def _write_v1(path: Path, tape: T13) -> Path:
     with h5py.File(path, "w") as f:
-        t13._write(f, tape, "TR", version=1)
+        t13_hdf5._write(f, tape, "TR", version=1)
     return path
 
 
@@ -373,13 +375,13 @@ def test_unsorted_pairs_are_refused(tmp_path: Path, tape: T13) -> None:
 
 
 def test_file_writer_writes_a_complete_tape_at_any_path(tmp_path: Path, tape: T13) -> None:
-    writer = t13.t13_file_writer(tape, "full")
+    writer = t13_hdf5.t13_file_writer(tape, "full")
     writer(tmp_path / "direct.h5")
     np.testing.assert_array_equal(read_t13(tmp_path / "direct.h5").pairs.dJt_parts,
                                   tape.pairs.dJt_parts)
     bad = dataclasses.replace(tape, records=dataclasses.replace(
         tape.records, j=np.array([0, 0, 1])))
     with pytest.raises(TapeError, match="T13: records/j"):  # validated before any file
-        t13.t13_file_writer(bad)
+        t13_hdf5.t13_file_writer(bad)
     with pytest.raises(InputError, match="packing"):
-        t13.t13_file_writer(tape, "LR")
+        t13_hdf5.t13_file_writer(tape, "LR")

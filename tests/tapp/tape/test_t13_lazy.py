@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 from tapp.errors import InputError, TapeError
-from tapp.tape import hdf5io, memory_pairs, open_t13, t13, write_t13
+from tapp.tape import hdf5io, memory_pairs, t13, t13_hdf5
 from tapp.tape.packing import pack_tr, tr_diagonal, tr_size
 from tapp.tape.t13 import T13, PairBlock
+from tapp.tape.t13_hdf5 import open_t13, write_t13
 from tapp.tracking.simulate import simulate
 from tests.tapp.tape.synthetic import t13_tape
 from tests.tapp.tracking.helpers import leo_scenario
@@ -139,7 +140,7 @@ def test_a_bad_matrix_fails_only_the_block_that_reads_it(tmp_path: Path, tape: T
             f.pair_block(2, 3)
     with pytest.raises(TapeError, match=rf"pairs/dJ: expected a non-negative diagonal.*pair "
                                         rf"{bad_pair}, row 2"):
-        t13.read_t13(path)
+        t13_hdf5.read_t13(path)
 
 
 def test_an_asymmetric_full_matrix_fails_its_block(tmp_path: Path, tape: T13) -> None:
@@ -222,7 +223,7 @@ def test_closed_file_and_version_1(tmp_path: Path, tape: T13) -> None:
         f.pair_block(1, 1)
     path = tmp_path / "v1.h5"
     with h5py.File(path, "w") as out:
-        t13._write(out, tape, "TR", version=1)
+        t13_hdf5._write(out, tape, "TR", version=1)
     bare = dataclasses.replace(tape, pairs=dataclasses.replace(tape.pairs, dJt_parts=None))
     with pytest.warns(UserWarning, match="version 1"), open_t13(path) as old:
         assert old.version == 1 and not old.has_parts

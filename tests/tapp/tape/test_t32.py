@@ -11,9 +11,11 @@ import numpy as np
 import pytest
 
 from tapp.errors import InputError, TapeError
-from tapp.tape import describe, format_t32_summary, hdf5io, read_t32, t32, verify, write_t32
+from tapp.tape import format_t32_summary, hdf5io, t32, t32_hdf5
+from tapp.tape.files import describe, verify
 from tapp.tape.packing import tr_size
 from tapp.tape.t32 import T32, T32Entity, T32Partition
+from tapp.tape.t32_hdf5 import read_t32, write_t32
 from tests.tapp.tape.synthetic import t32_tape
 
 
@@ -311,8 +313,8 @@ def test_a_failed_write_leaves_no_temporary_and_the_old_tape(tmp_path: Path, tap
 def test_file_writer_validates_first_and_writes_a_complete_tape(tmp_path: Path, tape: T32
                                                                 ) -> None:
     with pytest.raises(TapeError, match=r"^T32: recycles/k: expected"):
-        t32.t32_file_writer(_recycle(tape, 1, k=2))
-    writer = t32.t32_file_writer(tape)
+        t32_hdf5.t32_file_writer(_recycle(tape, 1, k=2))
+    writer = t32_hdf5.t32_file_writer(tape)
     writer(tmp_path / "plain.h5")
     assert read_t32(tmp_path / "plain.h5").recycles[2].k == 6
 

@@ -1,0 +1,168 @@
+"""Run a sweep on an executor of :mod:`iter.execute`, into a results table and files.
+
+Chunks complete in any order; the table is always sorted by case index. A case whose body
+fails is recorded as FAILED with its message and the sweep goes on; a chunk lost on Dask (a
+worker died) records each of its cases as FAILED the same way.
+
+With an output file the sweep is resumable: completed rows are written to the HDF5 file as
+chunks finish (at most every ``checkpoint_interval_s``, and at the end, also on an error or
+Ctrl-C), each time atomically. Running the same sweep again with the same file skips every
+case already OK and runs the rest (cases that failed are tried again).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+
+from .errors import SweepInputError
+from .execute import Execution, chunk_cases, default_chunk_size, open_executor
+from .results import read_hdf5, write_csv, write_hdf5
+from .sweep import Sweep
+from .table import CaseResult, CaseStatus, ResultTable
+
+
+@dataclass(frozen=True, slots=True)
+class SweepSummary:
+    """Counts and timing of one run of a sweep.
+
+    Parameters
+    ----------
+    n_cases : int
+        Cases in the sweep.
+    n_succeeded, n_failed : int
+        Cases OK and FAILED in the table after this run (resumed cases included).
+    n_resumed : int
+        Cases found OK in the results file and not run again.
+    wall_s : float
+        Wall time of this run, s.
+    mode : str
+        Where the cases ran (``serial``, ``local cluster (2 workers)``, ...).
+    output_h5, output_csv : str or None
+        The files written.
+    """
+
+    n_cases: int
+    n_succeeded: int
+    n_failed: int
+    n_resumed: int
+    wall_s: float
+    mode: str
+    output_h5: str | None
+    output_csv: str | None
+
+
+@dataclass(frozen=True, slots=True)
+class SweepResult:
+    """The results table and the summary of a run."""
+
+    table: ResultTable
+    summary: SweepSummary
+
+
+def _utc_now() -> str:
+    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _resume(sweep: Sweep, output_h5: Path) -> tuple[dict[int, CaseResult], str]:
+    """Return the OK rows already in ``output_h5`` and its creation time."""
+    if not output_h5.exists():
+        return {}, _utc_now()
+    stored = read_hdf5(output_h5)
+    if stored.definition_json != sweep.definition_json():
+        raise SweepInputError(str(output_h5), "definition_json",
+                              f"results of the same sweep as {sweep.source} to resume (the "
+                              "loops or the body differ: remove the file or choose another "
+                              "output)")
+    done = {row.index: row for row in stored.table.rows if row.status is CaseStatus.OK}
+    return done, stored.created_utc
+
+
+def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
+              output_csv: str | Path | None = None, execution: Execution | None = None,
+              progress: bool = False) -> SweepResult:
+    """Run every case of ``sweep`` not already done; return the table, sorted by case index.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        Loops and body.
+    output_h5 : str or Path or None
+        HDF5 results file; written as cases complete and resumed from if it exists.
+    output_csv : str or Path or None
+        CSV copy of the table, written at the end.
+    execution : Execution or None
+        Where to run; None for a local Dask cluster with one worker per core.
+    progress : bool
+        Show a rich progress bar on stderr.
+
+    Returns
+    -------
+    SweepResult
+        The table (every case, resumed ones included) and the summary.
+
+    Raises
+    ------
+    SweepInputError
+        ``output_h5`` holds results of a different sweep.
+    SchedulerError
+        The scheduler address does not answer within the connect timeout.
+    ResultFileError
+        A results file cannot be read or written.
+    """
+    execution = Execution() if execution is None else execution
+    start_s = time.perf_counter()
+    h5_path = None if output_h5 is None else Path(output_h5)
+    results, created_utc = ({}, _utc_now()) if h5_path is None else _resume(sweep, h5_path)
+    n_resumed = len(results)
+    pending = [case for case in sweep.cases() if case.index not in results]
+
+    def checkpoint() -> None:
+        if h5_path is not None:
+            write_hdf5(h5_path, ResultTable.from_results(sweep.names, results),
+                       sweep_json=sweep.contents_json(),
+                       definition_json=sweep.definition_json(), source=sweep.source,
+                       n_cases=sweep.n_cases, created_utc=created_utc,
+                       updated_utc=_utc_now())
+
+    bar = Progress(TextColumn("[bold]iter"), BarColumn(), MofNCompleteColumn(),
+                   TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(),
+                   TimeRemainingColumn(), console=Console(stderr=True), disable=not progress)
+    with open_executor(execution) as executor, bar:
+        chunk_size = execution.chunk_size or (
+            1 if execution.serial else default_chunk_size(len(pending), executor.slots))
+        task = bar.add_task("iter", total=sweep.n_cases, completed=n_resumed, failed=0)
+        n_failed_now = 0
+        checkpoint()  # fails fast on an unwritable output, before any case runs
+        last_checkpoint_s = time.perf_counter()
+        try:
+            for rows in executor.run(sweep.body, chunk_cases(pending, chunk_size)):
+                results.update((row.index, row) for row in rows)
+                n_failed_now += sum(row.status is CaseStatus.FAILED for row in rows)
+                bar.update(task, advance=len(rows), failed=n_failed_now)
+                if time.perf_counter() - last_checkpoint_s >= execution.checkpoint_interval_s:
+                    checkpoint()
+                    last_checkpoint_s = time.perf_counter()
+        finally:
+            checkpoint()
+    table = ResultTable.from_results(sweep.names, results)
+    if output_csv is not None:
+        write_csv(output_csv, table)
+    summary = SweepSummary(n_cases=sweep.n_cases, n_succeeded=table.n_succeeded,
+                           n_failed=table.n_failed, n_resumed=n_resumed,
+                           wall_s=time.perf_counter() - start_s, mode=executor.description,
+                           output_h5=None if h5_path is None else str(h5_path),
+                           output_csv=None if output_csv is None else str(output_csv))
+    return SweepResult(table=table, summary=summary)
