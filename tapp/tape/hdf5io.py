@@ -153,11 +153,14 @@ def write_numbers(group: h5py.Group, name: str, values, units: str, *, big: bool
     return ds
 
 
-def write_symmetric(group: h5py.Group, name: str, matrices, units: str, packing: str = "TR",
-                    *, big: bool = False, checksums: bool = True) -> h5py.Dataset:
-    """Write symmetric matrices (..., n, n) packed ("TR": (..., n(n+1)/2), "full": (..., n²)).
+def write_packed(group: h5py.Group, name: str, matrices, units: str, packing: str = "TR",
+                 form: str = "symmetric", *, big: bool = False, checksums: bool = True
+                 ) -> h5py.Dataset:
+    """Write symmetric matrices or upper-triangular factors (..., n, n) packed ("TR": the
+    upper triangle by rows, (..., n(n+1)/2); "full": (..., n²)).
 
-    Attributes ``packing`` and ``order`` (n) say how to unpack.
+    Attributes ``packing``, ``order`` (n) and ``form`` ("symmetric", or "factor": M = KᵀK
+    with K upper triangular) say how to unpack.
     """
     m = np.asarray(matrices, dtype=float)
     n = m.shape[-1]
@@ -166,7 +169,7 @@ def write_symmetric(group: h5py.Group, name: str, matrices, units: str, packing:
     else:
         stored = m.reshape(*m.shape[:-2], n * n)
     ds = write_numbers(group, name, stored, units, big=big, checksums=checksums)
-    write_attrs(ds, {"packing": packing, "order": n}, checksums=checksums)
+    write_attrs(ds, {"packing": packing, "order": n, "form": form}, checksums=checksums)
     return ds
 
 
@@ -342,6 +345,21 @@ class Reader:
         if packing == "TR":
             return frozen(unpack_tr(stored, n))
         return frozen(stored.reshape(*lead, n, n))
+
+    def triangular(self, name: str, lead: tuple[int, ...], n: int) -> np.ndarray:
+        """Read packed upper-triangular factors and return them full, shape (*lead, n, n)
+        ("full" packing: checked zero below the diagonal)."""
+        packing = self.stored_shape(name, lead, n)
+        stored = self.read(name)
+        if packing == "TR":
+            rows, cols = np.triu_indices(n)
+            out = np.zeros((*lead, n, n))
+            out[..., rows, cols] = stored
+            return frozen(out)
+        out = stored.reshape(*lead, n, n)
+        if np.any(np.tril(out, -1) != 0):
+            self.check.fail(name, "upper-triangular factors (zero below the diagonal)")
+        return frozen(out)
 
 
 def attr_value(check: Checker, where: str, value: object) -> object:

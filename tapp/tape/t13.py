@@ -11,16 +11,22 @@ A tape (:class:`T13`) holds the n_o parameters with their nominal values at t_0
 (:class:`TapeParameters`), the n_ts stations (:class:`TapeStations`), the n_m miss parameters
 and B = ∂m/∂x at injection (:class:`TapeMiss`), the T13 times and, per record, its epoch
 index j, the state at t_k and U = ∂p(t_k)/∂x(t_j) (:class:`TapeRecords`), the (record,
-station) pairs with data and their normal matrices AᵀWA, AᵀWMWA over (t_{k-1}, t_k] referred
-to t_j, AᵀWMWA optionally split into its white-noise, per-pass bias and exponentially
-correlated parts (:class:`TapePairs`), the tracking passes (:class:`TapePasses`) and,
-optionally, one row per scalar observation (:class:`TapeRaw`). Units of the normal matrices:
-entry (a, b) in 1/(u_a u_b) with u the parameters' units; U and B entries in (unit of
-row)/(unit of column).
+station) pairs with data and their square-root information over (t_{k-1}, t_k] referred to
+t_j: upper-triangular factors R, R̃ with RᵀR = AᵀWA and R̃ᵀR̃ = AᵀWMWA, R̃ optionally split
+into the factors of its white-noise, per-pass bias and exponentially correlated parts
+(:class:`TapePairs`; the normal matrices are their Gram matrices, :attr:`TapePairs.dJ`), the
+tracking passes (:class:`TapePasses`) and, optionally, one row per scalar observation
+(:class:`TapeRaw`). Units: factor entry (r, b) in 1/u_b with u the parameters' units (normal
+matrices 1/(u_a u_b)); U and B entries in (unit of row)/(unit of column).
+
+Version 3 carries the factors. Versions 1 and 2 carried the normal matrices themselves; their
+readers turn each into a factor (:func:`factor_normal_matrices`), which can keep only the
+digits the formed matrix kept (about 16 − 2 log₁₀ of the condition number of the data).
 
 :func:`validate` checks the dimensions and invariants of a tape; :class:`PairBlock` holds the
-pairs of a record range, matrices packed TR; :func:`memory_pairs` serves a tape in memory
-record range by record range, through the interface of the lazy file reader
+pairs of a record range, factors packed TR (the upper triangle by rows); :func:`memory_pairs`
+serves a tape in memory record range by record range, through the interface of the lazy file
+reader
 :class:`tapp.tape.t13_hdf5.T13File`; :func:`summary` summarises a tape. NumPy only: the HDF5
 layout, the writer and the readers are in :mod:`tapp.tape.t13_hdf5`.
 """
@@ -35,9 +41,10 @@ import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
+from tapp.estimation.factors import psd_factor
 from tapp.frames.time import Epoch
 from tapp.tape.checks import PACKINGS, SYMMETRY_TOL, Checker, frozen
-from tapp.tape.packing import pack_tr, scaled_difference, tr_size
+from tapp.tape.packing import pack_tr, tr_diagonal, tr_size
 
 #: Provenance attributes the simulator stamps: the scenario (JSON) and its file, the Earth
 #: orientation model ("iau2006" or "gmst") and the EOP source of the run.
@@ -49,12 +56,14 @@ def frame_of(provenance: dict[str, str]) -> str:
     return "GCRS" if provenance.get("earth_orientation") == "iau2006" else "EME2000"
 
 FORMAT = "T13"
-VERSION = 2
-SUPPORTED_VERSIONS = (1, 2)
-#: Names of the parts of ``pairs/dJt_parts``, in order (as tapp.tracking.noise.PARTS).
+VERSION = 3
+SUPPORTED_VERSIONS = (1, 2, 3)
+#: Versions that carry normal matrices, not factors (read with a warning).
+NORMAL_MATRIX_VERSIONS = (1, 2)
+#: Names of the parts of ``pairs/Rt_parts``, in order (as tapp.tracking.noise.PARTS).
 PARTS = ("white", "bias", "correlated")
-#: Largest relative difference max |Σ parts - dJt| / sqrt(dJt_aa dJt_bb) accepted (round-off
-#: of sums of a few thousand terms in another order).
+#: Largest relative difference between the diagonal of R̃ᵀR̃ and the sum of its parts'
+#: (column norms squared) accepted: the rounding of a QR of a few thousand rows.
 PARTS_TOL = 1e-10
 #: Names of the state in ``records/info`` (km, km/s, EME2000).
 INFO_COLUMNS = ("x_km", "y_km", "z_km", "vx_km_s", "vy_km_s", "vz_km_s")
@@ -64,10 +73,12 @@ UNITS_NOTE = ("km, km/s, s, rad; normal matrices in 1/(u_a u_b), partials in (ro
 #: :class:`tapp.tape.t13_hdf5.T13File`; bytes of packed matrices).
 BLOCK_BYTES = 1 << 25
 
-__all__ = ["FORMAT", "INFO_COLUMNS", "PACKINGS", "PARTS", "PARTS_TOL", "SUPPORTED_VERSIONS",
-           "SYMMETRY_TOL", "T13", "VERSION", "MemoryPairs", "PairBlock", "TapeMiss",
-           "TapePairs", "TapeParameters", "TapePasses", "TapeRaw", "TapeRecords",
-           "TapeStations", "memory_pairs", "summary", "utc_at", "validate"]
+__all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PARTS", "PARTS_TOL",
+           "SUPPORTED_VERSIONS", "SYMMETRY_TOL", "T13", "VERSION", "MemoryPairs", "PairBlock",
+           "TapeMiss", "TapePairs", "TapeParameters", "TapePasses", "TapeRaw", "TapeRecords",
+           "TapeStations", "check_factors", "check_parts_sum", "column_norms2",
+           "factor_normal_matrices", "memory_pairs", "packed_column_norms2", "summary",
+           "utc_at", "validate"]
 
 @dataclass(frozen=True, slots=True, eq=False)
 class TapeParameters:
@@ -139,24 +150,36 @@ class TapeRecords:
 
 @dataclass(frozen=True, slots=True, eq=False)
 class TapePairs:
-    """(record, station) pairs with data and their normal matrices, full in memory.
+    """(record, station) pairs with data and their square-root information, full in memory.
 
     Attributes
     ----------
     k, station, n_obs : (n_pairs,) int record index, station number, observations; sorted by
         (k, station).
-    dJ, dJt : (n_pairs, n_o, n_o) AᵀWA and AᵀWMWA, 1/(u_a u_b); None in the header of a
-        lazily read tape (:attr:`tapp.tape.t13_hdf5.T13File.header`).
-    dJt_parts : (n_pairs, 3, n_o, n_o) the :data:`PARTS` of dJt (white, bias, correlated),
-        or None (not on the tape, or a header).
+    R, Rt : (n_pairs, n_o, n_o) upper-triangular factors, diagonal >= 0, with RᵀR = AᵀWA and
+        R̃ᵀR̃ = AᵀWMWA, 1/u_b; None in the header of a lazily read tape
+        (:attr:`tapp.tape.t13_hdf5.T13File.header`).
+    Rt_parts : (n_pairs, 3, n_o, n_o) the factors of the :data:`PARTS` of AᵀWMWA (white,
+        bias, correlated), their Gram matrices summing to R̃ᵀR̃; or None (not on the tape, or
+        a header).
     """
 
     k: np.ndarray
     station: np.ndarray
     n_obs: np.ndarray
-    dJ: np.ndarray | None
-    dJt: np.ndarray | None
-    dJt_parts: np.ndarray | None = None
+    R: np.ndarray | None
+    Rt: np.ndarray | None
+    Rt_parts: np.ndarray | None = None
+
+    @property
+    def dJ(self) -> np.ndarray:
+        """AᵀWA = RᵀR, (n_pairs, n_o, n_o), 1/(u_a u_b)."""
+        return np.swapaxes(self.R, -1, -2) @ self.R
+
+    @property
+    def dJt(self) -> np.ndarray:
+        """AᵀWMWA = R̃ᵀR̃, (n_pairs, n_o, n_o), 1/(u_a u_b)."""
+        return np.swapaxes(self.Rt, -1, -2) @ self.Rt
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -236,26 +259,24 @@ class T13:
 
 @dataclass(frozen=True, slots=True, eq=False)
 class PairBlock:
-    """Pairs of records k_first..k_last (inclusive), normal matrices packed TR.
-
-    L = n_o (n_o + 1) / 2 (:func:`tapp.tape.packing.pack_tr`; unpack with
-    :func:`tapp.tape.packing.unpack_tr`).
+    """Pairs of records k_first..k_last (inclusive), factors packed TR (upper triangle by
+    rows, L = n_o (n_o + 1) / 2: :func:`tapp.tape.packing.pack_tr`).
 
     Attributes
     ----------
     k : (m,) int record index, ascending.
     station : (m,) int station number, ascending within a record.
     n_obs : (m,) int scalar observations of each pair.
-    dJ, dJt : (m, L) AᵀWA and AᵀWMWA, 1/(u_a u_b).
-    dJt_parts : (m, 3, L) the :data:`PARTS` of dJt, or None when the tape has no parts.
+    R, Rt : (m, L) factors of AᵀWA and AᵀWMWA, 1/u_b.
+    Rt_parts : (m, 3, L) the factors of the :data:`PARTS`, or None when the tape has none.
     """
 
     k: np.ndarray
     station: np.ndarray
     n_obs: np.ndarray
-    dJ: np.ndarray
-    dJt: np.ndarray
-    dJt_parts: np.ndarray | None
+    R: np.ndarray
+    Rt: np.ndarray
+    Rt_parts: np.ndarray | None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -270,34 +291,76 @@ def validate(tape: T13, source: str = "T13") -> None:
     ascending from t_0 = 0, each an epoch or an input time; k = 1..n_it; j_1 = 0 and j_k
     either j_{k-1} or k-1, k-1 exactly when t_{k-1} is an epoch time; pairs each once and
     sorted by (k, station), with known records and stations and at least one observation;
-    normal matrices present, symmetric with a non-negative diagonal; the parts of dJt (when
-    present) summing to dJt within :data:`PARTS_TOL`; raw rows consistent.
+    factors present, upper triangular with a non-negative diagonal; the parts' Gram matrices
+    (when present) summing to R̃ᵀR̃ on the diagonal within :data:`PARTS_TOL`; raw rows
+    consistent.
     """
     c = Checker(source)
     _validate_header(c, tape)
     pairs, n_pairs, n_o = tape.pairs, tape.pairs.k.size, tape.n_o
-    for name in ("dJ", "dJt"):
+    for name in ("R", "Rt"):
         m = getattr(pairs, name)
         if m is None:
-            c.fail(f"pairs/{name}", "the normal matrices (a complete tape)",
-                   "None: a header without pair matrices")
+            c.fail(f"pairs/{name}", "the pair factors (a complete tape)",
+                   "None: a header without pair factors")
         c.shape(f"pairs/{name}", m, (n_pairs, n_o, n_o))
         c.finite(f"pairs/{name}", m)
-        c.symmetric(f"pairs/{name}", m)
-    if pairs.dJt_parts is not None:
-        c.shape("pairs/dJt_parts", pairs.dJt_parts, (n_pairs, len(PARTS), n_o, n_o))
-        c.finite("pairs/dJt_parts", pairs.dJt_parts)
-        _check_parts_sum(c, scaled_difference(pairs.dJt_parts.sum(axis=1), pairs.dJt), 0)
+        check_factors(c, f"pairs/{name}", pack_tr(m), n_o, lower=np.tril(m, -1))
+    if pairs.Rt_parts is not None:
+        c.shape("pairs/Rt_parts", pairs.Rt_parts, (n_pairs, len(PARTS), n_o, n_o))
+        c.finite("pairs/Rt_parts", pairs.Rt_parts)
+        check_factors(c, "pairs/Rt_parts", pack_tr(pairs.Rt_parts), n_o,
+                      lower=np.tril(pairs.Rt_parts, -1))
+        check_parts_sum(c, column_norms2(pairs.Rt_parts), column_norms2(pairs.Rt), 0)
     if tape.raw is not None:
         _validate_raw(c, tape.raw, n_o, tape.n_ts, tape.n_it)
 
 
-def _check_parts_sum(c: Checker, defect: np.ndarray, offset: int) -> None:
+def column_norms2(factors: np.ndarray) -> np.ndarray:
+    """The diagonal of KᵀK of factors (..., m, n): their columns' squared norms, (..., n)."""
+    return np.einsum("...ij,...ij->...j", factors, factors)
+
+
+def packed_column_norms2(packed: np.ndarray, n: int) -> np.ndarray:
+    """:func:`column_norms2` of upper-triangular factors packed TR, (..., L) -> (..., n)."""
+    cols = np.triu_indices(n)[1]
+    out = np.zeros(packed.shape[:-1] + (n,))
+    np.add.at(out, (..., cols), packed * packed)
+    return out
+
+
+def check_factors(c: Checker, name: str, packed: np.ndarray, n: int,
+                  lower: np.ndarray | None = None, offset: int = 0) -> None:
+    """Factors packed TR (..., L): zero below the diagonal when given full (``lower``, the
+    strictly lower parts), and a non-negative diagonal (the canonical sign of a QR)."""
+    if lower is not None and np.any(lower != 0):
+        c.fail(name, "upper-triangular factors (zero below the diagonal)")
+    diag = packed[..., tr_diagonal(n)]
+    if np.any(diag < 0):
+        first = np.argwhere(diag < 0)[0]
+        c.fail(name, "factors with a non-negative diagonal (the canonical sign of a QR)",
+               f"{diag[tuple(first)]:.3g} in pair {int(first[0]) + offset}, row "
+               f"{int(first[-1])}")
+
+
+def check_parts_sum(c: Checker, parts: np.ndarray, total: np.ndarray, offset: int) -> None:
+    """Parts' squared column norms (m, 3, n) summing to the total's (m, n) within
+    :data:`PARTS_TOL` (the diagonal of the normal matrices)."""
+    ref = np.where(total > 0, total, 1.0)
+    defect = np.max(np.abs(parts.sum(axis=1) - total) / ref, axis=-1) if total.size else total
     if np.any(defect > PARTS_TOL):
         first = int(np.argmax(defect > PARTS_TOL))
-        c.fail("pairs/dJt_parts", f"parts summing to pairs/dJt (relative difference <= "
-                                  f"{PARTS_TOL:g})", f"{defect[first]:.3g} in pair "
-                                                     f"{first + offset}")
+        c.fail("pairs/Rt_parts", f"parts whose Gram matrices sum to R̃ᵀR̃ (diagonal, relative "
+                                 f"difference <= {PARTS_TOL:g})",
+               f"{defect[first]:.3g} in pair {first + offset}")
+
+
+def factor_normal_matrices(m: np.ndarray) -> np.ndarray:
+    """Upper-triangular factors (..., n, n) of symmetric PSD normal matrices (..., n, n): the
+    reading of a version-1 or -2 tape (:func:`tapp.estimation.factors.psd_factor` of each;
+    rounding that makes one indefinite is set to zero)."""
+    flat = m.reshape(-1, *m.shape[-2:])
+    return np.array([psd_factor(0.5 * (x + x.T)) for x in flat]).reshape(m.shape)
 
 
 def check_parameters(c: Checker, par: TapeParameters, n_p: int) -> None:
@@ -491,7 +554,7 @@ class MemoryPairs(_PairSource):
         self.header = _header(tape)
 
     def pair_block(self, k_first: int, k_last: int, *, parts: bool = True) -> PairBlock:
-        """Return the pairs of records k_first..k_last (inclusive), matrices packed TR.
+        """Return the pairs of records k_first..k_last (inclusive), factors packed TR.
 
         Raises
         ------
@@ -500,11 +563,11 @@ class MemoryPairs(_PairSource):
         """
         lo, hi = _record_range(self.header, k_first, k_last)
         pairs = self._tape.pairs
-        split = None if pairs.dJt_parts is None or not parts else frozen(
-            pack_tr(pairs.dJt_parts[lo:hi]))
+        split = None if pairs.Rt_parts is None or not parts else frozen(
+            pack_tr(pairs.Rt_parts[lo:hi]))
         return PairBlock(frozen(pairs.k[lo:hi], np.int64), frozen(pairs.station[lo:hi], np.int64),
-                         frozen(pairs.n_obs[lo:hi], np.int64), frozen(pack_tr(pairs.dJ[lo:hi])),
-                         frozen(pack_tr(pairs.dJt[lo:hi])), split)
+                         frozen(pairs.n_obs[lo:hi], np.int64), frozen(pack_tr(pairs.R[lo:hi])),
+                         frozen(pack_tr(pairs.Rt[lo:hi])), split)
 
 
 def memory_pairs(tape: T13) -> MemoryPairs:

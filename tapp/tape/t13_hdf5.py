@@ -3,7 +3,7 @@
 The tape in memory (its types, notation and validation) is :mod:`tapp.tape.t13`;
 DESIGN.md ("Tapes") fixes this form.
 
-HDF5 layout, version 2 (every dataset has a ``units`` attribute and a Fletcher-32 checksum,
+HDF5 layout, version 3 (every dataset has a ``units`` attribute and a Fletcher-32 checksum,
 :mod:`tapp.tape.hdf5io`):
 
 ==========================  =====================  ===========================================
@@ -34,15 +34,19 @@ records/U                   (n_it, n_p, n_o)       ∂p(t_k)/∂x(t_j)
 pairs/k, pairs/station      (n_pairs,) int         (record, station) pairs with data, each
                                                    once, sorted by (k, station)
 pairs/n_obs                 (n_pairs,) int         scalar observations in the pair
-pairs/dJ, pairs/dJt         (n_pairs, L)           AᵀWA, AᵀWMWA over (t_{k-1}, t_k] referred
-                                                   to t_j; L = n_o(n_o+1)/2 ("TR", upper
-                                                   triangle by rows) or n_o² ("full"); attrs
-                                                   packing, order (= n_o)
-pairs/dJt_parts (optional)  (n_pairs, 3, L)        AᵀWMWA split into its white-noise, per-pass
-                                                   bias and exponentially correlated parts
-                                                   (attr ``parts`` = white, bias, correlated:
-                                                   the terms of ``normal_matrix_parts`` of
-                                                   tapp.tracking.noise), summing to dJt
+pairs/R, pairs/Rt           (n_pairs, L)           square-root information over (t_{k-1},
+                                                   t_k] referred to t_j: upper-triangular
+                                                   R, R̃ (diagonal >= 0) with RᵀR = AᵀWA,
+                                                   R̃ᵀR̃ = AᵀWMWA; L = n_o(n_o+1)/2 ("TR",
+                                                   upper triangle by rows) or n_o² ("full",
+                                                   zero below the diagonal); attrs packing,
+                                                   order (= n_o), form = "factor"
+pairs/Rt_parts (optional)   (n_pairs, 3, L)        the factors of the white-noise, per-pass
+                                                   bias and exponentially correlated parts of
+                                                   AᵀWMWA (attr ``parts`` = white, bias,
+                                                   correlated: the rows of ``pass_rows`` of
+                                                   tapp.tracking.noise), whose Gram matrices
+                                                   sum to R̃ᵀR̃
 passes/station, t_start_s,  (n_passes,)            tracking passes (before any split at T13
 t_end_s, n_obs                                     times)
 raw/... (optional)          (N, ...)               one row per scalar observation: t_s,
@@ -54,19 +58,24 @@ raw/... (optional)          (N, ...)               one row per scalar observatio
                                                    :func:`tapp.tracking.noise.covariance_block`)
 ==========================  =====================  ===========================================
 
-Units of the normal matrices: entry (a, b) in 1/(u_a u_b) with u the parameters' units; U and
-B entries in (unit of row)/(unit of column). Every dataset is chunked (whole rows) with a
-Fletcher-32 checksum, text (of datasets and attributes: h5py reads text attributes as bytes)
-is fixed-length UTF-8, and large datasets are gzip-compressed. Version 1 (still read, with a
-``UserWarning``) has the same layout without checksums and without ``pairs/dJt_parts``; its
-text is variable-length.
+Units of the factors: entry (r, b) in 1/u_b with u the parameters' units (of the normal
+matrices RᵀR: 1/(u_a u_b)); U and B entries in (unit of row)/(unit of column). Every dataset is
+chunked (whole rows) with a Fletcher-32 checksum, text (of datasets and attributes: h5py reads
+text attributes as bytes) is fixed-length UTF-8, and large datasets are gzip-compressed.
+
+Versions 1 and 2 (still read, with a ``UserWarning`` that says their precision is limited)
+carry the normal matrices themselves, ``pairs/dJ`` = AᵀWA and ``pairs/dJt`` = AᵀWMWA (packed
+the same way, symmetric), and version 2 ``pairs/dJt_parts``; the readers turn each into a
+factor (:func:`tapp.tape.t13.factor_normal_matrices`). Version 1 has no checksums and no parts,
+and variable-length text.
 
 The writer writes to a temporary file beside the target and renames it: no half-written tape.
 The readers reject a wrong format or version, a missing dataset, a wrong shape, a non-finite
-value, a non-symmetric ("full") or negative-diagonal normal matrix, parts that do not sum to
-dJt, an inconsistent epoch index and a checksum mismatch, with a
+value, a factor with a negative diagonal (or, "full", non-zero below it; a normal matrix of
+version 1 or 2 that is not symmetric or has a negative diagonal), parts whose Gram matrices do
+not sum to R̃ᵀR̃, an inconsistent epoch index and a checksum mismatch, with a
 :class:`~tapp.errors.TapeError` naming the file and the dataset. :func:`read_t13` loads the
-whole tape; :func:`open_t13` loads everything but the pair matrices and reads those record
+whole tape; :func:`open_t13` loads everything but the pair factors and reads those record
 range by record range (:meth:`T13File.pair_block`), for tapes too large to unpack at once;
 :func:`tapp.tape.t13.memory_pairs` offers the same interface over a tape in memory.
 """
@@ -87,11 +96,13 @@ from tapp.frames.time import Epoch
 from tapp.tape import hdf5io
 from tapp.tape.checks import PACKINGS, frozen
 from tapp.tape.hdf5io import Reader
-from tapp.tape.packing import pack_tr, scaled_difference_tr, tr_diagonal
+from tapp.tape.packing import pack_tr, scaled_difference, unpack_tr
 from tapp.tape.t13 import (
     FORMAT,
     INFO_COLUMNS,
+    NORMAL_MATRIX_VERSIONS,
     PARTS,
+    PARTS_TOL,
     SCENARIO_PROVENANCE,
     SUPPORTED_VERSIONS,
     T13,
@@ -105,11 +116,14 @@ from tapp.tape.t13 import (
     TapeRaw,
     TapeRecords,
     TapeStations,
-    _check_parts_sum,
     _PairSource,
     _record_range,
     _validate_header,
+    check_factors,
+    check_parts_sum,
+    factor_normal_matrices,
     frame_of,
+    packed_column_norms2,
     validate,
 )
 
@@ -124,8 +138,9 @@ __all__ = ["T13File", "open_t13", "read_t13", "t13_file_writer", "write_t13"]
 def _write(f: h5py.File, tape: T13, packing: str, version: int = VERSION) -> None:
     """Write ``tape`` into the open file ``f``.
 
-    ``version=1`` writes the version-1 layout (no checksums, no ``pairs/dJt_parts``): kept
-    so that the reader of version-1 tapes stays tested.
+    ``version=1`` or ``2`` writes the layout of that version (the normal matrices RᵀR of the
+    factors; version 1 without checksums and parts): kept so that the readers of those
+    versions stay tested.
     """
     cs = version >= 2
 
@@ -189,12 +204,22 @@ def _write(f: h5py.File, tape: T13, packing: str, version: int = VERSION) -> Non
     numbers(g, "k", pairs.k, "")
     numbers(g, "station", pairs.station, "")
     numbers(g, "n_obs", pairs.n_obs, "")
-    units = "1/(u_a u_b), u = parameters/unit"
-    for name in ("dJ", "dJt"):
-        hdf5io.write_symmetric(g, name, getattr(pairs, name), units, packing, big=True,
-                               checksums=cs)
-    if cs and pairs.dJt_parts is not None:
-        ds = hdf5io.write_symmetric(g, "dJt_parts", pairs.dJt_parts, units, packing, big=True)
+    names = _pair_datasets(version)
+    if version in NORMAL_MATRIX_VERSIONS:
+        units = "1/(u_a u_b), u = parameters/unit"
+        matrices = (pairs.dJ, pairs.dJt,
+                    None if pairs.Rt_parts is None else gram_stack(pairs.Rt_parts))
+        form = "symmetric"
+    else:
+        units = "1/u_b, u = parameters/unit"
+        matrices = (pairs.R, pairs.Rt, pairs.Rt_parts)
+        form = "factor"
+    for name, m in zip(names[:2], matrices[:2], strict=True):
+        hdf5io.write_packed(g, name.removeprefix("pairs/"), m, units, packing, form, big=True,
+                            checksums=cs)
+    if cs and matrices[2] is not None:
+        ds = hdf5io.write_packed(g, names[2].removeprefix("pairs/"), matrices[2], units,
+                                 packing, form, big=True)
         hdf5io.write_attrs(ds, {"parts": list(PARTS)})
 
     ps = tape.passes
@@ -274,6 +299,18 @@ def write_t13(path: Path | str, tape: T13, *, packing: str = "TR") -> Path:
 # ---------------------------------------------------------------------------------------------
 
 
+def _pair_datasets(version: int) -> tuple[str, str, str]:
+    """The pair datasets of a version: (AᵀWA, AᵀWMWA, its parts) as factors or matrices."""
+    if version in NORMAL_MATRIX_VERSIONS:
+        return "pairs/dJ", "pairs/dJt", "pairs/dJt_parts"
+    return "pairs/R", "pairs/Rt", "pairs/Rt_parts"
+
+
+def gram_stack(factors: np.ndarray) -> np.ndarray:
+    """KᵀK of each factor of a stack (..., m, n) -> (..., n, n)."""
+    return np.swapaxes(factors, -1, -2) @ factors
+
+
 def _reader(f: h5py.File, source: str) -> tuple[Reader, int]:
     """Check format and version; return the reader (checksums required from version 2)."""
     r = Reader(f, source, checksums=False)
@@ -286,19 +323,45 @@ def _reader(f: h5py.File, source: str) -> tuple[Reader, int]:
     if version == 1:
         warnings.warn(f"{source}: T13 version 1 carries no checksums: corruption cannot be "
                       "detected", UserWarning, stacklevel=3)
+    if version in NORMAL_MATRIX_VERSIONS:
+        warnings.warn(f"{source}: T13 version {version} carries normal matrices, not "
+                      "square-root information: its factors are formed from them and hold "
+                      "only the digits they kept (about 16 - 2 log10 of the condition number "
+                      "of the data); simulate it again for version 3", UserWarning,
+                      stacklevel=3)
     r.checksums = version >= 2
     return r, version
 
 
-def _parts_attr(r: Reader) -> None:
-    parts = r.attr("parts", list, owner="pairs/dJt_parts", default=())
+def _parts_attr(r: Reader, name: str) -> None:
+    parts = r.attr("parts", list, owner=name, default=())
     if parts != PARTS:
-        r.check.fail("pairs/dJt_parts.attrs/parts", f"the parts {', '.join(PARTS)}",
+        r.check.fail(f"{name}.attrs/parts", f"the parts {', '.join(PARTS)}",
                      ", ".join(parts) or "none")
 
 
-def _read(r: Reader, *, raw: bool, matrices: bool) -> tuple[T13, np.ndarray]:
-    """Return the tape (pair matrices None unless ``matrices``; their stored shapes checked
+def _factors_of_matrices(c, names: tuple[str, str, str], dj, djt, parts):
+    """Version 1, 2: check the normal matrices as the tape had them, then factor them."""
+    for name, m in zip(names, (dj, djt), strict=True):
+        c.symmetric(name, m)
+    if parts is not None:
+        _check_legacy_parts(c, names[2], parts, djt, 0)
+    return (factor_normal_matrices(dj), factor_normal_matrices(djt),
+            None if parts is None else factor_normal_matrices(parts))
+
+
+def _check_legacy_parts(c, name: str, parts: np.ndarray, total: np.ndarray, offset: int
+                        ) -> None:
+    """The parts of a version-2 tape summing to its AᵀWMWA, as that version was checked."""
+    defect = scaled_difference(parts.sum(axis=1), total)
+    if np.any(defect > PARTS_TOL):
+        first = int(np.argmax(defect > PARTS_TOL))
+        c.fail(name, f"parts summing to pairs/dJt (relative difference <= {PARTS_TOL:g})",
+               f"{defect[first]:.3g} in pair {first + offset}")
+
+
+def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, np.ndarray]:
+    """Return the tape (pair factors None unless ``matrices``; their stored shapes checked
     all the same) and records/t_s (checked against times/t_s once those are valid)."""
     dims = {name: r.attr(name, int) for name in ("n_o", "n_p", "n_m", "n_ts", "n_it")}
     epoch = Epoch(r.attr("epoch_jd_whole", float), r.attr("epoch_jd_fraction", float))
@@ -324,21 +387,24 @@ def _read(r: Reader, *, raw: bool, matrices: bool) -> tuple[T13, np.ndarray]:
             r.check.fail(f"attrs/{name}", f"{name} = {value} as the datasets have", dims[name])
     k = r.read("pairs/k", "i")
     n_pairs, n_o = k.size, dims["n_o"]
-    has_parts = r.has("pairs/dJt_parts")
+    names = _pair_datasets(version)
+    has_parts = r.has(names[2])
     if has_parts:
-        _parts_attr(r)
-    if matrices:
-        dj = r.symmetric("pairs/dJ", (n_pairs,), n_o)
-        djt = r.symmetric("pairs/dJt", (n_pairs,), n_o)
-        parts = r.symmetric("pairs/dJt_parts", (n_pairs, len(PARTS)), n_o) if has_parts else None
+        _parts_attr(r, names[2])
+    leads = ((n_pairs,), (n_pairs,), (n_pairs, len(PARTS)))
+    factors = (None, None, None)
+    if matrices and version in NORMAL_MATRIX_VERSIONS:
+        stored = [r.symmetric(name, lead, n_o) if i < 2 or has_parts else None
+                  for i, (name, lead) in enumerate(zip(names, leads, strict=True))]
+        factors = _factors_of_matrices(r.check, names, *stored)
+    elif matrices:
+        factors = tuple(r.triangular(name, lead, n_o) if i < 2 or has_parts else None
+                        for i, (name, lead) in enumerate(zip(names, leads, strict=True)))
     else:
-        r.stored_shape("pairs/dJ", (n_pairs,), n_o)
-        r.stored_shape("pairs/dJt", (n_pairs,), n_o)
-        if has_parts:
-            r.stored_shape("pairs/dJt_parts", (n_pairs, len(PARTS)), n_o)
-        dj = djt = parts = None
-    pairs = TapePairs(k, r.read("pairs/station", "i"), r.read("pairs/n_obs", "i"), dj, djt,
-                      parts)
+        for i, (name, lead) in enumerate(zip(names, leads, strict=True)):
+            if i < 2 or has_parts:
+                r.stored_shape(name, lead, n_o)
+    pairs = TapePairs(k, r.read("pairs/station", "i"), r.read("pairs/n_obs", "i"), *factors)
     passes = TapePasses(r.read("passes/station", "i"), r.read("passes/t_start_s"),
                         r.read("passes/t_end_s"), r.read("passes/n_obs", "i"))
     tape_raw = None
@@ -363,9 +429,9 @@ def _check_record_times(source: str, record_times: np.ndarray, tape: T13) -> Non
 
 
 def read_t13(path: Path | str, *, raw: bool = True) -> T13:
-    """Read and validate a whole T13 tape (every pair matrix unpacked in memory).
+    """Read and validate a whole T13 tape (every pair factor unpacked in memory).
 
-    For tapes too large for that, :func:`open_t13` reads the pair matrices record range by
+    For tapes too large for that, :func:`open_t13` reads the pair factors record range by
     record range.
 
     Parameters
@@ -384,12 +450,13 @@ def read_t13(path: Path | str, *, raw: bool = True) -> T13:
     Warns
     -----
     UserWarning
-        For a version-1 tape (no checksums: corruption cannot be detected).
+        For a version-1 or -2 tape (normal matrices, whose factors hold only the digits they
+        kept; version 1 without checksums: corruption cannot be detected).
     """
     path = Path(path)
     with hdf5io.open_tape(path, "T13 tape") as f:
-        r, _ = _reader(f, str(path))
-        tape, record_times = _read(r, raw=raw, matrices=True)
+        r, version = _reader(f, str(path))
+        tape, record_times = _read(r, version, raw=raw, matrices=True)
     validate(tape, str(path))
     _check_record_times(str(path), record_times, tape)
     return tape
@@ -397,42 +464,44 @@ def read_t13(path: Path | str, *, raw: bool = True) -> T13:
 
 
 class T13File(_PairSource):
-    """A T13 tape open for lazy reading of its pair matrices (from :func:`open_t13`).
+    """A T13 tape open for lazy reading of its pair factors (from :func:`open_t13`).
 
     A context manager (``with open_t13(path) as tape:``); :meth:`close` closes the file.
 
     Attributes
     ----------
     header : T13
-        Everything of the tape but the pair matrices (``header.pairs.dJ``, ``dJt`` and
-        ``dJt_parts`` are None) and the raw rows (``header.raw`` is None), validated.
+        Everything of the tape but the pair factors (``header.pairs.R``, ``Rt`` and
+        ``Rt_parts`` are None) and the raw rows (``header.raw`` is None), validated.
     path : Path
     version : int
         Version of the tape.
+    names : the pair datasets of its version (factors, or normal matrices before version 3).
     packing : str
-        Storage of the pair matrices on the tape ("TR" or "full").
+        Storage of the pair datasets on the tape ("TR" or "full").
     has_parts : bool
-        Whether the tape has ``pairs/dJt_parts``.
+        Whether the tape has the parts (``pairs/Rt_parts``, ``pairs/dJt_parts``).
     """
 
-    __slots__ = ("_file", "_reader", "has_parts", "header", "packing", "path", "version")
+    __slots__ = ("_file", "_reader", "has_parts", "header", "names", "packing", "path",
+                 "version")
 
     def __init__(self, path: Path | str):
         self.path = Path(path)
         self._file = hdf5io.open_tape(self.path, "T13 tape")
         try:
             self._reader, self.version = _reader(self._file, str(self.path))
-            tape, record_times = _read(self._reader, raw=False, matrices=False)
+            tape, record_times = _read(self._reader, self.version, raw=False, matrices=False)
             c = self._reader.check
             _validate_header(c, tape)
             _check_record_times(str(self.path), record_times, tape)
-            self.packing = self._reader.packing("pairs/dJ")
-            if self._reader.packing("pairs/dJt") != self.packing:
-                c.fail("pairs/dJt.attrs/packing", f"the packing of pairs/dJ ({self.packing})")
-            self.has_parts = self._reader.has("pairs/dJt_parts")
-            if self.has_parts and self._reader.packing("pairs/dJt_parts") != self.packing:
-                c.fail("pairs/dJt_parts.attrs/packing",
-                       f"the packing of pairs/dJ ({self.packing})")
+            self.names = _pair_datasets(self.version)
+            self.packing = self._reader.packing(self.names[0])
+            self.has_parts = self._reader.has(self.names[2])
+            for name in self.names[1:] if self.has_parts else self.names[1:2]:
+                if self._reader.packing(name) != self.packing:
+                    c.fail(f"{name}.attrs/packing",
+                           f"the packing of {self.names[0]} ({self.packing})")
         except BaseException:
             self._file.close()
             raise
@@ -448,35 +517,57 @@ class T13File(_PairSource):
         """Close the file (:meth:`pair_block` then fails)."""
         self._file.close()
 
-    def _matrices(self, name: str, lo: int, hi: int, lead: tuple[int, ...]) -> np.ndarray:
-        """Read rows lo..hi-1 of a pair-matrix dataset, checked, packed TR (m, *lead, L)."""
+    def _stored(self, name: str, lo: int, hi: int, lead: tuple[int, ...]) -> np.ndarray:
+        """Rows lo..hi-1 of a pair dataset, finite, as full matrices (m, *lead, n_o, n_o) for
+        "full" packing or packed TR (m, *lead, L)."""
         n_o = self.header.n_o
-        c = self._reader.check
         stored = self._reader.read(name, selection=np.s_[lo:hi])
-        c.finite(name, stored)
-        if self.packing == "full":  # as read_t13 + validate: dJ, dJt symmetric; parts as stored
-            full = stored.reshape(hi - lo, *lead, n_o, n_o)
-            if not lead:
-                c.symmetric(name, full, offset=lo)
-            stored = frozen(pack_tr(full))
-        if not lead:
-            diag = stored[:, tr_diagonal(n_o)]
-            if np.any(diag < 0):
-                i, col = (int(v) for v in np.argwhere(diag < 0)[0])
-                c.fail(name, "a non-negative diagonal (normal matrices)",
-                       f"{diag[i, col]:.3g} in pair {i + lo}, row {col}")
+        self._reader.check.finite(name, stored)
+        if self.packing == "full":
+            return stored.reshape(hi - lo, *lead, n_o, n_o)
         return stored
+
+    def _factors(self, name: str, lo: int, hi: int, lead: tuple[int, ...]) -> np.ndarray:
+        """Version 3: read and check factors, packed TR (m, *lead, L)."""
+        n_o = self.header.n_o
+        stored = self._stored(name, lo, hi, lead)
+        lower = None
+        if self.packing == "full":
+            lower = np.tril(stored, -1)
+            stored = frozen(pack_tr(stored))
+        check_factors(self._reader.check, name, stored, n_o, lower=lower, offset=lo)
+        return stored
+
+    def _legacy(self, lo: int, hi: int, parts: bool) -> tuple:
+        """Versions 1, 2: read the normal matrices, check them as their version was checked,
+        and return their factors packed TR."""
+        n_o = self.header.n_o
+        full = []
+        for name, lead in zip(self.names, ((), (), (len(PARTS),)), strict=True):
+            if lead and not parts:
+                full.append(None)
+                continue
+            stored = self._stored(name, lo, hi, lead)
+            full.append(stored if self.packing == "full" else unpack_tr(stored, n_o))
+        c = self._reader.check
+        for name, m in zip(self.names[:2], full[:2], strict=True):
+            c.symmetric(name, m, offset=lo)
+        if full[2] is not None:
+            _check_legacy_parts(c, self.names[2], full[2], full[1], lo)
+        return tuple(None if m is None else frozen(pack_tr(factor_normal_matrices(m)))
+                     for m in full)
 
     def pair_block(self, k_first: int, k_last: int, *, parts: bool = True) -> PairBlock:
         """Return the pairs of records k_first..k_last (inclusive), read and checked now.
 
-        ``parts=False`` skips ``pairs/dJt_parts`` (``dJt_parts`` is then None): TAPP III needs
+        ``parts=False`` skips ``pairs/Rt_parts`` (``Rt_parts`` is then None): TAPP III needs
         them only for its error budget, and they are 3/5 of the bytes.
 
-        Only the rows of ``pairs/dJ``, ``pairs/dJt`` (and ``pairs/dJt_parts``) of those
-        records are read (and their checksums checked); they are checked finite, with a
-        non-negative diagonal, symmetric (a "full" tape, then packed TR) and the parts
-        summing to dJt.
+        Only the rows of ``pairs/R``, ``pairs/Rt`` (and ``pairs/Rt_parts``) of those records
+        are read (and their checksums checked); they are checked finite, upper triangular
+        with a non-negative diagonal, and the parts' Gram matrices summing to R̃ᵀR̃ on the
+        diagonal. A version-1 or -2 tape's normal matrices are checked as that version was,
+        then factored (:func:`tapp.tape.t13.factor_normal_matrices`).
 
         Raises
         ------
@@ -491,22 +582,26 @@ class T13File(_PairSource):
                                                      "close)")
         lo, hi = _record_range(self.header, k_first, k_last)
         pairs = self.header.pairs
-        dj = self._matrices("pairs/dJ", lo, hi, ())
-        djt = self._matrices("pairs/dJt", lo, hi, ())
-        split = None
-        if parts and self.has_parts:
-            split = self._matrices("pairs/dJt_parts", lo, hi, (len(PARTS),))
-            _check_parts_sum(self._reader.check,
-                             scaled_difference_tr(split.sum(axis=1), djt), lo)
-        return PairBlock(pairs.k[lo:hi], pairs.station[lo:hi], pairs.n_obs[lo:hi], dj, djt,
+        parts = parts and self.has_parts
+        if self.version in NORMAL_MATRIX_VERSIONS:
+            r, rt, split = self._legacy(lo, hi, parts)
+        else:
+            r, rt = (self._factors(name, lo, hi, ()) for name in self.names[:2])
+            split = None
+            if parts:
+                split = self._factors(self.names[2], lo, hi, (len(PARTS),))
+                n_o = self.header.n_o
+                check_parts_sum(self._reader.check, packed_column_norms2(split, n_o),
+                                packed_column_norms2(rt, n_o), lo)
+        return PairBlock(pairs.k[lo:hi], pairs.station[lo:hi], pairs.n_obs[lo:hi], r, rt,
                          split)
 
 
 def open_t13(path: Path | str) -> T13File:
-    """Open a T13 tape for reading its pair matrices record range by record range.
+    """Open a T13 tape for reading its pair factors record range by record range.
 
-    Everything but the pair matrices (and the raw rows) is read and validated now, as by
-    :func:`read_t13`; the pair matrices are read and checked block by block
+    Everything but the pair factors (and the raw rows) is read and validated now, as by
+    :func:`read_t13`; the pair factors are read and checked block by block
     (:meth:`T13File.pair_block`, :meth:`T13File.blocks`), so a tape of 20,000 pairs of
     n_o = 50 needs no more memory than one block.
 
@@ -515,13 +610,13 @@ def open_t13(path: Path | str) -> T13File:
     InputError
         If the file does not exist.
     TapeError
-        As :func:`read_t13`, for everything but the values of the pair matrices (their
+        As :func:`read_t13`, for everything but the values of the pair factors (their
         stored shapes are checked).
 
     Warns
     -----
     UserWarning
-        For a version-1 tape.
+        For a version-1 or -2 tape (normal matrices; version 1 without checksums).
 
     Examples
     --------

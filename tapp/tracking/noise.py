@@ -1,6 +1,7 @@
-"""Fit-world and real-world measurement noise, and the per-pass normal matrices AᵀWA, AᵀWMWA.
+"""Fit-world and real-world measurement noise, and the per-pass square-root information.
 
-TAPP I hands TAPP III two normal matrices per (record, station): the fit world's
+TAPP I hands TAPP III the data of each (record, station) in two worlds. The fit world's
+normal matrix
 
 .. math:: \\Delta J = A^T W A,\\qquad W = \\mathrm{diag}(1/\\sigma_i^2)
 
@@ -19,18 +20,20 @@ kinds and between stations. Within one pass of one kind at times t_1 < ... < t_n
     M_{ab} = \\sigma_w^2\\,\\delta_{ab} + \\sigma_b^2
              + \\sigma_c^2\\,e^{-|t_a - t_b|/\\tau}.
 
-With B = W A (rows scaled by the weights) and s = Bᵀ1,
+Neither matrix is formed: each is given by rows whose Gram matrix it is (square-root
+information, :mod:`tapp.estimation.factors`). With B = W A (rows scaled by the weights),
 
 .. math::
 
-    A^T W M W A = \\sigma_w^2 B^T B + \\sigma_b^2\\, s s^T + \\sigma_c^2\\,(B^T F + F^T B - B^T B),
-    \\qquad F = L B,\\ L_{ab} = e^{-(t_a - t_b)/\\tau}\\ (b \\le a),
+    \\Delta J = (W^{1/2}A)^T (W^{1/2}A),\\qquad
+    \\Delta\\tilde J = \\underbrace{(\\sigma_w B)^T(\\sigma_w B)}_{white}
+      + \\underbrace{(\\sigma_b\\,1^T B)^T(\\sigma_b\\,1^T B)}_{bias}
+      + \\underbrace{(\\sigma_c\\,C^T B)^T(\\sigma_c\\,C^T B)}_{correlated},
 
-because the exponential kernel is K = L + Lᵀ - I. F follows from the recursion
-F_1 = B_1, F_a = B_a + e^{-(t_a - t_{a-1})/τ} F_{a-1}: O(n) per pass, no n x n matrix (the
-Markov property of the process; e.g. Maybeck, *Stochastic Models, Estimation and Control*
-vol. 1, 1979, §4.11). The result is exact, not a diagonal approximation, and exactly
-symmetric as written.
+C the Cholesky factor of the unit exponential kernel, whose rows CᵀB follow from a backward
+recursion, O(n) per pass (:func:`tapp.estimation.factors.ar1_whitened`; the Markov property
+of the process). The result is exact, not a diagonal approximation. TAPP I triangularises the
+rows of each (record, station) by Householder QR (T13 version 3).
 
 Units: σ of each kind in the unit of ``tapp.measurements.OBSERVABLE_UNITS`` (km, km/s, rad),
 τ in s. At the edges (scenario files) σ are in m, mm/s and deg (:data:`EDGE_UNITS`).
@@ -44,9 +47,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from tapp.errors import InputError
+from tapp.estimation.factors import ar1_whitened, gram
 from tapp.measurements import OBSERVABLE_UNITS, Observable
 
-#: The parts of the real-world AᵀWMWA (:func:`normal_matrix_parts`), in their order.
+#: The parts of the real-world AᵀWMWA (:func:`pass_rows`), in their order.
 PARTS = ("white", "bias", "correlated")
 
 #: Edge unit of each observable kind's noise in scenario files, and the factor to the internal
@@ -141,32 +145,6 @@ class RealNoise:
         return cls(fit.kind, factor * fit.sigma)
 
 
-def exponential_kernel_lower(b, t_s, tau_s: float) -> np.ndarray:
-    """Return F = L B with L_ab = exp(-(t_a - t_b)/τ) for b <= a, shape (n, p); O(n p).
-
-    .. math:: F_1 = B_1,\\qquad F_a = B_a + e^{-(t_a - t_{a-1})/\\tau} F_{a-1}
-
-    Parameters
-    ----------
-    b : array_like, shape (n, p)
-        Rows at the times ``t_s``.
-    t_s : array_like, shape (n,)
-        Non-decreasing times, s.
-    tau_s : float
-        Time constant, s, > 0 (``inf`` gives the running sum).
-    """
-    b = np.asarray(b, dtype=float)
-    t = np.asarray(t_s, dtype=float)
-    decay = np.exp(-np.diff(t) / tau_s)
-    out = np.empty_like(b)
-    if b.shape[0] == 0:
-        return out
-    out[0] = b[0]
-    for a in range(1, b.shape[0]):
-        out[a] = b[a] + decay[a - 1] * out[a - 1]
-    return out
-
-
 def covariance_block(t_s, real: RealNoise) -> np.ndarray:
     """Return the dense real-world covariance M of one pass of one kind, shape (n, n).
 
@@ -187,19 +165,23 @@ def covariance_block(t_s, real: RealNoise) -> np.ndarray:
     return m
 
 
-def normal_matrix_parts(a, t_s, weights, real: RealNoise) -> tuple[np.ndarray, np.ndarray]:
-    r"""Return AᵀWA (n_o, n_o) and AᵀWMWA split into its :data:`PARTS`, (3, n_o, n_o).
+@dataclass(frozen=True, slots=True, eq=False)
+class PassRows:
+    """Rows whose Gram matrices are a pass's normal matrices (module docstring).
 
-    The three terms of the module docstring's formula, for one pass of one observable kind:
+    Attributes
+    ----------
+    fit : (n, n_o) W^{1/2} A: fitᵀfit = AᵀWA, 1/(u_a u_b).
+    parts : the :data:`PARTS` of AᵀWMWA: white (n, n_o), bias (1, n_o) and correlated
+        (n, n_o) rows ((0, n_o) where that σ is zero); their Grams sum to AᵀWMWA.
+    """
 
-    .. math::
+    fit: np.ndarray
+    parts: tuple[np.ndarray, np.ndarray, np.ndarray]
 
-        \tilde J_{white} = \sigma_w^2 B^T B,\quad
-        \tilde J_{bias} = \sigma_b^2\, s s^T,\quad
-        \tilde J_{corr} = \sigma_c^2\,(B^T F + F^T B - B^T B),
 
-    each exactly symmetric as written, summing to AᵀWMWA (:func:`normal_matrices`). A term
-    whose σ is zero is a zero matrix.
+def pass_rows(a, t_s, weights, real: RealNoise) -> PassRows:
+    """Return the fit-world and real-world rows of one pass of one observable kind.
 
     Parameters
     ----------
@@ -211,45 +193,24 @@ def normal_matrix_parts(a, t_s, weights, real: RealNoise) -> tuple[np.ndarray, n
         Fit-world weights 1/σ², 1/unit².
     real : RealNoise
         Real-world noise of the kind at the station.
-
-    Returns
-    -------
-    j_fit : (n_o, n_o) AᵀWA, 1/(u_a u_b).
-    parts : (3, n_o, n_o) white, per-pass bias and exponentially correlated parts of
-        AᵀWMWA, 1/(u_a u_b).
     """
     a = np.asarray(a, dtype=float)
-    b = np.asarray(weights, dtype=float)[:, None] * a
-    j_fit = a.T @ b
-    btb = b.T @ b
-    parts = np.zeros((len(PARTS), a.shape[1], a.shape[1]))
-    parts[0] = real.sigma_white**2 * btb
-    if real.sigma_pass_bias > 0:
-        s = b.sum(axis=0)
-        parts[1] = real.sigma_pass_bias**2 * np.outer(s, s)
-    if real.sigma_correlated > 0:
-        btf = b.T @ exponential_kernel_lower(b, t_s, real.tau_s)
-        parts[2] = real.sigma_correlated**2 * (btf + btf.T - btb)
-    return 0.5 * (j_fit + j_fit.T), parts
+    w = np.asarray(weights, dtype=float)
+    b = w[:, None] * a
+    empty = np.zeros((0, a.shape[1]))
+    white = real.sigma_white * b if real.sigma_white > 0 else empty
+    bias = real.sigma_pass_bias * b.sum(axis=0)[None] if real.sigma_pass_bias > 0 else empty
+    corr = (real.sigma_correlated * ar1_whitened(b, t_s, real.tau_s)
+            if real.sigma_correlated > 0 else empty)
+    return PassRows(np.sqrt(w)[:, None] * a, (white, bias, corr))
 
 
 def normal_matrices(a, t_s, weights, real: RealNoise) -> tuple[np.ndarray, np.ndarray]:
     """Return (AᵀWA, AᵀWMWA), each (n_o, n_o), of one pass of one observable kind.
 
-    Equations in the module docstring; M is block-diagonal over passes and kinds, so the
-    normal matrices of an arc are the sums of these. AᵀWMWA is the sum of the parts of
-    :func:`normal_matrix_parts`.
-
-    Parameters
-    ----------
-    a : array_like, shape (n, n_o)
-        Partials of the n observations w.r.t. the n_o parameters (one kind, one station).
-    t_s : array_like, shape (n,)
-        Their times, s, non-decreasing.
-    weights : array_like, shape (n,)
-        Fit-world weights 1/σ², 1/unit².
-    real : RealNoise
-        Real-world noise of the kind at the station.
+    The Gram matrices of :func:`pass_rows` (for readers and checks: the tape carries the
+    factors). M is block-diagonal over passes and kinds, so the normal matrices of an arc
+    are the sums of these.
     """
-    j_fit, parts = normal_matrix_parts(a, t_s, weights, real)
-    return j_fit, parts.sum(axis=0)
+    rows = pass_rows(a, t_s, weights, real)
+    return gram(rows.fit), sum(gram(p) for p in rows.parts)

@@ -32,15 +32,16 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
        A = \\Big[\\, H\\,\\Phi(t, t_j),\\; H\\,S_j(t),\\; \\partial h/\\partial(\\text{location}),
        \\; \\partial h/\\partial(\\text{bias}) \\,\\Big].
 
-3. **Normal matrices.** Per (record k, station s): ΔJ = AᵀWA and ΔJ̃ = AᵀWMWA over the
-   observations in (t_{k-1}, t_k] (:func:`tapp.tracking.noise.normal_matrices`, exact for
-   the correlated real world, O(n) per pass). The real world's M is block-diagonal over
-   (station, observable kind, pass) *and record*: a pass that straddles a T13 time is split
-   there, since the tape has no place for the cross terms of two records (and TAPP III
-   treats the noise of new data as uncorrelated with what came before). ΔJ̃ is also kept
-   split into its white, per-pass bias and correlated parts (``pairs/dJt_parts``,
-   :func:`tapp.tracking.noise.normal_matrix_parts`), which sum to it: TAPP III's error
-   budget reads them.
+3. **Square-root information.** Per (record k, station s): upper-triangular factors R and R̃
+   with RᵀR = ΔJ = AᵀWA and R̃ᵀR̃ = ΔJ̃ = AᵀWMWA over the observations in (t_{k-1}, t_k],
+   from a Householder QR of the whitened rows (:func:`tapp.tracking.noise.pass_rows`: exact
+   for the correlated real world, O(n) per pass), never from a formed normal matrix. The
+   real world's M is block-diagonal over (station, observable kind, pass) *and record*: a
+   pass that straddles a T13 time is split there, since the tape has no place for the cross
+   terms of two records (and TAPP III treats the noise of new data as uncorrelated with what
+   came before). R̃ is also kept split into the factors of its white, per-pass bias and
+   correlated parts (``pairs/Rt_parts``), whose Grams sum to ΔJ̃: TAPP III's error budget
+   reads them.
 
 4. **Miss parameters.** m at the miss time from the state propagated from t_0 (B-plane of the
    osculating target-relative hyperbola, or orbit elements), and
@@ -61,11 +62,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from tapp.bplane import b_plane
 from tapp.dynamics import Propagator, Trajectory
 from tapp.dynamics.forces import default_parameters
 from tapp.errors import InputError
+from tapp.estimation.factors import triangularize
 from tapp.frames.elements import cartesian_to_elements
 from tapp.measurements import (
     BIAS_NAMES,
@@ -87,7 +90,7 @@ from tapp.tape.t13 import (
     TapeStations,
 )
 from tapp.targeting import BPlaneProgram
-from tapp.tracking.noise import PARTS, normal_matrix_parts
+from tapp.tracking.noise import PARTS, pass_rows
 from tapp.tracking.scenario import (
     BIAS_KINDS,
     KINDS,
@@ -300,28 +303,33 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     change = np.ones(t.size, dtype=bool)
     change[1:] = (label[1:] != label[:-1]) | (record[1:] != record[:-1])
     m = len(ts.kinds)
-    pass_rows = [(float(grid[a_]), float(grid[b_ - 1]), (b_ - a_) * m) for a_, b_ in passes]
-    return _StationData(t, model.compute(t, x), a, record, np.cumsum(change) - 1, pass_rows)
+    pass_list = [(float(grid[a_]), float(grid[b_ - 1]), (b_ - a_) * m) for a_, b_ in passes]
+    return _StationData(t, model.compute(t, x), a, record, np.cumsum(change) - 1, pass_list)
 
 
 def _accumulate(ts: TrackingStation, data: _StationData, n_o: int
-                ) -> dict[int, list]:
-    """Per record k: [ΔJ, ΔJ̃, n_obs, parts of ΔJ̃ (3, n_o, n_o)] of the station (module
-    docstring, item 3; the parts of :func:`tapp.tracking.noise.normal_matrix_parts`)."""
-    out: dict[int, list] = {}
+                ) -> dict[int, tuple[np.ndarray, np.ndarray, int, np.ndarray]]:
+    """Per record k: the station's factors [R (n_o, n_o), R̃ (n_o, n_o), n_obs, the factors of
+    R̃'s parts (3, n_o, n_o)] (module docstring, item 3): the rows of
+    :func:`tapp.tracking.noise.pass_rows` of every segment and kind in the record,
+    triangularised by Householder QR; R̃ is the QR of the three part factors stacked."""
+    rows: dict[int, list] = {}
     bounds = np.flatnonzero(np.diff(data.segment, prepend=-1, append=data.segment[-1] + 1))
     for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
         k = int(data.record[start])
-        acc = out.setdefault(k, [np.zeros((n_o, n_o)), np.zeros((n_o, n_o)), 0,
-                                 np.zeros((len(PARTS), n_o, n_o))])
+        acc = rows.setdefault(k, [[], [[] for _ in PARTS], 0])
         t = data.t_s[start:stop]
         for c, (fit, real) in enumerate(zip(ts.fit, ts.real, strict=True)):
             weights = np.full(t.size, fit.weight)
-            j_fit, parts = normal_matrix_parts(data.a[start:stop, c, :], t, weights, real)
-            acc[0] += j_fit
-            acc[1] += parts.sum(axis=0)
+            pr = pass_rows(data.a[start:stop, c, :], t, weights, real)
+            acc[0].append(pr.fit)
+            for part, block in zip(acc[1], pr.parts, strict=True):
+                part.append(block)
             acc[2] += t.size
-            acc[3] += parts
+    out = {}
+    for k, (fit_rows, part_rows, count) in rows.items():
+        parts = np.array([triangularize(*blocks, n=n_o) for blocks in part_rows])
+        out[k] = (triangularize(*fit_rows, n=n_o), triangularize(*parts), count, parts)
     return out
 
 
@@ -505,11 +513,12 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                          f"0 observations from {len(grid)} sample times")
 
     pair_rows = []
-    for ts, d in zip(scenario.stations, data, strict=True):
-        if d is not None:
-            for k, (dj, djt, count, parts) in sorted(_accumulate(ts, d, n_o).items()):
-                pair_rows.append((k, ts.number, count, dj, djt, parts))
-        tick(f"normal matrices {ts.station.name}")
+    with threadpool_limits(limits=1, user_api="blas"):  # many small QRs: threads only cost
+        for ts, d in zip(scenario.stations, data, strict=True):
+            if d is not None:
+                for k, (r, rt, count, parts) in sorted(_accumulate(ts, d, n_o).items()):
+                    pair_rows.append((k, ts.number, count, r, rt, parts))
+            tick(f"square-root information {ts.station.name}")
     pair_rows.sort(key=lambda row: (row[0], row[1]))
 
     nominal, big_b = miss_partials(scenario)
@@ -543,7 +552,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         pairs=TapePairs(np.array([r[0] for r in pair_rows]), np.array([r[1] for r in pair_rows]),
                         np.array([r[2] for r in pair_rows]),
                         np.array([r[3] for r in pair_rows]), np.array([r[4] for r in pair_rows]),
-                        dJt_parts=np.array([r[5] for r in pair_rows])),
+                        Rt_parts=np.array([r[5] for r in pair_rows])),
         passes=_pass_table(stations, data),
         raw=_raw(stations, data, n_o) if raw else None,
         provenance={"scenario": scenario.document_json, "scenario_source": scenario.source,

@@ -1,4 +1,4 @@
-"""Fit-world and real-world noise: AᵀWA, AᵀWMWA exact against the dense M."""
+"""Fit-world and real-world noise: the rows of AᵀWA, AᵀWMWA exact against the dense M."""
 
 from __future__ import annotations
 
@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from tapp.errors import InputError
+from tapp.estimation.factors import ar1_whitened, gram
 from tapp.tracking.noise import (
     FitNoise,
     RealNoise,
     covariance_block,
-    exponential_kernel_lower,
     normal_matrices,
-    normal_matrix_parts,
+    pass_rows,
 )
 
 # Round-off of sums of ~100 products, relative to the natural scale sqrt(J_aa J_bb).
@@ -32,12 +32,14 @@ def _scaled_error(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.abs(a - b) / np.outer(d, d)))
 
 
-def test_kernel_recursion_is_the_lower_triangle_of_the_exponential_kernel() -> None:
+def test_the_recursion_gives_the_cholesky_factor_of_the_exponential_kernel() -> None:
+    """CᵀB from the O(n) recursion equals Lᵀ B with L = cholesky(K), K the dense kernel."""
     rng = np.random.default_rng(1)
     a, t, _ = _pass(rng, n=40)
-    lower = np.tril(np.exp(-(t[:, None] - t[None, :]) / 120.0))
-    np.testing.assert_allclose(exponential_kernel_lower(a, t, 120.0), lower @ a,
-                               rtol=1e-13, atol=1e-13 * np.abs(a).max())
+    kernel = np.exp(-np.abs(t[:, None] - t[None, :]) / 120.0)
+    lower = np.linalg.cholesky(kernel)
+    np.testing.assert_allclose(ar1_whitened(a, t, 120.0), lower.T @ a,
+                               rtol=1e-12, atol=1e-12 * np.abs(a).max())
 
 
 @pytest.mark.parametrize("tau_s", [10.0, 300.0, 1e5])
@@ -77,11 +79,12 @@ def test_parts_are_the_three_terms_of_the_dense_product_and_sum_to_it() -> None:
     rng = np.random.default_rng(11)
     a, t, w = _pass(rng)
     real = RealNoise("range_rate", 2e-6, 1e-6, 3e-6, 120.0)
-    j_fit, parts = normal_matrix_parts(a, t, w, real)
+    rows = pass_rows(a, t, w, real)
+    parts = [gram(p) for p in rows.parts]
     same_fit, j_real = normal_matrices(a, t, w, real)
-    assert parts.shape == (3, a.shape[1], a.shape[1])
-    np.testing.assert_array_equal(same_fit, j_fit)
-    np.testing.assert_array_equal(parts.sum(axis=0), j_real)  # one is the other, summed
+    assert [p.shape[0] for p in rows.parts] == [t.size, 1, t.size]
+    np.testing.assert_array_equal(same_fit, gram(rows.fit))
+    np.testing.assert_array_equal(sum(parts), j_real)  # one is the other, summed
     wa = w[:, None] * a
     ones = np.ones((t.size, t.size))
     kernel = np.exp(-np.abs(t[:, None] - t[None, :]) / real.tau_s)
@@ -93,11 +96,12 @@ def test_parts_are_the_three_terms_of_the_dense_product_and_sum_to_it() -> None:
         np.testing.assert_array_equal(part, part.T)
 
 
-def test_absent_noise_terms_are_zero_parts() -> None:
+def test_absent_noise_terms_have_no_rows() -> None:
     rng = np.random.default_rng(13)
     a, t, w = _pass(rng, n=20)
-    _, parts = normal_matrix_parts(a, t, w, RealNoise("range", 0.01))
-    assert np.all(parts[1:] == 0.0) and np.all(np.diag(parts[0]) > 0)
+    rows = pass_rows(a, t, w, RealNoise("range", 0.01))
+    assert [p.shape for p in rows.parts] == [(20, a.shape[1]), (0, a.shape[1]),
+                                              (0, a.shape[1])]
 
 
 @pytest.mark.parametrize(("make", "field"), [
