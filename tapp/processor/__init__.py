@@ -5,15 +5,17 @@ constrained parameter set in a *fit world* that may differ from the *real world*
 writes any requested output entity in any representation and partition (§3) at the print and
 recycle times (§4.3): the O3 printout, JSON, plots and the T32 tape for TAPP II.
 
-Modules: :mod:`.regression` (the algorithm, §2.5), :mod:`.links` (permutation and constraint
-links), :mod:`.representations` (orbit sets, systems, partitions: the partials accumulator),
-:mod:`.commands` (output entities in the seed's notation and as aliases), :mod:`.executive`,
+The regression algorithm of §2.5 is :func:`tapp.estimation.regression` (on square-root
+information factors, shared with TAPP II's navigation). Modules: :mod:`.links` (permutation
+and constraint links), :mod:`.representations` (orbit sets, systems, partitions: the
+partials accumulator), :mod:`.commands` (output entities in the seed's notation and as
+aliases), :mod:`.executive`,
 :mod:`.plan` and :mod:`.deck` (the manual inputs), :mod:`.sequencing` (the four phases),
 :mod:`.printout` (O3 text and JSON).
 """
 
+from tapp.estimation.regression import Regression, SingularFitError, regression
 from tapp.processor.commands import ROC, UPC, Command, Side, parse_command
-from tapp.processor.regression import Regression, SingularFitError, regression
 
 __all__ = ["ROC", "UPC", "Command", "Regression", "Side", "SingularFitError", "parse_command",
            "regression"]

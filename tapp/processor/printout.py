@@ -5,9 +5,11 @@ last recycle time and current time as T13 indices, and the state at t_k) and, fo
 its number ω, its command in both notations, and the matrix with rows and columns labelled by
 parameter names (which carry their units: ``x_km``, ``GM_km3_s2``; ``@current`` etc. tag the
 time of an orbit set, a trailing ``'`` a parameter changed by a constraint link). A
-covariance also gets its σ's and its correlation matrix; a real-world covariance its error
-budget: the σ of each source (signed: a negative variance, from correlations between sources,
-prints as −√|v|), whose variances add up to the printed total.
+covariance also gets its σ's, its correlation matrix and the number of significant digits it
+holds (on the scale √(C_ii C_jj), estimated from the condition of the factors it came from:
+:attr:`tapp.processor.executive.Entity.digits`); a real-world covariance its error budget:
+the σ of each source (signed: a negative variance, from correlations between sources, prints
+as −√|v|), whose variances add up to the printed total.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
+from tapp.estimation.factors import gram
 from tapp.frames.time import Epoch
 from tapp.processor.executive import Entity
 from tapp.processor.sequencing import Block, Run
@@ -59,8 +62,9 @@ def _grid(rows: tuple[str, ...], cols: tuple[str, ...], m: np.ndarray, fmt: str)
 def entity_lines(ent: Entity) -> list[str]:
     """The O3 lines of one entity."""
     cmd = ent.command
+    held = "" if ent.digits is None else f"   holds ~{ent.digits:.1f} digits"
     lines = [f"  ω = {ent.omega}   {cmd.seed()}   [{cmd.alias()}]   "
-             f"({len(ent.rows)} x {len(ent.cols)})"]
+             f"({len(ent.rows)} x {len(ent.cols)}){held}"]
     lines += ["    " + line for line in _grid(ent.rows, ent.cols, ent.matrix, ".4e")]
     if cmd.is_covariance and ent.rows == ent.cols:
         lines.append("    σ:")
@@ -76,7 +80,7 @@ def entity_lines(ent: Entity) -> list[str]:
         lines += ["    " + line for line in _grid((*b.sources, "total"), ent.rows, table,
                                                    ".4e")]
         lines.append(f"    closure: max |Σ variances − total| / total = {closure(b):.2g} "
-                     "(rounding, of order ε·cond of the fit normal matrix)")
+                     "(rounding)")
     return lines
 
 
@@ -123,6 +127,8 @@ def entity_dict(ent: Entity) -> dict:
     if ent.command.is_covariance and ent.rows == ent.cols:
         out["sigma"] = sigmas(ent.matrix).tolist()
         out["correlation"] = correlation(ent.matrix).tolist()
+    if ent.digits is not None:
+        out["digits"] = ent.digits
     if ent.budget is not None:
         out["budget"] = {"sources": list(ent.budget.sources),
                          "variance": ent.budget.variances.tolist(),
@@ -141,7 +147,7 @@ def run_dict(run: Run, header, deck_source: str, tape_source: str) -> dict:
                     "t_s": b.t_s, "utc": _utc(header.epoch, b.t_s), "info": b.info.tolist(),
                     "entities": [entity_dict(e) for e in b.entities]} for b in run.blocks],
         "history": {"labels": list(run.history_labels), "miss": list(header.miss.name),
-                    "rows": [{"kind": h.kind, "k": h.k, "t_s": h.t_s,
+                    "rows": [{"kind": h.kind, "k": h.k, "t_s": h.t_s, "digits": h.digits,
                               "sigma_fit": None if h.sigma_fit is None else h.sigma_fit.tolist(),
                               "sigma_real": h.sigma_real.tolist(),
                               "miss_sigma_fit": None if h.miss_fit is None
@@ -149,7 +155,9 @@ def run_dict(run: Run, header, deck_source: str, tape_source: str) -> dict:
                               "miss_sigma_real": sigmas(h.miss_real).tolist()}
                              for h in run.history]},
         "recycles": [{"number": r.number, "k": r.k, "l": r.l, "t_s": r.t_s,
-                      "miss_sigma_fit": sigmas(r.B @ r.Lambda_fit @ r.B.T).tolist(),
-                      "miss_sigma_real": sigmas(r.B @ r.Lambda_real @ r.B.T).tolist()}
+                      "miss_sigma_fit": sigmas(gram(r.Lambda_fit_factor, r.B)).tolist(),
+                      "miss_sigma_real": sigmas(gram(r.Lambda_real_factor, r.B)).tolist(),
+                      "digits": next(h.digits for h in run.history
+                                     if h.kind == "recycle" and h.k == r.k)}
                      for r in run.recycles],
     }

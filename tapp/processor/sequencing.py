@@ -16,19 +16,43 @@ Each cycle k = 0, 1, ..., n_IT runs four phases in order:
 4. **Tape read-in** (PH = 4): k, INFO and U of record k+1; J += ΔJ and J̃ += ΔJ̃ for every
    station whose time-station flag Δ_TS(k+1, s) is 1.
 
-Records are read lazily in blocks (the normal matrices stay packed until they are summed), so
+**Square-root information.** Every symmetric matrix of the machine is held as a factor
+(:mod:`tapp.estimation`): J = R_JᵀR_J, J̃ = R̃ᵀR̃ and S = R_SᵀR_S as square-root
+information, Λ̄ = UᵀU as a square-root covariance. Reading in a pair stacks its factors
+(T13 version 3 carries them) under the running ones and triangularises the stack by
+Householder QR; an update command maps a factor, K ← K Xᵀ (in twice the working precision:
+:func:`tapp.estimation.factors.accurate_map`); the statistics are the
+regression on factors (:func:`tapp.estimation.regression`), and an output entity
+X₁ M X₂ᵀ is (K X₁ᵀ)ᵀ (K X₂ᵀ). No normal matrix is summed, no inverse formed and no
+covariance subtracted, so the results keep the digits of the data rather than losing twice
+the logarithm of their condition number; each printed covariance states the digits it holds
+(:attr:`tapp.processor.executive.Entity.digits`).
+
+A QR is backward stable column by column in the representation it runs in, and an epoch
+change after a swing-by is ill-conditioned (cond 1e13): a factor triangularised at the old
+epoch and then mapped carries that rounding times the condition. So the factors are mapped
+first and triangularised in the new epoch: the records read since the last statistics time
+are stacked only after the map, and the results of a regression stay stacked (up to
+:data:`COMPACT_ROWS` n_o rows) until the next epoch change maps them. This held the
+deep-space covariances after the periapsis epoch to 1e-10 of their scale, where
+triangularising first left 1e-9.
+
+Records are read lazily in blocks (the factors stay packed until they are stacked), so
 memory does not grow with the tape. Departures from the seed, each an addition: with δ_PM = 0
 (no print output) the statistics are still formed and updated at recycles, since the T32 tape
 carries them; Λ' at k = 0 is formed from the a priori when it can be.
 
 **Error budget.** The estimate error is linear in its sources: δ'x = G δx₀ + Σ_s (noise of
 source s), with δx₀ the a priori error at injection (covariance E₃Λ₀E₃ᵀ) and s = (station,
-part) for the white, per-pass bias and correlated parts of J̃ (the tape's ``pairs/dJt_parts``;
-one "total" part per station when a tape has none). The sequencer carries G (G ← L G at every
-regression, G ← T G on an epoch change) and each noise source's covariance
-(C_s ← L C_s Lᵀ + Λ' J̃_s Λ'), so Λ̄' = G E₃Λ₀E₃ᵀ Gᵀ + Σ_s C_s; the a priori part is split
-into groups of uncertain parameters, with the cross-correlations between groups as one more
-source, so the variances add up exactly to the printed diagonal.
+part) for the white, per-pass bias and correlated parts of J̃ (the tape's ``pairs/Rt_parts``;
+one "total" part per station when a tape has none). The a priori part is split into groups g
+of uncertain parameters: the sequencer carries the map G_g = G E₃[:, g] K_gᵀ of each group's
+whitened error (K_gᵀK_g = Λ₀[g, g]; G_g ← L G_g at every regression, applied right to left,
+and ← T G_g on an epoch change) and a factor K_s of each noise source's covariance
+(C_s ← L C_s Lᵀ + Λ' J̃_s Λ', K_s ← QR of [K_s Lᵀ; R̃_s Λ']), so
+Λ̄' = Σ_g G_g G_gᵀ + Σ_s K_sᵀK_s when Λ₀ does not correlate groups; when it does, the whole
+map G E₃ K₀ᵀ is carried too and the cross-correlations between groups are one more source,
+its share beyond the groups, so the variances add up to the printed diagonal.
 """
 
 from __future__ import annotations
@@ -38,12 +62,21 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from tapp.errors import InputError
+from tapp.estimation.factors import (
+    accurate_map,
+    digits_held,
+    gram,
+    psd_factor,
+    triangularize,
+    upper_from_packed,
+)
+from tapp.estimation.regression import FitSystem, SingularFitError, regression
 from tapp.processor.commands import UPC, Command
-from tapp.processor.executive import Budget, Entity, evaluate
+from tapp.processor.executive import Budget, Entity, evaluate, transform
 from tapp.processor.plan import Plan
-from tapp.processor.regression import SingularFitError, regression, symmetric
 from tapp.processor.representations import (
     ISOLATED_SETS,
     SYSTEM_PARTITIONS,
@@ -51,17 +84,34 @@ from tapp.processor.representations import (
     Accumulator,
     Stored,
 )
-from tapp.tape.packing import unpack_tr
 from tapp.tape.t32 import T32Entity, T32Recycle
 
-#: Pairs read from the tape at a time (bounds the memory of a block of packed matrices).
+#: Pairs read from the tape at a time (bounds the memory of a block of packed factors).
 PAIRS_PER_BLOCK = 2048
 NOISE_PARTS = ("white", "bias", "correlated")
+#: Rows (times n_o) beyond which a running factor is triangularised at once; below, it stays
+#: stacked until the next epoch change maps it and it is triangularised in the new epoch.
+COMPACT_ROWS = 4
+#: The budget source of the a priori correlations between groups of parameters.
+CROSS = "correlations between a priori groups"
+#: The error estimate of a covariance is ERROR_PER_KAPPA ε κ on its scale √(C_ii C_jj), κ the
+#: largest condition number of a scaled fit factor R₁₁ it came from (every regression since
+#: the injection, through the recycles): the QR and triangular-solve bounds grow like a small
+#: multiple of ε κ. Checked against 40-digit arithmetic on the deep-space study, whose
+#: largest ratio of error to ε κ is 3.0 (tests/tapp/processor/test_reference.py).
+ERROR_PER_KAPPA = 16.0
+EPS = float(np.finfo(float).eps)
+
+
+def _digits(kappa: float) -> float:
+    """Significant digits of a covariance from fits of condition numbers up to κ."""
+    return digits_held(ERROR_PER_KAPPA * EPS * kappa)
 
 
 class TrackingData(Protocol):
-    """What the processor reads: a T13 header and its pair matrices by record range
-    (:func:`tapp.tape.t13_hdf5.open_t13` or :func:`tapp.tape.t13.memory_pairs`)."""
+    """What the processor reads: a T13 header and its pair factors by record range
+    (a T13 file opened by :func:`tapp.tape.t13_hdf5.open_t13`, or
+    :func:`tapp.tape.t13.memory_pairs`)."""
 
     header: object
 
@@ -87,7 +137,8 @@ class HistoryRow:
     """σ's at a statistics time: of the history partition and of the miss set, fit and real.
 
     ``miss_fit``/``miss_real`` are the (n_m, n_m) covariances of the miss set (None when the
-    fit covariance is not defined, e.g. k = 0 without a full a priori).
+    fit covariance is not defined, e.g. k = 0 without a full a priori); ``digits`` the
+    significant digits these covariances hold (:attr:`Entity.digits`).
     """
 
     kind: str
@@ -97,25 +148,33 @@ class HistoryRow:
     sigma_real: np.ndarray
     miss_fit: np.ndarray | None
     miss_real: np.ndarray
+    digits: float
 
 
 @dataclass(frozen=True, slots=True, eq=False)
 class Run:
     """A processed tape: the O3 blocks, the σ history, the a priori, and the recycles as the
-    T32 tape carries them (every n_o x n_o matrix in the representation x^k of its time)."""
+    T32 tape carries them (every n_o x n_o matrix in the representation x^k of its time).
+
+    ``S0_fit_factor`` and ``Lambda0_real_factor`` are upper-triangular factors (n_o, n_o) of
+    the a priori at injection: S⁰ = KᵀK (fit-world normal matrix), Λ̄⁰ = KᵀK (real-world
+    covariance).
+    """
 
     blocks: tuple[Block, ...]
     history: tuple[HistoryRow, ...]
     history_labels: tuple[str, ...]
     recycles: tuple[T32Recycle, ...]
-    S0_fit: np.ndarray
-    Lambda0_real: np.ndarray
+    S0_fit_factor: np.ndarray
+    Lambda0_real_factor: np.ndarray
     budget_sources: tuple[str, ...] = ()
 
 
 @dataclass(slots=True)
 class _Current:
-    """Statistics at the current time (seed "current statistics", δ_CS = 1)."""
+    """Statistics at the current time (seed "current statistics", δ_CS = 1), as factors:
+    S' = SᵀS, Λ̄' = LbᵀLb, Λ' = fitᵀfit, Σ = Sigmaᵀ Sigma, noise source s: K[s]ᵀK[s], a priori
+    source g: apriori[g] apriori[g]ᵀ."""
 
     k: int
     S: np.ndarray
@@ -124,8 +183,9 @@ class _Current:
     fit: np.ndarray | None
     fit_error: InputError | None
     Sigma: np.ndarray
-    G: np.ndarray
-    C: np.ndarray
+    apriori: list[np.ndarray]
+    K: list[np.ndarray]
+    kappa: float
 
 
 class Processor:
@@ -144,8 +204,7 @@ class Processor:
         self.stored = Stored(eye.copy(), eye.copy(), eye.copy(), eye.copy(),
                              np.array(h.miss.B, dtype=float))
         self.acc = Accumulator(sy, self.stored)
-        zeros = np.zeros((self.n_o, self.n_o))
-        self.J, self.Jt, self.S, self.Lb = zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy()
+        self.RJ, self.RJt, self.RS, self.U = (self._empty() for _ in range(4))
         self.j, self.l, self.k = -1, 0, 0
         self.info = np.array(h.parameters.nominal[:self.n_p], dtype=float)
         self.current: _Current | None = None
@@ -154,12 +213,18 @@ class Processor:
         self.has_parts = True
         self.sources = [f"noise: {name} {part}" for name in h.stations.name
                         for part in NOISE_PARTS]
-        self.Jt_src = np.zeros((len(self.sources), self.n_o, self.n_o))
-        self.G = np.eye(self.n_o)
-        self.C = np.zeros_like(self.Jt_src)
+        self.Rt_src = [self._empty() for _ in self.sources]
+        self.apriori: list[np.ndarray] = []
+        self.apriori_names: list[str] = []
+        self.K = [self._empty() for _ in self.sources]
+        self.kappa = 1.0
+        self.packed = np.triu_indices(self.n_o)
         self.blocks: list[Block] = []
         self.history: list[HistoryRow] = []
         self.recycles: list[T32Recycle] = []
+
+    def _empty(self) -> np.ndarray:
+        return np.zeros((0, self.n_o))
 
     # -----------------------------------------------------------------------------------------
     # Phase 4: tape read-in
@@ -171,8 +236,19 @@ class Processor:
             keep &= ~((station == off.station) & (k >= off.k_first) & (k <= off.k_last))
         return keep
 
-    def _flush(self) -> None:
-        """Sum the pending records' ΔJ, ΔJ̃ (flagged stations left out) into J, J̃."""
+    def _rows(self, packed: np.ndarray, to: tuple | None = None) -> np.ndarray:
+        """The stacked rows (m n_o, n_o) of m packed upper-triangular factors, mapped by
+        ``to`` = (X, X_lo) (rows (X + X_lo)ᵀ, :func:`accurate_map`) when given; zero rows
+        left out."""
+        rows, cols = self.packed
+        stack = upper_from_packed(packed, rows, cols, self.n_o).reshape(-1, self.n_o)
+        stack = stack[np.any(stack != 0, axis=1)]
+        return stack if to is None else accurate_map(stack, *to)
+
+    def _flush(self, to: tuple[np.ndarray, np.ndarray | None] | None = None) -> None:
+        """Stack the pending records' factors (flagged stations left out) under R_J, R̃;
+        ``to`` (the update's adjoint and its remainder) maps their rows to a new epoch
+        first."""
         if not self.pending:
             return
         first, last = self.pending[0], self.pending[-1]
@@ -184,22 +260,26 @@ class Processor:
             keep = self._keep(np.asarray(blk.k), np.asarray(blk.station))
             if not np.any(keep):
                 continue
-            self.J += unpack_tr(blk.dJ[keep].sum(axis=0), self.n_o)
-            self.Jt += unpack_tr(blk.dJt[keep].sum(axis=0), self.n_o)
+            self.RJ = triangularize(self.RJ, self._rows(blk.R[keep], to))
+            self.RJt = triangularize(self.RJt, self._rows(blk.Rt[keep], to))
             if self.plan.budget:
-                self._budget_read(blk, keep)
+                self._budget_read(blk, keep, to)
 
-    def _budget_read(self, blk, keep: np.ndarray) -> None:
-        pos = np.searchsorted(self.station_ids, np.asarray(blk.station)[keep])
-        onehot = np.zeros((self.station_ids.size, pos.size))
-        onehot[pos, np.arange(pos.size)] = 1.0
-        if blk.dJt_parts is None:
+    def _budget_read(self, blk, keep: np.ndarray, to: tuple | None = None) -> None:
+        station = np.asarray(blk.station)[keep]
+        parts = None if blk.Rt_parts is None else blk.Rt_parts[keep]
+        if parts is None:
             self.has_parts = False
-            parts = blk.dJt[keep][:, None, :] * np.array([1.0, 0.0, 0.0])[None, :, None]
-        else:
-            parts = blk.dJt_parts[keep]
-        sums = (onehot @ parts.reshape(pos.size, -1)).reshape(-1, parts.shape[-1])
-        self.Jt_src += unpack_tr(sums, self.n_o)
+        for pos, sid in enumerate(self.station_ids):
+            mine = station == sid
+            if not np.any(mine):
+                continue
+            for p in range(len(NOISE_PARTS)):
+                if parts is None and p > 0:
+                    continue
+                packed = blk.Rt[keep][mine] if parts is None else parts[mine, p]
+                i = pos * len(NOISE_PARTS) + p
+                self.Rt_src[i] = triangularize(self.Rt_src[i], self._rows(packed, to))
 
     def _read(self, k: int) -> None:
         rec = self.h.records
@@ -216,19 +296,21 @@ class Processor:
 
     def _update(self, k: int) -> None:
         if k != 0:
-            self._flush()
-            matrices = {"J": self.J, "Jt": self.Jt, "S": self.S, "Lb": self.Lb}
-            out = {}
-            for omega, cmd in enumerate(UPC, start=1):
-                out[omega] = evaluate(omega, cmd, self.acc, matrices.__getitem__,
-                                      self.miss_names).matrix
+            st = self.stored
+            st.V, st.W, st.B, self.RJ, self.RJt, self.RS, self.U = (
+                transform(cmd, self.acc, f)
+                for cmd, f in zip(UPC, (st.V, st.W, st.B, self.RJ, self.RJt, self.RS, self.U),
+                                  strict=True))
             t = self.acc.transformation(0, 1, 1)
-            t_adj = self.acc.transformation(1, 1, 1)
-            self.stored.V, self.stored.W, self.stored.B = out[1], out[2], out[3]
-            self.J, self.Jt, self.S, self.Lb = out[4], out[5], out[6], out[7]
-            self.G = t @ self.G
-            self.C = t @ self.C @ t.T
-            self.Jt_src = t_adj @ self.Jt_src @ t_adj.T
+            adj = (self.acc.transformation(1, 1, 1), self.acc.remainder(1, 1, "o"))
+            self.apriori = [accurate_map(m.T, t).T for m in self.apriori]
+            self.K = [accurate_map(f, t) for f in self.K]
+            self.Rt_src = [accurate_map(f, *adj) for f in self.Rt_src]
+            self._flush(adj)  # the pending records: mapped first, stacked in the new epoch
+            self.RS, self.U, self.RJ, self.RJt = (triangularize(f, n=self.n_o) for f in
+                                                  (self.RS, self.U, self.RJ, self.RJt))
+            self.K = [triangularize(f, n=self.n_o) for f in self.K]
+            self.Rt_src = [triangularize(f, n=self.n_o) for f in self.Rt_src]
         self.stored.U = np.eye(self.n_p, self.n_o)
         self.j = k
         self.acc.invalidate()
@@ -252,79 +334,98 @@ class Processor:
                           f"reciprocal condition {exc.rcond:.2g}; near-null direction "
                           + " ".join(terms))
 
+    def _fit_system(self) -> FitSystem:
+        return FitSystem(self.acc.transformation(0, 0, 4),
+                         self.acc.transformation(1, 0, 4).T, self.plan.systems.n_f1)
+
     def _statistics(self, k: int) -> _Current:
         if self.current is not None and self.current.k == k:
             return self.current
         self._flush()
-        n = len(self.sources)
         if k == 0:
-            d1 = self.acc.partials(0, 0, "f1")
-            e3 = self.acc.partials(1, 0, "r1").T
-            self.S0_fit = symmetric(d1.T @ self.plan.S0 @ d1)
-            self.E3 = e3
-            self.Lambda0_real = symmetric(e3 @ self.plan.Lambda0 @ e3.T)
-            self.S, self.Lb = self.S0_fit, self.Lambda0_real
-            fit, error = None, None
-            try:
-                fit = regression(self.acc.partials(1, 0, "f1").T, self.S0_fit,
-                                 np.zeros_like(self.J), self.Lambda0_real,
-                                 np.zeros_like(self.J)).Lambda1_00
-            except SingularFitError as exc:
-                error = self._singular(k, exc)
-            self.current = _Current(k, self.S0_fit, self.Lambda0_real, np.eye(self.n_o), fit,
-                                    error, np.zeros_like(self.J), np.eye(self.n_o),
-                                    np.zeros((n, self.n_o, self.n_o)))
-            return self.current
-        e1 = self.acc.partials(1, 0, "f1").T
+            return self._apriori()
         try:
-            reg = regression(e1, self.S, self.J, self.Lb, self.Jt)
+            reg = regression(self._fit_system(), self.RS, self.RJ, self.U, self.RJt)
         except SingularFitError as exc:
             raise self._singular(k, exc) from None
-        lam = reg.Lambda1_00
-        sigma = symmetric(lam @ self.Jt @ lam)
-        c = reg.L @ self.C @ reg.L.T + lam @ self.Jt_src @ lam if self.plan.budget else self.C
-        self.current = _Current(k, reg.S1_00, reg.Lambda_real, reg.L, lam, None, sigma,
-                                reg.L @ self.G, c)
+        K, apriori = self.K, self.apriori
+        if self.plan.budget:
+            K = [self._compact(np.vstack([reg.apply_L(k_s.T).T, reg.noise_factor(rt)]))
+                 for k_s, rt in zip(self.K, self.Rt_src, strict=True)]
+            apriori = [reg.apply_L(m) for m in self.apriori]
+        self.current = _Current(k, self._compact(reg.R_S1), self._compact(reg.U_real), reg.L,
+                                reg.F.T, None, reg.K_sigma, apriori, K,
+                                max(self.kappa, reg.kappa))
         return self.current
 
-    def _matrix(self, cur: _Current) -> Callable[[str], np.ndarray]:
+    def _compact(self, f: np.ndarray) -> np.ndarray:
+        """A factor with at most :data:`COMPACT_ROWS` n_o rows: triangularised beyond that,
+        else left stacked until the next epoch change maps it (module docstring)."""
+        return triangularize(f, n=self.n_o) if f.shape[0] > COMPACT_ROWS * self.n_o else f
+
+    def _apriori(self) -> _Current:
+        """Statistics at k = 0: the a priori (the Statistical Input Program)."""
+        d1 = self.acc.partials(0, 0, "f1")
+        e3 = self.acc.partials(1, 0, "r1").T
+        self._apriori_sources(e3)
+        self.RS = psd_factor(self.plan.S0) @ d1
+        self.U = psd_factor(self.plan.Lambda0) @ e3.T
+        self.S0_fit_factor = triangularize(self.RS, n=self.n_o)
+        self.Lambda0_real_factor = triangularize(self.U, n=self.n_o)
+        fit, error = None, None
+        try:
+            fit = regression(self._fit_system(), self.RS, self._empty()).F.T
+        except SingularFitError as exc:
+            error = self._singular(0, exc)
+        self.current = _Current(0, self.RS, self.U, np.eye(self.n_o), fit, error,
+                                self._empty(), self.apriori,
+                                [self._empty() for _ in self.sources], 1.0)
+        return self.current
+
+    def _apriori_sources(self, e3: np.ndarray) -> None:
+        """The a priori error sources of the budget: per group g of uncertain parameters the
+        map E₃[:, g] K_gᵀ (K_gᵀK_g = Λ₀[g, g]) of its whitened error, and, when Λ₀ correlates
+        groups, the whole E₃ K₀ᵀ last (its share beyond the groups is theirs together)."""
+        n_p, n_r1 = self.n_p, self.plan.systems.n_r1
+        lam0 = self.plan.Lambda0
+        named = {i for _, idx in self.plan.budget_groups for i in idx}
+        r1_names = self.plan.systems.system_names(6)
+        groups = [("orbit (a priori)", tuple(range(n_p)))]
+        groups += [(f"{name} (a priori)", idx) for name, idx in self.plan.budget_groups]
+        groups += [(f"{r1_names[i]} (a priori)", (i,)) for i in range(n_p, n_r1)
+                   if i not in named]
+        block = np.zeros_like(lam0)
+        self.apriori, self.apriori_names = [], []
+        for name, idx in groups:
+            ix = np.ix_(idx, idx)
+            block[ix] = lam0[ix]
+            self.apriori.append(e3[:, list(idx)] @ psd_factor(lam0[ix]).T)
+            self.apriori_names.append(name)
+        if np.any(lam0 != block):
+            self.apriori.append(e3 @ psd_factor(lam0).T)
+            self.apriori_names.append(CROSS)
+
+    def _factor(self, cur: _Current) -> Callable[[str], np.ndarray]:
         def get(code: str) -> np.ndarray:
             if code == "L'":
                 if cur.fit is None:
                     raise cur.fit_error
                 return cur.fit
-            return {"J": self.J, "Jt": self.Jt, "S": self.S, "Lb": self.Lb, "S'": cur.S,
+            return {"J": self.RJ, "Jt": self.RJt, "S": self.RS, "Lb": self.U, "S'": cur.S,
                     "Lb'": cur.Lb, "Sigma": cur.Sigma}[code]
         return get
 
     # -----------------------------------------------------------------------------------------
-    # Error budget
+    # Error budget and accuracy
     # -----------------------------------------------------------------------------------------
 
-    def _budget(self, x: np.ndarray, g: np.ndarray, c: np.ndarray, total: np.ndarray) -> Budget:
+    def _budget(self, x: np.ndarray, apriori: list[np.ndarray], k_src: list[np.ndarray],
+                total: np.ndarray) -> Budget:
         """Per-source variances of the rows of X (Λ̄ or Λ̄') (module docstring)."""
-        n_p = self.n_p
-        n_r1 = self.plan.systems.n_r1
-        xg = x @ g @ self.E3
-        lam0 = self.plan.Lambda0
-        named = {i for _, idx in self.plan.budget_groups for i in idx}
-        groups = [("orbit (a priori)", tuple(range(n_p)))]
-        groups += [(f"{name} (a priori)", idx) for name, idx in self.plan.budget_groups]
-        r1_names = self.plan.systems.system_names(6)
-        groups += [(f"{r1_names[i]} (a priori)", (i,)) for i in range(n_p, n_r1)
-                   if i not in named]
-        sources, rows = [], []
-        block = np.zeros_like(lam0)
-        for name, idx in groups:
-            ix = np.ix_(idx, idx)
-            block[ix] = lam0[ix]
-            part = xg[:, idx]
-            sources.append(name)
-            rows.append(np.einsum("ij,jk,ik->i", part, lam0[ix], part))
-        cross = lam0 - block
-        if np.any(cross != 0):
-            sources.append("correlations between a priori groups")
-            rows.append(np.einsum("ij,jk,ik->i", xg, cross, xg))
+        rows = [np.einsum("ij,ij->i", xm, xm) for xm in (x @ m for m in apriori)]
+        if self.apriori_names[-1] == CROSS:
+            rows[-1] = rows[-1] - np.sum(rows[:-1], axis=0)  # the whole minus the groups
+        sources = list(self.apriori_names)
         for i, src in enumerate(self.sources):
             station, part = src.rsplit(" ", 1)
             if not self.has_parts:
@@ -332,31 +433,36 @@ class Processor:
                     continue
                 src = f"{station} total"
             sources.append(src)
-            rows.append(np.einsum("ij,jk,ik->i", x, c[i], x))
+            rows.append(np.diagonal(gram(k_src[i], x)).copy())
         return Budget(tuple(sources), np.array(rows), total)
 
     def _entities(self, commands: tuple[Command, ...], cur: _Current) -> tuple[Entity, ...]:
         out = []
+        factor = self._factor(cur)
         for omega, cmd in enumerate(commands, start=1):
-            ent = evaluate(omega, cmd, self.acc, self._matrix(cur), self.miss_names)
+            ent = evaluate(omega, cmd, self.acc, factor, self.miss_names)
+            budget = digits = None
+            if cmd.is_covariance:
+                kappa = self.kappa if cmd.sigma == "Lb" else cur.kappa
+                digits = _digits(kappa)
             if self.plan.budget and cmd.sigma in ("Lb", "Lb'") and cmd.rows == cmd.cols:
                 x = self.acc.partials(cmd.rows.mu, cmd.rows.tau, cmd.rows.rho)
-                g, c = (self.G, self.C) if cmd.sigma == "Lb" else (cur.G, cur.C)
-                ent = Entity(ent.omega, ent.command, ent.rows, ent.cols, ent.matrix,
-                             self._budget(x, g, c, np.diagonal(ent.matrix).copy()))
-            out.append(ent)
+                maps, k_src = ((self.apriori, self.K) if cmd.sigma == "Lb"
+                               else (cur.apriori, cur.K))
+                budget = self._budget(x, maps, k_src, np.diagonal(ent.matrix).copy())
+            out.append(Entity(ent.omega, ent.command, ent.rows, ent.cols, ent.matrix, budget,
+                              digits))
         return tuple(out)
 
     def _record_history(self, kind: str, k: int, cur: _Current) -> None:
         side = self.plan.history
         x = self.acc.partials(side.mu, side.tau, side.rho)
-        real = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", x, cur.Lb, x), 0.0))
-        fit = None if cur.fit is None else np.sqrt(np.maximum(
-            np.einsum("ij,jk,ik->i", x, cur.fit, x), 0.0))
+        real = np.sqrt(np.diagonal(gram(cur.Lb, x)))
+        fit = None if cur.fit is None else np.sqrt(np.diagonal(gram(cur.fit, x)))
         b = self.stored.B
-        miss_real = symmetric(b @ cur.Lb @ b.T)
-        miss_fit = None if cur.fit is None else symmetric(b @ cur.fit @ b.T)
-        self.history.append(HistoryRow(kind, k, self._t(k), fit, real, miss_fit, miss_real))
+        miss_fit = None if cur.fit is None else gram(cur.fit, b)
+        self.history.append(HistoryRow(kind, k, self._t(k), fit, real, miss_fit,
+                                       gram(cur.Lb, b), _digits(cur.kappa)))
 
     # -----------------------------------------------------------------------------------------
     # Phases 2 and 3
@@ -381,30 +487,47 @@ class Processor:
                 self.recycles.append(self._t32_recycle(k, number, cur, ents))
         self.l = k
         self.stored.V = self.stored.U.copy()
-        self.S, self.Lb, self.G, self.C = cur.S, cur.Lb, cur.G, cur.C
-        self.J = np.zeros_like(self.J)
-        self.Jt = np.zeros_like(self.Jt)
-        self.Jt_src = np.zeros_like(self.Jt_src)
+        self.RS, self.U, self.apriori, self.K = cur.S, cur.Lb, cur.apriori, cur.K
+        self.kappa = cur.kappa
+        self.RJ, self.RJt = self._empty(), self._empty()
+        self.Rt_src = [self._empty() for _ in self.sources]
         self.acc.invalidate()
         self.current = None
 
     def _t32_recycle(self, k: int, number: int, cur: _Current, ents) -> T32Recycle:
         t = self.acc.transformation(0, 1, 1)
         ta = self.acc.transformation(1, 1, 1)
-        transition = t @ self.acc.transformation(1, 2, 1).T
-        fit = self._matrix(cur)("L'")
+        transition = accurate_map(t, self.acc.transformation(1, 2, 1))
+        adjoint = accurate_map(ta, self.acc.transformation(0, 2, 1))
+        fit = self._factor(cur)("L'")
         entities = tuple(T32Entity(e.omega, e.command.seed(), e.command.alias(), e.rows, e.cols,
                                    e.matrix) for e in ents)
+
+        def mapped(f: np.ndarray, m: np.ndarray) -> np.ndarray:
+            return triangularize(f @ m.T, n=self.n_o)
+
         return T32Recycle(
             number, k, self.l, self.j, self._t(k), self._t(self.l), self.info.copy(),
-            symmetric(ta @ cur.S @ ta.T), symmetric(t @ fit @ t.T), symmetric(t @ cur.Lb @ t.T),
-            t @ cur.L @ ta.T, symmetric(t @ cur.Sigma @ t.T), symmetric(ta @ self.J @ ta.T),
-            symmetric(ta @ self.Jt @ ta.T), self.stored.B @ ta.T, transition, entities)
+            S_fit_factor=mapped(cur.S, ta), Lambda_fit_factor=mapped(fit, t),
+            Lambda_real_factor=mapped(cur.Lb, t), L=t @ cur.L @ ta.T,
+            Sigma_factor=mapped(cur.Sigma, t), J_factor=mapped(self.RJ, ta),
+            Jt_factor=mapped(self.RJt, ta), B=self.stored.B @ ta.T, transition=transition,
+            transition_adjoint=adjoint, entities=entities)
 
     # -----------------------------------------------------------------------------------------
 
     def run(self) -> Run:
-        """Process the whole tape (seed Figure C-4) and return the outputs."""
+        """Process the whole tape (seed Figure C-4) and return the outputs.
+
+        BLAS runs on one thread meanwhile (``threadpoolctl``): the factors are n_o x n_o,
+        where threads cost more than they gain (a QR merge of two 50 x 50 triangles takes
+        30 µs on one thread and up to 16 ms on two), and the rounding then does not depend on
+        the number of threads either.
+        """
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._run()
+
+    def _run(self) -> Run:
         plan = self.plan
         prints = set(plan.print_k) if plan.print_statistics else set()
         recycles = {0, *plan.recycle_k}
@@ -423,10 +546,11 @@ class Processor:
                 self._read(k + 1)
             if self.progress is not None:
                 self.progress(k, self.n_it)
-        self._flush()  # read the tail too: every record's matrices are checked once
+        self._flush()  # read the tail too: every record's factors are checked once
         return Run(tuple(self.blocks), tuple(self.history),
                    tuple(self.acc.labels(plan.history.tau, plan.history.rho, self.miss_names)),
-                   tuple(self.recycles), self.S0_fit, self.Lambda0_real, tuple(self.sources))
+                   tuple(self.recycles), self.S0_fit_factor, self.Lambda0_real_factor,
+                   tuple(self.sources))
 
 
 def process(data: TrackingData, plan: Plan, *, source: str = "deck",

@@ -38,7 +38,8 @@ def build_t32(run: Run, plan: Plan, header, provenance: dict[str, str]) -> T32:
                tuple(header.miss.unit),
                {SYSTEMS[c]: sy.chain_matrix(c) for c in (3, 4, 6)},
                {SYSTEMS[c]: tuple(sy.system_names(c)) for c in (3, 4, 6)},
-               _partitions(plan, miss_names), run.S0_fit, run.Lambda0_real, run.recycles,
+               _partitions(plan, miss_names), run.S0_fit_factor, run.Lambda0_real_factor,
+               run.recycles,
                provenance)
 
 

@@ -218,28 +218,15 @@ def test_the_eliminated_rows_carry_the_a_priori_through_k_c(processed) -> None:
     np.testing.assert_allclose(fit.matrix[np.ix_([10, 14], [10, 14])], 1e-12, rtol=ROUNDING)
 
 
-def _zero_scale(proc: Processor, run: Run, side) -> np.ndarray:
-    """Per-row size of the terms of a covariance on a τ = 0 system partition:
-    diag(|X| |Λ̄₀| |X|ᵀ) with Λ̄₀ the real a priori; 0 elsewhere (a variance must be >= 0).
-
-    Rows held fixed by a constraint (c2, r2) have a variance that is exactly 0 and is
-    computed as a difference of terms of this size: it comes out as ±ε times it.
-    """
-    if side.tau != 0:
-        _, t, h = proc.plan.systems.bounds(side.rho)
-        return np.zeros(h - t)
-    x = np.abs(proc.acc.partials(side.mu, 0, side.rho))
-    return np.einsum("ij,jk,ik->i", x, np.abs(run.Lambda0_real), x)
-
-
-def _is_psd(cov: np.ndarray, zero: np.ndarray) -> bool:
-    """Symmetric positive semi-definite to rounding: no variance below -ROUNDING × its
-    terms, and the correlation matrix (rows of zero variance left unscaled) PSD."""
+def _is_psd(cov: np.ndarray) -> bool:
+    """Every variance >= 0 exactly (a Gram matrix of a factor: the square-root form
+    guarantees it, where the normal-matrix form let held-fixed rows round to ±ε), and the
+    correlation matrix (rows of zero variance left unscaled) PSD to rounding."""
     var = np.diagonal(cov)
-    if np.any(var < -ROUNDING * zero):
+    if np.any(var < 0):
         return False
-    d = np.sqrt(np.clip(var, 0.0, None))
-    scale = np.where(var > ROUNDING * zero, d, 1.0)
+    d = np.sqrt(var)
+    scale = np.where(var > 0, d, 1.0)
     return float(np.linalg.eigvalsh(cov / np.outer(scale, scale))[0]) >= -PSD_ROUNDING
 
 
@@ -251,8 +238,7 @@ def test_every_printed_covariance_is_symmetric_and_positive_semi_definite(proces
             cmd = ent.command
             if cmd.is_covariance and cmd.rows == cmd.cols:
                 assert np.array_equal(ent.matrix, ent.matrix.T), (block.k, cmd.seed())
-                zero = _zero_scale(proc, run, cmd.rows)
-                assert _is_psd(ent.matrix, zero), (block.k, cmd.seed())
+                assert _is_psd(ent.matrix), (block.k, cmd.seed())
                 checked += 1
     assert checked == 6 * 15  # 15 square covariances at each of the 6 print times
 

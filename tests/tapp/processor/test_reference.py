@@ -1,0 +1,168 @@
+"""TAPP III on the deep-space tape against 40-digit arithmetic, and its stability.
+
+The deep-space study (``scenarios/deep_space.toml``, 30 days of DSN tracking of a lunar
+transfer, with ``scenarios/tapp3_deep_space.toml``: GM of the Moon held fixed in the fit
+world, white-noise weights against biased and correlated real noise, recycles at days 1-3,
+epoch changes at the periapsis and at day 15) is the ill-conditioned case of the project:
+the scaled fit normal matrices reach condition numbers of ~1e12, so the normal-matrix form
+held 2.5-3.5 digits of the real-world covariances at the correction times.
+
+The reference (:mod:`tests.tapp.processor.reference`) evaluates the same regression in
+40-digit arithmetic from the tape's factors taken as exact. Every printed covariance and every
+T32 recycle covariance must agree with it within :data:`SCALED_1E9` on the scale
+√(C_ii C_jj), and the accuracy each entity claims (``digits``) must not exceed what the
+comparison shows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+from tapp.processor.deck import Deck, bind
+from tapp.processor.printout import closure
+from tapp.processor.sequencing import process
+from tapp.schema import validate
+from tapp.tape.t13 import T13, memory_pairs
+from tapp.tomlfile import read_toml
+from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.simulate import simulate
+from tests.tapp.guidance.helpers import SCENARIOS
+from tests.tapp.processor.helpers import scaled_err
+from tests.tapp.processor.reference import reference
+
+#: The issue's bound on every covariance entry, relative to √(C_ii C_jj).
+SCALED_1E9 = 1e-9
+#: Largest |Σ source variances − total| / total of an error budget (the issue's bound).
+BUDGET = 1e-10
+#: Relative size of the random perturbation of every factor entry in the stability test.
+PERTURBATION = 1e-15
+#: How far the processor's response to that perturbation may depart from the exact one.
+STABLE = 5e-10
+#: The exact response itself, as measured over six seeds (1.4e-9 at most): the data's own
+#: conditioning, checked so that a change of the scenario that worsens it is seen.
+DATA_CONDITIONING = 3e-9
+
+
+@lru_cache(maxsize=1)
+def _tape() -> T13:
+    return simulate(parse_scenario(read_toml(SCENARIOS / "deep_space.toml"),
+                                   "deep_space.toml")).tape
+
+
+@lru_cache(maxsize=1)
+def _plan():
+    tape = _tape()
+    deck = read_toml(SCENARIOS / "tapp3_deep_space.toml")
+    return bind(validate(Deck, deck, "deck.toml"), memory_pairs(tape).header, "deck.toml")
+
+
+def _run(tape: T13):
+    return process(memory_pairs(tape), _plan(), source="deck.toml")
+
+
+def _covariances(run):
+    """{(k, command): (matrix, digits)} of the printed covariances of a run."""
+    return {(b.k, e.command): (e.matrix, e.digits) for b in run.blocks if b.kind == "print"
+            for e in b.entities if e.command.is_covariance}
+
+
+def _scaled(a: np.ndarray, b: np.ndarray) -> float:
+    return 0.0 if b.size == 0 else scaled_err(a, b)
+
+
+@pytest.fixture(scope="module")
+def runs():
+    tape = _tape()
+    return _run(tape), reference(tape, _plan())
+
+
+def test_every_printed_covariance_is_within_1e_9_of_40_digit_arithmetic(runs):
+    run, ref = runs
+    got = _covariances(run)
+    assert len(ref.prints) == len(got) == 7 * 5   # 7 print times (k = 0 too) x 5 covariances
+    worst = max(_scaled(got[key][0], value) for key, value in ref.prints.items())
+    assert worst < SCALED_1E9
+
+
+def test_every_t32_recycle_covariance_is_within_1e_9_of_40_digit_arithmetic(runs):
+    run, ref = runs
+    assert sorted(ref.recycles) == [rc.k for rc in run.recycles] == [1, 2, 3]
+    for rc in run.recycles:
+        for name, value in ref.recycles[rc.k].items():
+            assert _scaled(getattr(rc, name), value) < SCALED_1E9, (rc.k, name)
+
+
+def test_no_entity_claims_more_digits_than_it_holds(runs):
+    """The claimed error 10^-digits bounds the measured one; and the claims are not vacuous:
+    the a priori entities claim at least 14 digits, every other at least 9."""
+    run, ref = runs
+    got = _covariances(run)
+    for key, value in ref.prints.items():
+        matrix, digits = got[key]
+        error = _scaled(matrix, value)
+        assert error <= 10.0 ** -digits, (key, error, digits)
+        assert digits >= (14 if key[0] == 0 else 9), (key, digits)
+
+
+def test_every_error_budget_closes_to_1e_10_of_its_variance(runs):
+    """The sources' variances (a priori groups, white, bias and correlated noise per station)
+    add up to the printed total: measured 5e-11 at worst (the normal-matrix form closed to
+    ~1e-3 here, ε times the squared condition number)."""
+    run, _ = runs
+    budgets = [e.budget for b in run.blocks for e in b.entities if e.budget is not None]
+    assert len(budgets) == 7 * 3   # cov-real p, m and rq at each of the 7 print times
+    for budget in budgets:
+        assert closure(budget) < BUDGET
+        assert np.all(budget.variances[len(budget.sources) - 9:] >= 0)  # noise: Gram matrices
+
+
+def test_the_reference_keeps_its_digits_at_higher_precision(runs):
+    """The 40-digit reference against itself at 60 digits: the normal-matrix form loses up to
+    twice the logarithm of the condition number, and must keep well over 9 digits here."""
+    _, ref = runs
+    finer = reference(_tape(), _plan(), dps=60)
+    worst = max(_scaled(value, finer.prints[key]) for key, value in ref.prints.items())
+    assert worst < 1e-14
+
+
+@pytest.mark.parametrize("seed", [1, 2026])
+def test_a_1e_15_perturbation_moves_the_covariances_as_the_exact_arithmetic_does(runs, seed):
+    """Perturb every entry of the tape's factors R, R̃ (and parts) by a relative 1e-15 at
+    random (several ulps: more than another BLAS kernel or build leaves) and run both the
+    processor and the 40-digit reference on the perturbed tape.
+
+    The exact answer itself moves: by up to 1.4e-9 of its scale (the real-world variance of
+    vy at day 2; seeds 1 to 5 and 2026 give 1.6e-10 to 1.4e-9): that is the conditioning of
+    the data, which no algorithm changes, and it sits at the issue's 1e-9. What the test
+    holds the processor to is stability: its covariances move as the exact ones do, to within
+    :data:`STABLE` (measured 3e-11 to 2.7e-10 over those seeds; its agreement with the
+    reference is 1.8e-10). The normal-matrix form moved the day-2 answer by 1.5e-2 for a 1e-13
+    perturbation of AᵀWA and AᵀWMWA, where the exact answer moves by ~1e-7.
+    """
+    run, ref = runs
+    tape = _tape()
+    rng = np.random.default_rng(seed)
+
+    def nudge(m: np.ndarray) -> np.ndarray:
+        return m * (1.0 + PERTURBATION * rng.standard_normal(m.shape))
+
+    pairs = dataclasses.replace(tape.pairs, R=nudge(tape.pairs.R), Rt=nudge(tape.pairs.Rt),
+                                Rt_parts=nudge(tape.pairs.Rt_parts))
+    perturbed = dataclasses.replace(tape, pairs=pairs)
+    moved, moved_ref = _covariances(_run(perturbed)), reference(perturbed, _plan()).prints
+    base = _covariances(run)
+    worst = exact = 0.0
+    for key, value in ref.prints.items():
+        d = np.sqrt(np.abs(np.diag(value)))
+        scale = np.outer(d, d)
+        scale[scale == 0] = 1.0
+        exact_move = (moved_ref[key] - value) / scale
+        worst = max(worst, float(np.max(np.abs((moved[key][0] - base[key][0]) / scale
+                                               - exact_move))))
+        exact = max(exact, float(np.max(np.abs(exact_move))))
+    assert worst < STABLE
+    assert exact < DATA_CONDITIONING
