@@ -40,7 +40,7 @@ from pydantic import Field, model_validator
 from tapp.errors import InputError
 from tapp.guidance.execution import ExecutionErrors
 from tapp.guidance.model import Problem, build_problem
-from tapp.guidance.navigation import fit_world, inflate_after_manoeuvres
+from tapp.guidance.navigation import inflate_after_manoeuvres
 from tapp.guidance.statistics import BPLANE, FLIGHT_TIME, Corridor, bplane_rows, flight_time_row
 from tapp.schema import Invalid, Schema, Unique, load
 from tapp.tape.t32 import T32
@@ -152,7 +152,7 @@ def bind(guide: GuideFile, t32: T32, source: str, tape_source: str = "T32") -> S
                             tape_source=tape_source, guide_source=source)
     navigation = guide.navigation.after_manoeuvre
     if navigation == "inflate":
-        problem = inflate_after_manoeuvres(problem, fit_world(t32))
+        problem = inflate_after_manoeuvres(problem, t32)
     return Study(problem, _corridor(guide.corridor, t32, source), navigation, guide.title)
 
 

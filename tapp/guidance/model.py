@@ -1,8 +1,9 @@
 """The linear guidance problem of a T32 tape: per recycle, the maps the samples go through.
 
 :func:`build_problem` takes from the tape, for every recycle up to the last manoeuvre, the
-transition T_k = ∂x^k/∂x^{k_prev}, the estimator's L_k and Σ_k = Λ'J̃Λ' (all in x^k), and at
-the manoeuvre recycles the targeted rows B_t of B_k = ∂m/∂x^k with the guidance gain
+transition T_k = ∂x^k/∂x^{k_prev}, the estimator's L_k and a factor of Σ_k = Λ'J̃Λ' (all in
+x^k; the T32 tape carries Σ_k and Λ̄⁰ as factors, so they are positive semi-definite as read),
+and at the manoeuvre recycles the targeted rows B_t of B_k = ∂m/∂x^k with the guidance gain
 
 .. math::
 
@@ -56,10 +57,8 @@ class Step:
     t_s : t_k, s from the tape epoch.
     transition : (n_o, n_o) T_k = ∂x^k/∂x^{k_prev}.
     LT : (n_o, n_o) L_k T_k, with L_k = ∂(a posteriori error)/∂(a priori error) in x^k.
-    Sigma : (n_o, n_o) Σ_k = Λ'J̃Λ', u_a u_b: the positive semi-definite part of the tape's
-        (which is PSD only to the rounding of that product: its scaled eigenvalues reach
-        −2e-4 on the deep-space tape), the covariance the samples are drawn from.
-    sigma_factor : (n_o, n_o) F with F Fᵀ = Σ_k.
+    sigma_factor : (n_o, m) F with F Fᵀ = Σ_k = Λ'J̃Λ', u_a u_b: the covariance of the
+        interval's tracking noise in the estimate, which the samples are drawn from.
     correction : the manoeuvre at this recycle, None for an estimate update only.
     """
 
@@ -67,9 +66,13 @@ class Step:
     t_s: float
     transition: np.ndarray
     LT: np.ndarray
-    Sigma: np.ndarray
     sigma_factor: np.ndarray
     correction: Correction | None
+
+    @property
+    def Sigma(self) -> np.ndarray:
+        """Σ_k = F Fᵀ (n_o, n_o), u_a u_b."""
+        return self.sigma_factor @ self.sigma_factor.T
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -79,8 +82,8 @@ class Problem:
     Attributes
     ----------
     velocity : positions of vx, vy, vz in x^k.
-    Lambda0 : (n_o, n_o) Λ̄⁰, real-world a priori covariance at injection, in x^0.
-    lambda0_factor : (n_o, n_o) F with F Fᵀ = Λ̄⁰.
+    lambda0_factor : (n_o, n_o) F with F Fᵀ = Λ̄⁰, the real-world a priori covariance at
+        injection, in x^0.
     steps : the recycles up to the last manoeuvre (later ones change no outcome).
     B_final : (n_m, n_o) B of the last manoeuvre's recycle: the final miss is B_final d.
     miss_name, miss_unit : the n_m miss components.
@@ -89,7 +92,6 @@ class Problem:
     """
 
     velocity: tuple[int, int, int]
-    Lambda0: np.ndarray
     lambda0_factor: np.ndarray
     steps: tuple[Step, ...]
     B_final: np.ndarray
@@ -101,7 +103,12 @@ class Problem:
     @property
     def n_o(self) -> int:
         """Number of parameters."""
-        return self.Lambda0.shape[0]
+        return self.lambda0_factor.shape[0]
+
+    @property
+    def Lambda0(self) -> np.ndarray:
+        """Λ̄⁰ = F Fᵀ (n_o, n_o), u_a u_b."""
+        return self.lambda0_factor @ self.lambda0_factor.T
 
     @property
     def manoeuvres(self) -> tuple[Step, ...]:
@@ -112,19 +119,6 @@ class Problem:
     def n_normals(self) -> int:
         """Standard normals one sample draws: Λ̄⁰, then per step Σ_k and any manoeuvre."""
         return self.n_o * (1 + len(self.steps)) + NORMALS_PER_MANOEUVRE * len(self.manoeuvres)
-
-
-def psd_factor(C: np.ndarray) -> np.ndarray:
-    """Return F (n, n) with F Fᵀ = C for a symmetric positive semi-definite C.
-
-    C is scaled to unit diagonal first (its rows carry different units: km, km/s, rad), so
-    the eigen-decomposition is accurate for every parameter; eigenvalues below zero (rounding)
-    are set to zero. Parameters of zero variance get zero rows.
-    """
-    d = np.sqrt(np.diagonal(C).copy())
-    d[d == 0] = 1.0
-    w, v = np.linalg.eigh(C / np.outer(d, d))
-    return d[:, None] * v * np.sqrt(np.maximum(w, 0.0))
 
 
 def _velocity(t32: T32, source: str) -> tuple[int, int, int]:
@@ -207,13 +201,11 @@ def build_problem(t32: T32, targets: tuple[str, ...], manoeuvres: tuple[int, ...
         if rc.number in manoeuvres:
             bt = rc.B[rows]
             correction = Correction(bt, _gain(bt, velocity, rc.number, targets, guide_source))
-        factor = psd_factor(rc.Sigma)
         steps.append(Step(rc.number, rc.t_s, rc.transition, rc.L @ rc.transition,
-                          factor @ factor.T, factor, correction))
-    return Problem(velocity, t32.Lambda0_real, psd_factor(t32.Lambda0_real), tuple(steps),
+                          rc.Sigma_factor.T, correction))
+    return Problem(velocity, t32.Lambda0_real_factor.T, tuple(steps),
                    t32.recycles[numbers.index(last)].B, miss, t32.miss_unit, tuple(rows),
                    errors)
 
 
-__all__ = ["CARTESIAN_UNITS", "MIN_RCOND", "Correction", "Problem", "Step", "build_problem",
-           "psd_factor"]
+__all__ = ["CARTESIAN_UNITS", "MIN_RCOND", "Correction", "Problem", "Step", "build_problem"]

@@ -1,5 +1,5 @@
-"""A navigation that knows its manoeuvres: the fit-world a priori after a manoeuvre gains the
-execution-error covariance, and the regression is re-run from the tape's normal matrices.
+"""A navigation that knows its manoeuvres: after a manoeuvre, the fit world's a priori gains
+the execution-error covariance, and the regression is re-run on the tape's data factors.
 
 The tape's L_k and Σ_k (:mod:`tapp.guidance`, step 2) belong to an estimator whose a priori at
 t_k is its previous estimate as TAPP III formed it: it has never heard of a manoeuvre. After
@@ -11,115 +11,90 @@ the deep-space tape a second correction then leaves a worse miss than the first 
 With ``after_manoeuvre = "inflate"`` the navigation adds the manoeuvre's execution-error
 covariance E[εεᵀ] (:func:`tapp.guidance.execution.error_second_moment`, over the Δv
 covariance the linear analysis predicts: the same for every sample, so the maps stay linear)
-to the velocity rows of its a posteriori covariance Λ' before mapping it to the next recycle,
-and forms L_k, Λ'_k and Σ_k again for that recycle and every later one from the tape's J_k and
-J̃_k (seed TAPP III §2.5 with an a priori covariance, in x^k):
+to its a posteriori covariance in the velocity directions, maps it to the next recycle, and
+forms L_k, Σ_k again there and at every later recycle with TAPP III's own regression
+(:func:`tapp.estimation.regression`) on the tape's square-root information R_J, R̃ of the
+interval (T32 version 2 carries them).
+
+Everything stays in square-root information form (Bierman, *Factorization Methods for
+Discrete Sequential Estimation*, 1977, ch. VI). The navigation carries the factor R of its
+extended a posteriori normal matrix S' (the tape's at the first manoeuvre). Adding the
+covariance H Hᵀ = E[εεᵀ] on the velocity, x ← x + S_v H w with w ~ N(0, I), is the process
+noise step of the square-root information filter:
 
 .. math::
 
-    C &= T_k\\,(\\Lambda'_{k-1} + S\\,E[\\varepsilon\\varepsilon^T]\\,S^T)\\,T_k^T,
-        \\qquad C_{11} = R_1 C R_1^T = U U^T \\\\
-    {}^1\\Lambda^{11} &= (C_{11}^{-1} + E_1^T J E_1)^{-1}
-        = U\\,(I + U^T E_1^T J E_1 U)^{-1}\\,U^T \\\\
-    \\Lambda'_k &= E_1\\,{}^1\\Lambda^{11} E_1^T, \\quad L_k = I - \\Lambda'_k J_k, \\quad
-    \\Sigma_k = \\Lambda'_k \\tilde J_k \\Lambda'_k = (\\Lambda'_k F)(\\Lambda'_k F)^T
+    Q^T \\begin{bmatrix} I & 0 \\\\ -R\\,S_v H & R \\end{bmatrix}
+    = \\begin{bmatrix} * & * \\\\ 0 & R^+ \\end{bmatrix},
 
-with E₁ = ∂x/∂x^{f1} and R₁ = ∂x^{f1}/∂x from the tape's fit-system chain (``systems/fit``,
-partition f1), U and F (F Fᵀ = J̃_k) positive semi-definite factors. The middle form needs no
-inverse of the (ill-conditioned) a priori and factors a matrix whose eigenvalues are >= 1;
-Σ_k is formed from factors, positive semi-definite by construction. Without a manoeuvre the
-same equations give back the tape's L_k, Λ'_k and Σ_k (TAPP III forms them in information
-form from the mapped normal matrix): checked in the tests.
+R⁺ the information factor of x after the noise (w integrated out), with no inverse of the
+(ill-conditioned) a priori and no subtraction. Mapping to the next recycle's representation
+is R ← R T_k⁻¹ = R (T_k*)ᵀ with the tape's adjoint transition T_k* (exact: the orbit link's
+symplectic adjoint). Without a manoeuvre these steps give back the tape's L_k and Σ_k (the
+same regression on the same factors): checked in the tests.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 
 import numpy as np
-from scipy import linalg
 
+from tapp.estimation.factors import psd_factor, triangularize
+from tapp.estimation.regression import FitSystem, regression
 from tapp.guidance.execution import error_second_moment
 from tapp.guidance.linear import initial, manoeuvre, recycle
-from tapp.guidance.model import Problem, psd_factor
+from tapp.guidance.model import Problem
 from tapp.tape.t32 import T32
 
 
-@dataclass(frozen=True, slots=True, eq=False)
-class FitWorld:
-    """The fit world of a tape, per recycle in x^k.
-
-    Attributes
-    ----------
-    E1 : (n_o, n_f1) ∂x/∂x^{f1}, the fit-world constraint matrix.
-    R1 : (n_f1, n_o) ∂x^{f1}/∂x, the rows f1 of the fit-system chain.
-    J, Jt : per recycle, (n_o, n_o) AᵀWA and AᵀWMWA of its interval.
-    Lambda_fit : per recycle, (n_o, n_o) the tape's Λ'.
-    """
-
-    E1: np.ndarray
-    R1: np.ndarray
-    J: tuple[np.ndarray, ...]
-    Jt: tuple[np.ndarray, ...]
-    Lambda_fit: tuple[np.ndarray, ...]
-
-
-@dataclass(frozen=True, slots=True, eq=False)
-class Refit:
-    """The regression of one recycle (module docstring): L_k, Λ'_k and F_Σ with
-    F_Σ F_Σᵀ = Σ_k."""
-
-    L: np.ndarray
-    Lambda_fit: np.ndarray
-    sigma_factor: np.ndarray
-
-
-def fit_world(t32: T32) -> FitWorld:
-    """The fit world of a tape (its fit chain, partition f1 and recycle matrices)."""
+def fit_system(t32: T32) -> FitSystem:
+    """The fit world of a tape: D = its fit-system chain ∂x^f/∂x, E = D⁻¹, n_1 = |f1|."""
     chain = t32.systems["fit"]
     f1 = t32.partition("f1")
-    E1 = linalg.solve(chain, np.eye(chain.shape[0]))[:, f1.tail:f1.head]
-    rc = t32.recycles
-    return FitWorld(E1, chain[f1.tail:f1.head], tuple(r.J for r in rc),
-                    tuple(r.Jt for r in rc), tuple(r.Lambda_fit for r in rc))
+    return FitSystem(chain, np.linalg.solve(chain, np.eye(chain.shape[0])), f1.head - f1.tail)
 
 
-def refit(C: np.ndarray, fit: FitWorld, J: np.ndarray, Jt: np.ndarray) -> Refit:
-    """The fit-world regression of an interval with a priori covariance ``C`` (module
-    docstring); C, J, Jt (n_o, n_o) in the same representation."""
-    U = psd_factor(fit.R1 @ C @ fit.R1.T)
-    UtJU = U.T @ (fit.E1.T @ J @ fit.E1) @ U
-    M = np.eye(U.shape[1]) + 0.5 * (UtJU + UtJU.T)
-    lam11 = U @ linalg.cho_solve(linalg.cho_factor(M), U.T)
-    lam = fit.E1 @ (0.5 * (lam11 + lam11.T)) @ fit.E1.T
-    return Refit(np.eye(J.shape[0]) - lam @ J, lam, lam @ psd_factor(Jt))
+def add_velocity_noise(R: np.ndarray, velocity: tuple[int, ...], H: np.ndarray) -> np.ndarray:
+    """Return R⁺ (n_o, n_o), the information factor after x ← x + S_v H w (module docstring).
+
+    Parameters
+    ----------
+    R : (m, n_o) information factor of x.
+    velocity : positions of the velocity in x (the columns S_v).
+    H : (3, r) factor of the added velocity covariance, H Hᵀ.
+    """
+    n_o, r = R.shape[1], H.shape[1]
+    array = np.zeros((r + R.shape[0], r + n_o))
+    array[:r, :r] = np.eye(r)
+    array[r:, :r] = -R[:, list(velocity)] @ H
+    array[r:, r:] = R
+    return triangularize(array)[r:, r:]
 
 
-def inflate_after_manoeuvres(problem: Problem, fit: FitWorld) -> Problem:
+def inflate_after_manoeuvres(problem: Problem, t32: T32) -> Problem:
     """The problem with L_k, Σ_k re-formed at every recycle after the first manoeuvre, the a
     priori after a manoeuvre holding its execution-error covariance (module docstring)."""
-    S = np.zeros((problem.n_o, 3))
-    S[list(problem.velocity), [0, 1, 2]] = 1.0
-    Z = initial(problem)
+    fit = fit_system(t32)
+    W = initial(problem)
     steps = []
-    prior = None  # the navigation's covariance after the previous recycle, once re-formed
-    for i, step in enumerate(problem.steps):
-        lam = fit.Lambda_fit[i]
-        if prior is not None:
-            T = step.transition
-            r = refit(T @ prior @ T.T, fit, fit.J[i], fit.Jt[i])
-            F = r.sigma_factor
-            step = dataclasses.replace(step, LT=r.L @ T, Sigma=F @ F.T, sigma_factor=F)
-            lam = r.Lambda_fit
-        Z = recycle(Z, step)
+    info = None  # the navigation's information factor after the previous recycle, once re-formed
+    for step, rc in zip(problem.steps, t32.recycles, strict=False):
+        S1 = rc.S_fit_factor
+        if info is not None:
+            reg = regression(fit, info @ rc.transition_adjoint.T, rc.J_factor, Rt=rc.Jt_factor)
+            step = dataclasses.replace(step, LT=reg.L @ step.transition,
+                                       sigma_factor=reg.K_sigma.T)
+            S1 = reg.R_S1
+        W = recycle(W, step)
         if step.correction is not None:
-            Z, P = manoeuvre(Z, step.correction, problem)
-            prior = lam + S @ error_second_moment(P, problem.errors) @ S.T
-        elif prior is not None:
-            prior = lam
+            W, P = manoeuvre(W, step.correction, problem)
+            H = psd_factor(error_second_moment(P, problem.errors)).T
+            info = add_velocity_noise(S1, problem.velocity, H)
+        elif info is not None:
+            info = S1
         steps.append(step)
     return dataclasses.replace(problem, steps=tuple(steps))
 
 
-__all__ = ["FitWorld", "Refit", "fit_world", "inflate_after_manoeuvres", "refit"]
+__all__ = ["add_velocity_noise", "fit_system", "inflate_after_manoeuvres"]

@@ -20,13 +20,15 @@ _DAY_S = 86400.0
 
 
 def recycle_sigma_table(content: dict) -> str:
-    """Markdown table of the miss σ, fit / real, at each recycle of a ``run_dict``."""
+    """Markdown table of the miss σ, fit / real, at each recycle of a ``run_dict``, with the
+    significant digits those covariances hold."""
     miss = content["history"]["miss"]
     rows = [[r["number"], r["k"], f"{r['t_s'] / _DAY_S:.3f}",
              *(f"{f:.4g} / {g:.4g}" for f, g in zip(r["miss_sigma_fit"], r["miss_sigma_real"],
-                                                     strict=True))]
+                                                     strict=True)), f"~{r['digits']:.1f}"]
             for r in content["recycles"]]
-    return table(["recycle", "k", "t (d)", *(f"σ {m} fit / real" for m in miss)], rows)
+    return table(["recycle", "k", "t (d)", *(f"σ {m} fit / real" for m in miss),
+                  "digits held"], rows)
 
 
 def _plots(folder: Path, run, header, guidance, title: str) -> list[Path]:

@@ -19,6 +19,14 @@ injection and the recycles (:class:`T32Recycle`), each with its matrices and the
 the recycle commands (:class:`T32Entity`). All n_o x n_o matrices of a recycle are in x^k,
 with k that recycle's record index.
 
+Version 2 carries every symmetric matrix (normal matrix or covariance) as its upper-triangular
+factor K, M = KᵀK (square-root information or covariance, as TAPP III computes them), so that
+TAPP II forms Σ, draws its samples and re-runs the regression without subtraction and without
+factoring a matrix that rounding has made indefinite; the matrices themselves are the
+properties of the same names (:attr:`T32Recycle.Sigma`). It also carries each transition's
+adjoint (inverse transpose), exact for the symplectic orbit block. Version 1 carried the
+matrices; its reader factors them (:mod:`tapp.tape.t32_hdf5`).
+
 :func:`validate` checks the dimensions and invariants of a tape; :func:`summary` and
 :func:`format_t32_summary` summarise it. NumPy only: the HDF5 layout, the writer and the
 reader are in :mod:`tapp.tape.t32_hdf5`.
@@ -31,23 +39,28 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from tapp.estimation.factors import gram
 from tapp.frames.time import Epoch
 from tapp.tape.checks import Checker
 from tapp.tape.t13 import TapeParameters, check_parameters, utc_at
 
 FORMAT = "T32"
-VERSION = 1
-SUPPORTED_VERSIONS = (1,)
+VERSION = 2
+SUPPORTED_VERSIONS = (1, 2)
 #: Systems a partition may belong to; the systems with a chain on the tape.
 SYSTEMS = ("standard", "common", "fit", "real", "miss")
 CHAINED = ("common", "fit", "real")
-#: Symmetric matrices of a recycle: (name, "normal" or "covariance", units).
+#: Symmetric matrices of a recycle: (name, "normal" or "covariance", units of the matrix).
+#: Version 2 stores the factor of each (``<name>_factor``, units the square roots).
 SYMMETRIC = (("S_fit", "normal", "1/(u_a u_b)"), ("Lambda_fit", "covariance", "u_a u_b"),
              ("Lambda_real", "covariance", "u_a u_b"), ("Sigma", "covariance", "u_a u_b"),
              ("J", "normal", "1/(u_a u_b)"), ("Jt", "normal", "1/(u_a u_b)"))
-#: Σ = Λ' J̃ Λ' is a covariance, but the variance of a parameter the data barely reach
-#: cancels to ~0 and its rounding can come out negative (−1.5e-9 Λ̄'_ii seen when a station
-#: is switched off); since Σ <= Λ̄' in exact arithmetic, Σ_ii down to −1e-6 Λ̄'_ii is rounding.
+#: Units of the factor of a normal matrix and of a covariance.
+FACTOR_UNITS = {"normal": "1/u_b", "covariance": "u_b"}
+#: Version 1 only (it carried Σ = Λ' J̃ Λ' formed as a product): the variance of a parameter
+#: the data barely reach cancels to ~0 and its rounding can come out negative (−1.5e-9 Λ̄'_ii
+#: seen when a station is switched off); since Σ <= Λ̄' in exact arithmetic, Σ_ii down to
+#: −1e-6 Λ̄'_ii is read as rounding.
 SIGMA_ROUNDING = 1e-6
 #: Provenance the writer stamps itself (a value given for these is replaced).
 STAMPED = ("tapp_version", "git_commit", "created_utc")
@@ -126,16 +139,24 @@ class T32Recycle:
     k, l, j : current, last recycle and program epoch T13 indices.
     t_s, t_l_s : t_k and t_l, s from the tape epoch.
     info : (6,) state at t_k, km, km/s.
-    S_fit : (n_o, n_o) S' fit-world normal matrix (extended), symmetric, 1/(u_a u_b).
-    Lambda_fit : (n_o, n_o) Λ' fit-world covariance, symmetric PSD, u_a u_b.
-    Lambda_real : (n_o, n_o) Λ̄' real-world covariance, symmetric PSD, u_a u_b.
+    S_fit_factor : (n_o, n_o) upper-triangular factor of S', the fit-world normal matrix
+        (extended), 1/u_b.
+    Lambda_fit_factor : (n_o, n_o) factor of Λ', the fit-world covariance, u_b.
+    Lambda_real_factor : (n_o, n_o) factor of Λ̄', the real-world covariance, u_b.
     L : (n_o, n_o) ∂(a posteriori error)/∂(a priori error at t_l), both in x^k.
-    Sigma : (n_o, n_o) Λ' J̃ Λ', this interval's tracking-noise covariance, symmetric.
-    J, Jt : (n_o, n_o) AᵀWA, AᵀWMWA from t_l to t_k in x^k, symmetric, 1/(u_a u_b).
+    Sigma_factor : (n_o, n_o) factor of Σ = Λ' J̃ Λ', this interval's tracking-noise
+        covariance, u_b.
+    J_factor, Jt_factor : (n_o, n_o) factors of AᵀWA, AᵀWMWA from t_l to t_k in x^k, 1/u_b.
     B : (n_m, n_o) ∂m/∂x^k.
     transition : (n_o, n_o) ∂x^k/∂x^{k_prev}, from the previous recycle's representation
         (the injection representation x^0 for the first).
+    transition_adjoint : (n_o, n_o) its inverse transposed, (∂x^{k_prev}/∂x^k)ᵀ: an
+        information factor R of x^{k_prev} maps to R T⁻¹ = R (adjoint)ᵀ.
     entities : the recycle command outputs, ω ascending.
+
+    The factors K (KᵀK = M, upper triangular, diagonal >= 0) are what the tape carries; the
+    matrices are the properties ``S_fit``, ``Lambda_fit``, ``Lambda_real``, ``Sigma``,
+    ``J``, ``Jt``.
     """
 
     number: int
@@ -145,16 +166,47 @@ class T32Recycle:
     t_s: float
     t_l_s: float
     info: np.ndarray
-    S_fit: np.ndarray
-    Lambda_fit: np.ndarray
-    Lambda_real: np.ndarray
+    S_fit_factor: np.ndarray
+    Lambda_fit_factor: np.ndarray
+    Lambda_real_factor: np.ndarray
     L: np.ndarray
-    Sigma: np.ndarray
-    J: np.ndarray
-    Jt: np.ndarray
+    Sigma_factor: np.ndarray
+    J_factor: np.ndarray
+    Jt_factor: np.ndarray
     B: np.ndarray
     transition: np.ndarray
+    transition_adjoint: np.ndarray
     entities: tuple[T32Entity, ...]
+
+    @property
+    def S_fit(self) -> np.ndarray:
+        """S' (n_o, n_o), 1/(u_a u_b)."""
+        return gram(self.S_fit_factor)
+
+    @property
+    def Lambda_fit(self) -> np.ndarray:
+        """Λ' (n_o, n_o), u_a u_b."""
+        return gram(self.Lambda_fit_factor)
+
+    @property
+    def Lambda_real(self) -> np.ndarray:
+        """Λ̄' (n_o, n_o), u_a u_b."""
+        return gram(self.Lambda_real_factor)
+
+    @property
+    def Sigma(self) -> np.ndarray:
+        """Σ = Λ'J̃Λ' (n_o, n_o), u_a u_b."""
+        return gram(self.Sigma_factor)
+
+    @property
+    def J(self) -> np.ndarray:
+        """AᵀWA of the interval (n_o, n_o), 1/(u_a u_b)."""
+        return gram(self.J_factor)
+
+    @property
+    def Jt(self) -> np.ndarray:
+        """AᵀWMWA of the interval (n_o, n_o), 1/(u_a u_b)."""
+        return gram(self.Jt_factor)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -171,8 +223,10 @@ class T32:
     systems : "common", "fit", "real" -> (n_o, n_o) system chain ∂x^s/∂x (q links only).
     system_names : "common", "fit", "real" -> (n_o) row names of each system vector.
     partitions : the set partitions (Table B-4).
-    S0_fit : (n_o, n_o) fit-world a priori normal matrix at injection in x^0.
-    Lambda0_real : (n_o, n_o) real-world a priori covariance at injection in x^0.
+    S0_fit_factor : (n_o, n_o) upper-triangular factor of S⁰, the fit-world a priori normal
+        matrix at injection in x^0 (property ``S0_fit``).
+    Lambda0_real_factor : (n_o, n_o) factor of Λ̄⁰, the real-world a priori covariance at
+        injection in x^0 (property ``Lambda0_real``).
     recycles : the recycles, numbers 1..n_r.
     provenance : text describing how the tape was made (e.g. deck (JSON), deck_source,
         t13_source, t13_iden; plus tapp_version, git_commit, created_utc on reading).
@@ -187,10 +241,20 @@ class T32:
     systems: dict[str, np.ndarray]
     system_names: dict[str, tuple[str, ...]]
     partitions: tuple[T32Partition, ...]
-    S0_fit: np.ndarray
-    Lambda0_real: np.ndarray
+    S0_fit_factor: np.ndarray
+    Lambda0_real_factor: np.ndarray
     recycles: tuple[T32Recycle, ...]
     provenance: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def S0_fit(self) -> np.ndarray:
+        """S⁰ (n_o, n_o), 1/(u_a u_b)."""
+        return gram(self.S0_fit_factor)
+
+    @property
+    def Lambda0_real(self) -> np.ndarray:
+        """Λ̄⁰ (n_o, n_o), u_a u_b."""
+        return gram(self.Lambda0_real_factor)
 
     @property
     def n_o(self) -> int:
@@ -234,10 +298,15 @@ def _matrix(c: Checker, name: str, m: np.ndarray, shape: tuple[int, ...]) -> Non
     c.finite(name, m)
 
 
-def _symmetric(c: Checker, name: str, m: np.ndarray, n: int, what: str,
-               floor: np.ndarray | None = None) -> None:
+def _factor(c: Checker, name: str, m: np.ndarray, n: int) -> None:
+    """An (n, n) upper-triangular factor, finite, with a non-negative diagonal."""
     _matrix(c, name, m, (n, n))
-    c.symmetric(name, m, what=f"{what} matrix", label=None, floor=floor)
+    if np.any(np.tril(m, -1) != 0):
+        c.fail(name, "an upper-triangular factor (zero below the diagonal)")
+    diag = np.diagonal(m)
+    if np.any(diag < 0):
+        row = int(np.argmax(diag < 0))
+        c.fail(name, "a factor with a non-negative diagonal", f"{diag[row]:.3g} in row {row}")
 
 
 def validate(t32: T32, source: str = "T32") -> None:
@@ -246,8 +315,8 @@ def validate(t32: T32, source: str = "T32") -> None:
     Checks: n_p in 1..n_o, parameter and miss lists of matching lengths; the three system
     chains (n_o, n_o) finite with n_o row names; partitions uniquely named, in a known
     system, 0 <= tail <= head <= the system's length, their names those of the system's
-    rows; the a priori and every recycle's symmetric matrices (n_o, n_o), finite, symmetric
-    (relative asymmetry <= 1e-12) with a non-negative diagonal; recycle numbers 1..n_r, k
+    rows; the factors of the a priori and of every recycle's symmetric matrices (n_o, n_o),
+    finite, upper triangular with a non-negative diagonal; recycle numbers 1..n_r, k
     strictly ascending, 0 <= l < k with l_i = k_{i-1}, 0 <= j < k, 0 <= t_l < t_k with
     t_l of a recycle the t_k of the one before; the other matrices of the right shapes and
     finite; entity numbers ω >= 1 ascending, matrices (len(rows), len(cols)) and finite;
@@ -287,8 +356,8 @@ def validate(t32: T32, source: str = "T32") -> None:
                                              f"{p.system} system for {p.name}: "
                                              f"{', '.join(expected)}", ", ".join(p.names))
 
-    _symmetric(c, "apriori/S0_fit", t32.S0_fit, n_o, "normal")
-    _symmetric(c, "apriori/Lambda0_real", t32.Lambda0_real, n_o, "covariance")
+    _factor(c, "apriori/S0_fit_factor", t32.S0_fit_factor, n_o)
+    _factor(c, "apriori/Lambda0_real_factor", t32.Lambda0_real_factor, n_o)
 
     prev: T32Recycle | None = None
     for i, rc in enumerate(t32.recycles):
@@ -314,12 +383,9 @@ def validate(t32: T32, source: str = "T32") -> None:
                                      "before", f"t_l = {rc.t_l_s}, t_k = {rc.t_s} in recycle "
                                                f"{rc.number}")
         _matrix(c, "recycles/info", rc.info, (6,))
-        for name, what, _ in SYMMETRIC:
-            floor = None
-            if name == "Sigma" and np.shape(rc.Lambda_real) == (n_o, n_o):
-                floor = SIGMA_ROUNDING * np.clip(np.diagonal(rc.Lambda_real), 0.0, None)
-            _symmetric(c, f"{base}/{name}", getattr(rc, name), n_o, what, floor)
-        for name in ("L", "transition"):
+        for name, _, _ in SYMMETRIC:
+            _factor(c, f"{base}/{name}_factor", getattr(rc, f"{name}_factor"), n_o)
+        for name in ("L", "transition", "transition_adjoint"):
             _matrix(c, f"{base}/{name}", getattr(rc, name), (n_o, n_o))
         _matrix(c, f"{base}/B", rc.B, (n_m, n_o))
         omega = 0

@@ -3,10 +3,13 @@
 The tape in memory (its types, notation and validation) is :mod:`tapp.tape.t32`;
 DESIGN.md ("Tapes") fixes this form.
 
-HDF5 layout, version 1. Every dataset is chunked with a Fletcher-32 checksum and has a
+HDF5 layout, version 2. Every dataset is chunked with a Fletcher-32 checksum and has a
 ``units`` attribute; text is fixed-length UTF-8 (attributes too: h5py reads them as bytes);
-symmetric matrices are packed "TR" (upper triangle by rows, L = n_o(n_o+1)/2 entries; attrs
-``packing`` = "TR", ``order`` = n_o) as on the T13 tape (:mod:`tapp.tape.hdf5io`):
+every symmetric matrix M (normal matrix or covariance) is stored as its upper-triangular
+factor K, M = KᵀK, diagonal >= 0 (``<name>_factor``), packed "TR" (upper triangle by rows,
+L = n_o(n_o+1)/2 entries; attrs ``packing`` = "TR", ``order`` = n_o, ``form`` = "factor") as
+on the T13 tape (:mod:`tapp.tape.hdf5io`); units of a factor: 1/u_b (normal) or u_b
+(covariance):
 
 ===============================  ===============  =============================================
 path                             shape            content
@@ -37,29 +40,30 @@ partitions/names                 (Σ (head-tail),) the row names of every partit
                                                   head_i - tail_i entries after those of
                                                   partitions 0..i-1; they equal the system's
                                                   names tail..head-1
-apriori/S0_fit                   (L,)             S⁰ fit-world a priori normal matrix at
-                                                  injection, in x^0, 1/(u_a u_b)
-apriori/Lambda0_real             (L,)             Λ̄⁰ real-world a priori covariance at
-                                                  injection, in x^0, u_a u_b
+apriori/S0_fit_factor            (L,)             S⁰ fit-world a priori normal matrix at
+                                                  injection, in x^0
+apriori/Lambda0_real_factor      (L,)             Λ̄⁰ real-world a priori covariance at
+                                                  injection, in x^0
 recycles/number                  (n_r,) int       recycle number i' = 1..n_r
 recycles/k, l, j                 (n_r,) int       current, last recycle and program epoch
                                                   T13 indices (k ascending, l_1 < k_1,
                                                   l_i = k_{i-1})
 recycles/t_s, t_l_s              (n_r,) float     t_k and t_l, s from the tape epoch
 recycles/info                    (n_r, 6) float   state at t_k, km, km/s, EME2000
-recycles/<i'>/S_fit              (L,)             S' fit-world normal matrix (extended),
-                                                  1/(u_a u_b)
-recycles/<i'>/Lambda_fit         (L,)             Λ' fit-world covariance, u_a u_b
-recycles/<i'>/Lambda_real        (L,)             Λ̄' real-world covariance, u_a u_b
-recycles/<i'>/Sigma              (L,)             Λ' J̃ Λ', this interval's tracking-noise
-                                                  covariance, u_a u_b
-recycles/<i'>/J, Jt              (L,)             AᵀWA, AᵀWMWA from t_l to t_k, 1/(u_a u_b)
+recycles/<i'>/S_fit_factor       (L,)             S' fit-world normal matrix (extended)
+recycles/<i'>/Lambda_fit_factor  (L,)             Λ' fit-world covariance
+recycles/<i'>/Lambda_real_factor (L,)             Λ̄' real-world covariance
+recycles/<i'>/Sigma_factor       (L,)             Λ' J̃ Λ', this interval's tracking-noise
+                                                  covariance
+recycles/<i'>/J_factor,          (L,)             AᵀWA, AᵀWMWA from t_l to t_k
+Jt_factor
 recycles/<i'>/L                  (n_o, n_o)       ∂(a posteriori error)/∂(a priori error at
                                                   t_l), both in x^k, u_a/u_b
 recycles/<i'>/B                  (n_m, n_o)       ∂m/∂x^k, (miss unit)/u_b
 recycles/<i'>/transition         (n_o, n_o)       ∂x^k/∂x^{k_prev}, from the previous
                                                   recycle's representation (x^0 for the
                                                   first), u_a/u_b
+recycles/<i'>/transition_adjoint (n_o, n_o)       its inverse transposed, u_b/u_a
 recycles/<i'>/entities/<ω>/      (r, c)           output of recycle command ω (1-based) of
 matrix                                            Table B-5; attrs command (seed notation,
                                                   e.g. "I; 0,-,pk; 1,2,fp"), alias (readable)
@@ -67,10 +71,18 @@ recycles/<i'>/entities/<ω>/      (r,), (c,) str   row and column labels (parame
 rows, cols                                        with units)
 ===============================  ===============  =============================================
 
-All n_o x n_o matrices of a recycle are in x^k, with k that recycle's record index. The writer
-validates, then writes to a temporary file beside the target and renames it: no half-written
-tape. The reader rejects a wrong format or version, a missing dataset or attribute, a wrong
-shape, a non-finite value, a non-symmetric or negative-diagonal normal or covariance matrix, a
+All n_o x n_o matrices of a recycle are in x^k, with k that recycle's record index.
+
+Version 1 (still read, with a ``UserWarning`` that its precision is limited) stored the
+symmetric matrices themselves under the names without ``_factor`` and no adjoint; the reader
+checks them as that version did (symmetric, a non-negative diagonal, Σ_ii down to
+−1e-6 Λ̄'_ii as rounding), factors them (:func:`tapp.estimation.factors.psd_factor`: negative
+rounding set to zero) and inverts the transitions.
+
+The writer validates, then writes to a temporary file beside the target and renames it: no
+half-written tape. The reader rejects a wrong format or version, a missing dataset or
+attribute, a wrong shape, a non-finite value, a factor that is not upper triangular or has a
+negative diagonal (version 1: a non-symmetric or negative-diagonal matrix), a
 partition outside its system (or whose names are not the system's), recycle numbers other
 than 1..n_r, indices k not ascending, an entity matrix whose shape is not (rows, cols), a
 dataset without a checksum and a checksum mismatch, with a :class:`~tapp.errors.TapeError`
@@ -79,6 +91,7 @@ dataset without a checksum and a checksum mismatch, with a :class:`~tapp.errors.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -86,14 +99,17 @@ import h5py
 import numpy as np
 
 from tapp.atomic import atomic_write
+from tapp.estimation.factors import psd_factor
 from tapp.frames.time import Epoch
 from tapp.tape import hdf5io
 from tapp.tape.hdf5io import Reader
 from tapp.tape.t13 import TapeParameters
 from tapp.tape.t32 import (
     CHAINED,
+    FACTOR_UNITS,
     FORMAT,
     INFO_UNITS,
+    SIGMA_ROUNDING,
     STAMPED,
     SUPPORTED_VERSIONS,
     SYMMETRIC,
@@ -153,8 +169,10 @@ def _write(f: h5py.File, t32: T32) -> None:
     strings(g, "names", [n for p in parts for n in p.names])
 
     g = f.create_group("apriori")
-    hdf5io.write_symmetric(g, "S0_fit", t32.S0_fit, "1/(u_a u_b)")
-    hdf5io.write_symmetric(g, "Lambda0_real", t32.Lambda0_real, "u_a u_b")
+    hdf5io.write_packed(g, "S0_fit_factor", t32.S0_fit_factor, FACTOR_UNITS["normal"],
+                        form="factor")
+    hdf5io.write_packed(g, "Lambda0_real_factor", t32.Lambda0_real_factor,
+                        FACTOR_UNITS["covariance"], form="factor")
 
     g = f.create_group("recycles")
     rcs = t32.recycles
@@ -166,10 +184,12 @@ def _write(f: h5py.File, t32: T32) -> None:
             INFO_UNITS)
     for rc in rcs:
         rg = g.create_group(str(rc.number))
-        for name, _, units in SYMMETRIC:
-            hdf5io.write_symmetric(rg, name, getattr(rc, name), units, big=n_o > 100)
+        for name, what, _ in SYMMETRIC:
+            hdf5io.write_packed(rg, f"{name}_factor", getattr(rc, f"{name}_factor"),
+                                FACTOR_UNITS[what], form="factor", big=n_o > 100)
         numbers(rg, "L", rc.L, "u_a/u_b", big=n_o > 100)
         numbers(rg, "transition", rc.transition, "u_a/u_b", big=n_o > 100)
+        numbers(rg, "transition_adjoint", rc.transition_adjoint, "u_b/u_a", big=n_o > 100)
         numbers(rg, "B", rc.B, "miss/unit per parameters/unit")
         eg = rg.create_group("entities")
         for e in rc.entities:
@@ -242,6 +262,33 @@ def _entities(r: Reader, base: str) -> tuple[T32Entity, ...]:
     return tuple(out)
 
 
+def _v1_factor(r: Reader, name: str, n: int, floor: np.ndarray | None = None) -> np.ndarray:
+    """Version 1: a symmetric matrix checked as that version did, returned as its factor."""
+    m = r.symmetric(name, (), n)
+    r.check.finite(name, m)
+    r.check.symmetric(name, m, what="matrix", label=None, floor=floor)
+    return psd_factor(m)
+
+
+def _v1_recycle_factors(r: Reader, base: str, n: int) -> dict[str, np.ndarray]:
+    lam_real = r.symmetric(f"{base}/Lambda_real", (), n)
+    out = {}
+    for name, _, _ in SYMMETRIC:
+        floor = (SIGMA_ROUNDING * np.clip(np.diagonal(lam_real), 0.0, None)
+                 if name == "Sigma" else None)
+        out[name] = _v1_factor(r, f"{base}/{name}", n, floor)
+    return out
+
+
+def _v1_adjoint(r: Reader, name: str, transition: np.ndarray) -> np.ndarray:
+    """Version 1 has no adjoint: (T⁻¹)ᵀ by an LU solve."""
+    r.check.finite(name, transition)
+    try:
+        return np.linalg.solve(transition, np.eye(transition.shape[0])).T
+    except np.linalg.LinAlgError:
+        r.check.fail(name, "an invertible transition")
+
+
 def _read(r: Reader) -> T32:
     fmt = r.attr("format", str)
     if fmt != FORMAT:
@@ -249,6 +296,11 @@ def _read(r: Reader) -> T32:
     version = r.attr("version", int)
     if version not in SUPPORTED_VERSIONS:
         r.check.fail("attrs/version", f"a supported version {SUPPORTED_VERSIONS}", version)
+    if version == 1:
+        warnings.warn(f"{r.check.source}: T32 version 1 carries the covariances, not their "
+                      "factors: they hold only the digits their products kept (the real-world "
+                      "covariances of an ill-conditioned fit, a few); process the T13 tape "
+                      "again for version 2", UserWarning, stacklevel=4)
     dims = {name: r.attr(name, int) for name in ("n_o", "n_p", "n_m", "n_recycles",
                                                  "n_partitions")}
     n_o = dims["n_o"]
@@ -289,8 +341,12 @@ def _read(r: Reader) -> T32:
         T32Partition(p_name[i], p_system[i], int(tail[i]), int(head[i]),
                      flat[offsets[i]:offsets[i + 1]]) for i in range(n_part))
 
-    s0 = r.symmetric("apriori/S0_fit", (), n_o)
-    lam0 = r.symmetric("apriori/Lambda0_real", (), n_o)
+    if version == 1:
+        s0 = _v1_factor(r, "apriori/S0_fit", n_o)
+        lam0 = _v1_factor(r, "apriori/Lambda0_real", n_o)
+    else:
+        s0 = r.triangular("apriori/S0_fit_factor", (), n_o)
+        lam0 = r.triangular("apriori/Lambda0_real_factor", (), n_o)
 
     n_r = dims["n_recycles"]
     table = {name: r.read(f"recycles/{name}", "i") for name in ("number", "k", "l", "j")}
@@ -305,12 +361,19 @@ def _read(r: Reader) -> T32:
     recycles = []
     for i in range(n_r):
         base = f"recycles/{i + 1}"
-        sym = {name: r.symmetric(f"{base}/{name}", (), n_o) for name, _, _ in SYMMETRIC}
+        transition = r.read(f"{base}/transition")
+        if version == 1:
+            fac = _v1_recycle_factors(r, base, n_o)
+            adjoint = _v1_adjoint(r, f"{base}/transition", transition)
+        else:
+            fac = {name: r.triangular(f"{base}/{name}_factor", (), n_o)
+                   for name, _, _ in SYMMETRIC}
+            adjoint = r.read(f"{base}/transition_adjoint")
         recycles.append(T32Recycle(
             i + 1, int(table["k"][i]), int(table["l"][i]), int(table["j"][i]),
-            float(table["t_s"][i]), float(table["t_l_s"][i]), info[i], sym["S_fit"],
-            sym["Lambda_fit"], sym["Lambda_real"], r.read(f"{base}/L"), sym["Sigma"], sym["J"],
-            sym["Jt"], r.read(f"{base}/B"), r.read(f"{base}/transition"),
+            float(table["t_s"][i]), float(table["t_l_s"][i]), info[i], fac["S_fit"],
+            fac["Lambda_fit"], fac["Lambda_real"], r.read(f"{base}/L"), fac["Sigma"],
+            fac["J"], fac["Jt"], r.read(f"{base}/B"), transition, adjoint,
             _entities(r, base)))
 
     keys = r.attr("provenance_keys", list, default=())

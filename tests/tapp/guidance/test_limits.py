@@ -28,7 +28,7 @@ N = 40_000
 @pytest.fixture(scope="module")
 def perfect_tape():
     zeros = np.zeros_like(deep_space_t32().recycles[0].L)
-    return with_recycles(deep_space_t32(), L=zeros, Sigma=zeros)
+    return with_recycles(deep_space_t32(), L=zeros, Sigma_factor=zeros)
 
 
 def _problem(tape, targets, execution, recycles=(1,)):
