@@ -19,6 +19,7 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 from tests.bench import (  # noqa: E402
     common,
     guidance,
+    kernels,
     od,
     processor,
     propagation,
@@ -29,7 +30,7 @@ from tests.bench import (  # noqa: E402
 
 SECTIONS = {module.NAME: module
             for module in (propagation, tracking, od, targeting, sweeps, processor,
-                           guidance)}
+                           guidance, kernels)}
 
 
 def main(argv: list[str] | None = None) -> int:
