@@ -44,7 +44,7 @@ from tapp.errors import InputError
 from tapp.estimation.factors import psd_factor
 from tapp.frames.time import Epoch
 from tapp.tape.checks import PACKINGS, SYMMETRY_TOL, Checker, frozen
-from tapp.tape.packing import pack_tr, tr_diagonal, tr_size
+from tapp.tape.packing import pack_tr, scaled_difference, tr_diagonal, tr_size
 
 #: Provenance attributes the simulator stamps: the scenario (JSON) and its file, the Earth
 #: orientation model ("iau2006" or "gmst") and the EOP source of the run.
@@ -76,7 +76,7 @@ BLOCK_BYTES = 1 << 25
 __all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PARTS", "PARTS_TOL",
            "SUPPORTED_VERSIONS", "SYMMETRY_TOL", "T13", "VERSION", "MemoryPairs", "PairBlock",
            "TapeMiss", "TapePairs", "TapeParameters", "TapePasses", "TapeRaw", "TapeRecords",
-           "TapeStations", "check_factors", "check_parts_sum", "column_norms2",
+           "TapeStations", "LEGACY_PSD_TOL", "check_factors", "check_parts_sum", "column_norms2",
            "factor_normal_matrices", "memory_pairs", "packed_column_norms2", "summary",
            "utc_at", "validate"]
 
@@ -334,7 +334,10 @@ def check_factors(c: Checker, name: str, packed: np.ndarray, n: int,
     """Factors packed TR (..., L): zero below the diagonal when given full (``lower``, the
     strictly lower parts), and a non-negative diagonal (the canonical sign of a QR)."""
     if lower is not None and np.any(lower != 0):
-        c.fail(name, "upper-triangular factors (zero below the diagonal)")
+        first = np.argwhere(lower != 0)[0]
+        c.fail(name, "upper-triangular factors (zero below the diagonal)",
+               f"{lower[tuple(first)]:.3g} in pair {int(first[0]) + offset}, row "
+               f"{int(first[-2])}, column {int(first[-1])}")
     diag = packed[..., tr_diagonal(n)]
     if np.any(diag < 0):
         first = np.argwhere(diag < 0)[0]
@@ -355,12 +358,29 @@ def check_parts_sum(c: Checker, parts: np.ndarray, total: np.ndarray, offset: in
                f"{defect[first]:.3g} in pair {first + offset}")
 
 
-def factor_normal_matrices(m: np.ndarray) -> np.ndarray:
+#: Largest scaled difference between a version-1 or -2 normal matrix and the Gram matrix of
+#: its factor: a sum of AᵀWA terms is PSD to its rounding (~1e-15 of its scale), so anything
+#: beyond this is a matrix that is not a normal matrix.
+LEGACY_PSD_TOL = 1e-8
+
+
+def factor_normal_matrices(m: np.ndarray, c: Checker, name: str, offset: int = 0
+                           ) -> np.ndarray:
     """Upper-triangular factors (..., n, n) of symmetric PSD normal matrices (..., n, n): the
     reading of a version-1 or -2 tape (:func:`tapp.estimation.factors.psd_factor` of each;
-    rounding that makes one indefinite is set to zero)."""
+    rounding that makes one indefinite is set to zero). A matrix whose factor's Gram matrix
+    departs from it by more than :data:`LEGACY_PSD_TOL` of its scale (indefinite beyond
+    rounding) is refused, naming ``name`` and the pair (numbered from ``offset``)."""
     flat = m.reshape(-1, *m.shape[-2:])
-    return np.array([psd_factor(0.5 * (x + x.T)) for x in flat]).reshape(m.shape)
+    factors = np.array([psd_factor(0.5 * (x + x.T)) for x in flat])
+    defect = scaled_difference(np.swapaxes(factors, -1, -2) @ factors, flat)
+    if np.any(defect > LEGACY_PSD_TOL):
+        first = int(np.argmax(defect > LEGACY_PSD_TOL))
+        per_pair = flat.shape[0] // m.shape[0] if m.ndim > 2 else 1  # the parts: 3 a pair
+        pair = first // per_pair + offset
+        c.fail(name, f"positive semi-definite normal matrices (to {LEGACY_PSD_TOL:g} of "
+                     "their scale)", f"{defect[first]:.3g} in pair {pair}")
+    return factors.reshape(m.shape)
 
 
 def check_parameters(c: Checker, par: TapeParameters, n_p: int) -> None:

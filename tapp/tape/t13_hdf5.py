@@ -342,12 +342,12 @@ def _parts_attr(r: Reader, name: str) -> None:
 
 def _factors_of_matrices(c, names: tuple[str, str, str], dj, djt, parts):
     """Version 1, 2: check the normal matrices as the tape had them, then factor them."""
-    for name, m in zip(names, (dj, djt), strict=True):
+    for name, m in zip(names[:2], (dj, djt), strict=True):
         c.symmetric(name, m)
     if parts is not None:
         _check_legacy_parts(c, names[2], parts, djt, 0)
-    return (factor_normal_matrices(dj), factor_normal_matrices(djt),
-            None if parts is None else factor_normal_matrices(parts))
+    return tuple(None if m is None else factor_normal_matrices(m, c, name)
+                 for name, m in zip(names, (dj, djt, parts), strict=True))
 
 
 def _check_legacy_parts(c, name: str, parts: np.ndarray, total: np.ndarray, offset: int
@@ -554,8 +554,9 @@ class T13File(_PairSource):
             c.symmetric(name, m, offset=lo)
         if full[2] is not None:
             _check_legacy_parts(c, self.names[2], full[2], full[1], lo)
-        return tuple(None if m is None else frozen(pack_tr(factor_normal_matrices(m)))
-                     for m in full)
+        return tuple(None if m is None else frozen(pack_tr(factor_normal_matrices(m, c, name,
+                                                                                  lo)))
+                     for name, m in zip(self.names, full, strict=True))
 
     def pair_block(self, k_first: int, k_last: int, *, parts: bool = True) -> PairBlock:
         """Return the pairs of records k_first..k_last (inclusive), read and checked now.
