@@ -36,6 +36,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
+from functools import cache
 
 import numpy as np
 
@@ -323,10 +324,17 @@ def column_norms2(factors: np.ndarray) -> np.ndarray:
 
 def packed_column_norms2(packed: np.ndarray, n: int) -> np.ndarray:
     """:func:`column_norms2` of upper-triangular factors packed TR, (..., L) -> (..., n)."""
+    order, starts = _by_column(n)
+    return np.add.reduceat((packed * packed)[..., order], starts, axis=-1)
+
+
+@cache
+def _by_column(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The TR positions sorted by column, and where each column's run starts."""
     cols = np.triu_indices(n)[1]
-    out = np.zeros(packed.shape[:-1] + (n,))
-    np.add.at(out, (..., cols), packed * packed)
-    return out
+    order = np.argsort(cols, kind="stable")
+    starts = np.searchsorted(cols[order], np.arange(n))
+    return order, starts
 
 
 def check_factors(c: Checker, name: str, packed: np.ndarray, n: int,
