@@ -12,7 +12,15 @@ Exit codes of ``tapp dc`` (the outcomes of :mod:`tapp.od.batch`; the output is p
 5 stalled: the RMS settled above the fit limit (the data are not fitted)
 6 converging: the iteration limit was reached while the RMS was still falling geometrically;
   the observed contraction factor and the projected iterations to the fit limit are printed
+7 converged, residuals inconsistent with the noise model: the RMS settled within the fit
+  limit but above the RMS a correct model exceeds with probability 0.1 % (the 99.9 % χ²
+  bound of the residuals and the 6 estimated parameters, :func:`tapp.od.batch.rms_bound`):
+  the data are not explained by the models and their σ, and the estimate may be far from
+  the orbit (a wrong Earth orientation, force model, station or σ)
 = ============================================================================================
+
+The residual RMS and its bound are printed (JSON: ``rms``, ``rms_bound``,
+``noise_model_probability``) with every outcome but ill-conditioned.
 
 Earth orientation: every command uses the study file's ``earth_orientation`` and ``eop``
 (:mod:`tapp.od.setup`) for the stations and the geopotential of the data and the estimator;
@@ -58,6 +66,8 @@ from tapp.frames.orientation import EarthOrientation
 from tapp.od import setup
 from tapp.od.batch import (
     MAX_ITERATIONS,
+    N_STATE,
+    NOISE_MODEL_PROBABILITY,
     STATE_NAMES,
     DCOutcome,
     DCSettings,
@@ -82,8 +92,10 @@ EXIT_DIVERGED = 3
 EXIT_ILL_CONDITIONED = 4
 EXIT_STALLED = 5
 EXIT_CONVERGING = 6
+EXIT_INCONSISTENT = 7
 EXIT_CODE = {DCOutcome.CONVERGED: 0, DCOutcome.DIVERGED: EXIT_DIVERGED,
-             DCOutcome.STALLED: EXIT_STALLED, DCOutcome.CONVERGING: EXIT_CONVERGING}
+             DCOutcome.STALLED: EXIT_STALLED, DCOutcome.CONVERGING: EXIT_CONVERGING,
+             DCOutcome.INCONSISTENT: EXIT_INCONSISTENT}
 
 OrbitOpt = Annotated[str, typer.Option(help="Orbit name (SATORB1..8) or a=..,e=..,i=..,"
                                        "raan=..,argp=..,M=.. (km, deg)")]
@@ -200,7 +212,9 @@ def dc(
     """Batch differential correction from the brief's offset initial estimate.
 
     Exit 0 converged, 3 diverged, 4 ill-conditioned, 5 stalled, 6 converging (the limit was
-    reached while converging); the predicted rate ρ is printed beside the observed factor.
+    reached while converging), 7 converged with residuals inconsistent with the noise model
+    (RMS above its 99.9 % χ² bound); the predicted rate ρ is printed beside the observed
+    factor, the RMS beside its bound.
     """
 
     def body() -> int:
@@ -239,6 +253,8 @@ def dc(
                         "exit_code": code, "reason": result.reason,
                         "iterations": len(result.iterations),
                         "converged_at": result.converged_at, "rms": result.rms,
+                        "rms_bound": result.rms_bound,
+                        "noise_model_probability": NOISE_MODEL_PROBABILITY,
                         "contraction_factor": q if np.isfinite(q) else None,
                         "projected_iterations": result.projected_iterations,
                         "predicted_rate": None if rate is None else rate.rho,
@@ -278,10 +294,23 @@ def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float, use
                          for v in rate.eigenvalues[:2])
         predicted = f"predicted rate ρ = {rate.rho:.4g} (largest eigenvalues of M: {lead})"
     console.print(f"{result.status}: {result.reason}")
+    console.print(_noise_model_line(result))
     console.print(f"{predicted}; {observed}")
     console.print(f"{result.n_measurements} measurements; epoch position error "
                   f"{err_km * 1e3:.3f} m")
     console.print(f"Earth orientation: {setup.describe_orientation(used)}")
+
+
+def _noise_model_line(result) -> str:
+    """The last RMS against the noise model's bound, and the verdict where there is an
+    estimate to judge (the RMS settled)."""
+    rms = result.rms[-1]
+    verdict = ("inconsistent with the noise model" if rms > result.rms_bound else
+               "consistent with the noise model") if result.settled else \
+        f"not judged ({result.status}: no settled estimate)"
+    return (f"residuals: RMS {rms:.4f} against {result.rms_bound:.4f}, the "
+            f"{100 * NOISE_MODEL_PROBABILITY:g} % χ² bound of {result.n_measurements} "
+            f"residuals and {N_STATE} estimated parameters: {verdict}")
 
 
 def _print_ill_conditioned(exc: IllConditionedError, json_out: bool, used: dict) -> None:
