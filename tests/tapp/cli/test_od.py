@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 
 from tapp.cli import app
 from tapp.od import setup
+from tapp.od.observations import MadeUnder
 from tapp.od.obsfile import read_observations, write_observations
 from tapp.stations_file import load_stations
 
@@ -143,6 +144,8 @@ def test_observation_file_round_trip(tmp_path: Path, small_obs, suffix: str) -> 
     assert [back.stations[i].name for i in back.station] == names
     if suffix != ".csv":
         assert back.end_s == pytest.approx(small_obs.end_s)
+    # the study file's model, gmst, which uses no EOP, in the mean frame of J2000
+    assert back.made_under == small_obs.made_under == MadeUnder("gmst", "not used", "EME2000")
 
 
 def test_dc_saves_and_reads_a_tdm(tmp_path: Path) -> None:
