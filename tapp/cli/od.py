@@ -26,6 +26,14 @@ Earth orientation: every command uses the study file's ``earth_orientation`` and
 (:mod:`tapp.od.setup`) for the stations and the geopotential of the data and the estimator;
 ``--earth-orientation iau2006|gmst`` overrides the file's model. The outputs say which model
 was used, the EOP source and whether predicted EOP were used (JSON: ``earth_orientation``).
+Observations simulated here, and written by ``--save-obs`` or ``tapp simulate --tdm``,
+record the model, EOP source and frame they were made under (:mod:`tapp.od.obsfile`); read
+with ``--obs`` they are checked against the run's (:func:`tapp.od.setup.check_made_under`):
+a mismatch is bad input (2), naming both and ``--earth-orientation``, unless that option
+chose the run's model, which then fits them regardless with a note on stderr; a file that
+states nothing (one written by another tool) is taken as made under the run's model, with a
+note on stderr. JSON: ``observations_made_under`` (null when the file states nothing).
+``tapp rsig`` reads no observations.
 
 Bad input (2) includes an arc longer than the data span (``--arc`` and the span named), an
 unknown ``--earth-orientation`` and an epoch or span outside the EOP table; no
@@ -128,14 +136,27 @@ def _model_pair(truth: str, stm: str, orient: EarthOrientation) -> Propagator:
 
 
 def _observations(x_true: np.ndarray, truth: str, stations: str | None, obs_file: Path | None,
-                  scenario: Path, seed: int | None, orient: EarthOrientation) -> Observations:
+                  scenario: Path, seed: int | None, orient: EarthOrientation,
+                  chosen: bool) -> Observations:
+    """The observations of ``--obs``, checked against the run's Earth orientation (``chosen``:
+    by ``--earth-orientation``; :func:`tapp.od.setup.check_made_under`, whose note goes to
+    stderr), or simulated under it."""
     if obs_file is not None:
         data = setup.load_study(scenario)
-        return read_observations(obs_file, load_stations(data, str(scenario)),
-                                 setup.tracking(scenario).sigma, epoch=setup.epoch(scenario),
-                                 sigma_kinds=setup.KINDS)
+        obs = read_observations(obs_file, load_stations(data, str(scenario)),
+                                setup.tracking(scenario).sigma, epoch=setup.epoch(scenario),
+                                sigma_kinds=setup.KINDS)
+        note = setup.check_made_under(obs, orient, str(obs_file), scenario, chosen)
+        if note is not None:
+            typer.echo(f"note: {note}", err=True)
+        return obs
     return setup.simulated_observations(x_true, truth, _network(x_true, stations, scenario),
                                         scenario, seed, orient=orient)
+
+
+def _made_under_json(data: Observations) -> dict[str, str] | None:
+    """What the observations state they were made under (None: their file states none)."""
+    return None if data.made_under is None else data.made_under.as_dict()
 
 
 def _spacecraft(orbit: str) -> str:
@@ -225,7 +246,7 @@ def dc(
         x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm, orient)
         data = _observations(x_true, truth, stations, obs, scenario,
-                             seed_option("--seed", seed), orient)
+                             seed_option("--seed", seed), orient, earth_orientation is not None)
         window = data.arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, window.t_s)
         if save_obs is not None:
@@ -261,7 +282,8 @@ def dc(
                         "eigenvalues": _eigen_json(rate),
                         "final_elements": _elements_dict(result.x0),
                         "position_error_km": err_km, "measurements": result.n_measurements,
-                        "earth_orientation": used})
+                        "earth_orientation": used,
+                        "observations_made_under": _made_under_json(window)})
         else:
             _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}), {orient.model}: "
                       f"{result.status}", err_km, used)
@@ -389,7 +411,8 @@ def ekf(
         p0 = _apriori(apriori, scenario)
         q_km2_s3 = nonnegative_option("--process-noise", process_noise)
         data = _observations(x_true, truth, stations, obs, scenario,
-                             seed_option("--seed", seed), orient).arc(arc_s, "--arc", got=arc)
+                             seed_option("--seed", seed), orient,
+                             earth_orientation is not None).arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, data.t_s)
         x_start = setup.initial_estimate(x_true, setup.offset(scenario))
         result = extended_kalman_filter(data, prop, x_start, p0, orientation=orient,
@@ -399,7 +422,8 @@ def ekf(
         if json_out:
             print_json({"passes": [{"station": p.station, "t_start_s": p.t_start_s,
                                     "t_end_s": p.t_end_s} for p in result.passes],
-                        "max_abs_residual_per_pass": per_pass, "earth_orientation": used})
+                        "max_abs_residual_per_pass": per_pass, "earth_orientation": used,
+                        "observations_made_under": _made_under_json(data)})
             return
         table = Table(title=f"EKF {orbit}, {arc}, ({truth},{stm}), a priori {apriori}, "
                       f"{orient.model}")
