@@ -78,6 +78,7 @@ from tapp.od.batch import (
     NOISE_MODEL_PROBABILITY,
     STATE_NAMES,
     DCOutcome,
+    DCResult,
     DCSettings,
     IllConditionedError,
     describe_direction,
@@ -323,14 +324,16 @@ def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float, use
     console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
 
-def _noise_model_line(result) -> str:
+_VERDICT = {DCOutcome.CONVERGED: "consistent with the noise model",
+            DCOutcome.INCONSISTENT: "inconsistent with the noise model"}
+
+
+def _noise_model_line(result: DCResult) -> str:
     """The last RMS against the noise model's bound, and the verdict where there is an
-    estimate to judge (the RMS settled)."""
-    rms = result.rms[-1]
-    verdict = ("inconsistent with the noise model" if rms > result.rms_bound else
-               "consistent with the noise model") if result.settled else \
-        f"not judged ({result.status}: no settled estimate)"
-    return (f"residuals: RMS {rms:.4f} against {result.rms_bound:.4f}, the "
+    estimate to judge (the RMS settled: :mod:`tapp.od.batch`)."""
+    verdict = _VERDICT.get(DCOutcome(result.status),
+                           f"not judged ({result.status}: no settled estimate)")
+    return (f"residuals: RMS {result.rms[-1]:.5g} against {result.rms_bound:.5g}, the "
             f"{100 * NOISE_MODEL_PROBABILITY:g} % χ² bound of {result.n_measurements} "
             f"residuals and {N_STATE} estimated parameters: {verdict}")
 
