@@ -14,12 +14,15 @@ Exit codes (every command keeps this contract)
     ``error: SOURCE: FIELD: expected WHAT (got VALUE)``, where SOURCE is the option as typed
     (``--process-noise``, ``-o/--output``) when an option is at fault, and the file when a
     file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).
-3, 4, 5, 6
+3, 4, 5, 6, 7
     A numerical outcome, with its output still printed and written: ``tapp dc`` diverged
     (3), found the normal matrix too ill-conditioned to iterate (4; the condition number and
-    the undetermined state directions are printed), stalled above the fit limit (5) or
-    reached its iteration limit while still converging (6) (:mod:`tapp.cli.od`);
-    ``tapp search`` diverged (3) or met a singular matrix (4).
+    the undetermined state directions are printed), stalled above the fit limit (5),
+    reached its iteration limit while still converging (6), or converged with residuals
+    inconsistent with the noise model (7: the weighted residual RMS settled above its
+    99.9 % χ² bound for the number of residuals and estimated parameters; the RMS and the
+    bound are printed, and the estimate is not to be used as an orbit)
+    (:mod:`tapp.cli.od`); ``tapp search`` diverged (3) or met a singular matrix (4).
 1
     Anything else: a computation that could not be completed (``tapp search``: a trajectory
     that misses the target's sphere of influence; ``tapp dc``, ``tapp ekf``: too few

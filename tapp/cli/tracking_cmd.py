@@ -26,12 +26,14 @@ from tapp.cli.common import (
     print_json,
     run_guarded,
 )
+from tapp.od.observations import MadeUnder
+from tapp.od.obsfile import TDM_PREFIX, made_under_statements
 from tapp.outputs import OutputSet, check_paths
 from tapp.tape.files import describe
 from tapp.tape.t13_hdf5 import write_t13
 from tapp.tape.t32 import format_t32_summary
 from tapp.tracking.oem import format_oem
-from tapp.tracking.scenario import read_scenario
+from tapp.tracking.scenario import Scenario, read_scenario
 from tapp.tracking.simulate import Simulation
 from tapp.tracking.simulate import simulate as run_simulation
 
@@ -43,7 +45,7 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
 
 
 def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: str | None = None
-                       ) -> tuple[Simulation, float]:
+                       ) -> tuple[Simulation, float, Scenario]:
     scenario = read_scenario(path, earth_orientation)
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
@@ -56,7 +58,7 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: st
             bar.update(task, description=stage, completed=done, total=total)
 
         sim = run_simulation(scenario, raw=raw, progress=progress)
-    return sim, time.perf_counter() - start
+    return sim, time.perf_counter() - start, scenario
 
 
 def _outputs(output: Path, sim: Simulation, oem: Path | None,
@@ -72,11 +74,12 @@ def _outputs(output: Path, sim: Simulation, oem: Path | None,
     return outputs
 
 
-def _tdm_text(sim: Simulation, scenario: Path) -> str:
-    """The observations of the tape's raw rows as a CCSDS TDM (one segment per station)."""
+def _tdm_text(sim: Simulation, scenario: Path, parsed: Scenario) -> str:
+    """The observations of the tape's raw rows as a CCSDS TDM (one segment per station),
+    stating the Earth orientation they were made under (:mod:`tapp.od.obsfile`)."""
     tape, raw = sim.tape, sim.tape.raw
     st = tape.stations
-    schedule = read_scenario(scenario).schedule
+    schedule = parsed.schedule
     tracks = tracks_from_rows(raw.t_s, raw.station - 1, raw.kind, raw.value, raw.kinds,
                               st.name, tape.iden,
                               path="2,1" if schedule.light_time == "one_way" else "1,2,1",
@@ -87,7 +90,7 @@ def _tdm_text(sim: Simulation, scenario: Path) -> str:
     tracks = [dataclasses.replace(t, comments=(where[t.station],)) for t in tracks]
     return format_tdm(tdm_from_tracks(tracks, tape.epoch, comments=(
         f"TAPP I observations of {scenario.name}, tape {tape.iden}: the models' values, "
-        "noise-free",)))
+        "noise-free", *made_under_statements(MadeUnder.of(parsed.orientation), TDM_PREFIX))))
 
 
 @app.command()
@@ -109,12 +112,13 @@ def simulate(
     def body() -> None:
         check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
                                              "--tdm": tdm})
-        sim, wall_s = _simulate_with_bar(scenario, raw or tdm is not None, quiet=json_out,
-                                         earth_orientation=earth_orientation_option(
-                                             earth_orientation))
+        sim, wall_s, parsed = _simulate_with_bar(scenario, raw or tdm is not None,
+                                                 quiet=json_out,
+                                                 earth_orientation=earth_orientation_option(
+                                                     earth_orientation))
         tdm_text = None
         if tdm is not None:
-            tdm_text = _tdm_text(sim, scenario)
+            tdm_text = _tdm_text(sim, scenario, parsed)
             if not raw:  # the raw rows were for the TDM only
                 sim = dataclasses.replace(sim, tape=dataclasses.replace(sim.tape, raw=None))
         tape = sim.tape

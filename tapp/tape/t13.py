@@ -43,6 +43,7 @@ import numpy as np
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
 from tapp.estimation.factors import psd_factor
+from tapp.frames.orientation import INERTIAL_FRAME
 from tapp.frames.time import Epoch
 from tapp.tape.checks import PACKINGS, SYMMETRY_TOL, Checker, frozen
 from tapp.tape.packing import pack_tr, scaled_difference, tr_diagonal, tr_size
@@ -54,7 +55,7 @@ SCENARIO_PROVENANCE = ("scenario", "scenario_source", "earth_orientation", "eop"
 
 def frame_of(provenance: dict[str, str]) -> str:
     """The inertial frame of a run: GCRS under iau2006, EME2000 under gmst (or unstated)."""
-    return "GCRS" if provenance.get("earth_orientation") == "iau2006" else "EME2000"
+    return INERTIAL_FRAME.get(provenance.get("earth_orientation", "gmst"), "EME2000")
 
 FORMAT = "T13"
 VERSION = 3
