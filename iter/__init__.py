@@ -4,7 +4,8 @@ A *loop* varies n named parameters over ``sets`` cases, either from a full table
 from a first row plus increments (type 2); loops nest to any depth, inner loops restarting
 for every outer case. The *body* is a Python callable (``"module:function"``) or a command-line
 program; each case gives one row of a results table (varied values, outputs, status, error),
-written to HDF5 and CSV. See :mod:`iter.sweepfile` for the sweep-file format.
+written to HDF5 and CSV. See :mod:`iter.sweepfile` for the sweep-file format and the rule for
+the paths in it (taken from the sweep file's folder).
 
 This package knows nothing of ``tapp`` and never imports it. Inside it, use relative imports:
 ``import iter`` would shadow the builtin ``iter()``; from outside, ``from iter import ...`` or

@@ -10,6 +10,9 @@ Two kinds, both picklable so Dask can ship them to workers:
   ``--json`` appended (unless turned off); its stdout must be one JSON object, which is taken
   as the outputs.
 
+Both take ``files``: named paths passed like constants, each as an absolute path (the sweep
+file reader takes relative ones from the sweep file's folder); each must exist.
+
 Outputs are flattened into named scalars: a nested mapping ``{"b": {"t_km": 1.0}}`` gives
 ``b.t_km``, a list ``{"r_km": [1, 2, 3]}`` gives ``r_km[0]``, ``r_km[1]``, ``r_km[2]``. Numbers
 become floats, ``null`` becomes NaN, text stays text; anything else fails the case.
@@ -146,6 +149,19 @@ def _cached_callable(target: str) -> Callable[..., object]:
     return resolve_callable(target)
 
 
+def _check_files(files: Mapping[str, str], source: str) -> None:
+    """Raise SweepInputError (field ``body.files.NAME``) for a file that does not exist."""
+    for name, path in files.items():
+        if not Path(path).exists():
+            raise SweepInputError(source, f"body.files.{name}", "an existing file (a relative "
+                                  "path is taken from the sweep file's folder)", path)
+
+
+def names_a_path(name: str) -> bool:
+    """Return True when program ``name`` has a directory part (a path, not a name on PATH)."""
+    return os.sep in name or (os.altsep is not None and os.altsep in name)
+
+
 def find_executable(name: str) -> str | None:
     """Return the path of program ``name``, or None when it cannot be found.
 
@@ -153,7 +169,7 @@ def find_executable(name: str) -> str | None:
     then next to the running Python interpreter, so ``tapp`` is found in an unactivated
     virtual environment.
     """
-    if os.sep in name or (os.altsep is not None and os.altsep in name):
+    if names_a_path(name):
         return name if os.access(name, os.X_OK) else None
     return shutil.which(name) or shutil.which(name, path=str(Path(sys.executable).parent))
 
@@ -214,21 +230,29 @@ class CallableBody:
         no limit; a number runs each case in a child process, killed at the limit (the
         constants and outputs must then be picklable, and each case pays for starting a
         Python process).
+    files : mapping of str to str
+        Paths passed to every case as keyword arguments, like constants; absolute (a
+        relative path is taken from the current directory of the process running the case).
     """
 
     target: str
     constants: Mapping[str, object] = field(default_factory=dict)
     timeout_s: float | None = None
+    files: Mapping[str, str] = field(default_factory=dict)
 
     def check(self, source: str) -> None:
-        """Raise SweepInputError (field ``body.callable``) unless the target resolves."""
+        """Raise SweepInputError (field ``body.callable`` or ``body.files.NAME``) unless the
+        target resolves and every file exists."""
         resolve_callable(self.target, source)
+        _check_files(self.files, source)
 
     def definition(self) -> dict[str, object]:
         """Return the body as the ``[body]`` table of a sweep file."""
         table: dict[str, object] = {"callable": self.target, "constants": dict(self.constants)}
         if self.timeout_s is not None:
             table["timeout_s"] = self.timeout_s
+        if self.files:
+            table["files"] = dict(self.files)
         return table
 
     def __call__(self, case: Case) -> object:
@@ -241,7 +265,7 @@ class CallableBody:
         ChildFailure
             The function raised in its child process (``timeout_s`` set).
         """
-        kwargs = {**self.constants, **case.kwargs()}
+        kwargs = _arguments(self, case)
         if self.timeout_s is None:
             return _cached_callable(self.target)(**kwargs)
         payload = pickle.dumps(([p for p in sys.path if p], self.target, kwargs))
@@ -276,6 +300,9 @@ class ProgramBody:
         programs (``tapp``) expect.
     timeout_s : float or None
         Wall-time limit per case, s; None for :data:`DEFAULT_PROGRAM_TIMEOUT_S`.
+    files : mapping of str to str
+        Paths passed to every case as ``--name path``, like constants; absolute (a relative
+        path is taken from the current directory).
     """
 
     argv: tuple[str, ...]
@@ -283,13 +310,16 @@ class ProgramBody:
     json_option: bool = True
     dashes: bool = False
     timeout_s: float | None = None
+    files: Mapping[str, str] = field(default_factory=dict)
 
     def check(self, source: str) -> None:
-        """Raise SweepInputError (field ``body.program``) unless the program is found."""
+        """Raise SweepInputError (field ``body.program`` or ``body.files.NAME``) unless the
+        program is found and every file exists."""
         if find_executable(self.argv[0]) is None:
             raise SweepInputError(source, "body.program",
                                   "a program on PATH, next to the Python interpreter, or a "
                                   "path to an executable", self.argv[0])
+        _check_files(self.files, source)
 
     def definition(self) -> dict[str, object]:
         """Return the body as the ``[body]`` table of a sweep file."""
@@ -297,13 +327,15 @@ class ProgramBody:
                                     "dashes": self.dashes, "constants": dict(self.constants)}
         if self.timeout_s is not None:
             table["timeout_s"] = self.timeout_s
+        if self.files:
+            table["files"] = dict(self.files)
         return table
 
     def command(self, case: Case) -> list[str]:
         """Return the command line for ``case``."""
         executable = find_executable(self.argv[0]) or self.argv[0]
         args = [executable, *self.argv[1:]]
-        for name, value in (*self.constants.items(), *case.kwargs().items()):
+        for name, value in _arguments(self, case).items():
             option = "--" + (name.replace("_", "-") if self.dashes else name)
             if value is True:
                 args.append(option)
@@ -339,6 +371,12 @@ class ProgramBody:
 
 
 Body = CallableBody | ProgramBody
+
+
+def _arguments(body: Body, case: Case) -> dict[str, object]:
+    """Return the arguments of ``case``: the constants, the files, then the varied values."""
+    return {**body.constants, **body.files, **case.kwargs()}
+
 
 #: Prefix given to an output whose name is a varied name or a reserved column.
 CLASH_PREFIX = "output."

@@ -40,10 +40,10 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
 runner = CliRunner()
 
-#: Tables whose keys are names chosen by the user (stations, orbits, constants, ...), so a
-#: renamed key there is not a misspelling.
-FREE_FORM_TABLES = frozenset({"constants", "stations", "orbits", "networks", "apriori",
-                              "station"})
+#: Tables whose keys are names chosen by the user (stations, orbits, constants, a sweep
+#: body's files, ...), so a renamed key there is not a misspelling.
+FREE_FORM_TABLES = frozenset({"constants", "files", "stations", "orbits", "networks",
+                              "apriori", "station"})
 #: Values passed through unchecked to a sweep body (a callable decides what it accepts).
 PASS_THROUGH_TABLES = frozenset({"constants"})
 EXTREME_NUMBERS = (math.nan, math.inf, -math.inf, 1e308, -1e308, 0.0, -1.0)
@@ -308,10 +308,12 @@ def _pipeline_parts_absolute(document: dict) -> dict:
 
 
 def _one_case(document: dict) -> dict:
-    """The tracking sweep cut to one case of 1,000 samples."""
+    """The tracking sweep cut to one case of 1,000 samples, its pipeline named by an absolute
+    path (the fuzz writes the sweep to a temporary folder)."""
     for loop in document["loop"]:
         loop["sets"], loop["vary"] = 1, loop["vary"][:1]
     document["body"]["constants"]["samples"] = 1000
+    document["body"]["files"]["pipeline"] = str(SCENARIOS / document["body"]["files"]["pipeline"])
     return document
 
 

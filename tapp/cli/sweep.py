@@ -71,8 +71,9 @@ def iter_command(
 ) -> None:
     """Run every case of SWEEP_FILE (seed section VI, ITER) and write the results table.
 
-    Failing cases are recorded with their message and do not stop the sweep. Running again
-    with the same results file resumes: cases already OK are skipped.
+    Paths in the sweep file are taken from its folder. Failing cases are recorded with their
+    message and do not stop the sweep. Running again with the same results file resumes:
+    cases already OK are skipped.
     """
     h5_path = output if output is not None else Path(sweep_file.stem + ".h5")
 

@@ -11,6 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 import tapp.cli.sweep  # noqa: F401  (registers the iter command on the app)
+from iter import read_hdf5
 from tapp.cli.common import EXIT_INPUT, app
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
@@ -94,3 +95,39 @@ def test_conflicting_options_name_the_option(tmp_path):
                                  "--serial", "--workers", "2"])
     assert result.exit_code == EXIT_INPUT
     assert result.stderr.startswith("error: command line: --serial: expected no scheduler")
+
+
+@pytest.fixture
+def bodies(monkeypatch):
+    """The helper module iter_bodies, importable by name for a sweep's callable."""
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parent))
+    import iter_bodies
+
+    return iter_bodies
+
+
+def _scaled_sweep(folder: Path, scale: str) -> Path:
+    """A sweep file in ``folder`` whose body reads ``data/scale.txt`` (a relative path)."""
+    (folder / "data").mkdir(parents=True)
+    (folder / "data" / "scale.txt").write_text(scale)
+    path = folder / "scaled.toml"
+    path.write_text('[body]\ncallable = "iter_bodies:scaled_body"\n'
+                    f'[body.constants]\ncalls_dir = "{folder / "data"}"\n'
+                    '[body.files]\nscale_file = "data/scale.txt"\n'
+                    '[[loop]]\ntype = 2\nnames = ["azimuth_deg"]\nsets = 3\nvary = [96.0]\n'
+                    'delta = [3.0]\n')
+    return path
+
+
+def test_a_sweep_reads_its_files_from_its_folder_in_any_directory(tmp_path, monkeypatch,
+                                                                  bodies):
+    path = _scaled_sweep(tmp_path / "study", "2")
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    result = runner.invoke(app, ["iter", "../study/scaled.toml", "-o", "r.h5", "--serial",
+                                 "--json"])
+    assert result.exit_code == 0, result.output
+    rows = read_hdf5(tmp_path / "elsewhere" / "r.h5").table.rows
+    assert [row.outputs["scaled_deg"] for row in rows] == [192.0, 198.0, 204.0]
+    assert path.exists()
+

@@ -285,3 +285,21 @@ def test_program_bodies_have_a_default_timeout():
 
     assert DEFAULT_PROGRAM_TIMEOUT_S == 3600.0
     assert "timeout_s" not in ProgramBody(argv=("tapp",)).definition()  # resumes old files
+
+
+def _scaled_sweep(folder: Path, scale: str, constants: dict | None = None,
+                  files: dict | None = None) -> Sweep:
+    """Five azimuths through iter_bodies:scaled_body, which reads ``folder/scale.txt``."""
+    (folder / "calls").mkdir(exist_ok=True)
+    (folder / "scale.txt").write_text(scale)
+    body = CallableBody("iter_bodies:scaled_body",
+                        {"calls_dir": str(folder / "calls"), **(constants or {})},
+                        files={"scale_file": str(folder / "scale.txt"), **(files or {})})
+    return Sweep(loops=(AZIMUTHS,), body=body, source="scaled.toml")
+
+
+def test_a_body_reading_a_file_runs_every_case(tmp_path, bodies):
+    result = run_sweep(_scaled_sweep(tmp_path, "2"), execution=SERIAL)
+    assert [row.outputs["scaled_deg"] for row in result.table.rows] == [
+        192.0, 198.0, 204.0, 210.0, 216.0]
+
