@@ -1,8 +1,10 @@
 """Run a sweep on an executor of :mod:`iter.execute`, into a results table and files.
 
-Chunks complete in any order; the table is always sorted by case index. A case whose body
-fails is recorded as FAILED with its message and the sweep goes on; a chunk lost on Dask (a
-worker died) records each of its cases as FAILED the same way.
+Before any case runs or anything is written, the first case to run is checked
+(:meth:`iter.sweep.Sweep.check_case`): an input error there would be every case's, so it
+stops the sweep. Chunks complete in any order; the table is always sorted by case index. A
+case whose body fails is recorded as FAILED with its message and the sweep goes on; a chunk
+lost on Dask (a worker died) records each of its cases as FAILED the same way.
 
 With an output file the sweep is resumable: completed rows are written to the HDF5 file as
 chunks finish (at most every ``checkpoint_interval_s``, and at the end, also on an error or
@@ -116,7 +118,12 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
     Raises
     ------
     SweepInputError
-        ``output_h5`` holds results of a different sweep.
+        ``output_h5`` holds results of a different sweep, or the first case to run cannot
+        run (:meth:`Sweep.check_case`: the body's reference, a file, an argument); nothing is
+        written and no case runs.
+    Exception
+        Whatever the body's own input check raises on the first case to run (the same
+        guarantees).
     SchedulerError
         The scheduler address does not answer within the connect timeout.
     ResultFileError
@@ -128,6 +135,8 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
     results, created_utc = ({}, _utc_now()) if h5_path is None else _resume(sweep, h5_path)
     n_resumed = len(results)
     pending = [case for case in sweep.cases() if case.index not in results]
+    if pending:
+        sweep.check_case(pending[0])
 
     def checkpoint() -> None:
         if h5_path is not None:

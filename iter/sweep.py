@@ -77,6 +77,17 @@ class Sweep:
         """Return every case, outer-major (see :func:`iter.loops.generate_cases`)."""
         return generate_cases(self.loops)
 
+    def check_case(self, case: Case) -> None:
+        """Raise if ``case`` cannot run: the body's reference, its files, and (a callable)
+        the arguments and the function's own input check (:meth:`CallableBody.check_case`).
+
+        Called on the first case to run, before any runs: an input error there, in a file the
+        body reads or in the sweep file, would be hit by every case.
+        """
+        fields = {name: f"loop[{i}].names" for i, loop in enumerate(self.loops)
+                  for name in loop.names}
+        self.body.check_case(case, self.source, fields)
+
     def definition(self) -> dict[str, object]:
         """Return the sweep as a canonical sweep-file document (defaults filled in)."""
         loops = []

@@ -52,6 +52,15 @@ Constants are passed unchanged, so a path a body takes belongs in ``[body.files]
 ``[body.constants]``. A document parsed without a file (:func:`parse_sweep`) takes its paths
 from ``base_dir``, the current directory by default.
 
+Checks before anything runs
+---------------------------
+Reading the file checks its fields, that the callable imports (or the program is found) and
+that every file exists. Running it (:func:`iter.run.run_sweep`) then checks the first case's
+inputs before any case runs or anything is written: a callable must take every constant,
+file and varied name as a keyword argument and be given every argument it needs, and its own
+input check (:func:`iter.body.input_check`), if it offers one, must pass. An input error
+there would be the error of every case; errors a case meets later are recorded in its row.
+
 The file is validated against one declared schema, :class:`SweepFile` (``iter.schema``):
 unknown keys and tables are errors (a typo must not silently fall back to a default), and
 booleans are not numbers nor numbers strings. Errors name the file and the field, e.g.

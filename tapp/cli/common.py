@@ -10,7 +10,11 @@ Exit codes (every command keeps this contract)
     missing, misspelt, of the wrong type or out of range, a truncated or corrupt tape or
     ITER results file, a checksum that does not match), an output path that is an input or
     another output (symbolic links and relative paths resolved) or cannot be written, an
-    epoch outside the ephemeris' coverage. The message is one line on stderr,
+    epoch outside the ephemeris' coverage. ``tapp iter`` also refuses, before any case runs,
+    input that every case would meet: checked on the first case, a file the body reads
+    missing (``body.files``) or invalid (the body's own input check, which names that file
+    and its field), a body that cannot be imported or found, an argument the body does not
+    take or one it needs and is not given. The message is one line on stderr,
     ``error: SOURCE: FIELD: expected WHAT (got VALUE)``, where SOURCE is the option as typed
     (``--process-noise``, ``-o/--output``) when an option is at fault, and the file when a
     file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).

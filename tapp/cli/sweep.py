@@ -4,9 +4,11 @@ The engine is the ``iter`` package; this module only turns options into an
 :class:`iter.Execution`, maps ``iter``'s errors onto tapp's (so bad input, including a results
 file that is corrupt or cannot be written, is one line on stderr and exit code 2) and prints
 the summary. Before anything runs, the results file and the CSV must be distinct from the sweep
-file and from each other (:func:`tapp.outputs.check_paths`). The results file is a checkpoint,
-rewritten atomically as cases complete so that a killed sweep resumes; the CSV is written
-atomically at the end.
+file and from each other (:func:`tapp.outputs.check_paths`), and the first case's inputs must
+pass the body's checks (:meth:`iter.Sweep.check_case`: a file the body reads missing or
+invalid, a bad body reference, an argument the body does not take: exit 2, nothing written).
+The results file is a checkpoint, rewritten atomically as cases complete so that a killed
+sweep resumes; the CSV is written atomically at the end.
 """
 
 from __future__ import annotations

@@ -131,3 +131,13 @@ def test_a_sweep_reads_its_files_from_its_folder_in_any_directory(tmp_path, monk
     assert [row.outputs["scaled_deg"] for row in rows] == [192.0, 198.0, 204.0]
     assert path.exists()
 
+
+def test_a_file_the_body_refuses_stops_the_sweep_before_any_case(tmp_path, bodies):
+    path = _scaled_sweep(tmp_path, "fast")
+    h5 = tmp_path / "r.h5"
+    result = runner.invoke(app, ["iter", str(path), "-o", str(h5), "--serial"])
+    assert result.exit_code == EXIT_INPUT
+    assert result.stderr == (f"error: {tmp_path / 'data' / 'scale.txt'}: file: expected a "
+                             "number (got 'fast')\n")
+    assert bodies.calls(tmp_path / "data") == []
+    assert not h5.exists()

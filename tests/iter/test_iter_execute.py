@@ -303,3 +303,50 @@ def test_a_body_reading_a_file_runs_every_case(tmp_path, bodies):
     assert [row.outputs["scaled_deg"] for row in result.table.rows] == [
         192.0, 198.0, 204.0, 210.0, 216.0]
 
+
+@pytest.mark.parametrize(("scale", "constants", "files", "field", "fragment"), [
+    # the body's own input check refuses the file it reads: its error, naming that file
+    ("fast", {}, {}, "file", "expected a number (got 'fast')"),
+    ("2", {}, {"scale_file": "/no/such/scale.txt"}, "body.files.scale_file",
+     "expected an existing file"),
+    ("2", {"scael": 1.0}, {}, "body.constants.scael",
+     "expected an argument of iter_bodies:scaled_body (azimuth_deg, scale_file, calls_dir)"),
+    ("2", {}, {"calls": "."}, "body.files.calls", "expected an argument of"),
+])
+def test_bad_input_stops_the_sweep_before_any_case_runs_or_anything_is_written(
+        tmp_path, bodies, scale, constants, files, field, fragment):
+    sweep = _scaled_sweep(tmp_path, scale, constants, files)
+    output = tmp_path / "out.h5"
+    with pytest.raises(SweepInputError) as info:
+        run_sweep(sweep, output_h5=output, execution=SERIAL)
+    source = str(tmp_path / "scale.txt") if field == "file" else "scaled.toml"
+    assert (info.value.source, info.value.field) == (source, field)
+    assert fragment in str(info.value)
+    assert bodies.calls(tmp_path / "calls") == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["calls", "scale.txt"]
+
+
+@pytest.mark.parametrize(("target", "names", "field", "fragment"), [
+    ("iter.examples:launch_azimuth_case", ("azimuth_deg",), "body.constants",
+     "a value for the argument 'launch_day' of iter.examples:launch_azimuth_case"),
+    ("iter_bodies:raising_body", ("azimut_deg",), "loop[0].names",
+     "an argument of iter_bodies:raising_body (azimuth_deg)"),
+])
+def test_arguments_are_checked_against_the_signature(bodies, target, names, field, fragment):
+    loop = Loop(type=1, names=names, sets=1, vary=(96.0,))
+    with pytest.raises(SweepInputError) as info:
+        run_sweep(Sweep(loops=(loop,), body=CallableBody(target)), execution=SERIAL)
+    assert info.value.field == field
+    assert fragment in info.value.expected
+
+
+@pytest.mark.parametrize(("target", "outputs"), [
+    # dict declares no signature to inspect: nothing to check (it takes any keyword)
+    ("builtins:dict", {"k": 1.0, "output.azimuth_deg": 96.0}),
+    ("iter_bodies:keywords_body", {"total": 97.0}),  # **values takes any name
+])
+def test_a_function_taking_any_keyword_is_called_with_every_name(bodies, target, outputs):
+    loop = Loop(type=1, names=("azimuth_deg",), sets=1, vary=(96.0,))
+    result = run_sweep(Sweep(loops=(loop,), body=CallableBody(target, {"k": 1.0})),
+                       execution=SERIAL)
+    assert result.table.rows[0].outputs == outputs

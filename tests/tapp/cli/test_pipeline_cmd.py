@@ -201,3 +201,40 @@ def test_the_tracking_sweep_runs_every_case_from_another_directory(parts, tmp_pa
     # Goldstone alone leaves a wider final B-plane dispersion than the three complexes
     assert rows[1].outputs["bplane_semi_major_km"] > rows[0].outputs["bplane_semi_major_km"]
 
+
+def _broken_deck(parts, folder: Path) -> Path:
+    """A copy of the 3-day pipeline whose deck has a misspelt key."""
+    folder.mkdir()
+    for name in ("scenario", "guidance", "pipeline"):
+        (folder / parts[name].name).write_text(parts[name].read_text())
+    deck = tomllib.loads(parts["deck"].read_text())
+    deck["stations_offf"] = []
+    (folder / parts["deck"].name).write_text(tomli_w.dumps(deck))
+    return folder / parts["pipeline"].name
+
+
+@pytest.mark.parametrize("broken", ["missing pipeline", "misspelt deck key", "bad network"])
+def test_bad_tracking_sweep_input_is_refused_before_any_case_runs(parts, tmp_path,
+                                                                   broken) -> None:
+    pipeline = parts["pipeline"]
+    if broken == "missing pipeline":
+        pipeline = tmp_path / "no_such_pipeline.toml"
+    elif broken == "misspelt deck key":
+        pipeline = _broken_deck(parts, tmp_path / "broken")
+    path = _tracking_sweep(tmp_path / "sweeps", pipeline)
+    if broken == "bad network":
+        sweep = tomllib.loads(path.read_text())
+        sweep["body"]["constants"]["networks"] = "WOOMERA; GOLDSTONE"
+        path.write_text(tomli_w.dumps(sweep))
+    expected = {
+        "missing pipeline": f"{path}: body.files.pipeline: expected an existing file",
+        "misspelt deck key": (f"{tmp_path / 'broken' / 'deck.toml'} (overridden: stations_off):"
+                              " stations_offf: expected no such key"),
+        "bad network": "networks: stations: expected stations of the scenario",
+    }[broken]
+    out = tmp_path / "out.h5"
+    res = runner.invoke(app, ["iter", str(path), "-o", str(out), "--serial"])
+    assert res.exit_code == 2, res.output
+    assert res.stderr.startswith(f"error: {expected}"), res.stderr
+    assert res.stderr.count("\n") == 1
+    assert not out.exists()
