@@ -27,8 +27,10 @@ Exit codes (every command keeps this contract)
 1
     Anything else: a computation that could not be completed (``tapp search``: a trajectory
     that misses the target's sphere of influence; ``tapp dc``, ``tapp ekf``: too few
-    measurements in the arc), or an internal failure (a bug; out of memory). Also one line
-    on stderr.
+    measurements in the arc; ``tapp iter``: every case of the sweep failed, the message
+    giving the first case's error, after the summary is printed and the results file, which
+    records every failure, is written), or an internal failure (a bug; out of memory). Also
+    one line on stderr.
 130
     Interrupted (Ctrl-C).
 
@@ -47,7 +49,8 @@ temporaries beside their targets and renamed over them only once all are complet
 A killed run leaves the old outputs or the new ones, each complete, and possibly hidden
 ``.NAME.*.tmp`` temporaries, which the next write of the same output removes. ``tapp iter``
 checkpoints its results file (each time atomically) as cases complete, so that a killed or
-interrupted sweep can be resumed.
+interrupted sweep can be resumed; a sweep whose every case failed (exit 1) keeps its results
+file and CSV, which record the failures.
 """
 
 from __future__ import annotations

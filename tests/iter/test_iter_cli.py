@@ -11,8 +11,8 @@ import pytest
 from typer.testing import CliRunner
 
 import tapp.cli.sweep  # noqa: F401  (registers the iter command on the app)
-from iter import read_hdf5
-from tapp.cli.common import EXIT_INPUT, app
+from iter import CaseStatus, read_hdf5
+from tapp.cli.common import EXIT_FAILURE, EXIT_INPUT, app
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 runner = CliRunner()
@@ -104,6 +104,40 @@ def bodies(monkeypatch):
     import iter_bodies
 
     return iter_bodies
+
+
+def _altitude_sweep(tmp_path: Path, altitudes_km: list[float]) -> Path:
+    """A sweep over altitudes; one below the Earth's centre fails (math domain error)."""
+    path = tmp_path / "altitudes.toml"
+    path.write_text('[body]\ncallable = "iter.examples:launch_azimuth_case"\n'
+                    '[body.constants]\nlaunch_day = 0.0\nazimuth_deg = 90.0\n'
+                    'latitude_deg = 28.5\neast_longitude_deg = 0.0\n'
+                    f'[[loop]]\nnames = ["altitude_km"]\nsets = {len(altitudes_km)}\n'
+                    f'vary = {altitudes_km}\n')
+    return path
+
+
+def test_a_sweep_whose_every_case_fails_exits_1_with_the_first_error(tmp_path):
+    path = _altitude_sweep(tmp_path, [-7000.0, -8000.0])
+    h5, table = tmp_path / "r.h5", tmp_path / "r.csv"
+    result = runner.invoke(app, ["iter", str(path), "-o", str(h5), "--csv", str(table),
+                                 "--serial", "--json"])
+    assert result.exit_code == EXIT_FAILURE
+    assert result.stderr == (f"error: {path}: every case failed (2 of 2); case 0: "
+                             f"ValueError: math domain error (every failure is recorded in "
+                             f"{h5})\n")
+    summary = json.loads(result.stdout)  # the summary is still printed
+    assert (summary["n_succeeded"], summary["n_failed"]) == (0, 2)
+    rows = read_hdf5(h5).table.rows  # and the failures recorded
+    assert [row.status for row in rows] == [CaseStatus.FAILED] * 2
+    assert table.read_text().count("math domain error") == 2
+
+
+def test_a_sweep_with_one_case_that_succeeds_exits_0(tmp_path):
+    path = _altitude_sweep(tmp_path, [-7000.0, 185.0])
+    result = runner.invoke(app, ["iter", str(path), "-o", str(tmp_path / "r.h5"), "--serial"])
+    assert result.exit_code == 0, result.output
+    assert "case 0: ValueError: math domain error" in result.stdout
 
 
 def _scaled_sweep(folder: Path, scale: str) -> Path:

@@ -12,6 +12,7 @@ import h5py
 import pytest
 
 from iter import (
+    AllCasesFailed,
     CallableBody,
     Case,
     CaseStatus,
@@ -90,6 +91,7 @@ def test_failing_case_is_recorded_and_a_rerun_resumes(tmp_path, bodies):
     output = tmp_path / "out.h5"
 
     first = run_sweep(sweep, output_h5=output, execution=SERIAL)
+    first.raise_if_all_failed()  # four cases succeeded: an answer
     assert bodies.calls(calls_dir) == [96.0, 99.0, 102.0, 105.0, 108.0]
     assert [row.status for row in first.table.rows] == [
         CaseStatus.OK, CaseStatus.OK, CaseStatus.FAILED, CaseStatus.OK, CaseStatus.OK]
@@ -285,6 +287,19 @@ def test_program_bodies_have_a_default_timeout():
 
     assert DEFAULT_PROGRAM_TIMEOUT_S == 3600.0
     assert "timeout_s" not in ProgramBody(argv=("tapp",)).definition()  # resumes old files
+
+
+def test_a_sweep_whose_every_case_failed_has_no_answer(tmp_path, bodies):
+    sweep = Sweep(loops=(AZIMUTHS,), body=CallableBody("iter_bodies:raising_body"),
+                  source="all.toml")
+    output = tmp_path / "all.h5"
+    result = run_sweep(sweep, output_h5=output, execution=SERIAL)
+    with pytest.raises(AllCasesFailed) as info:
+        result.raise_if_all_failed()
+    assert (info.value.first_index, info.value.n_cases) == (0, 5)
+    assert str(info.value) == ("all.toml: every case failed (5 of 5); case 0: ValueError: "
+                               f"cannot fly at 96.0 deg (every failure is recorded in {output})")
+    assert [row.status for row in read_hdf5(output).table.rows] == [CaseStatus.FAILED] * 5
 
 
 def _scaled_sweep(folder: Path, scale: str, constants: dict | None = None,
