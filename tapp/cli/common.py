@@ -10,7 +10,11 @@ Exit codes (every command keeps this contract)
     missing, misspelt, of the wrong type or out of range, a truncated or corrupt tape or
     ITER results file, a checksum that does not match), an output path that is an input or
     another output (symbolic links and relative paths resolved) or cannot be written, an
-    epoch outside the ephemeris' coverage. The message is one line on stderr,
+    epoch outside the ephemeris' coverage. ``tapp iter`` also refuses, before any case runs,
+    input that every case would meet: checked on the first case, a file the body reads
+    missing (``body.files``) or invalid (the body's own input check, which names that file
+    and its field), a body that cannot be imported or found, an argument the body does not
+    take or one it needs and is not given. The message is one line on stderr,
     ``error: SOURCE: FIELD: expected WHAT (got VALUE)``, where SOURCE is the option as typed
     (``--process-noise``, ``-o/--output``) when an option is at fault, and the file when a
     file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).
@@ -26,8 +30,10 @@ Exit codes (every command keeps this contract)
 1
     Anything else: a computation that could not be completed (``tapp search``: a trajectory
     that misses the target's sphere of influence; ``tapp dc``, ``tapp ekf``: too few
-    measurements in the arc), or an internal failure (a bug; out of memory). Also one line
-    on stderr.
+    measurements in the arc; ``tapp iter``: every case of the sweep failed, the message
+    giving the first case's error, after the summary is printed and the results file, which
+    records every failure, is written), or an internal failure (a bug; out of memory). Also
+    one line on stderr.
 130
     Interrupted (Ctrl-C).
 
@@ -46,7 +52,8 @@ temporaries beside their targets and renamed over them only once all are complet
 A killed run leaves the old outputs or the new ones, each complete, and possibly hidden
 ``.NAME.*.tmp`` temporaries, which the next write of the same output removes. ``tapp iter``
 checkpoints its results file (each time atomically) as cases complete, so that a killed or
-interrupted sweep can be resumed.
+interrupted sweep can be resumed; a sweep whose every case failed (exit 1) keeps its results
+file and CSV, which record the failures.
 """
 
 from __future__ import annotations
