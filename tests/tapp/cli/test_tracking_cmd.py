@@ -7,11 +7,14 @@ import os
 from pathlib import Path
 
 import pytest
+import tomli_w
 from typer.testing import CliRunner
 
 import tapp.cli.tracking_cmd  # noqa: F401  (registers the commands until tapp.cli imports it)
 from tapp.cli.common import app
 from tapp.tape.t13_hdf5 import read_t13
+from tapp.tracking.simulate import EDITING_RULES
+from tests.tapp.tracking.helpers import geo_document
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
 LEO = SCENARIOS / "leo_equatorial.toml"
@@ -99,3 +102,31 @@ def test_unreadable_tapes(tmp_path: Path) -> None:
     assert missing.exit_code == 2 and "none.h5: file: expected an existing" in missing.stderr
     scenario = runner.invoke(app, ["simulate", str(tmp_path / "none.toml"), "-o", str(out)])
     assert scenario.exit_code == 2 and "none.toml: file:" in scenario.stderr
+
+
+def test_geo_track_counts_printed_and_on_the_tape_add_up(tmp_path: Path) -> None:
+    """The 12 h GEO track with max_pass_s = 8 h: every sample kept in 2 passes per station
+    (tests/tapp/tracking/test_editing.py counts them by hand), and what simulate prints is
+    what the tape says."""
+    scenario, out = tmp_path / "geo.toml", tmp_path / "geo.t13.h5"
+    scenario.write_text(tomli_w.dumps(geo_document()))
+    res = runner.invoke(app, ["simulate", str(scenario), "-o", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    printed = json.loads(res.stdout)["stations"]
+    editing = read_t13(out).editing
+    for i, s in enumerate(printed):
+        removed = [s["removed"][rule]["observations"] for rule in EDITING_RULES]
+        assert s["observations"] + sum(removed) == s["scheduled_observations"] == 144
+        assert (s["observations"], s["passes"], s["passes_added_by_split"]) == (144, 2, 1)
+        assert removed == editing.removed_obs[i].tolist() == [0, 0, 0, 0]
+    text = runner.invoke(app, ["simulate", str(scenario), "-o", str(out)])
+    info = runner.invoke(app, ["tape", "info", str(out)])
+    for res in (text, info):
+        assert res.exit_code == 0, res.output
+        assert "Observations: scheduled = kept + removed by each rule" in res.stdout
+        cells = [[c.strip() for c in line.split("│")[1:-1]] for line in res.stdout.splitlines()]
+        rows = [c[1:] for c in cells if len(c) == 5 + len(EDITING_RULES)]
+        # name, scheduled, kept, removed by each rule, passes (+ added by splitting)
+        assert rows == [[name, "144", "144", "0", "0", "0", "0", "2 (+1)"]
+                        for name in ("UNDER", "EAST")]
+
