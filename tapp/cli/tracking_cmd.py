@@ -31,8 +31,8 @@ from tapp.tape.files import describe
 from tapp.tape.t13 import summary
 from tapp.tape.t13_hdf5 import write_t13
 from tapp.tape.t32 import format_t32_summary
-from tapp.tracking.oem import format_oem
-from tapp.tracking.scenario import read_scenario
+from tapp.tracking.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem, oem_trajectory
+from tapp.tracking.scenario import Scenario, read_scenario
 from tapp.tracking.simulate import Simulation
 from tapp.tracking.simulate import simulate as run_simulation
 
@@ -44,7 +44,7 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
 
 
 def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: str | None = None
-                       ) -> tuple[Simulation, float]:
+                       ) -> tuple[Scenario, Simulation, float]:
     scenario = read_scenario(path, earth_orientation)
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
@@ -57,7 +57,7 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: st
             bar.update(task, description=stage, completed=done, total=total)
 
         sim = run_simulation(scenario, raw=raw, progress=progress)
-    return sim, time.perf_counter() - start
+    return scenario, sim, time.perf_counter() - start
 
 
 def _outputs(output: Path, sim: Simulation, oem: Path | None,
@@ -110,20 +110,25 @@ def simulate(
     def body() -> None:
         check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
                                              "--tdm": tdm})
-        sim, wall_s = _simulate_with_bar(scenario, raw or tdm is not None, quiet=json_out,
-                                         earth_orientation=earth_orientation_option(
-                                             earth_orientation))
+        scenario_run, sim, wall_s = _simulate_with_bar(
+            scenario, raw or tdm is not None, quiet=json_out,
+            earth_orientation=earth_orientation_option(earth_orientation))
         tdm_text = None
         if tdm is not None:
             tdm_text = _tdm_text(sim, scenario)
             if not raw:  # the raw rows were for the TDM only
                 sim = dataclasses.replace(sim, tape=dataclasses.replace(sim.tape, raw=None))
         tape = sim.tape
-        oem_text = None
+        oem_text, oem_states = None, 0
         if oem is not None:
-            oem_text = format_oem(tape.epoch, sim.t_s, sim.states, object_name=tape.iden,
-                                  object_id=tape.iden,
-                                  comments=(f"TAPP I trajectory of {scenario.name}",))
+            traj = oem_trajectory(scenario_run, float(sim.t_s[-1]))
+            oem_states = traj.t_s.size
+            oem_text = format_oem(tape.epoch, traj.t_s, traj.states, object_name=tape.iden,
+                                  object_id=tape.iden, ref_frame=traj.ref_frame,
+                                  interpolation=INTERPOLATION,
+                                  interpolation_degree=INTERPOLATION_DEGREE,
+                                  comments=(f"TAPP I trajectory of {scenario.name}",),
+                                  meta_comments=traj.comments)
         _outputs(output, sim, oem, oem_text, tdm, tdm_text).commit()
         out = {"tape": str(output), "bytes": output.stat().st_size, "iden": tape.iden,
                "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
@@ -143,7 +148,7 @@ def simulate(
                       f"observations in {out['passes']} passes")
         console.print(_editing_table(out["stations"]))
         if oem is not None:
-            console.print(f"OEM {oem} ({sim.t_s.size} states)")
+            console.print(f"OEM {oem} ({oem_states} states)")
         if tdm is not None:
             console.print(f"TDM {tdm} ({out['observations']} observations)")
 
