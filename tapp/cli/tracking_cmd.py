@@ -32,7 +32,7 @@ from tapp.tape.t13 import summary
 from tapp.tape.t13_hdf5 import write_t13
 from tapp.tape.t32 import format_t32_summary
 from tapp.tracking.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem, oem_trajectory
-from tapp.tracking.scenario import Scenario, read_scenario
+from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import Simulation
 from tapp.tracking.simulate import simulate as run_simulation
 
@@ -44,7 +44,7 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
 
 
 def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: str | None = None
-                       ) -> tuple[Scenario, Simulation, float]:
+                       ) -> tuple[Simulation, float]:
     scenario = read_scenario(path, earth_orientation)
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
@@ -57,7 +57,7 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: st
             bar.update(task, description=stage, completed=done, total=total)
 
         sim = run_simulation(scenario, raw=raw, progress=progress)
-    return scenario, sim, time.perf_counter() - start
+    return sim, time.perf_counter() - start
 
 
 def _outputs(output: Path, sim: Simulation, oem: Path | None,
@@ -110,9 +110,9 @@ def simulate(
     def body() -> None:
         check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
                                              "--tdm": tdm})
-        scenario_run, sim, wall_s = _simulate_with_bar(
-            scenario, raw or tdm is not None, quiet=json_out,
-            earth_orientation=earth_orientation_option(earth_orientation))
+        sim, wall_s = _simulate_with_bar(scenario, raw or tdm is not None, quiet=json_out,
+                                         earth_orientation=earth_orientation_option(
+                                             earth_orientation))
         tdm_text = None
         if tdm is not None:
             tdm_text = _tdm_text(sim, scenario)
@@ -121,7 +121,7 @@ def simulate(
         tape = sim.tape
         oem_text, oem_states = None, 0
         if oem is not None:
-            traj = oem_trajectory(scenario_run, float(sim.t_s[-1]))
+            traj = oem_trajectory(sim.scenario, float(sim.t_s[-1]))
             oem_states = traj.t_s.size
             oem_text = format_oem(tape.epoch, traj.t_s, traj.states, object_name=tape.iden,
                                   object_id=tape.iden, ref_frame=traj.ref_frame,

@@ -134,11 +134,13 @@ class Simulation:
     t_s : (N,) trajectory times, s from the epoch (t_0 = 0, the samples and T13 times).
     states : (N, 6) states, km and km/s, Earth-centred, inertial: GCRS under the iau2006
         Earth orientation, EME2000 under gmst.
+    scenario : the scenario simulated (its injection state is ``states[0]``).
     """
 
     tape: T13
     t_s: np.ndarray
     states: np.ndarray
+    scenario: Scenario
 
 
 @dataclass(frozen=True, slots=True)
@@ -626,7 +628,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     )
     t_out = np.concatenate([[0.0], arc.t_s])
     states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])
-    return Simulation(tape, t_out, states)
+    return Simulation(tape, t_out, states, scenario)
 
 
 def _pass_table(stations: tuple[TrackingStation, ...], data: list[_StationData | None]
