@@ -30,9 +30,10 @@ from tapp.od.observations import MadeUnder
 from tapp.od.obsfile import TDM_PREFIX, made_under_statements
 from tapp.outputs import OutputSet, check_paths
 from tapp.tape.files import describe
+from tapp.tape.t13 import summary
 from tapp.tape.t13_hdf5 import write_t13
 from tapp.tape.t32 import format_t32_summary
-from tapp.tracking.oem import format_oem
+from tapp.tracking.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem, oem_trajectory
 from tapp.tracking.scenario import Scenario, read_scenario
 from tapp.tracking.simulate import Simulation
 from tapp.tracking.simulate import simulate as run_simulation
@@ -122,17 +123,23 @@ def simulate(
             if not raw:  # the raw rows were for the TDM only
                 sim = dataclasses.replace(sim, tape=dataclasses.replace(sim.tape, raw=None))
         tape = sim.tape
-        oem_text = None
+        oem_text, oem_states = None, 0
         if oem is not None:
-            oem_text = format_oem(tape.epoch, sim.t_s, sim.states, object_name=tape.iden,
-                                  object_id=tape.iden,
-                                  comments=(f"TAPP I trajectory of {scenario.name}",))
+            traj = oem_trajectory(sim.scenario, float(sim.t_s[-1]))
+            oem_states = traj.t_s.size
+            oem_text = format_oem(tape.epoch, traj.t_s, traj.states, object_name=tape.iden,
+                                  object_id=tape.iden, ref_frame=traj.ref_frame,
+                                  interpolation=INTERPOLATION,
+                                  interpolation_degree=INTERPOLATION_DEGREE,
+                                  comments=(f"TAPP I trajectory of {scenario.name}",),
+                                  meta_comments=traj.comments)
         _outputs(output, sim, oem, oem_text, tdm, tdm_text).commit()
         out = {"tape": str(output), "bytes": output.stat().st_size, "iden": tape.iden,
                "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
                "passes": int(tape.passes.station.size),
-               "observations": int(tape.pairs.n_obs.sum()), "raw": raw,
+               "observations": int(tape.pairs.n_obs.sum()),
+               "stations": summary(tape)["stations"], "raw": raw,
                "oem": None if oem is None else str(oem),
                "tdm": None if tdm is None else str(tdm), "wall_s": wall_s}
         if json_out:
@@ -143,12 +150,31 @@ def simulate(
                       f"{wall_s:.2f} s: n_o = {tape.n_o}, n_p = {tape.n_p}, n_m = {tape.n_m}, "
                       f"n_ts = {tape.n_ts}, n_it = {tape.n_it}; {out['observations']} "
                       f"observations in {out['passes']} passes")
+        console.print(_editing_table(out["stations"]))
         if oem is not None:
-            console.print(f"OEM {oem} ({sim.t_s.size} states)")
+            console.print(f"OEM {oem} ({oem_states} states)")
         if tdm is not None:
             console.print(f"TDM {tdm} ({out['observations']} observations)")
 
     run_guarded(body)
+
+
+def _editing_table(stations: list[dict]) -> Table:
+    """Per station: observations scheduled, kept, removed by each rule (passes removed whole
+    in parentheses), passes and those added by splitting at max_pass_s (T13 ``editing/``)."""
+    rules = list(stations[0]["removed"])
+    table = Table(title="Observations: scheduled = kept + removed by each rule (passes removed "
+                        "whole)")
+    for col in ("s", "name", "scheduled", "kept", *(r.replace("_", " ") for r in rules),
+                "passes (+ split)"):
+        table.add_column(col, justify="right")
+    for s in stations:
+        removed = [f"{r['observations']}" + (f" ({r['passes']})" if r["passes"] else "")
+                   for r in s["removed"].values()]
+        table.add_row(str(s["id"]), s["name"], str(s["scheduled_observations"]),
+                      str(s["observations"]), *removed,
+                      f"{s['passes']} (+{s['passes_added_by_split']})")
+    return table
 
 
 def _print_t13(info: dict) -> None:
@@ -172,6 +198,8 @@ def _print_t13(info: dict) -> None:
                       f"{s['lon_deg']:.4f}", f"{s['h_km']:.3f}", str(s["passes"]),
                       str(s["observations"]))
     console.print(table)
+    if "removed" in info["stations"][0]:  # tapes written before the counts have none
+        console.print(_editing_table(info["stations"]))
     table = Table(title="Epoch times")
     for col in ("index", "t (s)", "UTC"):
         table.add_column(col, justify="right")

@@ -15,9 +15,11 @@ station) pairs with data and their square-root information over (t_{k-1}, t_k] r
 t_j: upper-triangular factors R, R̃ with RᵀR = AᵀWA and R̃ᵀR̃ = AᵀWMWA, R̃ optionally split
 into the factors of its white-noise, per-pass bias and exponentially correlated parts
 (:class:`TapePairs`; the normal matrices are their Gram matrices, :attr:`TapePairs.dJ`), the
-tracking passes (:class:`TapePasses`) and, optionally, one row per scalar observation
-(:class:`TapeRaw`). Units: factor entry (r, b) in 1/u_b with u the parameters' units (normal
-matrices 1/(u_a u_b)); U and B entries in (unit of row)/(unit of column).
+tracking passes (:class:`TapePasses`), optionally what the tracking schedule asked for and
+what each rule that removes data removed, per station (:class:`TapeEditing`), and, optionally,
+one row per scalar observation (:class:`TapeRaw`). Units: factor entry (r, b) in 1/u_b with
+u the parameters' units (normal matrices 1/(u_a u_b)); U and B entries in (unit of row)/(unit
+of column).
 
 Version 3 carries the factors. Versions 1 and 2 carried the normal matrices themselves; their
 readers turn each into a factor (:func:`factor_normal_matrices`), which can keep only the
@@ -77,8 +79,9 @@ BLOCK_BYTES = 1 << 25
 
 __all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PARTS", "PARTS_TOL",
            "SUPPORTED_VERSIONS", "SYMMETRY_TOL", "T13", "VERSION", "MemoryPairs", "PairBlock",
-           "TapeMiss", "TapePairs", "TapeParameters", "TapePasses", "TapeRaw", "TapeRecords",
-           "TapeStations", "LEGACY_PSD_TOL", "check_factors", "check_parts_sum", "column_norms2",
+           "LEGACY_PSD_TOL", "TapeEditing", "TapeMiss", "TapePairs", "TapeParameters",
+           "TapePasses", "TapeRaw", "TapeRecords", "TapeStations", "check_factors",
+           "check_parts_sum", "column_norms2",
            "factor_normal_matrices", "memory_pairs", "packed_column_norms2", "summary",
            "utc_at", "validate"]
 
@@ -195,6 +198,41 @@ class TapePasses:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
+class TapeEditing:
+    """What the tracking schedule asked of each station and what each rule removed.
+
+    Counts are scalar observations (a sample of a station that measures m observables is m
+    observations) and passes. Every scheduled observation is either on the tape (in
+    ``pairs/n_obs``) or counted under exactly one rule, the first that removed it:
+
+    .. math:: \\text{scheduled}_s = \\sum_k n_{obs}(k, s) + \\sum_r \\text{removed}_{s,r}
+
+    Attributes
+    ----------
+    rule : (n_rules,) names of the rules, in the order they apply (the simulator's: TAPP I's
+        are in :data:`tapp.tracking.simulate.EDITING_RULES`).
+    scheduled_obs : (n_ts,) int observations on the schedule's sample times.
+    removed_obs : (n_ts, n_rules) int observations removed by each rule.
+    removed_passes : (n_ts, n_rules) int passes removed whole by each rule (0 for a rule that
+        acts on samples before passes are formed).
+    added_passes : (n_ts,) int passes added by splitting passes longer than the longest pass
+        (no observation removed).
+    """
+
+    rule: tuple[str, ...]
+    scheduled_obs: np.ndarray
+    removed_obs: np.ndarray
+    removed_passes: np.ndarray
+    added_passes: np.ndarray
+
+    def kept_obs(self, pairs: TapePairs) -> np.ndarray:
+        """Observations on the tape per station, (n_ts,) int (from the pairs)."""
+        n_ts = self.scheduled_obs.size
+        return np.bincount(pairs.station - 1, weights=pairs.n_obs, minlength=n_ts
+                           ).astype(np.int64)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
 class TapeRaw:
     """One row per scalar observation, for validation (columns: :mod:`tapp.tape.t13_hdf5`).
 
@@ -223,7 +261,7 @@ class T13:
 
     ``provenance`` holds the root attributes that describe how the tape was made
     (scenario JSON and source on writing; plus tapp_version, git_commit, created_utc on
-    reading).
+    reading). ``editing`` is None on tapes written before it was recorded.
     """
 
     iden: str
@@ -237,6 +275,7 @@ class T13:
     passes: TapePasses
     raw: TapeRaw | None = None
     provenance: dict[str, str] = field(default_factory=dict)
+    editing: TapeEditing | None = None
 
     @property
     def n_o(self) -> int:
@@ -484,6 +523,30 @@ def _validate_header(c: Checker, tape: T13) -> None:
     c.finite("passes/t_end_s", ps.t_end_s)
     if np.any((ps.station < 1) | (ps.station > n_ts)) or np.any(ps.t_end_s < ps.t_start_s):
         c.fail("passes/station", f"station numbers in 1..{n_ts} and t_start_s <= t_end_s")
+    if tape.editing is not None:
+        _validate_editing(c, tape.editing, pairs, n_ts)
+
+
+def _validate_editing(c: Checker, ed: TapeEditing, pairs: TapePairs, n_ts: int) -> None:
+    """Shapes, counts >= 0, and every scheduled observation kept or removed by one rule."""
+    n_rules = len(ed.rule)
+    if len(set(ed.rule)) != n_rules or not all(ed.rule):
+        c.fail("editing/rule", "unique, non-empty rule names", list(ed.rule))
+    for name, value, shape in (("scheduled_obs", ed.scheduled_obs, (n_ts,)),
+                               ("removed_obs", ed.removed_obs, (n_ts, n_rules)),
+                               ("removed_passes", ed.removed_passes, (n_ts, n_rules)),
+                               ("added_passes", ed.added_passes, (n_ts,))):
+        c.shape(f"editing/{name}", value, shape)
+        if np.any(value < 0):
+            c.fail(f"editing/{name}", "counts >= 0", value.tolist())
+    kept = ed.kept_obs(pairs)
+    accounted = kept + ed.removed_obs.sum(axis=1)
+    if not np.array_equal(accounted, ed.scheduled_obs):
+        s = int(np.argmax(accounted != ed.scheduled_obs))
+        c.fail("editing/scheduled_obs", "the observations kept (pairs/n_obs) plus those "
+               "removed (editing/removed_obs) at every station",
+               f"{ed.scheduled_obs[s]} scheduled at station {s + 1}, {kept[s]} kept + "
+               f"{accounted[s] - kept[s]} removed")
 
 
 def _validate_raw(c: Checker, raw: TapeRaw, n_o: int, n_ts: int, n_it: int) -> None:
@@ -613,9 +676,12 @@ def memory_pairs(tape: T13) -> MemoryPairs:
 
 def summary(tape: T13, *, version: int = VERSION) -> dict:
     """Return a JSON-ready summary: dimensions, parameters, stations with their passes and
-    observations, epoch times, records and provenance (``version``: of the tape read)."""
+    observations (and, when the tape has them, the observations scheduled and removed by each
+    rule: :class:`TapeEditing`), epoch times, records and provenance (``version``: of the tape
+    read)."""
     rec = tape.records
     epoch_times = rec.times_s[rec.is_epoch]
+    editing = tape.editing
     stations = []
     for sid, name, obs, lat, lon, h in zip(tape.stations.id, tape.stations.name,
                                            tape.stations.observables, tape.stations.lat_deg,
@@ -627,7 +693,8 @@ def summary(tape: T13, *, version: int = VERSION) -> dict:
             "lon_deg": float(lon), "h_km": float(h),
             "passes": int(np.count_nonzero(tape.passes.station == sid)),
             "observations": int(tape.pairs.n_obs[mine].sum()),
-            "records_with_data": int(np.count_nonzero(mine))})
+            "records_with_data": int(np.count_nonzero(mine)),
+            **({} if editing is None else _editing_summary(editing, int(sid) - 1))})
     return {
         "format": FORMAT, "version": version, "iden": tape.iden, "epoch_utc": tape.epoch.iso(3),
         "dimensions": {"n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
@@ -649,6 +716,15 @@ def summary(tape: T13, *, version: int = VERSION) -> dict:
                  "nominal": tape.miss.nominal.tolist()},
         "provenance": {k: v for k, v in tape.provenance.items() if k != "scenario"},
     }
+
+
+def _editing_summary(ed: TapeEditing, i: int) -> dict:
+    """The editing counts of station index ``i``, for :func:`summary`."""
+    return {"scheduled_observations": int(ed.scheduled_obs[i]),
+            "removed": {rule: {"observations": int(n), "passes": int(p)}
+                        for rule, n, p in zip(ed.rule, ed.removed_obs[i], ed.removed_passes[i],
+                                              strict=True)},
+            "passes_added_by_split": int(ed.added_passes[i])}
 
 
 def utc_at(epoch: Epoch, t_s: float, decimals: int = 3) -> str:

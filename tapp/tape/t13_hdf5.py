@@ -49,6 +49,17 @@ pairs/Rt_parts (optional)   (n_pairs, 3, L)        the factors of the white-nois
                                                    sum to R̃ᵀR̃
 passes/station, t_start_s,  (n_passes,)            tracking passes (before any split at T13
 t_end_s, n_obs                                     times)
+editing/ (optional)                                what the schedule asked for and what each
+                                                   rule removed (tapp.tape.t13.TapeEditing):
+editing/rule                (n_rules,) str         the rules, in the order they apply
+editing/scheduled_obs       (n_ts,) int            scalar observations on the schedule's
+                                                   sample times
+editing/removed_obs,        (n_ts, n_rules) int    observations, passes removed by each rule
+removed_passes                                     (each observation under the first rule that
+                                                   removed it: scheduled_obs = kept (sum of
+                                                   pairs/n_obs) + sum of removed_obs)
+editing/added_passes        (n_ts,) int            passes added by splitting passes longer
+                                                   than the scenario's max_pass_s
 raw/... (optional)          (N, ...)               one row per scalar observation: t_s,
                                                    station, kind (code into attr ``kinds``),
                                                    record, segment, value, A (N, n_o) referred
@@ -109,6 +120,7 @@ from tapp.tape.t13 import (
     UNITS_NOTE,
     VERSION,
     PairBlock,
+    TapeEditing,
     TapeMiss,
     TapePairs,
     TapeParameters,
@@ -228,6 +240,15 @@ def _write(f: h5py.File, tape: T13, packing: str, version: int = VERSION) -> Non
     numbers(g, "t_start_s", ps.t_start_s, "s")
     numbers(g, "t_end_s", ps.t_end_s, "s")
     numbers(g, "n_obs", ps.n_obs, "")
+
+    if tape.editing is not None:
+        ed = tape.editing
+        g = f.create_group("editing")
+        strings(g, "rule", ed.rule)
+        numbers(g, "scheduled_obs", ed.scheduled_obs, "scalar observations")
+        numbers(g, "removed_obs", ed.removed_obs, "scalar observations")
+        numbers(g, "removed_passes", ed.removed_passes, "passes")
+        numbers(g, "added_passes", ed.added_passes, "passes")
 
     if tape.raw is not None:
         raw = tape.raw
@@ -407,6 +428,12 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, n
     pairs = TapePairs(k, r.read("pairs/station", "i"), r.read("pairs/n_obs", "i"), *factors)
     passes = TapePasses(r.read("passes/station", "i"), r.read("passes/t_start_s"),
                         r.read("passes/t_end_s"), r.read("passes/n_obs", "i"))
+    editing = None
+    if r.has("editing"):
+        editing = TapeEditing(r.strings("editing/rule"),
+                              *(r.read(f"editing/{name}", "i") for name in (
+                                  "scheduled_obs", "removed_obs", "removed_passes",
+                                  "added_passes")))
     tape_raw = None
     if raw and r.has("raw"):
         kinds = r.attr("kinds", list, owner="raw", default=())
@@ -418,7 +445,7 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, n
                                                     "created_utc", *SCENARIO_PROVENANCE)
                   if r.has_attr(key)}
     tape = T13(r.attr("iden", str), epoch, dims["n_p"], parameters, stations, miss, records,
-               pairs, passes, tape_raw, provenance)
+               pairs, passes, tape_raw, provenance, editing)
     return tape, r.read("records/t_s")
 
 
