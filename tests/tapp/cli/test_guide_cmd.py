@@ -76,6 +76,8 @@ def test_guide_prints_markdown_and_writes_json_and_plots(files, scheduler, tmp_p
     assert set(mc["manoeuvres"][0]["magnitude"]["percentiles_km_s"]) == {"50", "90", "99"}
     assert lin["total"]["sigma_km_s"] is None and lin["outside_corridor"]["either"] is None
     assert len(mc["miss_cov"]) == 3 and mc["bplane_ellipse"]["semi_major_km"] > 0
+    assert content["left_out"] == {} and content["agreement"]["statistics"] == 18
+    assert "## Linear covariance against the Monte Carlo" in out
     assert sorted(p.name for p in plots.iterdir()) == ["bplane_scatter.png",
                                                         "dv_histograms.png"]
     for png in plots.iterdir():
