@@ -3,6 +3,7 @@ values, in the Markdown and the JSON alike."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 
@@ -46,6 +47,25 @@ def test_a_tape_without_bplane_or_flight_time_prints_no_such_table(elements):
     assert content["left_out"] == why and "corridor" not in content
     for method in ("monte_carlo", "linear"):
         assert set(why).isdisjoint(content[method]) and "miss_cov" in content[method]
+
+
+def test_a_tape_with_a_flight_time_but_no_bplane_prints_the_flight_time_alone():
+    """The deep-space tape with its B·R, B·T renamed (so no longer B-plane components)."""
+    names = ("r_km", "t_km", "flight_time_s")
+    tape = dataclasses.replace(deep_space_t32(), miss_name=names)
+    r = guidance_study(tape, guide(targets={"miss": list(names[:2])}), samples=2000, seed=1,
+                       execution=SERIAL)
+    md = guidance_markdown(r)
+    table = md[md.index("## Flight-time dispersion (1σ)"):]
+    assert table.splitlines()[2] == "| method | σ flight time (s) |"
+    assert "semi-major" not in md and "## B-plane dispersion" not in md
+    assert md.splitlines().count("No B-plane dispersion ellipse: the tape has no B-plane miss "
+                                 "components (b_dot_t_km, b_dot_r_km); its miss components: "
+                                 "r_km, t_km, flight_time_s.") == 1
+    content = guidance_dict(r)
+    assert set(content["left_out"]) == {"bplane_ellipse", "outside_corridor"}
+    assert content["linear"]["flight_time_sigma_s"] > 0 and "bplane_ellipse" not in \
+        content["linear"]
 
 
 @pytest.fixture(scope="module")
