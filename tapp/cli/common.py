@@ -10,7 +10,9 @@ Exit codes (every command keeps this contract)
     missing, misspelt, of the wrong type or out of range, a truncated or corrupt tape or
     ITER results file, a checksum that does not match), an output path that is an input or
     another output (symbolic links and relative paths resolved) or cannot be written, an
-    epoch outside the ephemeris' coverage. The message is one line on stderr,
+    epoch outside the ephemeris' coverage, a scenario whose B-plane miss has no encounter
+    (``tapp simulate``, ``tapp pipeline``: the message names the closest approach;
+    :mod:`tapp.tracking.encounter`). The message is one line on stderr,
     ``error: SOURCE: FIELD: expected WHAT (got VALUE)``, where SOURCE is the option as typed
     (``--process-noise``, ``-o/--output``) when an option is at fault, and the file when a
     file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).
@@ -19,12 +21,16 @@ Exit codes (every command keeps this contract)
     (3), found the normal matrix too ill-conditioned to iterate (4; the condition number and
     the undetermined state directions are printed), stalled above the fit limit (5) or
     reached its iteration limit while still converging (6) (:mod:`tapp.cli.od`);
-    ``tapp search`` diverged (3) or met a singular matrix (4).
+    ``tapp search`` diverged (3) or met a singular matrix (4) (``--write-scenario`` is then
+    not written: a scenario that misses its aim point is no answer). ``tapp simulate`` of a
+    scenario with a ``[targeting]`` table whose SEARCH diverged (3) or met a singular matrix
+    (4): one line on stderr, and no tape (there is no injection to simulate).
 1
-    Anything else: a computation that could not be completed (``tapp search``: a trajectory
-    that misses the target's sphere of influence; ``tapp dc``, ``tapp ekf``: too few
-    measurements in the arc), or an internal failure (a bug; out of memory). Also one line
-    on stderr.
+    Anything else: a computation that could not be completed (``tapp search``, or the
+    ``[targeting]`` of ``tapp simulate``: a trajectory that misses the target's sphere of
+    influence, or a conic first guess that cannot be formed; ``tapp dc``, ``tapp ekf``: too
+    few measurements in the arc), or an internal failure (a bug; out of memory). Also one
+    line on stderr.
 130
     Interrupted (Ctrl-C).
 
@@ -243,10 +249,10 @@ def run_guarded(fn: Callable[[], T]) -> T:
     try:
         return fn()
     except (InputError, TapeError) as exc:
-        typer.echo(f"error: {_one_line(exc)}", err=True)
+        echo_error(exc)
         raise typer.Exit(EXIT_INPUT) from None
     except TappError as exc:
-        typer.echo(f"error: {_one_line(exc)}", err=True)
+        echo_error(exc)
         raise typer.Exit(EXIT_FAILURE) from None
     except OSError as exc:
         if exc.filename is None:
@@ -260,8 +266,10 @@ def run_guarded(fn: Callable[[], T]) -> T:
         raise typer.Exit(EXIT_FAILURE) from None
 
 
-def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split())
+def echo_error(exc: BaseException) -> None:
+    """Write ``error: MESSAGE`` on stderr, the message on one line."""
+    message = " ".join(str(exc).split())
+    typer.echo(f"error: {message}", err=True)
 
 
 def _to_jsonable(obj: object) -> object:
