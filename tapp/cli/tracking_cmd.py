@@ -231,6 +231,10 @@ def _print_t13(info: dict) -> None:
                   f"{prov.get('created_utc', '?')} from {prov.get('scenario_source', '?')}; "
                   f"Earth orientation {prov.get('earth_orientation', 'gmst (not recorded)')}"
                   + (f", EOP {prov['eop']}" if prov.get("eop") else ""))
+    if prov.get("targeting"):
+        record = json.loads(prov["targeting"])
+        console.print(f"injection retargeted by SEARCH ({record['status']} in {record['cases']} "
+                      "cases) to " + ", ".join(f"{n} = {v:g}" for n, v in record["aim"].items()))
 
 
 @tape_app.command("info")

@@ -34,6 +34,8 @@ Laplace's radius is 1,100 km from its value at periapsis.
 relative to the body, as SEARCH's program finds it (:meth:`tapp.targeting.BPlaneProgram
 .evaluate`: the first closest approach inside the sphere of influence on a 600 s scan, then
 Newton on r·v = 0), within SEARCH's default horizon (8 days) or the scenario's span if longer.
+That program flies the nominal model parameters: with ``[parameters.values]`` other than
+nominal the miss is at the nominal trajectory's periapsis (still inside the encounter).
 
 **Retargeting** (``[targeting]``): SEARCH on the scenario's own models and Earth orientation
 (:func:`tapp.targeting.scenario_targeting`) moves the injection velocity to the aim point; the

@@ -417,7 +417,9 @@ def _difference(f: Callable[[np.ndarray], np.ndarray], x: np.ndarray, steps: np.
 def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """Return the nominal miss parameters (n_m,) and B = ∂m/∂x(t_0) (n_m, n_o).
 
-    Equations in the module docstring (item 4).
+    Equations in the module docstring (item 4). The miss time must be resolved (a
+    ``"periapsis"`` one is found by :func:`tapp.tracking.encounter.prepare_encounter`, which
+    :func:`simulate` runs first).
 
     Raises
     ------

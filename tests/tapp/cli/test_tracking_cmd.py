@@ -250,3 +250,14 @@ def test_a_search_that_does_not_converge_writes_no_tape(tmp_path: Path, table: s
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"error: {path}: targeting: {says}"), lines
     assert sorted(p.name for p in tmp_path.iterdir()) == ["moved.toml"]
+
+
+def test_tape_info_says_the_injection_was_retargeted(retargeted_run, tmp_path: Path) -> None:
+    tape_path, out, _ = retargeted_run
+    res = runner.invoke(app, ["tape", "info", str(tape_path)])
+    assert res.exit_code == 0, res.output
+    assert (f"injection retargeted by SEARCH (converged in {out['targeting']['cases']} cases) "
+            "to b_dot_r_km = -2000, b_dot_t_km = 5300") in " ".join(res.stdout.split())
+    plain = tmp_path / "leo.t13.h5"
+    assert runner.invoke(app, ["simulate", str(LEO), "-o", str(plain)]).exit_code == 0
+    assert "retargeted" not in runner.invoke(app, ["tape", "info", str(plain)]).stdout
