@@ -1,4 +1,5 @@
-"""An independent reference for the encounter tests: trajectory and B-plane written here.
+"""An independent reference for the encounter tests (trajectory and B-plane written here),
+and the moved-epoch scenario they run.
 
 The trajectory is integrated by SciPy's DOP853 with a NumPy right-hand side of this module:
 the Earth's point mass and J2 about its pole at the epoch, the Sun and the Moon as third bodies
