@@ -4,7 +4,8 @@ A *loop* varies n named parameters over ``sets`` cases, either from a full table
 from a first row plus increments (type 2); loops nest to any depth, inner loops restarting
 for every outer case. The *body* is a Python callable (``"module:function"``) or a command-line
 program; each case gives one row of a results table (varied values, outputs, status, error),
-written to HDF5 and CSV. See :mod:`iter.sweepfile` for the sweep-file format.
+written to HDF5 and CSV. See :mod:`iter.sweepfile` for the sweep-file format, the rule for
+the paths in it (taken from the sweep file's folder) and the checks made before any case runs.
 
 This package knows nothing of ``tapp`` and never imports it. Inside it, use relative imports:
 ``import iter`` would shadow the builtin ``iter()``; from outside, ``from iter import ...`` or
@@ -21,8 +22,8 @@ of :mod:`iter.execute`) does not load h5py.
 
 import importlib
 
-from .body import CallableBody, ProgramBody, resolve_callable, run_case
-from .errors import IterError, ResultFileError, SchedulerError, SweepInputError
+from .body import CallableBody, ProgramBody, input_check, resolve_callable, run_case
+from .errors import AllCasesFailed, IterError, ResultFileError, SchedulerError, SweepInputError
 from .execute import Execution, probe_scheduler
 from .loops import Case, Loop, case_count, generate_cases
 from .sweep import Sweep
@@ -30,11 +31,11 @@ from .sweepfile import load_sweep, parse_sweep
 from .table import CaseResult, CaseStatus, ResultTable
 
 __all__ = [
-    "CallableBody", "Case", "CaseResult", "CaseStatus", "Execution", "IterError", "Loop",
-    "ProgramBody", "ResultFileError", "ResultTable", "SchedulerError", "Sweep",
-    "SweepInputError", "SweepResult", "SweepSummary", "case_count", "generate_cases",
-    "load_sweep", "parse_sweep", "probe_scheduler", "read_hdf5", "resolve_callable",
-    "run_case", "run_sweep", "write_csv", "write_hdf5",
+    "AllCasesFailed", "CallableBody", "Case", "CaseResult", "CaseStatus", "Execution",
+    "IterError", "Loop", "ProgramBody", "ResultFileError", "ResultTable", "SchedulerError",
+    "Sweep", "SweepInputError", "SweepResult", "SweepSummary", "case_count", "generate_cases",
+    "input_check", "load_sweep", "parse_sweep", "probe_scheduler", "read_hdf5",
+    "resolve_callable", "run_case", "run_sweep", "write_csv", "write_hdf5",
 ]
 
 #: Public names imported on first use, and their modules (which load h5py).

@@ -10,6 +10,14 @@ Two kinds, both picklable so Dask can ship them to workers:
   ``--json`` appended (unless turned off); its stdout must be one JSON object, which is taken
   as the outputs.
 
+Both take ``files``: named paths passed like constants, each as an absolute path (the sweep
+file reader takes relative ones from the sweep file's folder); each must exist.
+
+Before a sweep runs, :meth:`CallableBody.check_case` checks the first case's inputs: the
+function resolves, every file exists, every argument is one the function takes and none it
+needs is missing, and, if the function offers one (:func:`input_check`), its own input check
+passes. An error there would be an error of every case, so the sweep stops before it starts.
+
 Outputs are flattened into named scalars: a nested mapping ``{"b": {"t_km": 1.0}}`` gives
 ``b.t_km``, a list ``{"r_km": [1, 2, 3]}`` gives ``r_km[0]``, ``r_km[1]``, ``r_km[2]``. Numbers
 become floats, ``null`` becomes NaN, text stays text; anything else fails the case.
@@ -29,6 +37,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import inspect
 import json
 import math
 import os
@@ -41,12 +50,18 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
 from .errors import IterError, SweepInputError
 from .loops import Case
 from .table import RESERVED_COLUMNS, CaseResult, CaseStatus, OutputValue
+
+#: Attribute under which a body function carries its input check (:func:`input_check`).
+INPUT_CHECK_ATTRIBUTE = "iter_input_check"
+
+F = TypeVar("F", bound=Callable[..., object])
 
 #: Characters of a failing program's stderr kept in the error message (its tail).
 STDERR_TAIL_CHARS = 400
@@ -146,6 +161,72 @@ def _cached_callable(target: str) -> Callable[..., object]:
     return resolve_callable(target)
 
 
+def input_check(check: Callable[..., object]) -> Callable[[F], F]:
+    """Return a decorator that gives a body function ``check`` as its input check.
+
+    ``check`` takes the body's keyword arguments (constants, files and varied values) and
+    raises on input it refuses, naming the file and the field where it can (``iter``'s
+    :class:`~iter.errors.SweepInputError`, or the caller's own input-error type: whatever it
+    raises stops the sweep unchanged). It must be cheap: read and validate the inputs, never
+    compute. It runs once, on the first case to run, before any case runs or anything is
+    written; the body should call it too, so that a case run alone is checked the same way.
+
+    >>> def check(x_km):
+    ...     if x_km < 0:
+    ...         raise SweepInputError("sweep.toml", "x_km", "a length >= 0", x_km)
+    >>> @input_check(check)
+    ... def body(x_km):
+    ...     check(x_km)
+    ...     return {"y_km": 2.0 * x_km}
+    >>> getattr(body, INPUT_CHECK_ATTRIBUTE) is check
+    True
+    """
+    def attach(function: F) -> F:
+        setattr(function, INPUT_CHECK_ATTRIBUTE, check)
+        return function
+
+    return attach
+
+
+def _check_files(files: Mapping[str, str], source: str) -> None:
+    """Raise SweepInputError (field ``body.files.NAME``) for a file that does not exist."""
+    for name, path in files.items():
+        if not Path(path).exists():
+            raise SweepInputError(source, f"body.files.{name}", "an existing file (a relative "
+                                  "path is taken from the sweep file's folder)", path)
+
+
+def _check_arguments(function: Callable[..., object], target: str,
+                     arguments: Mapping[str, object], fields: Mapping[str, str],
+                     source: str) -> None:
+    """Raise SweepInputError unless ``function`` can be called with ``arguments`` by keyword.
+
+    ``fields`` names, for each argument, the sweep-file field that gives it.
+    """
+    try:
+        parameters = inspect.signature(function).parameters.values()
+    except ValueError:  # a compiled function that declares no signature: nothing to check
+        return
+    keywords = [p.name for p in parameters if p.kind in (p.POSITIONAL_OR_KEYWORD,
+                                                         p.KEYWORD_ONLY)]
+    if not any(p.kind is p.VAR_KEYWORD for p in parameters):
+        for name, value in arguments.items():
+            if name not in keywords:
+                raise SweepInputError(source, fields[name], f"an argument of {target} "
+                                      f"({', '.join(keywords) or 'it takes none'})", value)
+    for p in parameters:
+        if (p.default is p.empty and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
+                and (p.name not in arguments or p.kind is p.POSITIONAL_ONLY)):
+            raise SweepInputError(source, "body.constants", f"a value for the argument "
+                                  f"{p.name!r} of {target} (a constant, a file or a varied "
+                                  "name)")
+
+
+def names_a_path(name: str) -> bool:
+    """Return True when program ``name`` has a directory part (a path, not a name on PATH)."""
+    return os.sep in name or (os.altsep is not None and os.altsep in name)
+
+
 def find_executable(name: str) -> str | None:
     """Return the path of program ``name``, or None when it cannot be found.
 
@@ -153,7 +234,7 @@ def find_executable(name: str) -> str | None:
     then next to the running Python interpreter, so ``tapp`` is found in an unactivated
     virtual environment.
     """
-    if os.sep in name or (os.altsep is not None and os.altsep in name):
+    if names_a_path(name):
         return name if os.access(name, os.X_OK) else None
     return shutil.which(name) or shutil.which(name, path=str(Path(sys.executable).parent))
 
@@ -214,21 +295,52 @@ class CallableBody:
         no limit; a number runs each case in a child process, killed at the limit (the
         constants and outputs must then be picklable, and each case pays for starting a
         Python process).
+    files : mapping of str to str
+        Paths passed to every case as keyword arguments, like constants; absolute (a
+        relative path is taken from the current directory of the process running the case).
     """
 
     target: str
     constants: Mapping[str, object] = field(default_factory=dict)
     timeout_s: float | None = None
+    files: Mapping[str, str] = field(default_factory=dict)
 
     def check(self, source: str) -> None:
-        """Raise SweepInputError (field ``body.callable``) unless the target resolves."""
+        """Raise SweepInputError (field ``body.callable`` or ``body.files.NAME``) unless the
+        target resolves and every file exists."""
         resolve_callable(self.target, source)
+        _check_files(self.files, source)
+
+    def check_case(self, case: Case, source: str, fields: Mapping[str, str]) -> None:
+        """Raise unless ``case`` can run: :meth:`check`, the arguments against the function's
+        signature, then the function's own input check if it offers one (:func:`input_check`).
+
+        ``fields`` names the sweep-file field of each varied name (``loop[1].names``).
+
+        Raises
+        ------
+        SweepInputError
+            Naming ``source`` and the field: the target, a missing file, an argument the
+            function does not take or one it needs and is not given.
+        Exception
+            Whatever the function's input check raises, unchanged.
+        """
+        self.check(source)
+        function = resolve_callable(self.target, source)
+        arguments = _arguments(self, case)
+        _check_arguments(function, self.target, arguments, {**_fields(self), **fields},
+                         source)
+        check = getattr(function, INPUT_CHECK_ATTRIBUTE, None)
+        if check is not None:
+            check(**arguments)
 
     def definition(self) -> dict[str, object]:
         """Return the body as the ``[body]`` table of a sweep file."""
         table: dict[str, object] = {"callable": self.target, "constants": dict(self.constants)}
         if self.timeout_s is not None:
             table["timeout_s"] = self.timeout_s
+        if self.files:
+            table["files"] = dict(self.files)
         return table
 
     def __call__(self, case: Case) -> object:
@@ -241,7 +353,7 @@ class CallableBody:
         ChildFailure
             The function raised in its child process (``timeout_s`` set).
         """
-        kwargs = {**self.constants, **case.kwargs()}
+        kwargs = _arguments(self, case)
         if self.timeout_s is None:
             return _cached_callable(self.target)(**kwargs)
         payload = pickle.dumps(([p for p in sys.path if p], self.target, kwargs))
@@ -276,6 +388,9 @@ class ProgramBody:
         programs (``tapp``) expect.
     timeout_s : float or None
         Wall-time limit per case, s; None for :data:`DEFAULT_PROGRAM_TIMEOUT_S`.
+    files : mapping of str to str
+        Paths passed to every case as ``--name path``, like constants; absolute (a relative
+        path is taken from the current directory).
     """
 
     argv: tuple[str, ...]
@@ -283,13 +398,21 @@ class ProgramBody:
     json_option: bool = True
     dashes: bool = False
     timeout_s: float | None = None
+    files: Mapping[str, str] = field(default_factory=dict)
 
     def check(self, source: str) -> None:
-        """Raise SweepInputError (field ``body.program``) unless the program is found."""
+        """Raise SweepInputError (field ``body.program`` or ``body.files.NAME``) unless the
+        program is found and every file exists."""
         if find_executable(self.argv[0]) is None:
             raise SweepInputError(source, "body.program",
                                   "a program on PATH, next to the Python interpreter, or a "
                                   "path to an executable", self.argv[0])
+        _check_files(self.files, source)
+
+    def check_case(self, case: Case, source: str, fields: Mapping[str, str]) -> None:
+        """Raise SweepInputError unless the program is found and every file exists (a
+        program offers no input check of its own: its arguments are its to check)."""
+        self.check(source)
 
     def definition(self) -> dict[str, object]:
         """Return the body as the ``[body]`` table of a sweep file."""
@@ -297,13 +420,15 @@ class ProgramBody:
                                     "dashes": self.dashes, "constants": dict(self.constants)}
         if self.timeout_s is not None:
             table["timeout_s"] = self.timeout_s
+        if self.files:
+            table["files"] = dict(self.files)
         return table
 
     def command(self, case: Case) -> list[str]:
         """Return the command line for ``case``."""
         executable = find_executable(self.argv[0]) or self.argv[0]
         args = [executable, *self.argv[1:]]
-        for name, value in (*self.constants.items(), *case.kwargs().items()):
+        for name, value in _arguments(self, case).items():
             option = "--" + (name.replace("_", "-") if self.dashes else name)
             if value is True:
                 args.append(option)
@@ -339,6 +464,18 @@ class ProgramBody:
 
 
 Body = CallableBody | ProgramBody
+
+
+def _arguments(body: Body, case: Case) -> dict[str, object]:
+    """Return the arguments of ``case``: the constants, the files, then the varied values."""
+    return {**body.constants, **body.files, **case.kwargs()}
+
+
+def _fields(body: Body) -> dict[str, str]:
+    """Return the sweep-file field of each constant and file of ``body``."""
+    return {**{name: f"body.constants.{name}" for name in body.constants},
+            **{name: f"body.files.{name}" for name in body.files}}
+
 
 #: Prefix given to an output whose name is a varied name or a reserved column.
 CLASH_PREFIX = "output."

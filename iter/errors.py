@@ -6,7 +6,9 @@ small hierarchy. The ``tapp iter`` command maps :class:`SweepInputError`,
 field for field, and the others onto ``tapp.errors.TappError``.
 
 A failing *case* (the body raises, or the program exits non-zero) is not an exception at this
-level: it is recorded in the results table with its message, and the sweep goes on.
+level: it is recorded in the results table with its message, and the sweep goes on. A sweep
+whose every case failed has no answer: :meth:`iter.run.SweepResult.raise_if_all_failed`
+raises :class:`AllCasesFailed` for it, once the failures are recorded.
 """
 
 from __future__ import annotations
@@ -85,3 +87,32 @@ class ResultFileError(IterError):
         self.got = got
         detail = "" if got is None else f" (got {got!r})"
         super().__init__(f"{path}: {field}: expected {expected}{detail}")
+
+
+class AllCasesFailed(IterError):
+    """Every case of a sweep failed: the table holds failures only, no answer.
+
+    Parameters
+    ----------
+    source : str
+        The sweep (its file path).
+    n_cases : int
+        Cases in the sweep, every one failed.
+    first_index : int
+        The first failed case (the lowest case number).
+    first_error : str
+        Its error, ``"ExceptionType: message"``.
+    output : str or None
+        The results file that records every failure, if one was written.
+    """
+
+    def __init__(self, source: str, n_cases: int, first_index: int, first_error: str,
+                 output: str | None = None):
+        self.source = source
+        self.n_cases = n_cases
+        self.first_index = first_index
+        self.first_error = first_error
+        self.output = output
+        where = "" if output is None else f" (every failure is recorded in {output})"
+        super().__init__(f"{source}: every case failed ({n_cases} of {n_cases}); case "
+                         f"{first_index}: {first_error}{where}")

@@ -1,8 +1,11 @@
 """Run a sweep on an executor of :mod:`iter.execute`, into a results table and files.
 
-Chunks complete in any order; the table is always sorted by case index. A case whose body
-fails is recorded as FAILED with its message and the sweep goes on; a chunk lost on Dask (a
-worker died) records each of its cases as FAILED the same way.
+Before any case runs or anything is written, the first case to run is checked
+(:meth:`iter.sweep.Sweep.check_case`): an input error there would be every case's, so it
+stops the sweep. Chunks complete in any order; the table is always sorted by case index. A
+case whose body fails is recorded as FAILED with its message and the sweep goes on; a chunk
+lost on Dask (a worker died) records each of its cases as FAILED the same way. A sweep whose
+every case failed gives no answer: :meth:`SweepResult.raise_if_all_failed` says so.
 
 With an output file the sweep is resumable: completed rows are written to the HDF5 file as
 chunks finish (at most every ``checkpoint_interval_s``, and at the end, also on an error or
@@ -27,7 +30,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from .errors import SweepInputError
+from .errors import AllCasesFailed, SweepInputError
 from .execute import Execution, chunk_cases, default_chunk_size, open_executor
 from .results import read_hdf5, write_csv, write_hdf5
 from .sweep import Sweep
@@ -52,6 +55,8 @@ class SweepSummary:
         Where the cases ran (``serial``, ``local cluster (2 workers)``, ...).
     output_h5, output_csv : str or None
         The files written.
+    source : str
+        The sweep (its file path).
     """
 
     n_cases: int
@@ -62,6 +67,7 @@ class SweepSummary:
     mode: str
     output_h5: str | None
     output_csv: str | None
+    source: str
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,6 +76,20 @@ class SweepResult:
 
     table: ResultTable
     summary: SweepSummary
+
+    def raise_if_all_failed(self) -> None:
+        """Raise unless at least one case of the table succeeded.
+
+        Raises
+        ------
+        AllCasesFailed
+            Every case failed; the message gives the first case's error and the results
+            file that records every failure.
+        """
+        if self.table.n_succeeded == 0:
+            first = self.table.rows[0]
+            raise AllCasesFailed(self.summary.source, self.summary.n_cases, first.index,
+                                 first.error, self.summary.output_h5)
 
 
 def _utc_now() -> str:
@@ -116,7 +136,12 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
     Raises
     ------
     SweepInputError
-        ``output_h5`` holds results of a different sweep.
+        ``output_h5`` holds results of a different sweep, or the first case to run cannot
+        run (:meth:`Sweep.check_case`: the body's reference, a file, an argument); nothing is
+        written and no case runs.
+    Exception
+        Whatever the body's own input check raises on the first case to run (the same
+        guarantees).
     SchedulerError
         The scheduler address does not answer within the connect timeout.
     ResultFileError
@@ -128,6 +153,8 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
     results, created_utc = ({}, _utc_now()) if h5_path is None else _resume(sweep, h5_path)
     n_resumed = len(results)
     pending = [case for case in sweep.cases() if case.index not in results]
+    if pending:
+        sweep.check_case(pending[0])
 
     def checkpoint() -> None:
         if h5_path is not None:
@@ -164,5 +191,6 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
                            n_failed=table.n_failed, n_resumed=n_resumed,
                            wall_s=time.perf_counter() - start_s, mode=executor.description,
                            output_h5=None if h5_path is None else str(h5_path),
-                           output_csv=None if output_csv is None else str(output_csv))
+                           output_csv=None if output_csv is None else str(output_csv),
+                           source=sweep.source)
     return SweepResult(table=table, summary=summary)

@@ -31,9 +31,9 @@ class Sweep:
     Raises
     ------
     SweepInputError
-        No loop, a name varied twice, a varied name that is also a constant, a name
-        taken by a table column (``case``, ``status``, ``error``, ``elapsed_s``), or more
-        than :data:`iter.loops.MAX_CASES` cases.
+        No loop, a name varied twice, a varied name that is also a constant or a file, a
+        file that is also a constant, a name taken by a table column (``case``, ``status``,
+        ``error``, ``elapsed_s``), or more than :data:`iter.loops.MAX_CASES` cases.
     """
 
     loops: tuple[Loop, ...]
@@ -49,11 +49,15 @@ class Sweep:
             varied_names(self.loops)
         except SweepInputError as exc:
             raise SweepInputError(self.source, exc.field, exc.expected, exc.got) from None
+        for name in self.body.files:
+            if name in self.body.constants:
+                raise SweepInputError(self.source, f"body.files.{name}",
+                                      "a name that is not also in body.constants", name)
         for i, loop in enumerate(self.loops):
             for name in loop.names:
-                if name in self.body.constants:
-                    raise SweepInputError(self.source, f"loop[{i}].names",
-                                          "names that are not also body.constants", name)
+                if name in self.body.constants or name in self.body.files:
+                    raise SweepInputError(self.source, f"loop[{i}].names", "names that are "
+                                          "not also body.constants or body.files", name)
                 if name in RESERVED_COLUMNS:
                     raise SweepInputError(self.source, f"loop[{i}].names",
                                           f"a name other than {list(RESERVED_COLUMNS)}", name)
@@ -72,6 +76,17 @@ class Sweep:
     def cases(self) -> tuple[Case, ...]:
         """Return every case, outer-major (see :func:`iter.loops.generate_cases`)."""
         return generate_cases(self.loops)
+
+    def check_case(self, case: Case) -> None:
+        """Raise if ``case`` cannot run: the body's reference, its files, and (a callable)
+        the arguments and the function's own input check (:meth:`CallableBody.check_case`).
+
+        Called on the first case to run, before any runs: an input error there, in a file the
+        body reads or in the sweep file, would be hit by every case.
+        """
+        fields = {name: f"loop[{i}].names" for i, loop in enumerate(self.loops)
+                  for name in loop.names}
+        self.body.check_case(case, self.source, fields)
 
     def definition(self) -> dict[str, object]:
         """Return the sweep as a canonical sweep-file document (defaults filled in)."""

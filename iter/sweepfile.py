@@ -19,6 +19,9 @@ Format
     [body.constants]             # optional: passed unchanged to every case
     latitude_deg = 28.5
 
+    [body.files]                 # optional: paths the body reads, passed like constants,
+    stations = "stations.toml"   # relative to THIS FILE's folder; each must exist
+
     [[loop]]                     # one table per loop, OUTERMOST FIRST
     type = 2                     # the seed's TYPE: 1 = table, 2 = start + increments (default 1)
     names = ["launch_day"]       # the varied parameters, n = len(names); units in the names
@@ -37,6 +40,27 @@ Inner loops restart for every case of the outer loop, so the cases come out oute
 ``30 x 5 = 150`` cases, the five azimuths of the first day first. A varied value reaches a
 callable body as a keyword argument (a float) and a program as ``--name value``.
 
+Paths
+-----
+A path in a sweep file is taken from the sweep file's folder, as every input file of the
+project takes the paths inside it from its own folder, so a sweep runs the same from any
+working directory. Each entry of ``[body.files]`` reaches the body as an absolute path (a
+keyword argument of a callable, ``--name PATH`` for a program) and must exist;
+``body.program[0]``, when it is a path (``"./run.sh"``, ``"bin/body"``) rather than the name
+of a program on PATH, is taken from the sweep file's folder too. Absolute paths are kept.
+Constants are passed unchanged, so a path a body takes belongs in ``[body.files]``, never in
+``[body.constants]``. A document parsed without a file (:func:`parse_sweep`) takes its paths
+from ``base_dir``, the current directory by default.
+
+Checks before anything runs
+---------------------------
+Reading the file checks its fields, that the callable imports (or the program is found) and
+that every file exists. Running it (:func:`iter.run.run_sweep`) then checks the first case's
+inputs before any case runs or anything is written: a callable must take every constant,
+file and varied name as a keyword argument and be given every argument it needs, and its own
+input check (:func:`iter.body.input_check`), if it offers one, must pass. An input error
+there would be the error of every case; errors a case meets later are recorded in its row.
+
 The file is validated against one declared schema, :class:`SweepFile` (``iter.schema``):
 unknown keys and tables are errors (a typo must not silently fall back to a default), and
 booleans are not numbers nor numbers strings. Errors name the file and the field, e.g.
@@ -45,6 +69,7 @@ booleans are not numbers nor numbers strings. Errors name the file and the field
 
 from __future__ import annotations
 
+import os
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -52,7 +77,7 @@ from typing import Annotated, Any
 
 from pydantic import Field, model_validator
 
-from .body import Body, CallableBody, ProgramBody
+from .body import Body, CallableBody, ProgramBody, names_a_path
 from .errors import SweepInputError
 from .loops import Loop
 from .schema import Invalid, Schema, validate
@@ -79,12 +104,14 @@ class BodyTable(Schema):
     dashes: bool | None = None
     timeout_s: _Positive | None = None
     constants: dict[str, Any] = {}
+    files: dict[str, Annotated[str, Field(min_length=1)]] = {}
 
     @model_validator(mode="after")
     def _one_kind(self) -> BodyTable:
-        for name in self.constants:
-            if not name.isidentifier():
-                raise Invalid("a Python identifier as the name", name, f"constants.{name}")
+        for table in ("constants", "files"):
+            for name in getattr(self, table):
+                if not name.isidentifier():
+                    raise Invalid("a Python identifier as the name", name, f"{table}.{name}")
         if (self.callable is None) == (self.program is None):
             raise Invalid("exactly one of callable or program",
                           "both" if self.callable is not None else "neither")
@@ -151,15 +178,17 @@ def load_sweep(path: str | Path, *, check_body: bool = True) -> Sweep:
         document = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SweepInputError(source, "file", "valid TOML", str(exc)) from None
-    return parse_sweep(document, source=source, check_body=check_body)
+    return parse_sweep(document, source=source, check_body=check_body,
+                       base_dir=Path(path).parent)
 
 
 def parse_sweep(document: Mapping[str, object], *, source: str = "<sweep>",
-                check_body: bool = True) -> Sweep:
+                check_body: bool = True, base_dir: str | Path = ".") -> Sweep:
     """Return the sweep described by a parsed sweep-file ``document`` (see module docstring).
 
     The document is validated against :class:`SweepFile` (``iter.schema``: unknown keys are
-    errors, booleans are not numbers, ...), then the loops and the body are built.
+    errors, booleans are not numbers, ...), then the loops and the body are built, with the
+    paths of the body taken from ``base_dir`` (the sweep file's folder; see "Paths").
 
     Raises
     ------
@@ -167,7 +196,7 @@ def parse_sweep(document: Mapping[str, object], *, source: str = "<sweep>",
         A field is missing or invalid; ``source`` names the file in the message.
     """
     doc = validate(SweepFile, document, source)
-    body = _body(doc.body)
+    body = _body(doc.body, Path(base_dir))
     loops = tuple(_loop(source, i, table) for i, table in enumerate(doc.loop))
     sweep = Sweep(loops=loops, body=body, source=source, document=dict(document))
     if check_body:
@@ -175,14 +204,23 @@ def parse_sweep(document: Mapping[str, object], *, source: str = "<sweep>",
     return sweep
 
 
-def _body(table: BodyTable) -> Body:
+def _from_folder(base_dir: Path, path: str) -> str:
+    """Return ``path`` as an absolute path, taken from ``base_dir`` when it is relative."""
+    return os.path.abspath(base_dir / path)
+
+
+def _body(table: BodyTable, base_dir: Path) -> Body:
     constants = dict(table.constants)
+    files = {name: _from_folder(base_dir, path) for name, path in table.files.items()}
     if table.callable is not None:
         return CallableBody(target=table.callable, constants=constants,
-                            timeout_s=table.timeout_s)
-    return ProgramBody(argv=tuple(table.program), constants=constants,
+                            timeout_s=table.timeout_s, files=files)
+    program, *args = table.program
+    if names_a_path(program):
+        program = _from_folder(base_dir, program)
+    return ProgramBody(argv=(program, *args), constants=constants,
                        json_option=True if table.json_option is None else table.json_option,
-                       dashes=bool(table.dashes), timeout_s=table.timeout_s)
+                       dashes=bool(table.dashes), timeout_s=table.timeout_s, files=files)
 
 
 def _loop(source: str, i: int, table: LoopTable) -> Loop:

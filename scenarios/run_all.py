@@ -196,6 +196,7 @@ def sweeps() -> None:
         h5.unlink(missing_ok=True)  # a fresh run, not a resume
         res = run_sweep(sweep, output_h5=h5, output_csv=out / f"{name}.csv",
                         execution=Execution(workers=2), progress=True)
+        res.raise_if_all_failed()  # no answer to report: stop here, the failures recorded
         tables[name] = res.table
         lines.append(f"- `{name}`: {res.summary.n_cases} cases, {res.summary.n_succeeded} "
                      f"succeeded, {res.summary.n_failed} failed -> `{name}.csv`")

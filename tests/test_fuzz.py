@@ -40,10 +40,10 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
 runner = CliRunner()
 
-#: Tables whose keys are names chosen by the user (stations, orbits, constants, ...), so a
-#: renamed key there is not a misspelling.
-FREE_FORM_TABLES = frozenset({"constants", "stations", "orbits", "networks", "apriori",
-                              "station"})
+#: Tables whose keys are names chosen by the user (stations, orbits, constants, a sweep
+#: body's files, ...), so a renamed key there is not a misspelling.
+FREE_FORM_TABLES = frozenset({"constants", "files", "stations", "orbits", "networks",
+                              "apriori", "station"})
 #: Values passed through unchecked to a sweep body (a callable decides what it accepts).
 PASS_THROUGH_TABLES = frozenset({"constants"})
 EXTREME_NUMBERS = (math.nan, math.inf, -math.inf, 1e308, -1e308, 0.0, -1.0)
@@ -308,10 +308,12 @@ def _pipeline_parts_absolute(document: dict) -> dict:
 
 
 def _one_case(document: dict) -> dict:
-    """The tracking sweep cut to one case of 1,000 samples."""
+    """The tracking sweep cut to one case of 1,000 samples, its pipeline named by an absolute
+    path (the fuzz writes the sweep to a temporary folder)."""
     for loop in document["loop"]:
         loop["sets"], loop["vary"] = 1, loop["vary"][:1]
     document["body"]["constants"]["samples"] = 1000
+    document["body"]["files"]["pipeline"] = str(SCENARIOS / document["body"]["files"]["pipeline"])
     return document
 
 
@@ -321,6 +323,9 @@ def _two_days(document: dict) -> dict:
     return document
 
 
+#: The numerical exit codes of ``tapp iter``: 1, every case failed.
+ITER_CODES = frozenset({1})
+
 FILE_CASES = [
     FileCase("leo_equatorial.toml", _simulate, ("run.oem", "run.t13.h5"), 30),
     FileCase("deep_space.toml", _simulate, ("run.oem", "run.t13.h5"), 8),
@@ -328,17 +333,20 @@ FILE_CASES = [
     FileCase("approx_stm.toml", _dc, ("obs.h5",), 30, frozenset({3, 4, 5, 6})),
     # SEARCH: 3 diverged, 4 singular, 1 a case that failed (missed the sphere of influence)
     FileCase("search_bplane.toml", _search, (), 20, frozenset({1, 3, 4})),
-    FileCase("iter_azimuth_type1.toml", _iter, ("r.csv", "r.h5"), 15),
-    FileCase("iter_azimuth_type2.toml", _iter, ("r.csv", "r.h5"), 15),
-    FileCase("iter_days_azimuths.toml", _iter, ("r.csv", "r.h5"), 15),
-    FileCase("iter_lunar_departure.toml", _iter, ("r.csv", "r.h5"), 8, shrink=_two_days),
+    # ITER: 1 every case failed (the results file records the failures)
+    FileCase("iter_azimuth_type1.toml", _iter, ("r.csv", "r.h5"), 15, ITER_CODES),
+    FileCase("iter_azimuth_type2.toml", _iter, ("r.csv", "r.h5"), 15, ITER_CODES),
+    FileCase("iter_days_azimuths.toml", _iter, ("r.csv", "r.h5"), 15, ITER_CODES),
+    FileCase("iter_lunar_departure.toml", _iter, ("r.csv", "r.h5"), 8, ITER_CODES,
+             shrink=_two_days),
     FileCase("tapp1_table_d1.toml", _simulate, ("run.oem", "run.t13.h5"), 20),
     *(FileCase(deck.name, _process, ("o3.txt", "t32.h5"), 8)
       for deck in sorted(SCENARIOS.glob("tapp3_*.toml"))),
     FileCase("tapp2_deep_space.toml", _guide, ("g.json",), 8),
     FileCase("pipeline_deep_space.toml", _pipeline, ("run",), 4,
              shrink=_pipeline_parts_absolute),
-    FileCase("iter_pipeline_tracking.toml", _iter, ("r.csv", "r.h5"), 4, shrink=_one_case),
+    FileCase("iter_pipeline_tracking.toml", _iter, ("r.csv", "r.h5"), 4, ITER_CODES,
+             shrink=_one_case),
 ]
 
 

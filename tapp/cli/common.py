@@ -12,25 +12,35 @@ Exit codes (every command keeps this contract)
     another output (symbolic links and relative paths resolved) or cannot be written, an
     epoch outside the ephemeris' coverage, a scenario whose B-plane miss has no encounter
     (``tapp simulate``, ``tapp pipeline``: the message names the closest approach;
-    :mod:`tapp.tracking.encounter`). The message is one line on stderr,
+    :mod:`tapp.tracking.encounter`). ``tapp iter`` also refuses, before any case runs,
+    input that every case would meet: checked on the first case, a file the body reads
+    missing (``body.files``) or invalid (the body's own input check, which names that file
+    and its field), a body that cannot be imported or found, an argument the body does not
+    take or one it needs and is not given. The message is one line on stderr,
     ``error: SOURCE: FIELD: expected WHAT (got VALUE)``, where SOURCE is the option as typed
     (``--process-noise``, ``-o/--output``) when an option is at fault, and the file when a
     file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).
-3, 4, 5, 6
+3, 4, 5, 6, 7
     A numerical outcome, with its output still printed and written: ``tapp dc`` diverged
     (3), found the normal matrix too ill-conditioned to iterate (4; the condition number and
-    the undetermined state directions are printed), stalled above the fit limit (5) or
-    reached its iteration limit while still converging (6) (:mod:`tapp.cli.od`);
-    ``tapp search`` diverged (3) or met a singular matrix (4) (``--write-scenario`` is then
-    not written: a scenario that misses its aim point is no answer). ``tapp simulate`` of a
-    scenario with a ``[targeting]`` table whose SEARCH diverged (3) or met a singular matrix
-    (4): one line on stderr, and no tape (there is no injection to simulate).
+    the undetermined state directions are printed), stalled above the fit limit (5),
+    reached its iteration limit while still converging (6), or converged with residuals
+    inconsistent with the noise model (7: the weighted residual RMS settled above its
+    99.9 % χ² bound for the number of residuals and estimated parameters; the RMS and the
+    bound are printed, and the estimate is not to be used as an orbit)
+    (:mod:`tapp.cli.od`); ``tapp search`` diverged (3) or met a singular matrix (4)
+    (``--write-scenario`` is then not written: a scenario that misses its aim point is no
+    answer). ``tapp simulate`` of a scenario with a ``[targeting]`` table whose SEARCH
+    diverged (3) or met a singular matrix (4): one line on stderr, and no tape (there is no
+    injection to simulate).
 1
     Anything else: a computation that could not be completed (``tapp search``, or the
     ``[targeting]`` of ``tapp simulate``: a trajectory that misses the target's sphere of
     influence, or a conic first guess that cannot be formed; ``tapp dc``, ``tapp ekf``: too
-    few measurements in the arc), or an internal failure (a bug; out of memory). Also one
-    line on stderr.
+    few measurements in the arc; ``tapp iter``: every case of the sweep failed, the message
+    giving the first case's error, after the summary is printed and the results file, which
+    records every failure, is written), or an internal failure (a bug; out of memory). Also
+    one line on stderr.
 130
     Interrupted (Ctrl-C).
 
@@ -49,7 +59,8 @@ temporaries beside their targets and renamed over them only once all are complet
 A killed run leaves the old outputs or the new ones, each complete, and possibly hidden
 ``.NAME.*.tmp`` temporaries, which the next write of the same output removes. ``tapp iter``
 checkpoints its results file (each time atomically) as cases complete, so that a killed or
-interrupted sweep can be resumed.
+interrupted sweep can be resumed; a sweep whose every case failed (exit 1) keeps its results
+file and CSV, which record the failures.
 """
 
 from __future__ import annotations

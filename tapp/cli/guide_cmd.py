@@ -1,11 +1,13 @@
 """``tapp guide``: TAPP II on a T32 tape and a guidance file -> ΔV and miss statistics.
 
 The Monte Carlo runs in shards on Dask (a local cluster by default, ``--scheduler`` for a
-running one) and prints Markdown tables, Monte Carlo beside linear covariance; ``--json``
-writes every statistic, ``--plots`` the B-plane scatter and the ΔV histograms. Bad input (the
-tape, the guidance file or its fields, an option, an output path that is an input, a
-scheduler that does not answer) is one line on stderr naming the file or option and the
-field, exit 2; all outputs are written together or none (:class:`tapp.outputs.OutputSet`).
+running one) and prints Markdown tables, Monte Carlo beside linear covariance, with the
+linear values the Monte Carlo contradicts marked (:mod:`tapp.guidance.agreement`);
+``--json`` writes every statistic and check, ``--plots`` the B-plane scatter and the ΔV
+histograms. Bad input (the tape, the guidance file or its fields, a corridor on a component
+not targeted, an option, an output path that is an input, a scheduler that does not answer)
+is one line on stderr naming the file or option and the field, exit 2; all outputs are
+written together or none (:class:`tapp.outputs.OutputSet`).
 """
 
 from __future__ import annotations

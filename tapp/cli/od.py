@@ -12,12 +12,28 @@ Exit codes of ``tapp dc`` (the outcomes of :mod:`tapp.od.batch`; the output is p
 5 stalled: the RMS settled above the fit limit (the data are not fitted)
 6 converging: the iteration limit was reached while the RMS was still falling geometrically;
   the observed contraction factor and the projected iterations to the fit limit are printed
+7 converged, residuals inconsistent with the noise model: the RMS settled within the fit
+  limit but above the RMS a correct model exceeds with probability 0.1 % (the 99.9 % χ²
+  bound of the residuals and the 6 estimated parameters, :func:`tapp.od.batch.rms_bound`):
+  the data are not explained by the models and their σ, and the estimate may be far from
+  the orbit (a wrong Earth orientation, force model, station or σ)
 = ============================================================================================
+
+The residual RMS and its bound are printed (JSON: ``rms``, ``rms_bound``,
+``noise_model_probability``) with every outcome but ill-conditioned.
 
 Earth orientation: every command uses the study file's ``earth_orientation`` and ``eop``
 (:mod:`tapp.od.setup`) for the stations and the geopotential of the data and the estimator;
 ``--earth-orientation iau2006|gmst`` overrides the file's model. The outputs say which model
 was used, the EOP source and whether predicted EOP were used (JSON: ``earth_orientation``).
+Observations simulated here, and written by ``--save-obs`` or ``tapp simulate --tdm``,
+record the model, EOP source and frame they were made under (:mod:`tapp.od.obsfile`); read
+with ``--obs`` they are checked against the run's (:func:`tapp.od.setup.check_made_under`):
+a mismatch is bad input (2), naming both and ``--earth-orientation``, unless that option
+chose the run's model, which then fits them regardless with a note on stderr; a file that
+states nothing (one written by another tool) is taken as made under the run's model, with a
+note on stderr. JSON: ``observations_made_under`` (null when the file states nothing).
+``tapp rsig`` reads no observations.
 
 Bad input (2) includes an arc longer than the data span (``--arc`` and the span named), an
 unknown ``--earth-orientation`` and an epoch or span outside the EOP table; no
@@ -58,8 +74,11 @@ from tapp.frames.orientation import EarthOrientation
 from tapp.od import setup
 from tapp.od.batch import (
     MAX_ITERATIONS,
+    N_STATE,
+    NOISE_MODEL_PROBABILITY,
     STATE_NAMES,
     DCOutcome,
+    DCResult,
     DCSettings,
     IllConditionedError,
     describe_direction,
@@ -82,8 +101,10 @@ EXIT_DIVERGED = 3
 EXIT_ILL_CONDITIONED = 4
 EXIT_STALLED = 5
 EXIT_CONVERGING = 6
+EXIT_INCONSISTENT = 7
 EXIT_CODE = {DCOutcome.CONVERGED: 0, DCOutcome.DIVERGED: EXIT_DIVERGED,
-             DCOutcome.STALLED: EXIT_STALLED, DCOutcome.CONVERGING: EXIT_CONVERGING}
+             DCOutcome.STALLED: EXIT_STALLED, DCOutcome.CONVERGING: EXIT_CONVERGING,
+             DCOutcome.INCONSISTENT: EXIT_INCONSISTENT}
 
 OrbitOpt = Annotated[str, typer.Option(help="Orbit name (SATORB1..8) or a=..,e=..,i=..,"
                                        "raan=..,argp=..,M=.. (km, deg)")]
@@ -116,14 +137,27 @@ def _model_pair(truth: str, stm: str, orient: EarthOrientation) -> Propagator:
 
 
 def _observations(x_true: np.ndarray, truth: str, stations: str | None, obs_file: Path | None,
-                  scenario: Path, seed: int | None, orient: EarthOrientation) -> Observations:
+                  scenario: Path, seed: int | None, orient: EarthOrientation,
+                  chosen: bool) -> Observations:
+    """The observations of ``--obs``, checked against the run's Earth orientation (``chosen``:
+    by ``--earth-orientation``; :func:`tapp.od.setup.check_made_under`, whose note goes to
+    stderr), or simulated under it."""
     if obs_file is not None:
         data = setup.load_study(scenario)
-        return read_observations(obs_file, load_stations(data, str(scenario)),
-                                 setup.tracking(scenario).sigma, epoch=setup.epoch(scenario),
-                                 sigma_kinds=setup.KINDS)
+        obs = read_observations(obs_file, load_stations(data, str(scenario)),
+                                setup.tracking(scenario).sigma, epoch=setup.epoch(scenario),
+                                sigma_kinds=setup.KINDS)
+        note = setup.check_made_under(obs, orient, str(obs_file), scenario, chosen)
+        if note is not None:
+            typer.echo(f"note: {note}", err=True)
+        return obs
     return setup.simulated_observations(x_true, truth, _network(x_true, stations, scenario),
                                         scenario, seed, orient=orient)
+
+
+def _made_under_json(data: Observations) -> dict[str, str] | None:
+    """What the observations state they were made under (None: their file states none)."""
+    return None if data.made_under is None else data.made_under.as_dict()
 
 
 def _spacecraft(orbit: str) -> str:
@@ -200,7 +234,9 @@ def dc(
     """Batch differential correction from the brief's offset initial estimate.
 
     Exit 0 converged, 3 diverged, 4 ill-conditioned, 5 stalled, 6 converging (the limit was
-    reached while converging); the predicted rate ρ is printed beside the observed factor.
+    reached while converging), 7 converged with residuals inconsistent with the noise model
+    (RMS above its 99.9 % χ² bound); the predicted rate ρ is printed beside the observed
+    factor, the RMS beside its bound.
     """
 
     def body() -> int:
@@ -211,7 +247,7 @@ def dc(
         x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm, orient)
         data = _observations(x_true, truth, stations, obs, scenario,
-                             seed_option("--seed", seed), orient)
+                             seed_option("--seed", seed), orient, earth_orientation is not None)
         window = data.arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, window.t_s)
         if save_obs is not None:
@@ -239,13 +275,16 @@ def dc(
                         "exit_code": code, "reason": result.reason,
                         "iterations": len(result.iterations),
                         "converged_at": result.converged_at, "rms": result.rms,
+                        "rms_bound": result.rms_bound,
+                        "noise_model_probability": NOISE_MODEL_PROBABILITY,
                         "contraction_factor": q if np.isfinite(q) else None,
                         "projected_iterations": result.projected_iterations,
                         "predicted_rate": None if rate is None else rate.rho,
                         "eigenvalues": _eigen_json(rate),
                         "final_elements": _elements_dict(result.x0),
                         "position_error_km": err_km, "measurements": result.n_measurements,
-                        "earth_orientation": used})
+                        "earth_orientation": used,
+                        "observations_made_under": _made_under_json(window)})
         else:
             _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}), {orient.model}: "
                       f"{result.status}", err_km, used)
@@ -278,10 +317,25 @@ def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float, use
                          for v in rate.eigenvalues[:2])
         predicted = f"predicted rate ρ = {rate.rho:.4g} (largest eigenvalues of M: {lead})"
     console.print(f"{result.status}: {result.reason}")
+    console.print(_noise_model_line(result))
     console.print(f"{predicted}; {observed}")
     console.print(f"{result.n_measurements} measurements; epoch position error "
                   f"{err_km * 1e3:.3f} m")
     console.print(f"Earth orientation: {setup.describe_orientation(used)}")
+
+
+_VERDICT = {DCOutcome.CONVERGED: "consistent with the noise model",
+            DCOutcome.INCONSISTENT: "inconsistent with the noise model"}
+
+
+def _noise_model_line(result: DCResult) -> str:
+    """The last RMS against the noise model's bound, and the verdict where there is an
+    estimate to judge (the RMS settled: :mod:`tapp.od.batch`)."""
+    verdict = _VERDICT.get(DCOutcome(result.status),
+                           f"not judged ({result.status}: no settled estimate)")
+    return (f"residuals: RMS {result.rms[-1]:.5g} against {result.rms_bound:.5g}, the "
+            f"{100 * NOISE_MODEL_PROBABILITY:g} % χ² bound of {result.n_measurements} "
+            f"residuals and {N_STATE} estimated parameters: {verdict}")
 
 
 def _print_ill_conditioned(exc: IllConditionedError, json_out: bool, used: dict) -> None:
@@ -360,7 +414,8 @@ def ekf(
         p0 = _apriori(apriori, scenario)
         q_km2_s3 = nonnegative_option("--process-noise", process_noise)
         data = _observations(x_true, truth, stations, obs, scenario,
-                             seed_option("--seed", seed), orient).arc(arc_s, "--arc", got=arc)
+                             seed_option("--seed", seed), orient,
+                             earth_orientation is not None).arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, data.t_s)
         x_start = setup.initial_estimate(x_true, setup.offset(scenario))
         result = extended_kalman_filter(data, prop, x_start, p0, orientation=orient,
@@ -370,7 +425,8 @@ def ekf(
         if json_out:
             print_json({"passes": [{"station": p.station, "t_start_s": p.t_start_s,
                                     "t_end_s": p.t_end_s} for p in result.passes],
-                        "max_abs_residual_per_pass": per_pass, "earth_orientation": used})
+                        "max_abs_residual_per_pass": per_pass, "earth_orientation": used,
+                        "observations_made_under": _made_under_json(data)})
             return
         table = Table(title=f"EKF {orbit}, {arc}, ({truth},{stm}), a priori {apriori}, "
                       f"{orient.model}")

@@ -4,9 +4,13 @@ The engine is the ``iter`` package; this module only turns options into an
 :class:`iter.Execution`, maps ``iter``'s errors onto tapp's (so bad input, including a results
 file that is corrupt or cannot be written, is one line on stderr and exit code 2) and prints
 the summary. Before anything runs, the results file and the CSV must be distinct from the sweep
-file and from each other (:func:`tapp.outputs.check_paths`). The results file is a checkpoint,
-rewritten atomically as cases complete so that a killed sweep resumes; the CSV is written
-atomically at the end.
+file and from each other (:func:`tapp.outputs.check_paths`), and the first case's inputs must
+pass the body's checks (:meth:`iter.Sweep.check_case`: a file the body reads missing or
+invalid, a bad body reference, an argument the body does not take: exit 2, nothing written).
+The results file is a checkpoint, rewritten atomically as cases complete so that a killed
+sweep resumes; the CSV is written atomically at the end. A sweep whose every case failed
+prints its summary, then exits 1 with the first case's error (the results file records every
+failure).
 """
 
 from __future__ import annotations
@@ -71,19 +75,26 @@ def iter_command(
 ) -> None:
     """Run every case of SWEEP_FILE (seed section VI, ITER) and write the results table.
 
-    Failing cases are recorded with their message and do not stop the sweep. Running again
-    with the same results file resumes: cases already OK are skipped.
+    Paths in the sweep file are taken from its folder. Failing cases are recorded with their
+    message and do not stop the sweep; if every case fails, the command exits 1 with the
+    first case's error. Running again with the same results file resumes: cases already OK
+    are skipped.
     """
     h5_path = output if output is not None else Path(sweep_file.stem + ".h5")
 
-    def run() -> SweepResult:
+    def run() -> None:
         check_paths({"SWEEP_FILE": sweep_file}, {"-o/--output": h5_path, "--csv": csv})
         try:
             execution = Execution(serial=serial, scheduler=scheduler, workers=workers,
                                   chunk_size=chunk_size, connect_timeout_s=connect_timeout_s)
             sweep = load_sweep(sweep_file)
-            return run_sweep(sweep, output_h5=h5_path, output_csv=csv, execution=execution,
-                             progress=not json_output)
+            result = run_sweep(sweep, output_h5=h5_path, output_csv=csv, execution=execution,
+                               progress=not json_output)
+            if json_output:
+                print_json(_summary_dict(result))
+            else:
+                _print_summary(result)
+            result.raise_if_all_failed()
         except SweepInputError as exc:
             source = "command line" if exc.source == "options" else exc.source
             field = f"--{exc.field.replace('_', '-')}" if exc.source == "options" else exc.field
@@ -92,14 +103,10 @@ def iter_command(
             raise scheduler_error(exc, "command line", "--scheduler") from exc
         except ResultFileError as exc:
             raise InputError(exc.path, exc.field, exc.expected, exc.got) from exc
-        except IterError as exc:
+        except IterError as exc:  # AllCasesFailed among them: exit 1
             raise TappError(str(exc)) from exc
 
-    result = run_guarded(run)
-    if json_output:
-        print_json(_summary_dict(result))
-    else:
-        _print_summary(result)
+    run_guarded(run)
 
 
 def _summary_dict(result: SweepResult) -> dict[str, object]:

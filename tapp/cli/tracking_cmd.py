@@ -30,14 +30,16 @@ from tapp.cli.common import (
     run_guarded,
 )
 from tapp.cli.search_cmd import EXIT_CODE as SEARCH_EXIT_CODE
+from tapp.od.observations import MadeUnder
+from tapp.od.obsfile import TDM_PREFIX, made_under_statements
 from tapp.outputs import OutputSet, check_paths
 from tapp.tape.files import describe
-from tapp.tape.t13 import T13, utc_at
+from tapp.tape.t13 import T13, summary, utc_at
 from tapp.tape.t13_hdf5 import write_t13
 from tapp.tape.t32 import format_t32_summary
 from tapp.tracking.encounter import TargetingError
-from tapp.tracking.oem import format_oem
-from tapp.tracking.scenario import read_scenario
+from tapp.tracking.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem, oem_trajectory
+from tapp.tracking.scenario import Scenario, read_scenario
 from tapp.tracking.simulate import Simulation
 from tapp.tracking.simulate import simulate as run_simulation
 
@@ -49,7 +51,7 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
 
 
 def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: str | None = None
-                       ) -> tuple[Simulation, float]:
+                       ) -> tuple[Simulation, float, Scenario]:
     scenario = read_scenario(path, earth_orientation)
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
@@ -62,7 +64,7 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: st
             bar.update(task, description=stage, completed=done, total=total)
 
         sim = run_simulation(scenario, raw=raw, progress=progress)
-    return sim, time.perf_counter() - start
+    return sim, time.perf_counter() - start, scenario
 
 
 def _outputs(output: Path, sim: Simulation, oem: Path | None,
@@ -78,11 +80,12 @@ def _outputs(output: Path, sim: Simulation, oem: Path | None,
     return outputs
 
 
-def _tdm_text(sim: Simulation, scenario: Path) -> str:
-    """The observations of the tape's raw rows as a CCSDS TDM (one segment per station)."""
+def _tdm_text(sim: Simulation, scenario: Path, parsed: Scenario) -> str:
+    """The observations of the tape's raw rows as a CCSDS TDM (one segment per station),
+    stating the Earth orientation they were made under (:mod:`tapp.od.obsfile`)."""
     tape, raw = sim.tape, sim.tape.raw
     st = tape.stations
-    schedule = read_scenario(scenario).schedule
+    schedule = parsed.schedule
     tracks = tracks_from_rows(raw.t_s, raw.station - 1, raw.kind, raw.value, raw.kinds,
                               st.name, tape.iden,
                               path="2,1" if schedule.light_time == "one_way" else "1,2,1",
@@ -93,7 +96,7 @@ def _tdm_text(sim: Simulation, scenario: Path) -> str:
     tracks = [dataclasses.replace(t, comments=(where[t.station],)) for t in tracks]
     return format_tdm(tdm_from_tracks(tracks, tape.epoch, comments=(
         f"TAPP I observations of {scenario.name}, tape {tape.iden}: the models' values, "
-        "noise-free",)))
+        "noise-free", *made_under_statements(MadeUnder.of(parsed.orientation), TDM_PREFIX))))
 
 
 def _encounter_dict(tape: T13) -> tuple[dict, dict | None]:
@@ -149,29 +152,36 @@ def simulate(
         check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
                                              "--tdm": tdm})
         try:
-            sim, wall_s = _simulate_with_bar(scenario, raw or tdm is not None, quiet=json_out,
-                                             earth_orientation=earth_orientation_option(
-                                                 earth_orientation))
+            sim, wall_s, parsed = _simulate_with_bar(scenario, raw or tdm is not None,
+                                                     quiet=json_out,
+                                                     earth_orientation=earth_orientation_option(
+                                                         earth_orientation))
         except TargetingError as exc:
             echo_error(exc)
             return SEARCH_EXIT_CODE.get(exc.status, EXIT_FAILURE)
         tdm_text = None
         if tdm is not None:
-            tdm_text = _tdm_text(sim, scenario)
+            tdm_text = _tdm_text(sim, scenario, parsed)
             if not raw:  # the raw rows were for the TDM only
                 sim = dataclasses.replace(sim, tape=dataclasses.replace(sim.tape, raw=None))
         tape = sim.tape
-        oem_text = None
+        oem_text, oem_states = None, 0
         if oem is not None:
-            oem_text = format_oem(tape.epoch, sim.t_s, sim.states, object_name=tape.iden,
-                                  object_id=tape.iden,
-                                  comments=(f"TAPP I trajectory of {scenario.name}",))
+            traj = oem_trajectory(sim.scenario, float(sim.t_s[-1]))
+            oem_states = traj.t_s.size
+            oem_text = format_oem(tape.epoch, traj.t_s, traj.states, object_name=tape.iden,
+                                  object_id=tape.iden, ref_frame=traj.ref_frame,
+                                  interpolation=INTERPOLATION,
+                                  interpolation_degree=INTERPOLATION_DEGREE,
+                                  comments=(f"TAPP I trajectory of {scenario.name}",),
+                                  meta_comments=traj.comments)
         _outputs(output, sim, oem, oem_text, tdm, tdm_text).commit()
         out = {"tape": str(output), "bytes": output.stat().st_size, "iden": tape.iden,
                "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
                "passes": int(tape.passes.station.size),
-               "observations": int(tape.pairs.n_obs.sum()), "raw": raw,
+               "observations": int(tape.pairs.n_obs.sum()),
+               "stations": summary(tape)["stations"], "raw": raw,
                "oem": None if oem is None else str(oem),
                "tdm": None if tdm is None else str(tdm), "wall_s": wall_s}
         out["miss"], out["targeting"] = _encounter_dict(tape)
@@ -183,8 +193,9 @@ def simulate(
                       f"{wall_s:.2f} s: n_o = {tape.n_o}, n_p = {tape.n_p}, n_m = {tape.n_m}, "
                       f"n_ts = {tape.n_ts}, n_it = {tape.n_it}; {out['observations']} "
                       f"observations in {out['passes']} passes")
+        console.print(_editing_table(out["stations"]))
         if oem is not None:
-            console.print(f"OEM {oem} ({sim.t_s.size} states)")
+            console.print(f"OEM {oem} ({oem_states} states)")
         if tdm is not None:
             console.print(f"TDM {tdm} ({out['observations']} observations)")
         _print_encounter(console, out["miss"], out["targeting"])
@@ -193,6 +204,24 @@ def simulate(
     code = run_guarded(body)
     if code:
         raise typer.Exit(code)
+
+
+def _editing_table(stations: list[dict]) -> Table:
+    """Per station: observations scheduled, kept, removed by each rule (passes removed whole
+    in parentheses), passes and those added by splitting at max_pass_s (T13 ``editing/``)."""
+    rules = list(stations[0]["removed"])
+    table = Table(title="Observations: scheduled = kept + removed by each rule (passes removed "
+                        "whole)")
+    for col in ("s", "name", "scheduled", "kept", *(r.replace("_", " ") for r in rules),
+                "passes (+ split)"):
+        table.add_column(col, justify="right")
+    for s in stations:
+        removed = [f"{r['observations']}" + (f" ({r['passes']})" if r["passes"] else "")
+                   for r in s["removed"].values()]
+        table.add_row(str(s["id"]), s["name"], str(s["scheduled_observations"]),
+                      str(s["observations"]), *removed,
+                      f"{s['passes']} (+{s['passes_added_by_split']})")
+    return table
 
 
 def _print_t13(info: dict) -> None:
@@ -216,6 +245,8 @@ def _print_t13(info: dict) -> None:
                       f"{s['lon_deg']:.4f}", f"{s['h_km']:.3f}", str(s["passes"]),
                       str(s["observations"]))
     console.print(table)
+    if "removed" in info["stations"][0]:  # tapes written before the counts have none
+        console.print(_editing_table(info["stations"]))
     table = Table(title="Epoch times")
     for col in ("index", "t (s)", "UTC"):
         table.add_column(col, justify="right")

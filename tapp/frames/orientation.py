@@ -58,6 +58,10 @@ from tapp.frames.timescales import TimeScales
 
 #: Earth orientation models, the default first.
 MODELS = ("iau2006", "gmst")
+#: The inertial frame of the orbits under each model: the GCRS under iau2006 (module
+#: docstring); the mean equator and equinox of J2000 under gmst, which rotates it to the
+#: Earth-fixed frame with no precession or nutation since J2000.
+INERTIAL_FRAME = {"iau2006": "GCRS", "gmst": "EME2000"}
 #: Rate of the Earth rotation angle in TT-uniform seconds of UT1, rad/s (IERS Conventions 5.15).
 OMEGA_ERA_rad_s = 2.0 * math.pi * 1.00273781191135448 / 86400.0
 #: Segments and degree of the slow-term series.
@@ -196,6 +200,11 @@ class EarthOrientation:
         if check_model(model, source) == "gmst":
             return cls.gmst(epoch)
         return cls.iau2006(epoch, eop, source)
+
+    @property
+    def frame(self) -> str:
+        """The inertial frame of the orbits under this model (:data:`INERTIAL_FRAME`)."""
+        return INERTIAL_FRAME[self.model]
 
     @property
     def eop_note(self) -> str:

@@ -49,7 +49,9 @@ The Monte Carlo (:mod:`tapp.guidance.montecarlo`) draws the samples in fixed RNG
 runs them in shards on Dask (:mod:`tapp.guidance.shards`), reproducibly whatever the workers
 and shard size; the linear covariance (:mod:`tapp.guidance.linear`) propagates the exact
 second moments of [d; e] through the same maps; :mod:`tapp.guidance.statistics` turns both
-into ΔV and miss statistics.
+into ΔV and miss statistics, and :mod:`tapp.guidance.agreement` sets the linear statistics
+that take a law as Gaussian (the |Δv| statistics, the corridor fractions) against the samples
+of the same run, marking those the samples contradict.
 
 Public API
 ----------
@@ -58,6 +60,7 @@ Public API
 this package reads no tape file); :func:`tapp.report.tapp2.guidance_markdown` renders it.
 """
 
+from tapp.guidance.agreement import Agreement, Check, compare
 from tapp.guidance.execution import ExecutionErrors, error_second_moment, sample_errors
 from tapp.guidance.guidefile import GuideFile, Study, bind, read_guide
 from tapp.guidance.linear import LinearCovariance, linear_covariance
@@ -67,8 +70,9 @@ from tapp.guidance.shards import run_shards
 from tapp.guidance.statistics import Corridor, Outcome, linear_outcome, sample_outcome
 from tapp.guidance.study import GuidanceResult, guidance_study
 
-__all__ = ["BLOCK_SAMPLES", "Corridor", "ExecutionErrors", "GuidanceResult", "GuideFile",
-           "LinearCovariance", "Outcome", "Problem", "Samples", "Step", "Study", "bind",
-           "build_problem", "error_second_moment", "guidance_study", "linear_covariance",
+__all__ = ["BLOCK_SAMPLES", "Agreement", "Check", "Corridor", "ExecutionErrors",
+           "GuidanceResult", "GuideFile", "LinearCovariance", "Outcome", "Problem", "Samples",
+           "Step", "Study", "bind", "build_problem", "compare", "error_second_moment",
+           "guidance_study", "linear_covariance",
            "linear_outcome", "propagate", "read_guide", "run_shards",
            "sample_errors", "sample_outcome", "simulate_blocks"]

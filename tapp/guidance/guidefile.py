@@ -25,7 +25,8 @@ Layout (units at the edge: mrad, mm/s, deg; the code works in rad, km/s)::
     flight_time_s = 60.0            # optional |Δt_f| limit
 
 Every σ must be finite and >= 0; the corridor's sizes > 0; targets and manoeuvres are
-checked against the tape when bound (:func:`bind`).
+checked against the tape when bound (:func:`bind`), and the corridor's terms must be on
+targeted components (B·T and B·R for the B-plane, the flight time for its limit).
 """
 
 from __future__ import annotations
@@ -115,15 +116,39 @@ class Study:
     title: str
 
 
-def _corridor(table: CorridorTable | None, t32: T32, source: str) -> Corridor | None:
+def _corridor(table: CorridorTable | None, t32: T32, targets: tuple[str, ...], source: str
+              ) -> Corridor | None:
+    """The corridor of the guidance file, on targeted miss components only.
+
+    A corridor term on a component the guidance does not target (a flight-time limit when
+    the flight time is not among ``targets.miss``, a B-plane corridor without both B·T and
+    B·R) is refused rather than printed with a warning. A corridor is the acceptance test
+    of the guidance; on a component no manoeuvre corrects, the fraction outside measures
+    that component's free dispersion instead (on the deep-space tape an untargeted flight
+    time ends with σ = 18,000 s against 0.33 s targeted, an untargeted B·T with 1,500 km
+    against 0.42 km), and it swamps the targeted terms in "outside either". Its likely
+    cause is a component left out of the targets; and refusing loses nothing, since the
+    final-miss table gives the σ of every component, targeted or not.
+    """
     if table is None:
         return None
-    if bplane_rows(t32.miss_name) is None:
+    names = t32.miss_name
+    if bplane_rows(names) is None:
         raise InputError(source, "corridor", f"a tape with the B-plane miss components "
-                         f"{', '.join(BPLANE)}", ", ".join(t32.miss_name))
-    if table.flight_time_s is not None and flight_time_row(t32.miss_name) is None:
+                         f"{', '.join(BPLANE)}", ", ".join(names))
+    ft = flight_time_row(names)
+    if table.flight_time_s is not None and ft is None:
         raise InputError(source, "corridor.flight_time_s", f"a tape with a flight time miss "
-                         f"component ({' or '.join(FLIGHT_TIME)})", ", ".join(t32.miss_name))
+                         f"component ({' or '.join(FLIGHT_TIME)})", ", ".join(names))
+    terms = {"radius_km" if table.semi_axes_km is None else "semi_axes_km": BPLANE}
+    if table.flight_time_s is not None:
+        terms["flight_time_s"] = (names[ft],)
+    for field, components in terms.items():
+        free = [c for c in components if c not in targets]
+        if free:
+            raise InputError(source, f"corridor.{field}", "a corridor on targeted miss "
+                             f"components only (targets.miss: {', '.join(targets)})",
+                             f"{', '.join(free)} not targeted")
     axes = (table.radius_km, table.radius_km) if table.semi_axes_km is None \
         else tuple(table.semi_axes_km)
     return Corridor(axes, math.radians(table.angle_deg), table.flight_time_s)
@@ -137,8 +162,8 @@ def bind(guide: GuideFile, t32: T32, source: str, tape_source: str = "T32") -> S
     InputError
         A tape other than the one expected, targets or manoeuvre recycles the tape does not
         have, targets the velocity cannot control, a corridor without B-plane (or flight-time)
-        miss components (naming the guidance file), or orbit parameters that are not
-        Cartesian (naming the tape).
+        miss components or on components not targeted (naming the guidance file), or orbit
+        parameters that are not Cartesian (naming the tape).
     """
     if guide.tape.iden is not None and guide.tape.iden != t32.iden:
         raise InputError(source, "tape.iden", f"the tape's identification {t32.iden!r}",
@@ -153,7 +178,8 @@ def bind(guide: GuideFile, t32: T32, source: str, tape_source: str = "T32") -> S
     navigation = guide.navigation.after_manoeuvre
     if navigation == "inflate":
         problem = inflate_after_manoeuvres(problem, t32)
-    return Study(problem, _corridor(guide.corridor, t32, source), navigation, guide.title)
+    return Study(problem, _corridor(guide.corridor, t32, tuple(guide.targets.miss), source),
+                 navigation, guide.title)
 
 
 __all__ = ["GuideFile", "MAX_POINTING_MRAD", "Study", "bind", "read_guide"]

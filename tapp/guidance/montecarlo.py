@@ -44,6 +44,11 @@ class Samples:
         """Number of samples."""
         return self.miss.shape[0]
 
+    @property
+    def dv_magnitude_km_s(self) -> np.ndarray:
+        """(n, n_man) |Δv| of each manoeuvre, km/s."""
+        return np.sqrt(np.einsum("smi,smi->sm", self.dv_km_s, self.dv_km_s))
+
 
 def block_normals(seed: int, block: int, n: int, n_normals: int) -> np.ndarray:
     """Return the (n, n_normals) standard normals of RNG block ``block`` (module docstring)."""

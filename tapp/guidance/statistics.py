@@ -151,6 +151,17 @@ def _corridor_frame(corridor: Corridor) -> np.ndarray:
     return np.array([[c / a, s / a], [-s / b, c / b]])
 
 
+def outside_masks(miss_name: tuple[str, ...], miss: np.ndarray, corridor: Corridor
+                  ) -> tuple[np.ndarray, np.ndarray | None]:
+    """Which samples of the final miss (n, n_m) fall outside the corridor: (n,) booleans
+    for the B-plane ellipse, and for the flight-time limit (None: no limit)."""
+    q = np.einsum("ij,sj->si", _corridor_frame(corridor), miss[:, bplane_rows(miss_name)])
+    out_b = np.einsum("si,si->s", q, q) > 1.0
+    if corridor.flight_time_s is None:
+        return out_b, None
+    return out_b, np.abs(miss[:, flight_time_row(miss_name)]) > corridor.flight_time_s
+
+
 def _miss_stats(miss_name: tuple[str, ...], cov: np.ndarray
                 ) -> tuple[Ellipse | None, float | None]:
     bp, ft = bplane_rows(miss_name), flight_time_row(miss_name)
@@ -161,7 +172,7 @@ def _miss_stats(miss_name: tuple[str, ...], cov: np.ndarray
 def sample_outcome(problem: Problem, samples: Samples, corridor: Corridor | None) -> Outcome:
     """Statistics of the Monte Carlo samples (module docstring)."""
     dv = samples.dv_km_s
-    mags = np.sqrt(np.einsum("smi,smi->sm", dv, dv))
+    mags = samples.dv_magnitude_km_s
 
     def magnitude(x: np.ndarray) -> Magnitude:
         pct = np.percentile(x, PERCENTS)
@@ -176,15 +187,9 @@ def sample_outcome(problem: Problem, samples: Samples, corridor: Corridor | None
     shape, sigma_t = _miss_stats(problem.miss_name, cov)
     outside = None
     if corridor is not None:
-        bp = bplane_rows(problem.miss_name)
-        q = np.einsum("ij,sj->si", _corridor_frame(corridor), miss[:, bp])
-        out_b = np.einsum("si,si->s", q, q) > 1.0
-        out_t = np.zeros_like(out_b)
-        if corridor.flight_time_s is not None:
-            out_t = np.abs(miss[:, flight_time_row(problem.miss_name)]) > corridor.flight_time_s
-        outside = Outside(float(np.mean(out_b)),
-                          None if corridor.flight_time_s is None else float(np.mean(out_t)),
-                          float(np.mean(out_b | out_t)))
+        out_b, out_t = outside_masks(problem.miss_name, miss, corridor)
+        outside = Outside(float(np.mean(out_b)), None if out_t is None else float(np.mean(out_t)),
+                          float(np.mean(out_b if out_t is None else out_b | out_t)))
     return Outcome("Monte Carlo", mans, magnitude(mags.sum(axis=1)), miss.mean(axis=0), cov,
                    shape, sigma_t, outside)
 
@@ -216,4 +221,4 @@ def linear_outcome(problem: Problem, lin: LinearCovariance, corridor: Corridor |
 
 __all__ = ["BPLANE", "FLIGHT_TIME", "PERCENTS", "Corridor", "Ellipse", "Magnitude",
            "ManoeuvreStats", "Outcome", "Outside", "bplane_rows", "ellipse",
-           "flight_time_row", "linear_outcome", "sample_outcome"]
+           "flight_time_row", "linear_outcome", "outside_masks", "sample_outcome"]

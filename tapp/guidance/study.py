@@ -4,8 +4,8 @@
 the guidance file to the tape (:func:`tapp.guidance.guidefile.bind`), runs the Monte Carlo in
 shards (:func:`tapp.guidance.shards.run_shards`), propagates the linear covariance
 (:func:`tapp.guidance.linear.linear_covariance`) and returns both sets of statistics
-(:mod:`tapp.guidance.statistics`) with the per-sample outcomes, in one
-:class:`GuidanceResult`.
+(:mod:`tapp.guidance.statistics`), the linear statistics the samples contradict
+(:mod:`tapp.guidance.agreement`) and the per-sample outcomes, in one :class:`GuidanceResult`.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 from iter.execute import Execution
 from tapp.errors import InputError
+from tapp.guidance.agreement import Agreement, compare
 from tapp.guidance.execution import ExecutionErrors
 from tapp.guidance.guidefile import GuideFile, bind
 from tapp.guidance.linear import linear_covariance
@@ -51,6 +52,7 @@ class GuidanceResult:
     where : where the shards ran (e.g. "local cluster (2 workers)").
     wall_s : wall time of the Monte Carlo, s.
     monte_carlo, linear : the statistics of the samples and of the linear covariance.
+    agreement : every linear statistic against the samples: which ones they contradict.
     samples : the per-sample outcomes, in sample order.
     """
 
@@ -72,6 +74,7 @@ class GuidanceResult:
     wall_s: float
     monte_carlo: Outcome
     linear: Outcome
+    agreement: Agreement
     samples: Samples
 
 
@@ -135,14 +138,15 @@ def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
     run = run_shards(problem, seed, samples, Execution() if execution is None else execution,
                      shard_samples, progress)
     wall_s = time.perf_counter() - start
-    lin = linear_covariance(problem)
+    mc = sample_outcome(problem, run.samples, study.corridor)
+    lin = linear_outcome(problem, linear_covariance(problem), study.corridor)
+    agreement = compare(problem.miss_name, run.samples, study.corridor, mc, lin)
     return GuidanceResult(
         study.title, t32.iden, tape_source, guide_source,
         tuple(problem.miss_name[i] for i in problem.targets), problem.errors,
         study.navigation, study.corridor,
         problem.miss_name, problem.miss_unit, samples, seed, BLOCK_SAMPLES, run.shard_samples,
-        run.where, wall_s, sample_outcome(problem, run.samples, study.corridor),
-        linear_outcome(problem, lin, study.corridor), run.samples)
+        run.where, wall_s, mc, lin, agreement, run.samples)
 
 
 __all__ = ["MAX_SAMPLES", "MIN_SAMPLES", "GuidanceResult", "check_samples",

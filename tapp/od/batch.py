@@ -27,8 +27,14 @@ w_i = 1/σ_i², so RMS ≈ 1 at the noise level), with the thresholds of :class:
   appreciably either, δx_kᵀ N δx_k / (2 m RMS_k²) < ``rms_rel_tol`` (for Gauss-Newton
   δxᵀNδx is the predicted decrease of the weighted sum of squares m RMS²): two equal RMS
   values in a row while the RMS oscillates on its way down are not a convergence;
-- **converged** when the RMS settles at RMS_k <= ``rms_fit_limit``, or when RMS_k <
-  ``rms_floor`` (a noise-free fit is exact to rounding);
+- **converged** when the RMS settles at RMS_k <= ``rms_fit_limit`` and within the noise
+  model's bound (below), or when RMS_k < ``rms_floor`` (a noise-free fit is exact to
+  rounding);
+- **converged, residuals inconsistent with the noise model** when the RMS settles within
+  ``rms_fit_limit`` but above :func:`rms_bound`, the RMS a correct model exceeds with
+  probability 1 − :data:`NOISE_MODEL_PROBABILITY` (0.1 %): the iteration converged, but the
+  data are not explained by the model and their noise (a wrong Earth orientation, force
+  model, station or σ), so the estimate may be far from the orbit;
 - **stalled** when the RMS settles above ``rms_fit_limit`` (the data are not fitted to their
   noise level: the iteration found a point that is not the orbit);
 - **diverged** when RMS_k > ``divergence_ratio`` × min_{j<k} RMS_j (the RMS grows), when the
@@ -40,6 +46,25 @@ w_i = 1/σ_i², so RMS ≈ 1 at the noise level), with the thresholds of :class:
   an RMS oscillating on its way down counts as falling). The result gives q and the
   iterations still needed to reach ``rms_fit_limit`` if the fall goes on,
   ceil(log(rms_fit_limit / RMS_K) / log q) (0 when RMS_K is within the limit already).
+
+The noise-model test. With Gaussian measurement errors of the stated σ and a state and
+measurement model that are right, the weighted sum of squares of the m residuals at the
+least-squares estimate of n parameters is χ² with ν = m − n degrees of freedom (the
+standard result of linear least squares, e.g. Seber & Lee, *Linear Regression Analysis*,
+2nd ed., 2003, ch. 3; the DC's last linearisation makes it so to first order), so
+
+.. math::
+    \\mathrm{RMS}^2 = \\frac{1}{m}\\sum_i w_i y_i^2 \\sim \\frac{\\chi^2_\\nu}{m},\\qquad
+    \\mathrm{RMS}_{\\max} = \\sqrt{F^{-1}_{\\chi^2_\\nu}(0.999) / m}
+
+(SciPy's ``chi2.ppf``). n = 6 (the epoch state); with an a priori, whose six
+pseudo-measurements balance the six parameters, ν = m, a bound on the data's part of the
+sum. With ν = 0 the fit interpolates the data and the bound is 0. The test is applied only
+where the RMS settled: a diverged, stalled (the default ``rms_fit_limit`` 3 is above every
+bound: the largest, at m = 12, is 1.37) or still converging DC has no estimate to judge; the
+bound is reported with every outcome. A fit whose STM is truncated (J_M ≠ J_N) settles where
+H̃ᵀWy = 0, not at the least-squares estimate (HᵀWy = 0): its RMS is at or above the minimum,
+and the test judges the estimate it returns.
 
 The observed contraction factor q is measured on the corrections, not on the RMS: near the
 solution the DC with a truncated STM is the fixed-point iteration e_{k+1} = M e_k,
@@ -62,6 +87,7 @@ from enum import StrEnum
 
 import numpy as np
 import scipy.linalg
+from scipy.stats import chi2
 
 from tapp.dynamics import PropagationError, Propagator
 from tapp.errors import InputError, SingularMatrixError, TooFewMeasurementsError
@@ -72,12 +98,18 @@ from tapp.od.observations import Observations, predict, residuals
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "vz")
 #: Most iterations a DC may be asked for (each propagates the whole arc with its STM).
 MAX_ITERATIONS = 10_000
+#: Probability with which the weighted residual RMS of a correct model stays within
+#: :func:`rms_bound` (the issue's 99.9 %: one correct fit in a thousand is called inconsistent).
+NOISE_MODEL_PROBABILITY = 0.999
+#: Parameters a DC estimates from the data alone: the epoch state.
+N_STATE = 6
 
 
 class DCOutcome(StrEnum):
-    """The four outcomes of a differential correction (module docstring for the rules)."""
+    """The five outcomes of a differential correction (module docstring for the rules)."""
 
     CONVERGED = "converged"
+    INCONSISTENT = "converged, residuals inconsistent with the noise model"
     CONVERGING = "converging"
     STALLED = "stalled"
     DIVERGED = "diverged"
@@ -145,6 +177,32 @@ class IllConditionedError(SingularMatrixError):
                          f"{len(directions)} state direction(s): {dirs}")
 
 
+def rms_bound(n_residuals: int, n_parameters: int = N_STATE,
+              probability: float = NOISE_MODEL_PROBABILITY) -> float:
+    """Return the weighted residual RMS (dimensionless, w = 1/σ²) that a fit of a correct
+    model to ``n_residuals`` scalar measurements, estimating ``n_parameters``, exceeds with
+    probability 1 − ``probability``: sqrt(χ²_ν⁻¹(probability) / m), ν = m − n (module
+    docstring); 0 when ν = 0.
+
+    >>> round(rms_bound(1180), 4)   # the README's TDM: 590 range and range-rate pairs
+    1.0614
+    >>> rms_bound(6)
+    0.0
+
+    Raises
+    ------
+    InputError
+        Fewer residuals than parameters (ν < 0).
+    """
+    dof = n_residuals - n_parameters
+    if dof < 0:
+        raise InputError("dc", "residuals", f"at least {n_parameters} (one per estimated "
+                         "parameter)", n_residuals)
+    if dof == 0:
+        return 0.0
+    return float(np.sqrt(chi2.ppf(probability, dof) / n_residuals))
+
+
 def describe_direction(v: np.ndarray, smallest: float = 0.1) -> str:
     """Return a state direction as text, e.g. ``-0.70 z + 0.71 vz`` (components >= 0.1)."""
     order = np.argsort(-np.abs(v))
@@ -180,7 +238,8 @@ class DCResult:
     final estimate (the start of the last iteration, whose RMS is the last one reported);
     ``covariance`` its formal covariance; ``contraction_factor`` the observed factor q
     (module docstring; NaN with fewer than two iterations); ``projected_iterations`` the
-    iterations still needed to reach the fit limit (status "converging" only, else None).
+    iterations still needed to reach the fit limit (status "converging" only, else None);
+    ``rms_bound`` the noise model's bound on the RMS (:func:`rms_bound`, for every outcome).
     """
 
     status: str
@@ -191,15 +250,30 @@ class DCResult:
     n_measurements: int
     contraction_factor: float = math.nan
     projected_iterations: int | None = None
+    rms_bound: float = math.nan
 
     @property
     def converged(self) -> bool:
+        """True for the outcome "converged" only: the RMS settled within the noise model."""
         return self.status == DCOutcome.CONVERGED
 
     @property
+    def settled(self) -> bool:
+        """True when the iteration converged, the residuals consistent with the noise model
+        or not ("converged" or "converged, residuals inconsistent with the noise model")."""
+        return self.status in (DCOutcome.CONVERGED, DCOutcome.INCONSISTENT)
+
+    @property
+    def iteration_converges(self) -> bool:
+        """True when the iteration converged (:attr:`settled`) or was still converging at its
+        limit: what the predicted rate ρ < 1 foretells (:mod:`tapp.od.rate`)."""
+        return self.settled or self.status == DCOutcome.CONVERGING
+
+    @property
     def converged_at(self) -> int | None:
-        """Iteration at which the DC converged (its RMS settled), or None."""
-        return len(self.iterations) if self.converged else None
+        """Iteration at which the iteration converged (its RMS settled; :attr:`settled`),
+        or None."""
+        return len(self.iterations) if self.settled else None
 
     @property
     def rms(self) -> np.ndarray:
@@ -310,8 +384,11 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
     IllConditionedError
         The normal matrix of the first iteration is ill-conditioned (module docstring).
     """
-    if obs.count < 6:
-        raise TooFewMeasurementsError(6, obs.count)
+    if obs.count < N_STATE:
+        raise TooFewMeasurementsError(N_STATE, obs.count)
+    # with an a priori its six pseudo-measurements balance the six parameters (docstring)
+    n_estimated = 0 if apriori is not None else N_STATE
+    bound = rms_bound(obs.count, n_estimated)
     w = np.tile(1.0 / obs.sigma**2, obs.t_s.size)
     x = np.asarray(x_start, dtype=float).copy()
     info_prior = np.zeros((6, 6))
@@ -359,6 +436,11 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
             reason = (f"RMS settled (changed by less than {settings.rms_rel_tol:g}, "
                       f"relative) at iteration {k}" + ("" if settled else
                                           f", settling at {rms:.4g} > {settings.rms_fit_limit:g}"))
+            if settled and rms > bound:
+                status = DCOutcome.INCONSISTENT
+                reason += (f", at RMS {rms:.4g} > {bound:.4g}, the "
+                           f"{100 * NOISE_MODEL_PROBABILITY:g} % χ² bound of {y.size} "
+                           f"residuals and {n_estimated} estimated parameters")
             break
         if rms_prev and rms > settings.divergence_ratio * min(rms_prev):
             reason = (f"RMS grew to {rms:.4g}, more than {settings.divergence_ratio:g} x its "
@@ -373,4 +455,4 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
     last = history[-1] if history else DCIteration(0, x, np.nan, np.zeros(6),
                                                    np.full((6, 6), np.nan))
     return DCResult(str(status), reason, tuple(history), last.x0, last.covariance, obs.count,
-                    q, more)
+                    q, more, bound)

@@ -2,13 +2,14 @@
 
 An :class:`Observations` holds M time-tagged rows, each from one station, with the
 observable kinds of the set (range km, range-rate km/s by default) and their standard
-deviations. Simulated data and data read from a file (:mod:`tapp.od.obsfile`) are the same
-type, so real tracking data could be processed the same way.
+deviations, and, when known, the Earth orientation they were made under
+(:class:`MadeUnder`). Simulated data and data read from a file (:mod:`tapp.od.obsfile`) are
+the same type, so real tracking data could be processed the same way.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -18,6 +19,41 @@ from tapp.frames.orientation import EarthOrientation
 from tapp.measurements.observables import MeasurementModel
 from tapp.measurements.stations import Station
 from tapp.measurements.visibility import find_passes
+
+#: The EOP source recorded for observations made under gmst, which uses none.
+NO_EOP = "not used"
+
+
+@dataclass(frozen=True, slots=True)
+class MadeUnder:
+    """The Earth orientation observations were made under: what a station's place in the
+    inertial frame, and so every computed observable, depends on.
+
+    Attributes
+    ----------
+    earth_orientation : the model, "iau2006" or "gmst" (:mod:`tapp.frames.orientation`).
+    eop : the EOP source: the IERS table's file name (``finals2000A.all``), "none (UT1 = UTC,
+        no polar motion)", or :data:`NO_EOP` under gmst
+        (:attr:`tapp.frames.orientation.EarthOrientation.eop_note`).
+    frame : the inertial frame of the orbit, "GCRS" (iau2006) or "EME2000" (gmst).
+    """
+
+    earth_orientation: str
+    eop: str
+    frame: str
+
+    @classmethod
+    def of(cls, orientation: EarthOrientation) -> MadeUnder:
+        """The record of data made under ``orientation``."""
+        return cls(orientation.model, orientation.eop_note or NO_EOP, orientation.frame)
+
+    def as_dict(self) -> dict[str, str]:
+        """The fields by name, in order (:data:`MADE_UNDER_KEYS`)."""
+        return {key: getattr(self, key) for key in MADE_UNDER_KEYS}
+
+
+#: The names under which files record a :class:`MadeUnder`, in order.
+MADE_UNDER_KEYS = tuple(f.name for f in fields(MadeUnder))
 
 
 @dataclass(frozen=True, slots=True)
@@ -35,6 +71,8 @@ class Observations:
     span_s : end of the time span the data set covers, s from the epoch (the end of the
         tracking schedule: a station may see nothing in its last minutes); None when not
         known, then the last observation time stands for it (:attr:`end_s`).
+    made_under : the Earth orientation the data were made under; None when not known (a
+        file that states none, e.g. one written by another tool).
     """
 
     t_s: np.ndarray
@@ -44,6 +82,7 @@ class Observations:
     kinds: tuple[str, ...]
     sigma: np.ndarray
     span_s: float | None = None
+    made_under: MadeUnder | None = None
 
     def __post_init__(self) -> None:
         m = self.t_s.shape[0]
@@ -73,7 +112,7 @@ class Observations:
         keep = self.t_s <= t_end_s
         return Observations(self.t_s[keep], self.station[keep], self.values[keep],
                             self.stations, self.kinds, self.sigma,
-                            min(self.end_s, float(t_end_s)))
+                            min(self.end_s, float(t_end_s)), self.made_under)
 
     def arc(self, arc_s: float, source: str = "--arc", field: str = "value",
             got: object = None) -> Observations:
@@ -142,7 +181,7 @@ def simulate(truth: Propagator, x0: np.ndarray, stations: tuple[Station, ...],
     Every grid time at which a station sees the spacecraft gives one row; white Gaussian
     noise of ``sigma`` (k,) is added when ``rng`` is given (noise-free otherwise).
     ``orientation`` places the stations and orients ``truth``'s field (its model must be
-    that of ``truth``'s force model).
+    that of ``truth``'s force model); the data record it (``made_under``).
 
     Raises
     ------
@@ -169,4 +208,4 @@ def simulate(truth: Propagator, x0: np.ndarray, stations: tuple[Station, ...],
     if rng is not None:
         values = values + rng.standard_normal(values.shape) * sigma
     return Observations(t[order], np.concatenate(rows_s)[order], values, tuple(stations),
-                        tuple(kinds), sigma, float(traj.t_s[-1]))
+                        tuple(kinds), sigma, float(traj.t_s[-1]), MadeUnder.of(orientation))

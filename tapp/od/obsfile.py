@@ -13,12 +13,21 @@ Data Message of :mod:`tapp.ccsds.tdm`, one segment per station, epochs in UTC (t
 epoch is t = 0), participants the station and the spacecraft; read back, the participants
 must name stations of the scenario and the observables must have a σ in it. Files are written
 to a temporary name and renamed; readers name the file and the field at fault.
+
+The Earth orientation the data were made under (:class:`tapp.od.observations.MadeUnder`:
+``earth_orientation``, ``eop``, ``frame``) is recorded when known, as three statements
+``KEY = VALUE``: HDF5 root attributes of those names; CSV lines ``# KEY = VALUE`` before the
+header; TDM header lines ``COMMENT tapp: KEY = VALUE`` (the TDM standard has no keyword for
+it; REFERENCE_FRAME is the frame of RADEC angles). Read back, a file states all three or
+none (:attr:`~tapp.od.observations.Observations.made_under` None, e.g. a file written by
+another tool); a file stating some but not all, or an unknown model, is refused.
 """
 
 from __future__ import annotations
 
 import csv
 import math
+import re
 from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
@@ -37,14 +46,51 @@ from tapp.ccsds.tdm import (
 )
 from tapp.ccsds.tdm import StationTrack as _Track
 from tapp.errors import InputError
+from tapp.frames.orientation import check_model
 from tapp.frames.time import Epoch
 from tapp.measurements.stations import Station
-from tapp.od.observations import Observations
+from tapp.od.observations import MADE_UNDER_KEYS, MadeUnder, Observations
 
 _COLUMNS = {"range": "range_km", "range_rate": "range_rate_km_s", "azimuth": "azimuth_rad",
             "elevation": "elevation_rad"}
 FORMAT = "tapp-observations"
 VERSION = 1
+#: Prefixes of the ``KEY = VALUE`` statements of the Earth orientation in CSV lines and in
+#: TDM header comments (module docstring).
+CSV_PREFIX = "# "
+TDM_PREFIX = "tapp: "
+_STATEMENT = re.compile(r"^(" + "|".join(MADE_UNDER_KEYS) + r")\s*=\s*(.*?)\s*$")
+
+
+def made_under_statements(made: MadeUnder | None, prefix: str) -> tuple[str, ...]:
+    """Return the ``PREFIX KEY = VALUE`` lines recording ``made`` (none for None)."""
+    if made is None:
+        return ()
+    return tuple(f"{prefix}{key} = {value}" for key, value in made.as_dict().items())
+
+
+def _made_under(lines: list[str], prefix: str, source: str) -> MadeUnder | None:
+    """Return the MadeUnder stated by the ``PREFIX KEY = VALUE`` among ``lines`` (None when
+    none is), or raise InputError naming ``source`` for a partial statement or an unknown
+    model."""
+    found = {}
+    for line in lines:
+        m = _STATEMENT.match(line.removeprefix(prefix)) if line.startswith(prefix) else None
+        if m is not None:
+            found[m.group(1)] = m.group(2)
+    return _made_under_of(found, source)
+
+
+def _made_under_of(found: dict[str, str], source: str) -> MadeUnder | None:
+    if not found:
+        return None
+    missing = [key for key in MADE_UNDER_KEYS if key not in found]
+    if missing:
+        raise InputError(source, missing[0], "the Earth orientation, EOP source and frame "
+                         "the data were made under, stated together (" + ", ".join(
+                             MADE_UNDER_KEYS) + ")", f"only {', '.join(found)}")
+    check_model(found["earth_orientation"], source, "earth_orientation")
+    return MadeUnder(**{key: found[key] for key in MADE_UNDER_KEYS})
 
 
 def is_tdm(path: Path) -> bool:
@@ -73,7 +119,8 @@ def tdm_text(obs: Observations, epoch: Epoch, spacecraft: str,
                              obs.values[rows], obs.end_s, "1,2,1", (where,)))
     sigma = ", ".join(f"{KEYWORD_OF_KIND[k]} {v:g}" for k, v in zip(obs.kinds, obs.sigma,
                                                                    strict=True))
-    notes = (*comments, f"standard deviations (km, km/s, rad): {sigma}",
+    notes = (*comments, *made_under_statements(obs.made_under, TDM_PREFIX),
+             f"standard deviations (km, km/s, rad): {sigma}",
              "values are instantaneous at the receive time (no light time)")
     return format_tdm(tdm_from_tracks(tracks, epoch, comments=notes))
 
@@ -86,7 +133,8 @@ def observations_file_writer(path: Path, obs: Observations, *, epoch: Epoch | No
     :class:`tapp.outputs.OutputSet`, which passes a temporary beside ``path``.
 
     A TDM needs the ``epoch`` of t = 0 (UTC) and names the ``spacecraft``; ``comments`` go
-    to its header (HDF5: the root attribute ``comments``; CSV has no place for them).
+    to its header (HDF5: the root attribute ``comments``; CSV has no place for them). Every
+    format records ``obs.made_under`` when it is known (module docstring).
     """
     path = Path(path)
     kinds = [str(k) for k in obs.kinds]
@@ -100,6 +148,8 @@ def observations_file_writer(path: Path, obs: Observations, *, epoch: Epoch | No
     elif path.suffix == ".csv":
         def write(tmp: Path) -> None:
             with tmp.open("w", newline="") as fh:
+                fh.writelines(f"{line}\n" for line in made_under_statements(obs.made_under,
+                                                                           CSV_PREFIX))
                 out = csv.writer(fh)
                 out.writerow(["t_s", "station", *(_COLUMNS[k] for k in kinds)])
                 for t, s, row in zip(obs.t_s, obs.station, obs.values, strict=True):
@@ -112,6 +162,8 @@ def observations_file_writer(path: Path, obs: Observations, *, epoch: Epoch | No
                                created_utc=datetime.now(UTC).isoformat(), span_s=obs.end_s)
                 if comments:
                     f.attrs["comments"] = list(comments)
+                if obs.made_under is not None:
+                    f.attrs.update(obs.made_under.as_dict())
                 f.create_dataset("t_s", data=obs.t_s).attrs["units"] = "s"
                 f.create_dataset("station", data=obs.station)
                 v = f.create_dataset("values", data=obs.values)
@@ -171,11 +223,13 @@ def read_observations(path: Path, stations: dict[str, Station] | None = None,
             kinds = tuple(str(k) for k in f["values"].attrs["kinds"])
             t, s, v, sg = f["t_s"][()], f["station"][()], f["values"][()], f["sigma"][()]
             span = f.attrs.get("span_s")
+            stated = {key: str(f.attrs[key]) for key in MADE_UNDER_KEYS if key in f.attrs}
     except OSError as exc:
         raise InputError(str(path), "file", f"a readable HDF5 file ({exc})") from None
     _check(path, t, v)
     span_s = float(span) if span is not None and np.isfinite(span) else None
-    return Observations(t, s.astype(int), v, st, kinds, sg, span_s)
+    return Observations(t, s.astype(int), v, st, kinds, sg, span_s,
+                        _made_under_of(stated, str(path)))
 
 
 def _read_tdm(path: Path, stations: dict[str, Station], sigma: np.ndarray | None,
@@ -184,7 +238,8 @@ def _read_tdm(path: Path, stations: dict[str, Station], sigma: np.ndarray | None
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise InputError(str(path), "file", "a text (KVN) TDM") from None
-    tracks = read_tracks(parse_tdm(text, str(path)), epoch, stations)
+    tdm = parse_tdm(text, str(path))
+    tracks = read_tracks(tdm, epoch, stations)
     if not tracks:
         raise InputError(str(path), "data", "at least one observation")
     kinds = tracks[0].kinds
@@ -211,7 +266,7 @@ def _read_tdm(path: Path, stations: dict[str, Station], sigma: np.ndarray | None
     span = max([*ends, float(t.max())])
     sg = np.array([sigma[sigma_kinds.index(k)] for k in kinds], dtype=float)
     return Observations(t[order], s[order], v[order], tuple(stations[n] for n in names), kinds,
-                        sg, span)
+                        sg, span, _made_under(list(tdm.comments), TDM_PREFIX, str(path)))
 
 
 def _check(path: Path, t: np.ndarray, values: np.ndarray) -> None:
@@ -225,7 +280,11 @@ def _check(path: Path, t: np.ndarray, values: np.ndarray) -> None:
 def _read_csv(path: Path, stations: dict[str, Station], sigma: np.ndarray | None
               ) -> Observations:
     with path.open(newline="") as fh:
-        rows = list(csv.reader(fh))
+        lines = fh.read().splitlines()
+    # the statements of the Earth orientation (module docstring) come before the header
+    lead = next((i for i, line in enumerate(lines) if not line.startswith(CSV_PREFIX[0])),
+                len(lines))
+    rows = list(csv.reader(lines[lead:]))
     if not rows:
         raise InputError(str(path), "header", "t_s,station and observable columns")
     header = [h.strip() for h in rows[0]]
@@ -244,7 +303,7 @@ def _read_csv(path: Path, stations: dict[str, Station], sigma: np.ndarray | None
         raise InputError(str(path), "station", "stations defined in the scenario", unknown[0])
     index = {n: i for i, n in enumerate(names)}
     t, s, v = [], [], []
-    for line, r in enumerate(rows[1:], start=2):
+    for line, r in enumerate(rows[1:], start=lead + 2):
         if len(r) != len(header):
             raise InputError(str(path), f"line {line}", f"{len(header)} columns", len(r))
         try:
@@ -257,4 +316,5 @@ def _read_csv(path: Path, stations: dict[str, Station], sigma: np.ndarray | None
     t_arr, v_arr = np.array(t), np.array(v).reshape(len(t), len(kinds))
     _check(path, t_arr, v_arr)
     return Observations(t_arr, np.array(s, dtype=int), v_arr,
-                        tuple(stations[n] for n in names), kinds, np.asarray(sigma, float))
+                        tuple(stations[n] for n in names), kinds, np.asarray(sigma, float),
+                        made_under=_made_under(lines[:lead], CSV_PREFIX, str(path)))

@@ -42,7 +42,7 @@ from tapp.frames.orientation import EarthOrientation, check_model, orientation_f
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements.stations import Station
 from tapp.od.batch import MAX_ITERATIONS
-from tapp.od.observations import Observations, simulate
+from tapp.od.observations import MadeUnder, Observations, simulate
 from tapp.orbits import DEFAULT_SCENARIO, OrbitTable, parse_orbit
 from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, validate
 from tapp.stations_file import StationTable, load_network
@@ -334,6 +334,66 @@ def describe_orientation(record: dict) -> str:
         return "gmst (GMST IAU-82 + ω t, UT1 = UTC; no precession, nutation or polar motion)"
     predicted = "; predicted EOP used" if record["predicted_eop"] else ""
     return f"iau2006 (IAU 2006/2000A; EOP {record['eop']}{predicted})"
+
+
+def _describe_made_under(made: MadeUnder) -> str:
+    return f"{made.earth_orientation} (EOP {made.eop}, frame {made.frame})"
+
+
+def check_made_under(obs: Observations, orient: EarthOrientation, source: str,
+                     path: Path = DEFAULT_SCENARIO, chosen: bool = False) -> str | None:
+    """Check observations read from ``source`` against the run's Earth orientation
+    ``orient``; return a note for the user (one line) or None, or raise InputError.
+
+    Where data meet a model: observations made under one Earth orientation and fitted under
+    another are off by the difference of the station places (31.5 km at Goldstone between
+    iau2006 and gmst on 2026-01-01), and a DC on them settles tens of km from the orbit
+    (41.5 km for ``tapp simulate``'s TDM of ``scenarios/leo_equatorial.toml`` fitted under
+    the study's gmst). The file's record (``obs.made_under``, :mod:`tapp.od.obsfile`):
+
+    - states the run's model, EOP source and frame: None;
+    - states another, and the run's model is the study file's (``chosen`` False): refused,
+      naming the file, the first field that differs, both values and ``--earth-orientation``
+      (the option that sets the run's model);
+    - states another, and ``--earth-orientation`` chose the run's model (``chosen``): the
+      analyst asked for this fit; a note saying what the file states and what is used (a
+      DC whose data its model does not explain then fails the noise-model test, exit 7);
+    - states nothing: a note, and the data are taken as made under the run's model. Not
+      refused, because files written by other tools (the CCSDS examples of
+      ``tests/data/ccsds-tdm``, real tracking data) state no model: real data are made by
+      the Earth itself, and the model that reduces them is the analyst's choice, which the
+      study file or the option makes. Not assumed wrong either, which would be a silent
+      answer of its own. A wrong choice still shows in the DC, whose residuals then fail
+      the noise-model test (:func:`tapp.od.batch.rms_bound`, exit 7).
+
+    Raises
+    ------
+    InputError
+        A mismatch when not ``chosen`` (above).
+    """
+    run = MadeUnder.of(orient)
+    made = obs.made_under
+    if made is None:
+        return (f"{source} states no Earth orientation its observations were made under "
+                f"(earth_orientation, eop, frame); taken as the fit's, "
+                f"{_describe_made_under(run)}")
+    if made == run:
+        return None
+    if chosen:
+        return (f"{source} states observations made under {_describe_made_under(made)}; "
+                f"fitted under {_describe_made_under(run)} as --earth-orientation asks")
+    model = run.earth_orientation
+    rows = (("earth_orientation", "Earth orientation model", f"{path}'s earth_orientation; "
+             f"--earth-orientation {made.earth_orientation} fits them under theirs, "
+             f"--earth-orientation {model} under {model} regardless"),
+            ("eop", "EOP source", f"{path}'s eop; set it to theirs, or "
+             f"--earth-orientation {model} fits them regardless"),
+            ("frame", "inertial frame", f"that of {model}; --earth-orientation {model} fits "
+             "them regardless"))
+    # the first field that differs (made != run: there is one)
+    key, what, how = next(row for row in rows if getattr(made, row[0]) != getattr(run, row[0]))
+    raise InputError(source, key, f"observations made under the fit's {what} "
+                     f"{getattr(run, key)} ({how})", getattr(made, key))
 
 
 def force_model(spec: str, orient: EarthOrientation, source: str, field: str) -> ForceModel:

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from iter.body import input_check
 from iter.execute import Execution
 from tapp.errors import InputError
 from tapp.guidance.guidefile import GuideFile
@@ -34,7 +35,7 @@ from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.schema import validate
 from tapp.tape.t13_hdf5 import write_t13
 from tapp.tape.t32_hdf5 import read_t32, write_t32
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario import Scenario, parse_scenario
 from tapp.tracking.simulate import simulate
 
 #: What a pipeline directory holds.
@@ -106,14 +107,28 @@ def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | No
     return replace(result, directory=out_dir)
 
 
-def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: bool,
-         progress: Progress) -> PipelineResult:
-    wall: dict[str, float] = {}
-    start = time.perf_counter()
+def bind_parts(pipeline: Pipeline) -> tuple[Scenario, Deck, GuideFile]:
+    """Return the scenario, deck and guidance file, each validated by its own schema.
+
+    Cheap (reading and checking, no computation): the input check of a sweep over pipelines.
+
+    Raises
+    ------
+    InputError
+        Naming the part's file (or the pipeline file and the part) and the field.
+    """
     part = pipeline.scenario
     scenario = parse_scenario(part.document, part.source, pipeline.earth_orientation)
     deck = validate(Deck, pipeline.deck.document, pipeline.deck.source)
     guide = validate(GuideFile, pipeline.guidance.document, pipeline.guidance.source)
+    return scenario, deck, guide
+
+
+def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: bool,
+         progress: Progress) -> PipelineResult:
+    wall: dict[str, float] = {}
+    start = time.perf_counter()
+    scenario, deck, guide = bind_parts(pipeline)
     sim = simulate(scenario, progress=lambda stage, done, total: progress(
         f"TAPP I: {stage}", done, total))
     t13_path = work / OUTPUTS["t13"]
@@ -150,24 +165,27 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
     return PipelineResult(work, observations, content, guidance, wall)
 
 
-def tracking_case(pipeline: str, data_interval_s: float, network: float, networks: str,
-                  samples: int = 5000, seed: int = 1) -> dict[str, float]:
-    """ITER body: the pipeline with the tracking varied; return the trade-study outputs.
+def check_tracking_case(pipeline: str, data_interval_s: float, network: float,
+                        networks: str, samples: int = 5000, seed: int = 1) -> Pipeline:
+    """Return the pipeline of one :func:`tracking_case`, its parts read and validated.
 
-    ``network`` (a whole number, 0-based) picks a station set from ``networks``, sets of
-    station names separated by ``;`` (``"GOLDSTONE CANBERRA MADRID; GOLDSTONE"``); the
-    stations of the scenario outside the set are switched off in the deck for the whole run
-    (TAPP III's time-station flags: the tape and the parameter vector stay the same), and the
-    scenario's data interval is ``data_interval_s``. The run is serial (it is one case of a
-    sweep that is itself spread over workers) in a temporary directory.
+    The body's input check (ITER runs it on the first case before any case runs): the
+    pipeline file and the files of its parts, the station set, the sample count and the seed.
 
-    Outputs: σ of each final-miss component (Monte Carlo) and the semi-axes of the 1σ
-    B-plane dispersion ellipse, the 99 % and mean total ΔV (m/s), the fraction outside the
-    corridor, and the observations simulated.
+    Raises
+    ------
+    InputError
+        Naming the file (or the argument) and the field: a file missing or invalid, a
+        ``network`` that picks no set of ``networks``, a station the scenario does not have,
+        a sample count or seed out of range.
     """
+    if not isinstance(networks, str):
+        raise InputError("networks", "value", "station sets as text, separated by ';'",
+                         networks)
     sets = [s.split() for s in networks.split(";")]
-    index = int(network)
-    if index != network or not 0 <= index < len(sets) or not sets[index]:
+    index = _whole(network)
+    if (isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < len(sets)
+            or not sets[index]):
         raise InputError("network", "value", f"a whole number 0..{len(sets) - 1} picking a "
                          "station set of networks", network)
     base = read_pipeline(pipeline)
@@ -178,11 +196,41 @@ def tracking_case(pipeline: str, data_interval_s: float, network: float, network
         raise InputError("networks", "stations", f"stations of the scenario {stations}",
                          unknown)
     pipe = with_overrides(base, {
-        "scenario.tracking.data_interval_s": float(data_interval_s),
+        "scenario.tracking.data_interval_s": data_interval_s,
         "deck.stations_off": [*base.deck.document.get("stations_off", []), *off],
     })
-    pipe = replace(pipe, samples=check_samples(int(samples), "samples"),
-                   seed=check_seed(int(seed), "seed"))
+    pipe = replace(pipe, samples=check_samples(_whole(samples), "samples"),
+                   seed=check_seed(_whole(seed), "seed"))
+    bind_parts(pipe)
+    return pipe
+
+
+def _whole(value: object) -> object:
+    """Return a float with no fraction (a varied value, 2.0) as an int; anything else as it
+    is, for the check that follows to accept or refuse."""
+    return int(value) if isinstance(value, float) and value.is_integer() else value
+
+
+@input_check(check_tracking_case)
+def tracking_case(pipeline: str, data_interval_s: float, network: float, networks: str,
+                  samples: int = 5000, seed: int = 1) -> dict[str, float]:
+    """ITER body: the pipeline with the tracking varied; return the trade-study outputs.
+
+    ``pipeline`` is the pipeline file (a sweep gives it in ``[body.files]``, so that it is
+    taken from the sweep file's folder). ``network`` (a whole number, 0-based) picks a
+    station set from ``networks``, sets of station names separated by ``;`` (``"GOLDSTONE
+    CANBERRA MADRID; GOLDSTONE"``); the stations of the scenario outside the set are switched
+    off in the deck for the whole run (TAPP III's time-station flags: the tape and the
+    parameter vector stay the same), and the scenario's data interval is
+    ``data_interval_s``. The run is serial (it is one case of a sweep that is itself spread
+    over workers) in a temporary directory. Inputs are checked first
+    (:func:`check_tracking_case`, also the sweep's input check).
+
+    Outputs: σ of each final-miss component (Monte Carlo) and the semi-axes of the 1σ
+    B-plane dispersion ellipse, the 99 % and mean total ΔV (m/s), the fraction outside the
+    corridor, and the observations simulated.
+    """
+    pipe = check_tracking_case(pipeline, data_interval_s, network, networks, samples, seed)
     with tempfile.TemporaryDirectory() as tmp:
         result = run_pipeline(pipe, Path(tmp) / "run", execution=Execution(serial=True),
                               plots=False)

@@ -73,16 +73,17 @@ def evaluate(omega: int, cmd: Command, acc: Accumulator, factor: Callable[[str],
                   tuple(acc.labels(cmd.cols.tau, cmd.cols.rho, miss_names)), z)
 
 
-def transform(cmd: Command, acc: Accumulator, k: np.ndarray) -> np.ndarray:
+def transform(cmd: Command, acc: Accumulator, k: np.ndarray,
+              mapper: Callable[..., np.ndarray] = accurate_map) -> np.ndarray:
     """Return K X₂ᵀ for an update command (UPC): X₂ = (μ, τ, ρ| of its columns, K a factor
     (then the command's matrix X₂ KᵀK X₂ᵀ has the factor K X₂ᵀ and is never formed) or, for
     σ₀ = I, the stored partials of its rows.
 
-    Formed in twice the working precision (:func:`tapp.estimation.factors.accurate_map`):
-    the transformation to a new epoch is ill-conditioned after a swing-by (cond 1e13), and a
-    plain product's rounding moved the covariances after the deep-space tape's periapsis
-    epoch by 1e-9 to 1e-8 of their scale.
+    ``mapper(K, X, X_lo)`` forms the product: by default in twice the working precision
+    (:func:`tapp.estimation.factors.accurate_map`): the transformation to a new epoch is
+    ill-conditioned after a swing-by (cond 1e13), and a plain product's rounding moved the
+    covariances after the deep-space tape's periapsis epoch by 1e-9 to 1e-8 of their scale.
     """
     side = cmd.cols
-    return accurate_map(k, acc.partials(side.mu, side.tau, side.rho),
-                        acc.remainder(side.mu, side.tau, side.rho))
+    return mapper(k, acc.partials(side.mu, side.tau, side.rho),
+                  acc.remainder(side.mu, side.tau, side.rho))

@@ -89,6 +89,10 @@ from tapp.tape.t32 import T32Entity, T32Recycle
 #: Pairs read from the tape at a time (bounds the memory of a block of packed factors).
 PAIRS_PER_BLOCK = 2048
 NOISE_PARTS = ("white", "bias", "correlated")
+#: Condition number of a transition's orbit block up to which factors are mapped to a new
+#: epoch by a plain product (losing at most cond ε ≈ 2e-12 of their columns); beyond it the
+#: product is formed in twice the working precision (the deep-space periapsis: 4.5e13).
+PLAIN_MAP_COND = 1e4
 #: Rows (times n_o) beyond which a running factor is triangularised at once; below, it stays
 #: stacked until the next epoch change maps it and it is triangularised in the new epoch.
 COMPACT_ROWS = 4
@@ -101,6 +105,11 @@ CROSS = "correlations between a priori groups"
 #: largest ratio of error to ε κ is 3.0 (tests/tapp/processor/test_reference.py).
 ERROR_PER_KAPPA = 16.0
 EPS = float(np.finfo(float).eps)
+
+
+def _plain_map(k: np.ndarray, x: np.ndarray, x_lo: np.ndarray | None = None) -> np.ndarray:
+    """K Xᵀ as a plain product (X_lo, below X's rounding, is immaterial here)."""
+    return k @ x.T
 
 
 def _digits(kappa: float) -> float:
@@ -236,19 +245,21 @@ class Processor:
             keep &= ~((station == off.station) & (k >= off.k_first) & (k <= off.k_last))
         return keep
 
-    def _rows(self, packed: np.ndarray, to: tuple | None = None) -> np.ndarray:
+    def _rows(self, packed: np.ndarray, to: tuple | None = None,
+              mapper: Callable[..., np.ndarray] = accurate_map) -> np.ndarray:
         """The stacked rows (m n_o, n_o) of m packed upper-triangular factors, mapped by
-        ``to`` = (X, X_lo) (rows (X + X_lo)ᵀ, :func:`accurate_map`) when given; zero rows
-        left out."""
+        ``to`` = (X, X_lo) (rows (X + X_lo)ᵀ by ``mapper``) when given; zero rows left
+        out."""
         rows, cols = self.packed
         stack = upper_from_packed(packed, rows, cols, self.n_o).reshape(-1, self.n_o)
         stack = stack[np.any(stack != 0, axis=1)]
-        return stack if to is None else accurate_map(stack, *to)
+        return stack if to is None else mapper(stack, *to)
 
-    def _flush(self, to: tuple[np.ndarray, np.ndarray | None] | None = None) -> None:
+    def _flush(self, to: tuple[np.ndarray, np.ndarray | None] | None = None,
+               mapper: Callable[..., np.ndarray] = accurate_map) -> None:
         """Stack the pending records' factors (flagged stations left out) under R_J, R̃;
         ``to`` (the update's adjoint and its remainder) maps their rows to a new epoch
-        first."""
+        first, by ``mapper``."""
         if not self.pending:
             return
         first, last = self.pending[0], self.pending[-1]
@@ -260,12 +271,13 @@ class Processor:
             keep = self._keep(np.asarray(blk.k), np.asarray(blk.station))
             if not np.any(keep):
                 continue
-            self.RJ = triangularize(self.RJ, self._rows(blk.R[keep], to))
-            self.RJt = triangularize(self.RJt, self._rows(blk.Rt[keep], to))
+            self.RJ = triangularize(self.RJ, self._rows(blk.R[keep], to, mapper))
+            self.RJt = triangularize(self.RJt, self._rows(blk.Rt[keep], to, mapper))
             if self.plan.budget:
-                self._budget_read(blk, keep, to)
+                self._budget_read(blk, keep, to, mapper)
 
-    def _budget_read(self, blk, keep: np.ndarray, to: tuple | None = None) -> None:
+    def _budget_read(self, blk, keep: np.ndarray, to: tuple | None = None,
+                     mapper: Callable[..., np.ndarray] = accurate_map) -> None:
         station = np.asarray(blk.station)[keep]
         parts = None if blk.Rt_parts is None else blk.Rt_parts[keep]
         if parts is None:
@@ -279,7 +291,7 @@ class Processor:
                     continue
                 packed = blk.Rt[keep][mine] if parts is None else parts[mine, p]
                 i = pos * len(NOISE_PARTS) + p
-                self.Rt_src[i] = triangularize(self.Rt_src[i], self._rows(packed, to))
+                self.Rt_src[i] = triangularize(self.Rt_src[i], self._rows(packed, to, mapper))
 
     def _read(self, k: int) -> None:
         rec = self.h.records
@@ -294,19 +306,28 @@ class Processor:
     # Phase 1: update
     # -----------------------------------------------------------------------------------------
 
+    def _mapper(self) -> Callable[..., np.ndarray]:
+        """How the factors are mapped to the new epoch: in twice the working precision
+        (:func:`accurate_map`) when the orbit block of the transition is ill-conditioned
+        (cond > :data:`PLAIN_MAP_COND`), else by a plain product, which then loses at most
+        cond ε of the factors' columns."""
+        if np.linalg.cond(self.stored.U[:, :self.n_p]) > PLAIN_MAP_COND:
+            return accurate_map
+        return _plain_map
+
     def _update(self, k: int) -> None:
         if k != 0:
-            st = self.stored
+            st, mapper = self.stored, self._mapper()
             st.V, st.W, st.B, self.RJ, self.RJt, self.RS, self.U = (
-                transform(cmd, self.acc, f)
+                transform(cmd, self.acc, f, mapper)
                 for cmd, f in zip(UPC, (st.V, st.W, st.B, self.RJ, self.RJt, self.RS, self.U),
                                   strict=True))
             t = self.acc.transformation(0, 1, 1)
             adj = (self.acc.transformation(1, 1, 1), self.acc.remainder(1, 1, "o"))
-            self.apriori = [accurate_map(m.T, t).T for m in self.apriori]
-            self.K = [accurate_map(f, t) for f in self.K]
-            self.Rt_src = [accurate_map(f, *adj) for f in self.Rt_src]
-            self._flush(adj)  # the pending records: mapped first, stacked in the new epoch
+            self.apriori = [mapper(m.T, t).T for m in self.apriori]
+            self.K = [mapper(f, t) for f in self.K]
+            self.Rt_src = [mapper(f, *adj) for f in self.Rt_src]
+            self._flush(adj, mapper)  # the pending records: mapped, stacked in the new epoch
             self.RS, self.U, self.RJ, self.RJt = (triangularize(f, n=self.n_o) for f in
                                                   (self.RS, self.U, self.RJ, self.RJt))
             self.K = [triangularize(f, n=self.n_o) for f in self.K]

@@ -57,12 +57,14 @@ def dc_section(results: StudyResults) -> str:
         runs = [r for r in results.dc if r.block == title]
         rows = [[r.orbit, f"({r.truth},{r.stm})", f"{r.arc_h:g}", r.result.status,
                  _converged_at(r), str(len(r.result.iterations)), _rms_at(r, 1),
-                 _rms_at(r, 6), _rms_at(r, 12), f"{r.result.rms[-1]:.4g}", _q(r), _rho(r),
+                 _rms_at(r, 6), _rms_at(r, 12), f"{r.result.rms[-1]:.4g}",
+                 f"{r.result.rms_bound:.4g}", _q(r), _rho(r),
                  *_elements(r), f"{r.position_error_km * 1e3:.3g}"]
                 for r in runs]
         out.append(f"### {title}\n\n" + table(
             ["orbit", "(J_N,J_M)", "arc (h)", "outcome", "converged at", "iterations",
-             "RMS 1", "RMS 6", "RMS 12", "RMS last", "observed q", "predicted ρ", "a (km)",
+             "RMS 1", "RMS 6", "RMS 12", "RMS last", "99.9 % bound", "observed q",
+             "predicted ρ", "a (km)",
              "e", "i (deg)", "epoch pos. error (m)"], rows))
         out.append("\n".join(_reason(r) for r in runs) + "\n")
     return "\n".join(out)
@@ -140,15 +142,15 @@ def rate_discussion(results: StudyResults) -> str:
             np.isfinite(r.r_ratio)]
     if not runs:
         return ""
-    good = {"converged", "converging"}
-    agree = sum((r.rate.rho < 1) == (r.result.status in good) for r in runs)
-    linear = [r for r in runs if 0.1 < r.rate.rho < 1 and r.result.status in good and
+    agree = sum((r.rate.rho < 1) == r.result.iteration_converges for r in runs)
+    linear = [r for r in runs if 0.1 < r.rate.rho < 1 and r.result.iteration_converges and
               len(r.result.iterations) >= 8]
     worst = max((abs(r.result.contraction_factor - r.rate.rho) / r.rate.rho for r in linear),
                 default=float("nan"))
     out = ["### Where ρ and R(t) agree, and where they do not",
            f"ρ predicts the outcome of {agree} of the {len(runs)} truncated-STM runs before "
-           "any iteration (ρ < 1: converged or converging; ρ > 1: diverged or stalled). In "
+           "any iteration (ρ < 1: the iteration converged, its residuals consistent with the "
+           "noise model or not, or is converging; ρ > 1: diverged or stalled). In "
            f"the {len(linear)} runs that spend 8 iterations or more in the linear regime "
            f"with 0.1 < ρ < 1, the observed factor q matches ρ within {100 * worst:.1f} %: "
            "near the solution the DC is the fixed-point iteration e_(k+1) = M e_k."]
@@ -166,8 +168,8 @@ def rate_discussion(results: StudyResults) -> str:
             "the arc, the further the truncated STM departs from the true one, and both "
             f"signal it ({series[0].orbit} ({series[0].truth},{series[0].stm}), {steps}).")
     # disagreement: R cannot separate the outcomes
-    conv = [r for r in runs if r.result.status in good]
-    fail = [r for r in runs if r.result.status not in good]
+    conv = [r for r in runs if r.result.iteration_converges]
+    fail = [r for r in runs if not r.result.iteration_converges]
     out.append(
         "They part company across orbits, because R(t) knows nothing of the data. R is the "
         "size of the STM's position rows; ρ weighs the STM error in the directions the "
@@ -417,7 +419,11 @@ def write_report(results: StudyResults, out_dir: Path, elapsed_s: float) -> Path
         "Iteration k's RMS is that of the estimate it starts from. " + _offset_text(results)
         + "\n",
         "Outcomes (`tapp.od.batch`): **converged** (the RMS settled within the fit limit "
-        f"{results.settings.rms_fit_limit:g}), **converging** (the iteration limit was "
+        f"{results.settings.rms_fit_limit:g} and within the 99.9 % χ² bound of its residuals "
+        "and 6 estimated parameters, the column \"99.9 % bound\"), **converged, residuals "
+        "inconsistent with the noise model** (the RMS settled within the fit limit but above "
+        "that bound: the data are not explained by the models and their σ), "
+        "**converging** (the iteration limit was "
         "reached while the RMS was still falling geometrically: the observed factor and the "
         "projected iterations are in the notes), **stalled** (the RMS settled above the fit "
         "limit) and **diverged** (the RMS grew or failed to settle). Each DC iterates to "
@@ -444,6 +450,7 @@ def write_report(results: StudyResults, out_dir: Path, elapsed_s: float) -> Path
         "dc": [{"block": r.block, "orbit": r.orbit, "truth": r.truth, "stm": r.stm,
                 "arc_h": r.arc_h, "status": r.result.status, "reason": r.result.reason,
                 "converged_at": r.result.converged_at, "rms": r.result.rms.tolist(),
+                "rms_bound": r.result.rms_bound,
                 "steps": r.result.steps.tolist(),
                 "contraction_factor": _finite(r.result.contraction_factor),
                 "projected_iterations": r.result.projected_iterations,

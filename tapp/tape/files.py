@@ -132,7 +132,9 @@ def describe(path: Path | str) -> dict:
                     "verified_datasets": verified}
     if fmt == "T32":
         t32 = read_t32(path)
-        return {**t32_summary(t32), "verified_datasets": verified}
+        with open_tape(path) as f:
+            version = Reader(f, str(path), checksums=False).attr("version", int)
+        return {**t32_summary(t32, version=version), "verified_datasets": verified}
     with open_t13(path) as tape:
         for _ in tape.blocks():  # the pair matrices, checked block by block
             pass

@@ -15,9 +15,11 @@ station) pairs with data and their square-root information over (t_{k-1}, t_k] r
 t_j: upper-triangular factors R, R̃ with RᵀR = AᵀWA and R̃ᵀR̃ = AᵀWMWA, R̃ optionally split
 into the factors of its white-noise, per-pass bias and exponentially correlated parts
 (:class:`TapePairs`; the normal matrices are their Gram matrices, :attr:`TapePairs.dJ`), the
-tracking passes (:class:`TapePasses`) and, optionally, one row per scalar observation
-(:class:`TapeRaw`). Units: factor entry (r, b) in 1/u_b with u the parameters' units (normal
-matrices 1/(u_a u_b)); U and B entries in (unit of row)/(unit of column).
+tracking passes (:class:`TapePasses`), optionally what the tracking schedule asked for and
+what each rule that removes data removed, per station (:class:`TapeEditing`), and, optionally,
+one row per scalar observation (:class:`TapeRaw`). Units: factor entry (r, b) in 1/u_b with
+u the parameters' units (normal matrices 1/(u_a u_b)); U and B entries in (unit of row)/(unit
+of column).
 
 Version 3 carries the factors. Versions 1 and 2 carried the normal matrices themselves; their
 readers turn each into a factor (:func:`factor_normal_matrices`), which can keep only the
@@ -36,15 +38,17 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
+from functools import cache
 
 import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
 from tapp.estimation.factors import psd_factor
+from tapp.frames.orientation import INERTIAL_FRAME
 from tapp.frames.time import Epoch
 from tapp.tape.checks import PACKINGS, SYMMETRY_TOL, Checker, frozen
-from tapp.tape.packing import pack_tr, tr_diagonal, tr_size
+from tapp.tape.packing import pack_tr, scaled_difference, tr_diagonal, tr_size
 
 #: Provenance attributes the simulator stamps: the scenario (JSON) and its file, the Earth
 #: orientation model ("iau2006" or "gmst"), the EOP source of the run and, when SEARCH
@@ -55,7 +59,7 @@ SCENARIO_PROVENANCE = ("scenario", "scenario_source", "earth_orientation", "eop"
 
 def frame_of(provenance: dict[str, str]) -> str:
     """The inertial frame of a run: GCRS under iau2006, EME2000 under gmst (or unstated)."""
-    return "GCRS" if provenance.get("earth_orientation") == "iau2006" else "EME2000"
+    return INERTIAL_FRAME.get(provenance.get("earth_orientation", "gmst"), "EME2000")
 
 FORMAT = "T13"
 VERSION = 3
@@ -77,8 +81,9 @@ BLOCK_BYTES = 1 << 25
 
 __all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PARTS", "PARTS_TOL",
            "SUPPORTED_VERSIONS", "SYMMETRY_TOL", "T13", "VERSION", "MemoryPairs", "PairBlock",
-           "TapeMiss", "TapePairs", "TapeParameters", "TapePasses", "TapeRaw", "TapeRecords",
-           "TapeStations", "check_factors", "check_parts_sum", "column_norms2",
+           "LEGACY_PSD_TOL", "TapeEditing", "TapeMiss", "TapePairs", "TapeParameters",
+           "TapePasses", "TapeRaw", "TapeRecords", "TapeStations", "check_factors",
+           "check_parts_sum", "column_norms2",
            "factor_normal_matrices", "memory_pairs", "packed_column_norms2", "summary",
            "utc_at", "validate"]
 
@@ -195,6 +200,41 @@ class TapePasses:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
+class TapeEditing:
+    """What the tracking schedule asked of each station and what each rule removed.
+
+    Counts are scalar observations (a sample of a station that measures m observables is m
+    observations) and passes. Every scheduled observation is either on the tape (in
+    ``pairs/n_obs``) or counted under exactly one rule, the first that removed it:
+
+    .. math:: \\text{scheduled}_s = \\sum_k n_{obs}(k, s) + \\sum_r \\text{removed}_{s,r}
+
+    Attributes
+    ----------
+    rule : (n_rules,) names of the rules, in the order they apply (the simulator's: TAPP I's
+        are in :data:`tapp.tracking.simulate.EDITING_RULES`).
+    scheduled_obs : (n_ts,) int observations on the schedule's sample times.
+    removed_obs : (n_ts, n_rules) int observations removed by each rule.
+    removed_passes : (n_ts, n_rules) int passes removed whole by each rule (0 for a rule that
+        acts on samples before passes are formed).
+    added_passes : (n_ts,) int passes added by splitting passes longer than the longest pass
+        (no observation removed).
+    """
+
+    rule: tuple[str, ...]
+    scheduled_obs: np.ndarray
+    removed_obs: np.ndarray
+    removed_passes: np.ndarray
+    added_passes: np.ndarray
+
+    def kept_obs(self, pairs: TapePairs) -> np.ndarray:
+        """Observations on the tape per station, (n_ts,) int (from the pairs)."""
+        n_ts = self.scheduled_obs.size
+        return np.bincount(pairs.station - 1, weights=pairs.n_obs, minlength=n_ts
+                           ).astype(np.int64)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
 class TapeRaw:
     """One row per scalar observation, for validation (columns: :mod:`tapp.tape.t13_hdf5`).
 
@@ -223,7 +263,7 @@ class T13:
 
     ``provenance`` holds the root attributes that describe how the tape was made
     (scenario JSON and source on writing; plus tapp_version, git_commit, created_utc on
-    reading).
+    reading). ``editing`` is None on tapes written before it was recorded.
     """
 
     iden: str
@@ -237,6 +277,7 @@ class T13:
     passes: TapePasses
     raw: TapeRaw | None = None
     provenance: dict[str, str] = field(default_factory=dict)
+    editing: TapeEditing | None = None
 
     @property
     def n_o(self) -> int:
@@ -325,10 +366,17 @@ def column_norms2(factors: np.ndarray) -> np.ndarray:
 
 def packed_column_norms2(packed: np.ndarray, n: int) -> np.ndarray:
     """:func:`column_norms2` of upper-triangular factors packed TR, (..., L) -> (..., n)."""
+    order, starts = _by_column(n)
+    return np.add.reduceat((packed * packed)[..., order], starts, axis=-1)
+
+
+@cache
+def _by_column(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The TR positions sorted by column, and where each column's run starts."""
     cols = np.triu_indices(n)[1]
-    out = np.zeros(packed.shape[:-1] + (n,))
-    np.add.at(out, (..., cols), packed * packed)
-    return out
+    order = np.argsort(cols, kind="stable")
+    starts = np.searchsorted(cols[order], np.arange(n))
+    return order, starts
 
 
 def check_factors(c: Checker, name: str, packed: np.ndarray, n: int,
@@ -336,7 +384,10 @@ def check_factors(c: Checker, name: str, packed: np.ndarray, n: int,
     """Factors packed TR (..., L): zero below the diagonal when given full (``lower``, the
     strictly lower parts), and a non-negative diagonal (the canonical sign of a QR)."""
     if lower is not None and np.any(lower != 0):
-        c.fail(name, "upper-triangular factors (zero below the diagonal)")
+        first = np.argwhere(lower != 0)[0]
+        c.fail(name, "upper-triangular factors (zero below the diagonal)",
+               f"{lower[tuple(first)]:.3g} in pair {int(first[0]) + offset}, row "
+               f"{int(first[-2])}, column {int(first[-1])}")
     diag = packed[..., tr_diagonal(n)]
     if np.any(diag < 0):
         first = np.argwhere(diag < 0)[0]
@@ -357,12 +408,29 @@ def check_parts_sum(c: Checker, parts: np.ndarray, total: np.ndarray, offset: in
                f"{defect[first]:.3g} in pair {first + offset}")
 
 
-def factor_normal_matrices(m: np.ndarray) -> np.ndarray:
+#: Largest scaled difference between a version-1 or -2 normal matrix and the Gram matrix of
+#: its factor: a sum of AᵀWA terms is PSD to its rounding (~1e-15 of its scale), so anything
+#: beyond this is a matrix that is not a normal matrix.
+LEGACY_PSD_TOL = 1e-8
+
+
+def factor_normal_matrices(m: np.ndarray, c: Checker, name: str, offset: int = 0
+                           ) -> np.ndarray:
     """Upper-triangular factors (..., n, n) of symmetric PSD normal matrices (..., n, n): the
     reading of a version-1 or -2 tape (:func:`tapp.estimation.factors.psd_factor` of each;
-    rounding that makes one indefinite is set to zero)."""
+    rounding that makes one indefinite is set to zero). A matrix whose factor's Gram matrix
+    departs from it by more than :data:`LEGACY_PSD_TOL` of its scale (indefinite beyond
+    rounding) is refused, naming ``name`` and the pair (numbered from ``offset``)."""
     flat = m.reshape(-1, *m.shape[-2:])
-    return np.array([psd_factor(0.5 * (x + x.T)) for x in flat]).reshape(m.shape)
+    factors = np.array([psd_factor(0.5 * (x + x.T)) for x in flat])
+    defect = scaled_difference(np.swapaxes(factors, -1, -2) @ factors, flat)
+    if np.any(defect > LEGACY_PSD_TOL):
+        first = int(np.argmax(defect > LEGACY_PSD_TOL))
+        per_pair = flat.shape[0] // m.shape[0] if m.ndim > 2 else 1  # the parts: 3 a pair
+        pair = first // per_pair + offset
+        c.fail(name, f"positive semi-definite normal matrices (to {LEGACY_PSD_TOL:g} of "
+                     "their scale)", f"{defect[first]:.3g} in pair {pair}")
+    return factors.reshape(m.shape)
 
 
 def check_parameters(c: Checker, par: TapeParameters, n_p: int) -> None:
@@ -457,6 +525,30 @@ def _validate_header(c: Checker, tape: T13) -> None:
     c.finite("passes/t_end_s", ps.t_end_s)
     if np.any((ps.station < 1) | (ps.station > n_ts)) or np.any(ps.t_end_s < ps.t_start_s):
         c.fail("passes/station", f"station numbers in 1..{n_ts} and t_start_s <= t_end_s")
+    if tape.editing is not None:
+        _validate_editing(c, tape.editing, pairs, n_ts)
+
+
+def _validate_editing(c: Checker, ed: TapeEditing, pairs: TapePairs, n_ts: int) -> None:
+    """Shapes, counts >= 0, and every scheduled observation kept or removed by one rule."""
+    n_rules = len(ed.rule)
+    if len(set(ed.rule)) != n_rules or not all(ed.rule):
+        c.fail("editing/rule", "unique, non-empty rule names", list(ed.rule))
+    for name, value, shape in (("scheduled_obs", ed.scheduled_obs, (n_ts,)),
+                               ("removed_obs", ed.removed_obs, (n_ts, n_rules)),
+                               ("removed_passes", ed.removed_passes, (n_ts, n_rules)),
+                               ("added_passes", ed.added_passes, (n_ts,))):
+        c.shape(f"editing/{name}", value, shape)
+        if np.any(value < 0):
+            c.fail(f"editing/{name}", "counts >= 0", value.tolist())
+    kept = ed.kept_obs(pairs)
+    accounted = kept + ed.removed_obs.sum(axis=1)
+    if not np.array_equal(accounted, ed.scheduled_obs):
+        s = int(np.argmax(accounted != ed.scheduled_obs))
+        c.fail("editing/scheduled_obs", "the observations kept (pairs/n_obs) plus those "
+               "removed (editing/removed_obs) at every station",
+               f"{ed.scheduled_obs[s]} scheduled at station {s + 1}, {kept[s]} kept + "
+               f"{accounted[s] - kept[s]} removed")
 
 
 def _validate_raw(c: Checker, raw: TapeRaw, n_o: int, n_ts: int, n_it: int) -> None:
@@ -586,9 +678,12 @@ def memory_pairs(tape: T13) -> MemoryPairs:
 
 def summary(tape: T13, *, version: int = VERSION) -> dict:
     """Return a JSON-ready summary: dimensions, parameters, stations with their passes and
-    observations, epoch times, records and provenance (``version``: of the tape read)."""
+    observations (and, when the tape has them, the observations scheduled and removed by each
+    rule: :class:`TapeEditing`), epoch times, records and provenance (``version``: of the tape
+    read)."""
     rec = tape.records
     epoch_times = rec.times_s[rec.is_epoch]
+    editing = tape.editing
     stations = []
     for sid, name, obs, lat, lon, h in zip(tape.stations.id, tape.stations.name,
                                            tape.stations.observables, tape.stations.lat_deg,
@@ -600,7 +695,8 @@ def summary(tape: T13, *, version: int = VERSION) -> dict:
             "lon_deg": float(lon), "h_km": float(h),
             "passes": int(np.count_nonzero(tape.passes.station == sid)),
             "observations": int(tape.pairs.n_obs[mine].sum()),
-            "records_with_data": int(np.count_nonzero(mine))})
+            "records_with_data": int(np.count_nonzero(mine)),
+            **({} if editing is None else _editing_summary(editing, int(sid) - 1))})
     return {
         "format": FORMAT, "version": version, "iden": tape.iden, "epoch_utc": tape.epoch.iso(3),
         "dimensions": {"n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
@@ -622,6 +718,15 @@ def summary(tape: T13, *, version: int = VERSION) -> dict:
                  "nominal": tape.miss.nominal.tolist()},
         "provenance": {k: v for k, v in tape.provenance.items() if k != "scenario"},
     }
+
+
+def _editing_summary(ed: TapeEditing, i: int) -> dict:
+    """The editing counts of station index ``i``, for :func:`summary`."""
+    return {"scheduled_observations": int(ed.scheduled_obs[i]),
+            "removed": {rule: {"observations": int(n), "passes": int(p)}
+                        for rule, n, p in zip(ed.rule, ed.removed_obs[i], ed.removed_passes[i],
+                                              strict=True)},
+            "passes_added_by_split": int(ed.added_passes[i])}
 
 
 def utc_at(epoch: Epoch, t_s: float, decimals: int = 3) -> str:

@@ -49,6 +49,17 @@ pairs/Rt_parts (optional)   (n_pairs, 3, L)        the factors of the white-nois
                                                    sum to R̃ᵀR̃
 passes/station, t_start_s,  (n_passes,)            tracking passes (before any split at T13
 t_end_s, n_obs                                     times)
+editing/ (optional)                                what the schedule asked for and what each
+                                                   rule removed (tapp.tape.t13.TapeEditing):
+editing/rule                (n_rules,) str         the rules, in the order they apply
+editing/scheduled_obs       (n_ts,) int            scalar observations on the schedule's
+                                                   sample times
+editing/removed_obs,        (n_ts, n_rules) int    observations, passes removed by each rule
+removed_passes                                     (each observation under the first rule that
+                                                   removed it: scheduled_obs = kept (sum of
+                                                   pairs/n_obs) + sum of removed_obs)
+editing/added_passes        (n_ts,) int            passes added by splitting passes longer
+                                                   than the scenario's max_pass_s
 raw/... (optional)          (N, ...)               one row per scalar observation: t_s,
                                                    station, kind (code into attr ``kinds``),
                                                    record, segment, value, A (N, n_o) referred
@@ -109,6 +120,7 @@ from tapp.tape.t13 import (
     UNITS_NOTE,
     VERSION,
     PairBlock,
+    TapeEditing,
     TapeMiss,
     TapePairs,
     TapeParameters,
@@ -229,6 +241,15 @@ def _write(f: h5py.File, tape: T13, packing: str, version: int = VERSION) -> Non
     numbers(g, "t_end_s", ps.t_end_s, "s")
     numbers(g, "n_obs", ps.n_obs, "")
 
+    if tape.editing is not None:
+        ed = tape.editing
+        g = f.create_group("editing")
+        strings(g, "rule", ed.rule)
+        numbers(g, "scheduled_obs", ed.scheduled_obs, "scalar observations")
+        numbers(g, "removed_obs", ed.removed_obs, "scalar observations")
+        numbers(g, "removed_passes", ed.removed_passes, "passes")
+        numbers(g, "added_passes", ed.added_passes, "passes")
+
     if tape.raw is not None:
         raw = tape.raw
         g = f.create_group("raw")
@@ -342,12 +363,12 @@ def _parts_attr(r: Reader, name: str) -> None:
 
 def _factors_of_matrices(c, names: tuple[str, str, str], dj, djt, parts):
     """Version 1, 2: check the normal matrices as the tape had them, then factor them."""
-    for name, m in zip(names, (dj, djt), strict=True):
+    for name, m in zip(names[:2], (dj, djt), strict=True):
         c.symmetric(name, m)
     if parts is not None:
         _check_legacy_parts(c, names[2], parts, djt, 0)
-    return (factor_normal_matrices(dj), factor_normal_matrices(djt),
-            None if parts is None else factor_normal_matrices(parts))
+    return tuple(None if m is None else factor_normal_matrices(m, c, name)
+                 for name, m in zip(names, (dj, djt, parts), strict=True))
 
 
 def _check_legacy_parts(c, name: str, parts: np.ndarray, total: np.ndarray, offset: int
@@ -407,6 +428,12 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, n
     pairs = TapePairs(k, r.read("pairs/station", "i"), r.read("pairs/n_obs", "i"), *factors)
     passes = TapePasses(r.read("passes/station", "i"), r.read("passes/t_start_s"),
                         r.read("passes/t_end_s"), r.read("passes/n_obs", "i"))
+    editing = None
+    if r.has("editing"):
+        editing = TapeEditing(r.strings("editing/rule"),
+                              *(r.read(f"editing/{name}", "i") for name in (
+                                  "scheduled_obs", "removed_obs", "removed_passes",
+                                  "added_passes")))
     tape_raw = None
     if raw and r.has("raw"):
         kinds = r.attr("kinds", list, owner="raw", default=())
@@ -418,7 +445,7 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, n
                                                     "created_utc", *SCENARIO_PROVENANCE)
                   if r.has_attr(key)}
     tape = T13(r.attr("iden", str), epoch, dims["n_p"], parameters, stations, miss, records,
-               pairs, passes, tape_raw, provenance)
+               pairs, passes, tape_raw, provenance, editing)
     return tape, r.read("records/t_s")
 
 
@@ -554,8 +581,9 @@ class T13File(_PairSource):
             c.symmetric(name, m, offset=lo)
         if full[2] is not None:
             _check_legacy_parts(c, self.names[2], full[2], full[1], lo)
-        return tuple(None if m is None else frozen(pack_tr(factor_normal_matrices(m)))
-                     for m in full)
+        return tuple(None if m is None else frozen(pack_tr(factor_normal_matrices(m, c, name,
+                                                                                  lo)))
+                     for name, m in zip(self.names, full, strict=True))
 
     def pair_block(self, k_first: int, k_last: int, *, parts: bool = True) -> PairBlock:
         """Return the pairs of records k_first..k_last (inclusive), read and checked now.

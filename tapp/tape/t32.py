@@ -62,6 +62,14 @@ FACTOR_UNITS = {"normal": "1/u_b", "covariance": "u_b"}
 #: seen when a station is switched off); since Σ <= Λ̄' in exact arithmetic, Σ_ii down to
 #: −1e-6 Λ̄'_ii is read as rounding.
 SIGMA_ROUNDING = 1e-6
+#: Version 1 only: largest scaled difference between a stored covariance or normal matrix and
+#: the Gram matrix of its factor (its positive part). Those products were PSD only to the
+#: rounding of their terms: Σ_k's scaled eigenvalues reached −2e-4 on the deep-space tape.
+V1_PSD_TOL = 1e-3
+#: Largest |Tᵀ A − I|, relative to the terms |T|ᵀ|A|, for a transition T and its adjoint A:
+#: both come from the tape's STMs through the symplectic identity, exact to ~1e-12 of the
+#: terms; anything beyond this is not the adjoint of that transition.
+ADJOINT_TOL = 1e-6
 #: Provenance the writer stamps itself (a value given for these is replaced).
 STAMPED = ("tapp_version", "git_commit", "created_utc")
 #: Root attributes of the schema: not available as provenance names.
@@ -316,7 +324,8 @@ def validate(t32: T32, source: str = "T32") -> None:
     chains (n_o, n_o) finite with n_o row names; partitions uniquely named, in a known
     system, 0 <= tail <= head <= the system's length, their names those of the system's
     rows; the factors of the a priori and of every recycle's symmetric matrices (n_o, n_o),
-    finite, upper triangular with a non-negative diagonal; recycle numbers 1..n_r, k
+    finite, upper triangular with a non-negative diagonal; each transition's adjoint its
+    inverse transpose (:data:`ADJOINT_TOL`); recycle numbers 1..n_r, k
     strictly ascending, 0 <= l < k with l_i = k_{i-1}, 0 <= j < k, 0 <= t_l < t_k with
     t_l of a recycle the t_k of the one before; the other matrices of the right shapes and
     finite; entity numbers ω >= 1 ascending, matrices (len(rows), len(cols)) and finite;
@@ -387,6 +396,12 @@ def validate(t32: T32, source: str = "T32") -> None:
             _factor(c, f"{base}/{name}_factor", getattr(rc, f"{name}_factor"), n_o)
         for name in ("L", "transition", "transition_adjoint"):
             _matrix(c, f"{base}/{name}", getattr(rc, name), (n_o, n_o))
+        terms = np.abs(rc.transition.T) @ np.abs(rc.transition_adjoint)
+        defect = np.abs(rc.transition.T @ rc.transition_adjoint - np.eye(n_o))
+        if np.any(defect > ADJOINT_TOL * np.maximum(terms, 1.0)):
+            c.fail(f"{base}/transition_adjoint", "the inverse transpose of the transition "
+                   f"(|Tᵀ A − I| <= {ADJOINT_TOL:g} of the terms)",
+                   f"{float(np.max(defect / np.maximum(terms, 1.0))):.3g}")
         _matrix(c, f"{base}/B", rc.B, (n_m, n_o))
         omega = 0
         for e in rc.entities:

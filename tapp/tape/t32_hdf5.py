@@ -115,6 +115,7 @@ from tapp.tape.t32 import (
     SYMMETRIC,
     T32,
     UNITS_NOTE,
+    V1_PSD_TOL,
     VERSION,
     T32Entity,
     T32Partition,
@@ -262,21 +263,35 @@ def _entities(r: Reader, base: str) -> tuple[T32Entity, ...]:
     return tuple(out)
 
 
-def _v1_factor(r: Reader, name: str, n: int, floor: np.ndarray | None = None) -> np.ndarray:
-    """Version 1: a symmetric matrix checked as that version did, returned as its factor."""
+def _v1_factor(r: Reader, name: str, n: int, floor: np.ndarray | None = None,
+               scale: np.ndarray | None = None) -> np.ndarray:
+    """Version 1: a symmetric matrix checked as that version did, returned as its factor
+    (refused when that factor's Gram matrix departs from it by more than :data:`V1_PSD_TOL`
+    of its scale, √(s_i s_j) with s its diagonal or the given ``scale``: indefinite beyond
+    the rounding of its products)."""
     m = r.symmetric(name, (), n)
     r.check.finite(name, m)
     r.check.symmetric(name, m, what="matrix", label=None, floor=floor)
-    return psd_factor(m)
+    k = psd_factor(m)
+    d = np.sqrt(np.abs(np.diagonal(m)) if scale is None else scale)
+    both = np.outer(d, d)
+    gap = np.abs(k.T @ k - m)
+    defect = float(np.max(np.divide(gap, both, out=np.where(gap > 0, np.inf, 0.0),
+                                    where=both > 0)))
+    if defect > V1_PSD_TOL:
+        r.check.fail(name, f"a positive semi-definite matrix (to {V1_PSD_TOL:g} of its "
+                           "scale)", f"{defect:.3g}")
+    return k
 
 
 def _v1_recycle_factors(r: Reader, base: str, n: int) -> dict[str, np.ndarray]:
-    lam_real = r.symmetric(f"{base}/Lambda_real", (), n)
+    real = np.clip(np.diagonal(r.symmetric(f"{base}/Lambda_real", (), n)), 0.0, None)
     out = {}
     for name, _, _ in SYMMETRIC:
-        floor = (SIGMA_ROUNDING * np.clip(np.diagonal(lam_real), 0.0, None)
-                 if name == "Sigma" else None)
-        out[name] = _v1_factor(r, f"{base}/{name}", n, floor)
+        # Σ <= Λ̄' in exact arithmetic: Λ̄' sets its rounding floor and its scale
+        sigma = name == "Sigma"
+        out[name] = _v1_factor(r, f"{base}/{name}", n, SIGMA_ROUNDING * real if sigma else None,
+                               real if sigma else None)
     return out
 
 

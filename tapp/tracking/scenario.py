@@ -190,7 +190,9 @@ class Schedule:
     T13 time), where a station sees the spacecraft above its mask and outside its blackouts
     (:attr:`TrackingStation.blackouts_s`). ``light_time`` is "none", "one_way" or "two_way".
     A pass is a run of consecutive such samples; passes shorter than min_pass_s
-    are dropped and longer ones cut after max_pass_s.
+    are dropped, and passes longer than max_pass_s split into consecutive passes of at most
+    max_pass_s, every sample kept (each piece has its own per-pass bias in the real world).
+    What each rule removes is counted (:data:`tapp.tracking.simulate.EDITING_RULES`).
     """
 
     data_interval_s: float

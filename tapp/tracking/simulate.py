@@ -21,8 +21,12 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
 
 2. **Observations.** Samples fall on the schedule's grid; a station observes where the
    spacecraft is above its mask (geometric elevation) and outside its blackouts; runs of
-   samples form passes (:func:`tapp.measurements.find_passes`, split at gaps), filtered by
-   the pass limits. Observables and their partials come from
+   samples form passes (:func:`tapp.measurements.find_passes`, split at gaps); passes shorter
+   than min_pass_s are removed, and passes longer than max_pass_s are split into consecutive
+   passes of at most max_pass_s (each its own block of the real world's M: its own per-pass
+   bias), none of their samples removed. Every scheduled observation is either kept or
+   counted under the first of :data:`EDITING_RULES` that removed it (the tape's
+   ``editing/``, :class:`tapp.tape.t13.TapeEditing`). Observables and their partials come from
    :class:`tapp.measurements.MeasurementModel` (state, station location, biases; light time
    optional, with the bounce state from the integrated trajectory). One row of A per scalar
    observation, referred to the epoch t_j of its record:
@@ -81,6 +85,7 @@ from tapp.measurements import (
 )
 from tapp.tape.t13 import (
     T13,
+    TapeEditing,
     TapeMiss,
     TapePairs,
     TapeParameters,
@@ -111,6 +116,13 @@ CLASSICAL_MIN_E = 1e-4
 CLASSICAL_MIN_I_rad = 1e-4
 #: Passes split where consecutive samples are more than this many data intervals apart.
 _GAP_INTERVALS = 1.5
+#: The rules that remove scheduled samples, in the order they apply; a sample is counted
+#: under the first that removes it. "outside_tape": at t = 0 or after the last T13 time (no
+#: record holds it; counted whatever the spacecraft's elevation); "elevation_mask": at or
+#: below the station's mask; "blackout": in one of the station's blackouts (passes: the
+#: passes above the mask left without a sample); "min_pass": in a pass shorter than
+#: min_pass_s (passes: those passes).
+EDITING_RULES = ("outside_tape", "elevation_mask", "blackout", "min_pass")
 
 
 @dataclass(frozen=True, slots=True)
@@ -121,12 +133,15 @@ class Simulation:
     ----------
     tape : T13
     t_s : (N,) trajectory times, s from the epoch (t_0 = 0, the samples and T13 times).
-    states : (N, 6) states, km and km/s, EME2000, Earth-centred.
+    states : (N, 6) states, km and km/s, Earth-centred, inertial: GCRS under the iau2006
+        Earth orientation, EME2000 under gmst.
+    scenario : the scenario simulated (its injection state is ``states[0]``).
     """
 
     tape: T13
     t_s: np.ndarray
     states: np.ndarray
+    scenario: Scenario
 
 
 @dataclass(frozen=True, slots=True)
@@ -149,6 +164,16 @@ class _StationData:
     record: np.ndarray
     segment: np.ndarray
     passes: list[tuple[float, float, int]]
+
+
+@dataclass(frozen=True, slots=True)
+class _Editing:
+    """What the rules did at one station: samples and passes removed per rule (in the order
+    of :data:`EDITING_RULES`), passes added by splitting at max_pass_s."""
+
+    removed_samples: tuple[int, ...]
+    removed_passes: tuple[int, ...]
+    added_passes: int
 
 
 def equinoctial_elements(state, mu_km3_s2: float) -> np.ndarray:
@@ -204,12 +229,18 @@ def equinoctial_elements(state, mu_km3_s2: float) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 
 
+def _n_samples(scenario: Scenario, end_s: float) -> int:
+    """Number of sample times start + i Δt (i >= 0) up to ``end_s``."""
+    sch = scenario.schedule
+    return max(int(math.floor((end_s - sch.start_s) / sch.data_interval_s * (1 + 1e-14))) + 1,
+               0)
+
+
 def _grid(scenario: Scenario, last_s: float) -> np.ndarray:
     """Sample times start + i Δt in (0, min(end, last T13 time)], s."""
     sch = scenario.schedule
     end = min(sch.end_s, last_s)
-    n = int(math.floor((end - sch.start_s) / sch.data_interval_s * (1 + 1e-14))) + 1
-    t = sch.start_s + sch.data_interval_s * np.arange(max(n, 0))
+    t = sch.start_s + sch.data_interval_s * np.arange(_n_samples(scenario, end))
     return t[(t > 0) & (t <= end)]
 
 
@@ -241,20 +272,43 @@ def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.nda
 # ---------------------------------------------------------------------------------------------
 
 
-def _passes(ts: TrackingStation, scenario: Scenario, t: np.ndarray, states: np.ndarray
-            ) -> list[tuple[int, int]]:
-    """Index ranges [start, stop) into the grid of the station's passes after the limits."""
+def _split(t: np.ndarray, start: int, stop: int, max_pass_s: float) -> list[tuple[int, int]]:
+    """Cut the pass [start, stop) of the grid ``t`` into consecutive passes of at most
+    ``max_pass_s`` each (first to last sample), every sample kept."""
+    out = []
+    while start < stop:
+        end = start + int(np.count_nonzero(t[start:stop] - t[start] <= max_pass_s))
+        out.append((start, end))
+        start = end
+    return out
+
+
+def _passes(ts: TrackingStation, scenario: Scenario, t: np.ndarray, states: np.ndarray,
+            n_scheduled: int) -> tuple[list[tuple[int, int]], _Editing]:
+    """Index ranges [start, stop) into the grid ``t`` of the station's passes, and what each
+    rule removed of the ``n_scheduled`` samples of the schedule (:data:`EDITING_RULES`)."""
     sch = scenario.schedule
+    gap_s = _GAP_INTERVALS * sch.data_interval_s
     geometric = MeasurementModel(ts.station, scenario.orientation, ("elevation",))
-    visible = is_visible(geometric.elevation_rad(t, states), ts.station.elev_mask_rad)
+    above = is_visible(geometric.elevation_rad(t, states), ts.station.elev_mask_rad)
+    visible = above.copy()
     for start, end in ts.blackouts_s:
         visible &= ~((t >= start) & (t <= end))
-    out = []
-    for start, stop in find_passes(visible, t, _GAP_INTERVALS * sch.data_interval_s):
-        stop = start + int(np.count_nonzero(t[start:stop] - t[start] <= sch.max_pass_s))
-        if t[stop - 1] - t[start] >= sch.min_pass_s:
-            out.append((int(start), int(stop)))
-    return out
+    blacked_out = sum(not visible[a:b].any() for a, b in find_passes(above, t, gap_s))
+    long_enough = []
+    short = [0, 0]  # samples, passes
+    for start, stop in find_passes(visible, t, gap_s):
+        if t[stop - 1] - t[start] < sch.min_pass_s:
+            short[0] += int(stop - start)
+            short[1] += 1
+        else:
+            long_enough.append((int(start), int(stop)))
+    out = [piece for start, stop in long_enough
+           for piece in _split(t, start, stop, sch.max_pass_s)]
+    n_above, n_visible = int(np.count_nonzero(above)), int(np.count_nonzero(visible))
+    return out, _Editing(
+        (n_scheduled - t.size, t.size - n_above, n_above - n_visible, short[0]),
+        (0, 0, blacked_out, short[1]), len(out) - len(long_enough))
 
 
 def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
@@ -275,13 +329,14 @@ def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
 
 
 def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc: _Arc,
-                  grid: np.ndarray, t13: np.ndarray, columns: dict[str, int]
-                  ) -> _StationData | None:
-    """Rows of A for one station (module docstring, item 2), or None without samples."""
+                  grid: np.ndarray, t13: np.ndarray, columns: dict[str, int], n_scheduled: int
+                  ) -> tuple[_StationData | None, _Editing]:
+    """Rows of A for one station (module docstring, item 2), or None without samples, and
+    what the rules removed of its ``n_scheduled`` samples."""
     pos = np.searchsorted(arc.t_s, grid)
-    passes = _passes(ts, scenario, grid, arc.states[pos])
+    passes, editing = _passes(ts, scenario, grid, arc.states[pos], n_scheduled)
     if not passes:
-        return None
+        return None, editing
     take = np.concatenate([np.arange(a, b) for a, b in passes])
     label = np.concatenate([np.full(b - a, i) for i, (a, b) in enumerate(passes)])
     t, p = grid[take], pos[take]
@@ -305,7 +360,8 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     change[1:] = (label[1:] != label[:-1]) | (record[1:] != record[:-1])
     m = len(ts.kinds)
     pass_list = [(float(grid[a_]), float(grid[b_ - 1]), (b_ - a_) * m) for a_, b_ in passes]
-    return _StationData(t, model.compute(t, x), a, record, np.cumsum(change) - 1, pass_list)
+    return (_StationData(t, model.compute(t, x), a, record, np.cumsum(change) - 1, pass_list),
+            editing)
 
 
 def _accumulate(ts: TrackingStation, data: _StationData, n_o: int
@@ -513,15 +569,23 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     grid = _grid(scenario, float(t13[-1]))
     arc = _arc(scenario, prop, t13, is_epoch, grid, tick)
 
+    n_scheduled = _n_samples(scenario, scenario.schedule.end_s)
     data: list[_StationData | None] = []
+    editing: list[_Editing] = []
     for ts in scenario.stations:
-        data.append(_station_data(ts, scenario, prop, arc, grid, t13, columns))
+        d, e = _station_data(ts, scenario, prop, arc, grid, t13, columns, n_scheduled)
+        data.append(d)
+        editing.append(e)
         tick(f"observations {ts.station.name}")
     if all(d is None for d in data):
+        removed = np.sum([e.removed_samples for e in editing], axis=0)
         raise InputError(scenario.source, "tracking",
                          "a schedule that yields at least one observation (check the stations, "
                          "their masks and blackouts, start/end, data_interval_s, min_pass_s)",
-                         f"0 observations from {len(grid)} sample times")
+                         f"0 observations from {n_scheduled} sample times per station; "
+                         "samples removed over the stations: " + ", ".join(
+                             f"{rule} {n}" for rule, n in zip(EDITING_RULES, removed,
+                                                              strict=True)))
 
     pair_rows = []
     with threadpool_limits(limits=1, user_api="blas"):  # many small QRs: threads only cost
@@ -565,6 +629,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                         np.array([r[3] for r in pair_rows]), np.array([r[4] for r in pair_rows]),
                         Rt_parts=np.array([r[5] for r in pair_rows])),
         passes=_pass_table(stations, data),
+        editing=_editing_table(stations, n_scheduled, editing),
         raw=_raw(stations, data, n_o) if raw else None,
         provenance={"scenario": scenario.document_json, "scenario_source": scenario.source,
                     "earth_orientation": scenario.orientation.model,
@@ -574,7 +639,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     )
     t_out = np.concatenate([[0.0], arc.t_s])
     states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])
-    return Simulation(tape, t_out, states)
+    return Simulation(tape, t_out, states, scenario)
 
 
 def _pass_table(stations: tuple[TrackingStation, ...], data: list[_StationData | None]
@@ -584,3 +649,13 @@ def _pass_table(stations: tuple[TrackingStation, ...], data: list[_StationData |
     rows.sort(key=lambda r: (r[1], r[0]))
     return TapePasses(np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
                       np.array([r[2] for r in rows]), np.array([r[3] for r in rows]))
+
+
+def _editing_table(stations: tuple[TrackingStation, ...], n_scheduled: int,
+                   editing: list[_Editing]) -> TapeEditing:
+    """The tape's ``editing/``: samples turned into scalar observations (m per sample)."""
+    m = np.array([len(ts.kinds) for ts in stations])
+    return TapeEditing(EDITING_RULES, m * n_scheduled,
+                       m[:, None] * np.array([e.removed_samples for e in editing]),
+                       np.array([e.removed_passes for e in editing]),
+                       np.array([e.added_passes for e in editing]))

@@ -1,28 +1,36 @@
 """Benchmark of the TAPP III matrix processor on synthetic T13 tapes.
 
-The issue's target: n_o = 50, 2,000 records, 10 stations, 20 print times with 10 entities
-each and 3 recycles in under 2 s on the 2-core machine. The tapes are built directly (not by
-TAPP I): random symmetric positive semi-definite ΔJ = GᵀG, G with 3 rows over the columns a
-(record, station) pair observes (the orbit, the dynamic constants and that station's own
-parameters, as in a tracking tape; a dense variant fills every column), ΔJ̃ = 2 ΔJ split into
-its white, bias and correlated parts (1, 0.6, 0.4 of ΔJ, so the error budget has its input),
-3 of the 10 stations per record, epochs at 3 times, the orbit block of U the exponential of
-a Hamiltonian matrix (exactly symplectic, as a TAPP I STM is to its integration error). They
-are written with :func:`tapp.tape.t13_hdf5.write_t13` to a temporary folder (not timed) and
-processed through the lazy reader :func:`tapp.tape.t13_hdf5.open_t13`.
+The issue's targets: n_o = 50, 2,000 records, 10 stations, 20 print times with 10 entities
+each and 3 recycles in under 2 s on the 2-core machine; the square-root processor within
+1.5x of the normal-matrix one it replaced and within 2x of a plain NumPy peer. The tapes are
+built directly (not by TAPP I), in factor form: per (record, station) pair R = triangularize(G),
+G with 3 random rows over the columns the pair observes (the orbit, the dynamic constants and
+that station's own parameters, as in a tracking tape; a dense variant fills every column), so
+ΔJ = RᵀR = GᵀG; R̃ = √2 R (ΔJ̃ = 2 ΔJ) with the factors R, √0.6 R, √0.4 R of its white,
+bias and correlated parts (:data:`PART_SHARES` of ΔJ, so the error budget has its input);
+3 of the 10 stations per record, epochs at 3 times, the orbit block of U the
+exponential of a Hamiltonian matrix (exactly symplectic, as a TAPP I STM is to its
+integration error). Each tape is written twice to a temporary folder (not timed): as
+version 3 (the factors) with :func:`tapp.tape.t13_hdf5.write_t13`, and as version 2 (the
+normal matrices RᵀR, R̃ᵀR̃ and the parts' Grams) with the writer's private
+``_write(..., version=2)``.
 
 Measured (wall clock, best of :data:`REPEATS` after a warm-up): open + bind + process of the
-full deck; the same with one print (at the end) and no recycles (per record = that time /
-n_IT); the print
-commands evaluated alone on the last record's statistics (per entity); reading every pair block
-alone (the I/O floor); a plain NumPy/h5py peer (:func:`numpy_peer`) that reads the same
-packed matrices, sums them per print interval and does one Cholesky regression per print
-time; the peak of the processing's allocations by tracemalloc; ``tapp process`` end to end
-in a child process, with the default BLAS threads and with one (its peak RSS: VmHWM). The
-n_o scaling runs the same tape shape at n_o = 25, 50, 100."""
+full deck on the version-3 tape through the lazy reader :func:`tapp.tape.t13_hdf5.open_t13`;
+the same with one print (at the end) and no recycles (per record = that time / n_IT); the
+normal-matrix processor of commit :data:`tests.bench.legacy.NORMAL_MATRIX_COMMIT` on the
+version-2 tape, the same two decks timed the same way in a child process
+(:func:`normal_form`); the print commands evaluated alone on the last record's statistics (per
+entity); reading every pair block alone (the I/O floor); a plain NumPy/h5py peer
+(:func:`numpy_peer`) that reads the version-2 tape's packed normal matrices, sums them per
+print interval and does one Cholesky regression per print time; the peak of the processing's
+allocations by tracemalloc; ``tapp process`` end to end in a child process, with the default
+BLAS threads and with one (its peak RSS: VmHWM). The n_o scaling runs the same tape shape at
+n_o = 25, 50, 100."""
 
 from __future__ import annotations
 
+import math
 import os
 import subprocess
 import sys
@@ -35,9 +43,11 @@ import h5py
 import numpy as np
 from scipy import linalg
 
+from tapp.estimation.factors import triangularize
 from tapp.frames.time import Epoch
 from tapp.processor.deck import bind, read_deck
 from tapp.processor.sequencing import Processor, Run, process
+from tapp.tape import hdf5io
 from tapp.tape.packing import tr_size, unpack_tr
 from tapp.tape.t13 import (
     PARTS,
@@ -49,7 +59,8 @@ from tapp.tape.t13 import (
     TapeRecords,
     TapeStations,
 )
-from tapp.tape.t13_hdf5 import open_t13, write_t13
+from tapp.tape.t13_hdf5 import _write, open_t13, write_t13
+from tests.bench import legacy
 from tests.bench.common import (
     REPO_ROOT,
     Section,
@@ -72,6 +83,12 @@ N_EPOCHS = 3
 N_PRINTS = 20
 N_RECYCLES = 3
 TARGET_S = 2.0
+#: The issue's targets for the square-root processor: at most this many times the
+#: normal-matrix processor (commit legacy.NORMAL_MATRIX_COMMIT) and the NumPy peer.
+TARGET_NORMAL_RATIO = 1.5
+TARGET_PEER_RATIO = 2.0
+#: Shares of ΔJ in the white, bias and correlated parts of ΔJ̃ = 2 ΔJ (factors √share R).
+PART_SHARES = (1.0, 0.6, 0.4)
 REPEATS = 3
 SEED = 20261123
 #: Fit-world a priori σ of every parameter, and the real world's (units of the parameter).
@@ -122,18 +139,22 @@ def _parameters(n_o: int) -> TapeParameters:
                           np.linspace(1.0, 2.0, n_o))
 
 
-def _normal_matrices(rng: np.random.Generator, station: np.ndarray, owner: np.ndarray,
-                     dense: bool) -> np.ndarray:
-    """(n_pairs, n_o, n_o) ΔJ = GᵀG, G (3, n_o) random on the columns a pair observes: the
-    orbit, the dynamic constants and its own station's parameters (all columns if dense)."""
+def _factors(rng: np.random.Generator, station: np.ndarray, owner: np.ndarray, dense: bool
+             ) -> np.ndarray:
+    """(n_pairs, n_o, n_o) upper-triangular R = triangularize(G), G (3, n_cols) random on the
+    columns a pair observes: the orbit, the dynamic constants and its own station's parameters
+    (all columns if dense). R sits on those rows and columns (ascending, so it stays upper
+    triangular) and ΔJ = RᵀR = GᵀG."""
     n_o = owner.size
-    dj = np.zeros((station.size, n_o, n_o))
+    r = np.zeros((station.size, n_o, n_o))
     for s in range(1, N_STATIONS + 1):
         rows = np.flatnonzero(station == s)
         cols = np.arange(n_o) if dense else np.flatnonzero((owner == 0) | (owner == s))
         g = rng.normal(size=(rows.size, 3, cols.size))
-        dj[np.ix_(rows, cols, cols)] = np.einsum("pri,prj->pij", g, g)
-    return dj
+        at = np.ix_(cols, cols)
+        for row, g_pair in zip(rows, g, strict=True):
+            r[row][at] = triangularize(g_pair)
+    return r
 
 
 def _transition(rng: np.random.Generator, times_s: np.ndarray, epoch_of: np.ndarray,
@@ -170,8 +191,8 @@ def synthetic_tape(n_o: int, rng: np.random.Generator, *, dense: bool = False) -
     k, station = (v + 1 for v in np.nonzero(keep))
     n_pairs = k.size
     params = _parameters(n_o)
-    dj = _normal_matrices(rng, station, params.station, dense)
-    parts = np.stack([dj, 0.6 * dj, 0.4 * dj], axis=1)
+    r = _factors(rng, station, params.station, dense)
+    parts = np.stack([r * math.sqrt(share) for share in PART_SHARES], axis=1)
     n_obs = rng.integers(10, 60, n_pairs)
     per_station = np.bincount(station, weights=n_obs, minlength=N_STATIONS + 1)[1:]
     return T13(
@@ -189,7 +210,7 @@ def synthetic_tape(n_o: int, rng: np.random.Generator, *, dense: bool = False) -
         records=TapeRecords(times, is_epoch, np.ones(n_it + 1, dtype=bool), j,
                             np.arange(1, n_it + 1), rng.normal(size=(n_it, 6)),
                             _transition(rng, times, j, n_o)),
-        pairs=TapePairs(k, station, n_obs, dj, 2.0 * dj, parts),
+        pairs=TapePairs(k, station, n_obs, r, math.sqrt(2.0) * r, parts),
         passes=TapePasses(np.arange(1, N_STATIONS + 1), np.full(N_STATIONS, times[1]),
                           np.full(N_STATIONS, times[-1]), per_station.astype(np.int64)),
         provenance={"scenario": "{}", "scenario_source": "tests/bench/processor.py"},
@@ -327,27 +348,89 @@ def _best_s(fn) -> float:
     return time_calls(fn, REPEATS)[0].best_s
 
 
+#: The entity compared with the peer and with the normal-matrix form: Λ' of the fitted set.
+CHECK_ENTITY = "Λ'; 0,0,f1; 0,0,f1"
+
+
+def fit_cov_at(run: Run, k: int) -> np.ndarray:
+    """The matrix of :data:`CHECK_ENTITY` printed at record k."""
+    block = next(b for b in run.blocks if b.kind == "print" and b.k == k)
+    return next(e for e in block.entities if e.command.seed() == CHECK_ENTITY).matrix
+
+
+def relative_difference(a: np.ndarray, ref: np.ndarray) -> float:
+    """max |a − ref| / max |ref|."""
+    return float(np.max(np.abs(np.asarray(a) - ref)) / np.max(np.abs(ref)))
+
+
 def _agreement(run: Run, peer: PeerResult) -> float:
     """Max relative difference of the fit covariance of f1 at the first print time (before
     the first epoch change and recycle, where both use the same representation)."""
-    block = next(b for b in run.blocks if b.kind == "print" and b.k == print_k()[0])
-    ent = next(e for e in block.entities if e.command.seed() == "Λ'; 0,0,f1; 0,0,f1")
-    ref = peer.fit_cov[0]
-    return float(np.max(np.abs(ent.matrix - ref)) / np.max(np.abs(ref)))
+    return relative_difference(fit_cov_at(run, print_k()[0]), peer.fit_cov[0])
 
 
-def measure(n_o: int, folder: Path, rng: np.random.Generator, *, dense: bool = False
-            ) -> dict:
-    """Build and write one tape of n_o parameters, then time the processor and the peer."""
+#: The child of :func:`normal_form`, after :mod:`tests.bench.legacy`'s prelude and the source
+#: of :func:`process_tape` (run there on the normal-matrix commit's library): checks that the
+#: tape is version 2, then times each deck as :func:`measure` does; it replies the best times
+#: and the matrices of the check entity at the asked print times.
+_NORMAL_FORM_CHILD = """
+from tapp.processor.deck import bind, read_deck
+from tapp.processor.sequencing import process
+from tapp.tape.t13_hdf5 import open_t13
+
+with open_t13(ARGS["tape"]) as data:
+    if data.version != 2:
+        raise SystemExit(f"expected a version-2 tape, read version {data.version}")
+run = process_tape(ARGS["tape"], ARGS["decks"]["full"])  # warm-up
+checked = {}
+for block in run.blocks:
+    if block.kind == "print" and block.k in ARGS["check_k"]:
+        entity = next(e for e in block.entities if e.command.seed() == ARGS["entity"])
+        checked[str(block.k)] = entity.matrix.tolist()
+times = {kind: common.time_calls(lambda p=p: process_tape(ARGS["tape"], p),
+                                 ARGS["repeats"])[0].best_s
+         for kind, p in ARGS["decks"].items()}
+reply({"times_s": times, "fit_cov": checked})
+"""
+
+
+def normal_form(checkout: legacy.Checkout, tape_v2: Path, decks: dict[str, Path],
+                cache_dir: Path) -> dict:
+    """The normal-matrix processor (the checkout's) on the version-2 tape, in a child: best
+    of :data:`REPEATS` of open + bind + process after a warm-up, per deck; and
+    :data:`CHECK_ENTITY` at the first and last print times ({k: matrix})."""
+    check_k = [print_k()[0], print_k()[-1]]
+    reply = legacy.run_child(checkout, _NORMAL_FORM_CHILD, {
+        "tape": str(tape_v2), "decks": {kind: str(p) for kind, p in decks.items()},
+        "repeats": REPEATS, "check_k": check_k, "entity": CHECK_ENTITY},
+        cache_dir=cache_dir, functions=(process_tape,))
+    return {"times_s": reply["times_s"],
+            "fit_cov": {int(k): np.array(m) for k, m in reply["fit_cov"].items()}}
+
+
+def write_version2(path: Path, tape: T13) -> Path:
+    """Write ``tape`` in the version-2 layout (normal matrices) by the writer's private
+    ``_write``, not atomically (a benchmark input)."""
+    with hdf5io.create(path) as f:
+        _write(f, tape, "TR", version=2)
+    return path
+
+
+def measure(n_o: int, folder: Path, rng: np.random.Generator, *, dense: bool = False,
+            checkout: legacy.Checkout | None = None) -> dict:
+    """Build and write one tape of n_o parameters (versions 3 and 2), then time the
+    processor, the normal-matrix processor of ``checkout`` (None: not timed) and the peer."""
     label = f"n{n_o}{'_dense' if dense else ''}"
     t0 = time.perf_counter()
     tape = synthetic_tape(n_o, rng, dense=dense)
     tape_path = write_t13(folder / f"synthetic_{label}.t13.h5", tape)
+    v2_path = write_version2(folder / f"synthetic_{label}_v2.t13.h5", tape)
     names, n_pairs = tape.parameters.name, int(tape.pairs.k.size)
     del tape
     packed_mb = n_pairs * tr_size(n_o) * 8 * (2 + len(PARTS)) / 1e6
     log(f"{label}: tape of {n_pairs} pairs built and written in {time.perf_counter() - t0:.1f}"
-        f" s ({tape_path.stat().st_size / 1e6:.0f} MB on disk, {packed_mb:.0f} MB packed)")
+        f" s ({tape_path.stat().st_size / 1e6:.0f} MB on disk as version 3, "
+        f"{v2_path.stat().st_size / 1e6:.0f} MB as version 2, {packed_mb:.0f} MB packed)")
     decks = {}
     for kind, flags in (("full", {}), ("records_only", {"prints": False, "recycles": False})):
         decks[kind] = folder / f"deck_{label}_{kind}.toml"
@@ -358,23 +441,36 @@ def measure(n_o: int, folder: Path, rng: np.random.Generator, *, dense: bool = F
                            and b.k != 0)
     entities_s = entity_time_s(tape_path, decks["full"])
     io_s = _best_s(lambda: read_all_blocks(tape_path))
-    peer_s = _best_s(lambda: numpy_peer(tape_path, names))
-    check = _agreement(run, numpy_peer(tape_path, names))
+    peer_s = _best_s(lambda: numpy_peer(v2_path, names))
+    check = _agreement(run, numpy_peer(v2_path, names))
     peak_mb = traced_peak_mb(lambda: process_tape(tape_path, decks["full"]))
+    normal = {"normal_s": None, "normal_records_only_s": None, "ratio_to_normal": None,
+              "normal_per_record_us": None, "normal_agreement": None}
+    if checkout is not None:
+        nf = normal_form(checkout, v2_path, decks, folder / "normal-form-cache")
+        normal = {
+            "normal_s": nf["times_s"]["full"],
+            "normal_records_only_s": nf["times_s"]["records_only"],
+            "ratio_to_normal": times["full"] / nf["times_s"]["full"],
+            "normal_per_record_us": 1e6 * nf["times_s"]["records_only"] / N_RECORDS,
+            "normal_agreement": {k: relative_difference(fit_cov_at(run, k), m)
+                                 for k, m in nf["fit_cov"].items()}}
     result = {
         "label": label, "n_o": n_o, "dense": dense, "n_records": N_RECORDS, "n_pairs": n_pairs,
-        "tape_mb": tape_path.stat().st_size / 1e6, "packed_mb": packed_mb,
-        "full_s": times["full"], "entities_s": entities_s,
+        "tape_mb": tape_path.stat().st_size / 1e6, "tape_v2_mb": v2_path.stat().st_size / 1e6,
+        "packed_mb": packed_mb, "full_s": times["full"], "entities_s": entities_s,
         "records_only_s": times["records_only"], "io_floor_s": io_s, "peer_s": peer_s,
-        "ratio_to_peer": times["full"] / peer_s,
+        "ratio_to_peer": times["full"] / peer_s, **normal,
         "per_record_us": 1e6 * times["records_only"] / N_RECORDS,
         "per_entity_ms": 1e3 * entities_s / len(PRINT_COMMANDS),
         "print_entities": n_print_entities,
         "all_entities": sum(len(b.entities) for b in run.blocks),
         "tracemalloc_peak_mb": peak_mb, "peer_agreement": check,
-        "tape_path": tape_path, "deck_path": decks["full"],
+        "tape_path": tape_path, "v2_path": v2_path, "deck_path": decks["full"],
     }
-    log(f"{label}: full {times['full']:.3f} s, {len(PRINT_COMMANDS)} entities "
+    versus = ("" if checkout is None else
+              f"normal form {normal['normal_s']:.3f} s ({normal['ratio_to_normal']:.2f}x), ")
+    log(f"{label}: full {times['full']:.3f} s, {versus}{len(PRINT_COMMANDS)} entities "
         f"{1e3 * entities_s:.1f} ms, "
         f"records only {times['records_only']:.3f} s, peer {peer_s:.3f} s, I/O {io_s:.3f} s, "
         f"peak {peak_mb:.0f} MB, first print Λ' vs peer {check:.1e}")
@@ -421,12 +517,27 @@ def cli_once(tape_path: Path, deck_path: Path, folder: Path, *, one_thread: bool
             "peak_rss_mb": int(hwm[-1]) / 1024 if hwm else float("nan")}
 
 
+def _fmt(value: float | None, spec: str) -> str:
+    return "n/a" if value is None else format(value, spec)
+
+
 def _row(r: dict) -> list[str]:
-    return [f"{r['n_o']}{' (dense ΔJ)' if r['dense'] else ''}", str(r["n_pairs"]),
-            f"{r['tape_mb']:.0f} / {r['packed_mb']:.0f}", f"{r['full_s']:.3f}",
-            f"{r['per_record_us']:.0f}", f"{r['per_entity_ms']:.2f}", f"{r['io_floor_s']:.3f}",
+    agree = r["normal_agreement"]
+    return [f"{r['n_o']}{' (dense G)' if r['dense'] else ''}", str(r["n_pairs"]),
+            f"{r['tape_mb']:.0f} / {r['tape_v2_mb']:.0f} / {r['packed_mb']:.0f}",
+            f"{r['full_s']:.3f}", _fmt(r["normal_s"], ".3f"),
+            _fmt(r["ratio_to_normal"], ".2f"),
+            f"{r['per_record_us']:.0f} / {_fmt(r['normal_per_record_us'], '.0f')}",
+            f"{r['per_entity_ms']:.2f}", f"{r['io_floor_s']:.3f}",
             f"{r['peer_s']:.3f}", f"{r['ratio_to_peer']:.1f}",
-            f"{r['tracemalloc_peak_mb']:.0f}", f"{r['peer_agreement']:.0e}"]
+            f"{r['tracemalloc_peak_mb']:.0f}", f"{r['peer_agreement']:.0e}",
+            "n/a" if agree is None else " / ".join(f"{v:.0e}" for v in agree.values())]
+
+
+def _verdict(value: float | None, target: float) -> str:
+    if value is None:
+        return "n/a"
+    return "yes" if value <= target else "NO"
 
 
 def run() -> Section:
@@ -438,40 +549,68 @@ def run() -> Section:
     cli: list[dict] = []
     with tempfile.TemporaryDirectory(prefix="tapp3-bench-") as tmp:
         folder = Path(tmp)
+        checkout, skipped = legacy.extract(folder)
+        if checkout is None:
+            log(f"normal-matrix form not timed: {skipped}")
         for n_o, dense in [(n, False) for n in SCALING_N_O] + [(N_O, True)]:
-            r = measure(n_o, folder, rng, dense=dense)
+            r = measure(n_o, folder, rng, dense=dense, checkout=checkout)
             if n_o == N_O and not dense:
                 cli = [cli_once(r["tape_path"], r["deck_path"], folder, one_thread=flag)
                        for flag in (False, True)]
                 log("tapp process: " + ", ".join(f"{c['wall_s']:.2f} s" for c in cli))
             r.pop("tape_path").unlink()
+            r.pop("v2_path").unlink()
             r.pop("deck_path")
             results.append(r)
+        compiled = legacy.cache_files(folder / "normal-form-cache")
     load_after = os.getloadavg()
     main = next(r for r in results if r["n_o"] == N_O and not r["dense"])
     scaling = [r for r in results if not r["dense"]]
-    ok = "yes" if main["full_s"] < TARGET_S else "NO"
     growth = ", ".join(f"{r['full_s'] / scaling[0]['full_s']:.1f}x at n_o = {r['n_o']}"
                        for r in scaling[1:])
+    if checkout is None:
+        normal_note = f"Normal-matrix form not timed: {skipped}."
+    else:
+        normal_note = (
+            f"Normal-matrix form: the processor of commit {checkout.commit[:7]} "
+            "(`git archive` of tapp, search, iter into a temporary folder) in a child "
+            "process with only that folder on its path, on the version-2 tape of the same "
+            "data, the same decks, timed the same way (the child's imports excluded); "
+            + ("it compiled nothing." if not compiled else
+               f"NOTE: it compiled {', '.join(compiled)}."))
+    targets = {
+        "full_s": (main["full_s"], TARGET_S),
+        "ratio_to_normal": (main["ratio_to_normal"], TARGET_NORMAL_RATIO),
+        "ratio_to_peer": (main["ratio_to_peer"], TARGET_PEER_RATIO)}
     md = "\n".join([
         "## TAPP III: matrix processor on synthetic T13 tapes",
         "",
         f"Synthetic tapes: {N_RECORDS} records of {RECORD_STEP_S:.0f} s, {N_STATIONS} stations, "
-        f"{STATIONS_PER_RECORD} stations per record, epochs at {N_EPOCHS} times, random PSD "
-        f"ΔJ = GᵀG (G: 3 rows over the orbit, {N_DYNAMIC} dynamic constants and the pair's "
-        "own station parameters), ΔJ̃ = 2 ΔJ with its three parts, symplectic U; TR packing "
-        "and gzip (the writer's defaults), read lazily. Deck: σ tables over all parameters, "
+        f"{STATIONS_PER_RECORD} stations per record, epochs at {N_EPOCHS} times; per pair "
+        "R = triangularize(G), G: 3 random rows over the orbit, "
+        f"{N_DYNAMIC} dynamic constants and the pair's own station parameters (ΔJ = RᵀR), "
+        "R̃ = √2 R with parts R, √0.6 R, √0.4 R, symplectic U; written as version 3 (the "
+        "factors) and as version 2 (their normal matrices), TR packing and gzip (the "
+        "writer's defaults), read lazily. Deck: σ tables over all parameters, "
         f"{len(FIXED)} fixed in the fit world, {N_PRINTS} print times x {len(PRINT_COMMANDS)} "
         "entities (covariances with error budgets, normal matrices, partials), "
         f"{N_RECYCLES} recycles with the 9 standard commands. Wall time of open + bind + "
-        f"process, best of {REPEATS} after a warm-up. Target at n_o = {N_O}: < "
-        f"{TARGET_S:.0f} s. Load average (1 min) {load_before[0]:.1f} before and "
-        f"{load_after[0]:.1f} after the section (2 logical CPUs; other work inflates times).",
+        f"process, best of {REPEATS} after a warm-up. Targets at n_o = {N_O}: < "
+        f"{TARGET_S:.0f} s, square-root / normal-matrix form <= {TARGET_NORMAL_RATIO}x, "
+        f"square-root / NumPy peer <= {TARGET_PEER_RATIO:.0f}x. Load average (1 min) "
+        f"{load_before[0]:.1f} before and {load_after[0]:.1f} after the section (2 logical "
+        "CPUs; other work inflates times).",
         "",
-        f"**n_o = {N_O}: {main['full_s']:.3f} s (on target: {ok})**; "
+        f"**n_o = {N_O}: square root {main['full_s']:.3f} s (< {TARGET_S:.0f} s: "
+        f"{_verdict(main['full_s'], TARGET_S)}); normal-matrix form "
+        f"{_fmt(main['normal_s'], '.3f')} s, ratio {_fmt(main['ratio_to_normal'], '.2f')}x "
+        f"(<= {TARGET_NORMAL_RATIO}x: "
+        f"{_verdict(main['ratio_to_normal'], TARGET_NORMAL_RATIO)}); NumPy peer "
+        f"{main['peer_s']:.3f} s, ratio {main['ratio_to_peer']:.1f}x (<= "
+        f"{TARGET_PEER_RATIO:.0f}x: {_verdict(main['ratio_to_peer'], TARGET_PEER_RATIO)})**; "
         f"{main['per_record_us']:.0f} us per record, {main['per_entity_ms']:.2f} ms per print "
-        f"entity (with its budget), {main['all_entities']} entities in all; "
-        f"{main['ratio_to_peer']:.1f}x the NumPy peer; I/O floor {main['io_floor_s']:.3f} s. "
+        f"entity (with its budget), {main['all_entities']} entities in all; I/O floor "
+        f"{main['io_floor_s']:.3f} s. "
         "`tapp process` end to end (child process, interpreter start, O3 printout and JSON "
         f"written, {cli[0]['o3_mb']:.1f} MB of O3): " + ", ".join(
             f"{c['wall_s']:.2f} s with "
@@ -479,28 +618,42 @@ def run() -> Section:
             f" (peak RSS {c['peak_rss_mb']:.0f} MB)" for c in cli) + ". In-process runs: "
         f"OPENBLAS_NUM_THREADS={blas_threads}.",
         "",
-        markdown_table(["n_o", "pairs", "tape / packed (MB)", "wall (s)", "per record (us)",
-                        "per entity (ms)", "I/O floor (s)", "NumPy peer (s)", "ratio to peer",
-                        "tracemalloc peak (MB)", "Λ' vs peer"], [_row(r) for r in results]),
+        markdown_table(["n_o", "pairs", "tape v3 / v2 / packed (MB)", "square root (s)",
+                        "normal form (s)", "sqrt / normal", "per record (us) sqrt / normal",
+                        "per entity (ms)", "I/O floor (s)", "NumPy peer (s)", "sqrt / peer",
+                        "tracemalloc peak (MB)", "Λ' vs peer",
+                        "Λ' vs normal form (first / last print)"],
+                       [_row(r) for r in results]),
         "",
-        f"Growth of the wall time with n_o (from n_o = {scaling[0]['n_o']}): {growth}. Per "
-        "record: the run with one print (at the last record) and no recycles / n_IT. Per "
+        f"Growth of the square-root wall time with n_o (from n_o = {scaling[0]['n_o']}): "
+        f"{growth}. {normal_note} Per record: the run with one print (at the last record) "
+        "and no recycles / n_IT. Per "
         f"entity: the {len(PRINT_COMMANDS)} print commands evaluated on the last record's "
         f"statistics (with their error budgets), / {len(PRINT_COMMANDS)}. I/O floor: "
-        "reading and checking every pair block (ΔJ, ΔJ̃ and its parts) through the lazy "
-        "reader. NumPy peer: h5py reads of ΔJ, ΔJ̃ per print interval, one Cholesky "
-        "regression and the ten products per print time, in one representation, without "
-        "recycles, budget or parts (2/5 of the bytes). Λ' vs peer: max relative difference "
-        "of the fit covariance of the fitted parameters at the first print time. Dense ΔJ: "
-        "every entry non-zero, the worst case for the compression (and the reading).",
+        "reading and checking every pair block (R, R̃ and its parts) of the version-3 tape "
+        "through the lazy reader. NumPy peer: h5py reads of the version-2 tape's ΔJ, ΔJ̃ per "
+        "print interval, one Cholesky regression and the ten products per print time, in one "
+        "representation, without recycles, budget or parts (2/5 of the bytes). Λ' vs peer: "
+        "max relative difference of the fit covariance of the fitted parameters at the first "
+        "print time; Λ' vs normal form: the same against the normal-matrix form's, at the "
+        "first and the last print time (after the epoch changes and recycles). Dense G: "
+        "every column observed (R: 3 full rows), the worst case for the compression (and "
+        "the reading).",
     ])
-    data = {"target_s": TARGET_S, "n_o": N_O, "results": results, "cli": cli,
+    data = {"target_s": TARGET_S, "target_ratio_to_normal": TARGET_NORMAL_RATIO,
+            "target_ratio_to_peer": TARGET_PEER_RATIO, "n_o": N_O,
+            "on_target": {key: (None if v is None else v <= t)
+                          for key, (v, t) in targets.items()},
+            "normal_form": {"commit": None if checkout is None else checkout.commit,
+                            "skipped": skipped or None, "compiled": compiled},
+            "results": results, "cli": cli,
             "openblas_num_threads": blas_threads, "load_average": [load_before, load_after],
             "config": {"n_records": N_RECORDS, "n_stations": N_STATIONS,
                        "stations_per_record": STATIONS_PER_RECORD, "n_epochs": N_EPOCHS,
                        "n_dynamic": N_DYNAMIC, "n_prints": N_PRINTS,
                        "print_commands": list(PRINT_COMMANDS), "n_recycles": N_RECYCLES,
-                       "fixed": list(FIXED), "repeats": REPEATS, "seed": SEED}}
+                       "part_shares": list(PART_SHARES), "fixed": list(FIXED),
+                       "repeats": REPEATS, "seed": SEED}}
     return Section(NAME, md, data)
 
 

@@ -1,12 +1,16 @@
 """Benchmark of TAPP I on scenarios/deep_space.toml (30 days, DSN, one sample per minute).
 
-``run()`` returns a Markdown section: wall time of reading the scenario, simulating and
-writing the T13 tape (without and with the raw rows), the tape sizes and what was computed.
+``run()`` returns a section (Markdown and raw numbers): wall time of reading the scenario,
+simulating and writing the T13 tape (without and with the raw rows), the tape sizes and what
+was computed.
 Times are the best of a few repeats after a warm-up (the compiled right-hand side is cached
 on disk; the warm-up also loads DE421). Targets: under 30 s on a 2-core machine, tape under
 50 MB. The run is repeated under both Earth orientation models, side by side: "iau2006"
 (IAU 2006/2000A with IERS EOP, the scenario's) against "gmst" (GMST + ω t, the earlier
-model), with a target of iau2006 within 1.5x of gmst.
+model), with a target of iau2006 within 1.5x of gmst. Beside each run, the normal-matrix form
+of TAPP I (commit :data:`tests.bench.legacy.NORMAL_MATRIX_COMMIT`, T13 version 2) does the same
+in a child process (:func:`normal_form`), with its own right-hand-side cache and its own
+warm-up; target: the current (square-root) run within 1.5x of it.
 """
 
 from __future__ import annotations
@@ -16,9 +20,12 @@ import time
 from pathlib import Path
 
 from tapp.tape import T13
+from tapp.tape.t13 import VERSION as T13_VERSION
 from tapp.tape.t13_hdf5 import write_t13
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
+from tests.bench import legacy
+from tests.bench.common import Section, logger
 
 NAME = "tracking"
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "deep_space.toml"
@@ -27,6 +34,9 @@ TARGET_S = 30.0
 TARGET_MB = 50.0
 TARGET_RATIO = 1.5
 MODELS = ("iau2006", "gmst")
+#: The target of the current (square-root) TAPP I over the normal-matrix one, simulate + write.
+TARGET_NORMAL_RATIO = 1.5
+log = logger(NAME)
 
 
 def _run_once(raw: bool, out: Path, model: str = "iau2006") -> tuple[float, float, T13]:
@@ -39,10 +49,76 @@ def _run_once(raw: bool, out: Path, model: str = "iau2006") -> tuple[float, floa
     return mid - start, time.perf_counter() - start, sim.tape
 
 
-def run() -> str:
-    """Return the Markdown section of the tracking-simulation benchmark."""
-    rows = []
+#: The child of :func:`normal_form`, after :mod:`tests.bench.legacy`'s prelude and the source
+#: of :func:`_run_once` (run there on the normal-matrix commit's library): a warm-up under
+#: each model, then the best of the repeats as :func:`run` takes it; it replies
+#: {"raw model": [simulate s, total s, tape MB, tape version]}.
+_NORMAL_FORM_CHILD = """
+import h5py
+from tapp.tape.t13_hdf5 import write_t13
+from tapp.tracking.scenario import read_scenario
+from tapp.tracking.simulate import simulate
+
+SCENARIO = Path(ARGS["scenario"])
+folder = Path(ARGS["folder"])
+for model in ARGS["models"]:
+    _run_once(False, folder / "warm.t13.h5", model)
+best = {}
+for raw in (False, True):
+    for model in ARGS["models"]:
+        out = folder / f"normal_{raw}_{model}.t13.h5"
+        sim_s, total_s, _ = min((_run_once(raw, out, model) for _ in range(ARGS["repeats"])),
+                                key=lambda r: r[1])
+        with h5py.File(out, "r") as f:
+            version = int(f.attrs["version"])
+        best[f"{raw} {model}"] = [sim_s, total_s, out.stat().st_size / 1e6, version]
+reply(best)
+"""
+
+
+def normal_form(folder: Path) -> tuple[dict[tuple[bool, str], tuple] | None, str]:
+    """TAPP I of the normal-matrix commit in a child: ({(raw, model): (simulate s, total s,
+    tape MB, tape version)}, note), or (None, why not)."""
+    checkout, skipped = legacy.extract(folder)
+    if checkout is None:
+        return None, f"normal-matrix form not timed: {skipped}"
+    cache = folder / "normal-form-cache"
+    cache.mkdir()
+    out = folder / "normal-form-tapes"
+    out.mkdir()
+    reply = legacy.run_child(checkout, _NORMAL_FORM_CHILD, {
+        "scenario": str(SCENARIO), "models": list(MODELS), "repeats": REPEATS,
+        "folder": str(out)}, cache_dir=cache, functions=(_run_once,))
+    compiled = legacy.cache_files(cache)
+    best = {(raw == "True", model): tuple(v)
+            for (raw, model), v in ((key.split(" "), v) for key, v in reply.items())}
+    note = (f"Normal form: TAPP I of commit {checkout.commit[:7]} (`git archive` of tapp, "
+            "search, iter into a temporary folder) in a child process with only that folder "
+            f"on its path, its own right-hand-side cache ({len(compiled)} compiled there) and "
+            f"a warm-up under each model, timed the same way; its tapes are version "
+            f"{', '.join(str(v) for v in sorted({v[3] for v in best.values()}))}.")
+    return best, note
+
+
+def _row(r: dict) -> str:
+    n = r["normal"]
+    versus = (["n/a"] * 4 if n is None else
+              [f"{n['simulate_s']:.2f}", f"{n['total_s']:.2f}", f"{n['size_mb']:.2f}",
+               f"{r['ratio_to_normal_simulate']:.2f} / {r['ratio_to_normal']:.2f}"])
+    ratio = "" if r["iau2006_over_gmst"] is None else f"{r['iau2006_over_gmst']:.2f}"
+    return (f"| {'with raw/' if r['raw'] else 'without raw/'} | {r['model']} | "
+            f"{r['simulate_s']:.2f} | {r['total_s']:.2f} | {r['size_mb']:.2f} | "
+            f"{' | '.join(versus)} | {r['observations']} | {r['passes']} | {r['pairs']} | "
+            f"{ratio} | {'yes' if r['on_target'] else 'NO'} |")
+
+
+def run() -> Section:
+    """Run the tracking-simulation benchmark; return its Markdown and raw numbers."""
+    results = []
     with tempfile.TemporaryDirectory() as tmp:
+        log("normal-matrix form (child process)")
+        normal, normal_note = normal_form(Path(tmp))
+        log("current form")
         head = None
         for model in MODELS:
             head = _run_once(False, Path(tmp) / "warm.t13.h5", model)[2]
@@ -54,19 +130,30 @@ def run() -> str:
                            key=lambda r: r[1])
                 sim_s, total_s, tape = best
                 best_s[raw, model] = sim_s
-                size_mb = out.stat().st_size / 1e6
-                ok = total_s < TARGET_S and size_mb < TARGET_MB
-                ratio = ""
-                if model == "gmst":
-                    r = best_s[raw, "iau2006"] / sim_s
-                    ratio = f"{r:.2f}"
-                    ok = ok and r < TARGET_RATIO
-                rows.append(
-                    f"| {'with raw/' if raw else 'normal matrices only'} | {model} | "
-                    f"{sim_s:.2f} | {total_s:.2f} | {size_mb:.2f} | "
-                    f"{int(tape.pairs.n_obs.sum())} | {tape.passes.station.size} | "
-                    f"{tape.pairs.k.size} | {ratio} | {'yes' if ok else 'NO'} |")
-    return "\n".join([
+                r = {"raw": raw, "model": model, "simulate_s": sim_s, "total_s": total_s,
+                     "size_mb": out.stat().st_size / 1e6,
+                     "observations": int(tape.pairs.n_obs.sum()),
+                     "passes": int(tape.passes.station.size), "pairs": int(tape.pairs.k.size),
+                     "iau2006_over_gmst": (best_s[raw, "iau2006"] / sim_s
+                                           if model == "gmst" else None),
+                     "normal": None, "ratio_to_normal": None,
+                     "ratio_to_normal_simulate": None}
+                ok = total_s < TARGET_S and r["size_mb"] < TARGET_MB
+                if r["iau2006_over_gmst"] is not None:
+                    ok = ok and r["iau2006_over_gmst"] < TARGET_RATIO
+                if normal is not None:
+                    n_sim_s, n_total_s, n_mb, n_version = normal[raw, model]
+                    r["normal"] = {"simulate_s": n_sim_s, "total_s": n_total_s,
+                                   "size_mb": n_mb, "version": n_version}
+                    r["ratio_to_normal"] = total_s / n_total_s
+                    r["ratio_to_normal_simulate"] = sim_s / n_sim_s
+                    ok = ok and r["ratio_to_normal"] <= TARGET_NORMAL_RATIO
+                r["on_target"] = ok
+                log(f"{'raw' if raw else 'no raw'}, {model}: {total_s:.2f} s"
+                    + ("" if normal is None else
+                       f", normal form {r['normal']['total_s']:.2f} s"))
+                results.append(r)
+    md = "\n".join([
         "## TAPP I: deep-space tracking simulation",
         "",
         f"Scenario `{SCENARIO.name}`: trans-lunar injection and lunar swing-by, J2 + Sun + Moon "
@@ -76,14 +163,26 @@ def run() -> str:
         "periapsis and at 15 days), correlated real-world noise. Wall time: read the scenario, "
         f"simulate, write the tape; best of {REPEATS} after a warm-up. Targets: < "
         f"{TARGET_S:.0f} s, < {TARGET_MB:.0f} MB, iau2006 / gmst simulate time < "
-        f"{TARGET_RATIO} (the ratio is on the gmst row).",
+        f"{TARGET_RATIO} (the ratio is on the gmst row), square root / normal form (simulate "
+        f"+ write) <= {TARGET_NORMAL_RATIO}.",
         "",
-        "| tape | Earth orientation | simulate (s) | + write (s) | size (MB) | observations | "
-        "passes | pairs | iau2006 / gmst | on target |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---|",
-        *rows,
+        "| tape | Earth orientation | simulate (s) | + write (s) | size (MB) | "
+        "normal form simulate (s) | normal form + write (s) | normal form size (MB) | "
+        "sqrt / normal (simulate / + write) | observations | passes | pairs | "
+        "iau2006 / gmst | on target |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+        *(_row(r) for r in results),
+        "",
+        f"Square root: this tree (T13 version {T13_VERSION}: factors R, R̃ and parts). "
+        f"{normal_note}",
     ])
+    data = {"targets": {"total_s": TARGET_S, "size_mb": TARGET_MB,
+                        "iau2006_over_gmst": TARGET_RATIO,
+                        "ratio_to_normal": TARGET_NORMAL_RATIO},
+            "n_o": head.n_o, "n_it": head.n_it, "repeats": REPEATS,
+            "normal_form_note": normal_note, "results": results}
+    return Section(NAME, md, data)
 
 
 if __name__ == "__main__":
-    print(run())
+    print(run().markdown)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from iter import SweepInputError, input_check
+
 #: Azimuth at which :func:`counting_body` fails while the flag file exists, deg.
 FAILING_AZIMUTH_deg = 102.0
 #: Azimuth at which :func:`interrupting_body` raises KeyboardInterrupt, deg.
@@ -61,3 +63,30 @@ def hanging_body(azimuth_deg: float, hang_at_deg: float) -> dict[str, float]:
 def raising_body(azimuth_deg: float) -> dict[str, float]:
     """Raise ValueError for every case."""
     raise ValueError(f"cannot fly at {azimuth_deg} deg")
+
+
+def read_scale(scale_file: str, **_: object) -> float:
+    """Return the number written in ``scale_file``: the input check of :func:`scaled_body`.
+
+    Raises
+    ------
+    SweepInputError
+        Naming the file: its text is not a number.
+    """
+    text = Path(scale_file).read_text().strip()
+    try:
+        return float(text)
+    except ValueError:
+        raise SweepInputError(scale_file, "file", "a number", text) from None
+
+
+@input_check(read_scale)
+def scaled_body(azimuth_deg: float, scale_file: str, calls_dir: str) -> dict[str, float]:
+    """Return the azimuth times the number in ``scale_file`` (a file the body reads)."""
+    _log(calls_dir, azimuth_deg)
+    return {"scaled_deg": read_scale(scale_file) * azimuth_deg}
+
+
+def keywords_body(**values: float) -> dict[str, float]:
+    """Return the sum of whatever keyword arguments it is given."""
+    return {"total": sum(values.values())}

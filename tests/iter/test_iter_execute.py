@@ -12,6 +12,7 @@ import h5py
 import pytest
 
 from iter import (
+    AllCasesFailed,
     CallableBody,
     Case,
     CaseStatus,
@@ -90,6 +91,7 @@ def test_failing_case_is_recorded_and_a_rerun_resumes(tmp_path, bodies):
     output = tmp_path / "out.h5"
 
     first = run_sweep(sweep, output_h5=output, execution=SERIAL)
+    first.raise_if_all_failed()  # four cases succeeded: an answer
     assert bodies.calls(calls_dir) == [96.0, 99.0, 102.0, 105.0, 108.0]
     assert [row.status for row in first.table.rows] == [
         CaseStatus.OK, CaseStatus.OK, CaseStatus.FAILED, CaseStatus.OK, CaseStatus.OK]
@@ -285,3 +287,81 @@ def test_program_bodies_have_a_default_timeout():
 
     assert DEFAULT_PROGRAM_TIMEOUT_S == 3600.0
     assert "timeout_s" not in ProgramBody(argv=("tapp",)).definition()  # resumes old files
+
+
+def test_a_sweep_whose_every_case_failed_has_no_answer(tmp_path, bodies):
+    sweep = Sweep(loops=(AZIMUTHS,), body=CallableBody("iter_bodies:raising_body"),
+                  source="all.toml")
+    output = tmp_path / "all.h5"
+    result = run_sweep(sweep, output_h5=output, execution=SERIAL)
+    with pytest.raises(AllCasesFailed) as info:
+        result.raise_if_all_failed()
+    assert (info.value.first_index, info.value.n_cases) == (0, 5)
+    assert str(info.value) == ("all.toml: every case failed (5 of 5); case 0: ValueError: "
+                               f"cannot fly at 96.0 deg (every failure is recorded in {output})")
+    assert [row.status for row in read_hdf5(output).table.rows] == [CaseStatus.FAILED] * 5
+
+
+def _scaled_sweep(folder: Path, scale: str, constants: dict | None = None,
+                  files: dict | None = None) -> Sweep:
+    """Five azimuths through iter_bodies:scaled_body, which reads ``folder/scale.txt``."""
+    (folder / "calls").mkdir(exist_ok=True)
+    (folder / "scale.txt").write_text(scale)
+    body = CallableBody("iter_bodies:scaled_body",
+                        {"calls_dir": str(folder / "calls"), **(constants or {})},
+                        files={"scale_file": str(folder / "scale.txt"), **(files or {})})
+    return Sweep(loops=(AZIMUTHS,), body=body, source="scaled.toml")
+
+
+def test_a_body_reading_a_file_runs_every_case(tmp_path, bodies):
+    result = run_sweep(_scaled_sweep(tmp_path, "2"), execution=SERIAL)
+    assert [row.outputs["scaled_deg"] for row in result.table.rows] == [
+        192.0, 198.0, 204.0, 210.0, 216.0]
+
+
+@pytest.mark.parametrize(("scale", "constants", "files", "field", "fragment"), [
+    # the body's own input check refuses the file it reads: its error, naming that file
+    ("fast", {}, {}, "file", "expected a number (got 'fast')"),
+    ("2", {}, {"scale_file": "/no/such/scale.txt"}, "body.files.scale_file",
+     "expected an existing file"),
+    ("2", {"scael": 1.0}, {}, "body.constants.scael",
+     "expected an argument of iter_bodies:scaled_body (azimuth_deg, scale_file, calls_dir)"),
+    ("2", {}, {"calls": "."}, "body.files.calls", "expected an argument of"),
+])
+def test_bad_input_stops_the_sweep_before_any_case_runs_or_anything_is_written(
+        tmp_path, bodies, scale, constants, files, field, fragment):
+    sweep = _scaled_sweep(tmp_path, scale, constants, files)
+    output = tmp_path / "out.h5"
+    with pytest.raises(SweepInputError) as info:
+        run_sweep(sweep, output_h5=output, execution=SERIAL)
+    source = str(tmp_path / "scale.txt") if field == "file" else "scaled.toml"
+    assert (info.value.source, info.value.field) == (source, field)
+    assert fragment in str(info.value)
+    assert bodies.calls(tmp_path / "calls") == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["calls", "scale.txt"]
+
+
+@pytest.mark.parametrize(("target", "names", "field", "fragment"), [
+    ("iter.examples:launch_azimuth_case", ("azimuth_deg",), "body.constants",
+     "a value for the argument 'launch_day' of iter.examples:launch_azimuth_case"),
+    ("iter_bodies:raising_body", ("azimut_deg",), "loop[0].names",
+     "an argument of iter_bodies:raising_body (azimuth_deg)"),
+])
+def test_arguments_are_checked_against_the_signature(bodies, target, names, field, fragment):
+    loop = Loop(type=1, names=names, sets=1, vary=(96.0,))
+    with pytest.raises(SweepInputError) as info:
+        run_sweep(Sweep(loops=(loop,), body=CallableBody(target)), execution=SERIAL)
+    assert info.value.field == field
+    assert fragment in info.value.expected
+
+
+@pytest.mark.parametrize(("target", "outputs"), [
+    # dict declares no signature to inspect: nothing to check (it takes any keyword)
+    ("builtins:dict", {"k": 1.0, "output.azimuth_deg": 96.0}),
+    ("iter_bodies:keywords_body", {"total": 97.0}),  # **values takes any name
+])
+def test_a_function_taking_any_keyword_is_called_with_every_name(bodies, target, outputs):
+    loop = Loop(type=1, names=("azimuth_deg",), sets=1, vary=(96.0,))
+    result = run_sweep(Sweep(loops=(loop,), body=CallableBody(target, {"k": 1.0})),
+                       execution=SERIAL)
+    assert result.table.rows[0].outputs == outputs

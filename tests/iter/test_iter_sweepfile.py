@@ -109,7 +109,8 @@ def test_unknown_tables_and_body_keys_are_named_with_the_allowed_keys():
     document = _document()
     document["body"]["timeout"] = 5
     with pytest.raises(SweepInputError, match=r"^bad\.toml: body\.timeout: expected no such key "
-                       r"\(allowed: callable, program, json, dashes, timeout_s, constants\)"):
+                       r"\(allowed: callable, program, json, dashes, timeout_s, constants, "
+                       r"files\)"):
         parse_sweep(document, source="bad.toml")
     document = _document()
     document["body"]["timeout_s"] = True
@@ -150,3 +151,63 @@ def test_loaded_sweep_keeps_the_file_contents(tmp_path):
     assert sweep.body == CallableBody(target="iter.examples:launch_azimuth_case")
     assert '"description": "d"' in sweep.contents_json()
     assert "description" not in sweep.definition_json()
+
+
+def _write_sweep(path: Path, body: str) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(f'{body}\n[[loop]]\nnames = ["azimuth_deg"]\nsets = 1\nvary = [96.0]\n')
+    return path
+
+
+def test_files_are_taken_from_the_sweep_files_folder_whatever_the_directory(tmp_path,
+                                                                           monkeypatch):
+    folder = tmp_path / "study"
+    (folder / "data").mkdir(parents=True)
+    (folder / "data" / "scale.txt").write_text("2")
+    absolute = tmp_path / "elsewhere.txt"
+    absolute.write_text("3")
+    _write_sweep(folder / "sweeps" / "s.toml",
+                 '[body]\ncallable = "iter.examples:launch_azimuth_case"\n[body.files]\n'
+                 f'scale_file = "../data/scale.txt"\nother = "{absolute}"\n')
+    monkeypatch.chdir(tmp_path / "study" / "data")  # neither the repository nor the folder
+    sweep = load_sweep(Path("..") / "sweeps" / "s.toml")
+    assert sweep.body.files == {"scale_file": str(folder / "data" / "scale.txt"),
+                                "other": str(absolute)}
+    assert sweep.definition()["body"]["files"] == sweep.body.files
+    assert "files" not in load_sweep(SCENARIOS / "iter_azimuth_type1.toml").definition()["body"]
+
+
+def test_a_missing_file_is_named_with_where_it_was_looked_for(tmp_path, monkeypatch):
+    path = _write_sweep(tmp_path / "s.toml", '[body]\ncallable = "iter.examples:'
+                        'launch_azimuth_case"\n[body.files]\nscale_file = "scale.txt"\n')
+    (tmp_path / "cwd").mkdir()
+    (tmp_path / "cwd" / "scale.txt").write_text("2")  # beside the working directory: not used
+    monkeypatch.chdir(tmp_path / "cwd")
+    with pytest.raises(SweepInputError) as info:
+        load_sweep(path)
+    assert info.value.field == "body.files.scale_file"
+    assert info.value.got == str(tmp_path / "scale.txt")
+    assert "from the sweep file's folder" in info.value.expected
+
+
+def test_a_program_given_as_a_path_is_taken_from_the_sweep_files_folder(tmp_path):
+    by_path = _write_sweep(tmp_path / "a" / "s.toml", '[body]\nprogram = ["bin/run", "x.py"]\n')
+    by_name = _write_sweep(tmp_path / "b" / "s.toml", '[body]\nprogram = ["python3", "x.py"]\n')
+    assert load_sweep(by_path, check_body=False).body.argv == (
+        str(tmp_path / "a" / "bin" / "run"), "x.py")
+    assert load_sweep(by_name, check_body=False).body.argv == ("python3", "x.py")
+
+
+@pytest.mark.parametrize(("files", "constants", "varied", "field"), [
+    ({"azimuth_deg": "s.toml"}, {}, "azimuth_deg", "loop[0].names"),
+    ({"scale": "s.toml"}, {"scale": 1.0}, "azimuth_deg", "body.files.scale"),
+    ({"bad-name": "s.toml"}, {}, "azimuth_deg", "body.files.bad-name"),
+])
+def test_file_names_are_checked_like_constants(tmp_path, files, constants, varied, field):
+    document = {"body": {"callable": "iter.examples:launch_azimuth_case", "files": files,
+                         "constants": constants},
+                "loop": [{"names": [varied], "sets": 1, "vary": [96.0]}]}
+    (tmp_path / "s.toml").touch()
+    with pytest.raises(SweepInputError) as info:
+        parse_sweep(document, source="bad.toml", base_dir=tmp_path)
+    assert info.value.field == field

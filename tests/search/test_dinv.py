@@ -101,7 +101,9 @@ def test_threshold_is_relative_so_scaling_does_not_matter(seed, n, log10_scale):
     a = _with_condition(rng, n, 6.0)
     scale = 10.0**log10_scale
     small = dinv(a * scale)  # must not be declared singular however small the scale
-    np.testing.assert_allclose(small.inverse * scale, dinv(a).inverse, rtol=_bound(n, 1e6))
+    # normwise, as the bound is (an element that cancels may differ by more, relatively:
+    # 1.6e-8 against 8.9e-9 for seed 45, n = 8)
+    assert _rel(small.inverse * scale, dinv(a).inverse) < _bound(n, 1e6)
 
 
 def test_threshold_rejects_only_beyond_the_stated_condition_number():

@@ -22,7 +22,7 @@ GUIDE = """title = "three midcourse corrections"
 [tape]
 iden = "DSN-LUNAR-2026-03-10"
 [targets]
-miss = ["b_dot_t_km", "b_dot_r_km"]
+miss = ["b_dot_t_km", "b_dot_r_km", "flight_time_s"]
 [manoeuvres]
 recycles = [1, 2, 3]
 [execution]
@@ -68,13 +68,16 @@ def test_guide_prints_markdown_and_writes_json_and_plots(files, scheduler, tmp_p
     content = json.loads(js.read_text())
     assert content["samples"] == 4000 and content["seed"] == 3
     assert content["navigation"] == "tape" and content["targets"] == ["b_dot_t_km",
-                                                                      "b_dot_r_km"]
+                                                                      "b_dot_r_km",
+                                                                      "flight_time_s"]
     assert content["shard_samples"] == 2000 and content["where"].startswith("scheduler")
     mc, lin = content["monte_carlo"], content["linear"]
     assert [m["recycle"] for m in mc["manoeuvres"]] == [1, 2, 3]
     assert set(mc["manoeuvres"][0]["magnitude"]["percentiles_km_s"]) == {"50", "90", "99"}
     assert lin["total"]["sigma_km_s"] is None and lin["outside_corridor"]["either"] is None
     assert len(mc["miss_cov"]) == 3 and mc["bplane_ellipse"]["semi_major_km"] > 0
+    assert content["left_out"] == {} and content["agreement"]["statistics"] == 18
+    assert "## Linear covariance against the Monte Carlo" in out
     assert sorted(p.name for p in plots.iterdir()) == ["bplane_scatter.png",
                                                         "dv_histograms.png"]
     for png in plots.iterdir():
@@ -128,11 +131,19 @@ def _refused(code: int, err: str, new: list[str], fragment: str) -> None:
      "execution.sigma_pointing_mrad: expected a finite number <= 200"),
     (lambda t: t.replace("sigma_pointing_mrad", "sigma_pointing_deg"),
      "execution.sigma_pointing_deg: expected no such key"),
-    (lambda t: t.replace('"b_dot_r_km"]', '"b_dot_q_km"]'),
+    (lambda t: t.replace('"b_dot_r_km",', '"b_dot_q_km",'),
      "bad.toml: targets.miss[1]: expected a miss component of the tape"),
-    (lambda t: t.replace(', "b_dot_r_km"]', "]"), "targets.miss: expected at least 2 items"),
-    (lambda t: t.replace('"b_dot_r_km"]', '"b_dot_t_km"]'), "targets.miss: expected each item "
+    (lambda t: t.replace(', "b_dot_r_km", "flight_time_s"]', "]"),
+     "targets.miss: expected at least 2 items"),
+    (lambda t: t.replace('"b_dot_r_km",', '"b_dot_t_km",'), "targets.miss: expected each item "
                                                             "once"),
+    # a corridor term on a component the guidance does not target
+    (lambda t: t.replace(', "flight_time_s"]', "]"),
+     "bad.toml: corridor.flight_time_s: expected a corridor on targeted miss components only "
+     "(targets.miss: b_dot_t_km, b_dot_r_km) (got 'flight_time_s not targeted')"),
+    (lambda t: t.replace('"b_dot_t_km", ', ""),
+     "bad.toml: corridor.radius_km: expected a corridor on targeted miss components only "
+     "(targets.miss: b_dot_r_km, flight_time_s) (got 'b_dot_t_km not targeted')"),
     (lambda t: t.replace("recycles = [1, 2, 3]", "recycles = [1, 4]"),
      "manoeuvres.recycles[1]: expected a recycle number of the tape (1..3)"),
     (lambda t: t.replace("recycles = [1, 2, 3]", "recycles = []"),

@@ -4,17 +4,21 @@ and what the outputs record of it."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 from datetime import datetime, timedelta
 from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
+from scipy.stats import chi2
 from typer.testing import CliRunner
 
 from tapp.cli import app
 from tapp.od import setup
+from tapp.od.observations import MadeUnder
 from tapp.od.obsfile import read_observations, write_observations
 from tapp.stations_file import load_stations
 
@@ -60,6 +64,9 @@ def test_dc_text_output_shows_outcome_and_rates() -> None:
     assert res.exit_code == 6, res.output
     assert "converging: iteration limit 20 reached while converging" in res.stdout
     assert "predicted rate ρ = 0.98" in res.stdout and "factor q = 0.97" in res.stdout
+    # no settled estimate to judge against the noise model; the bound is printed still
+    assert "parameters: not judged (converging: no settled estimate)" in " ".join(
+        res.stdout.split())
 
 
 def test_dc_ill_conditioned_normal_matrix_exits_4_with_the_diagnosis() -> None:
@@ -143,6 +150,8 @@ def test_observation_file_round_trip(tmp_path: Path, small_obs, suffix: str) -> 
     assert [back.stations[i].name for i in back.station] == names
     if suffix != ".csv":
         assert back.end_s == pytest.approx(small_obs.end_s)
+    # the study file's model, gmst, which uses no EOP, in the mean frame of J2000
+    assert back.made_under == small_obs.made_under == MadeUnder("gmst", "not used", "EME2000")
 
 
 def test_dc_saves_and_reads_a_tdm(tmp_path: Path) -> None:
@@ -257,6 +266,7 @@ def test_the_study_file_runs_gmst_and_the_outputs_say_so() -> None:
     text = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h"])
     assert text.exit_code == 0 and "Earth orientation: gmst" in text.stdout
     assert "), gmst: converged" in text.stdout
+    assert "parameters: consistent with the noise model" in " ".join(text.stdout.split())
 
 
 @pytest.mark.parametrize("command", [
@@ -346,3 +356,180 @@ def test_saved_observations_record_the_earth_orientation(tmp_path: Path) -> None
     with h5py.File(path) as f:
         comments = [str(c) for c in f.attrs["comments"]]
     assert any("simulated with Earth orientation iau2006" in c for c in comments)
+
+
+# --- where observations meet a model: what the files state they were made under -----------
+
+SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+#: The README's example: TAPP I's noise-free TDM of SATORB1 (5x5 field, one day, equatorial
+#: network) made under the scenario's iau2006, 590 range and range-rate pairs.
+README_MEASUREMENTS = 1180
+#: Where the gmst fit of those data settles: 41.5 km from the orbit (above 10 km), and an
+#: exact fit of them lands within a millimetre.
+TEN_KM_km = 10.0
+ONE_MM_km = 1e-6
+
+
+def _chi2_rms_bound(m: int) -> float:
+    """The RMS a correct model exceeds with probability 0.1 %, from SciPy's χ² quantile
+    directly: m RMS² ~ χ²(m - 6)."""
+    return math.sqrt(chi2.ppf(0.999, m - 6) / m)
+
+
+@pytest.fixture(scope="module")
+def readme_tdm(tmp_path_factory) -> Path:
+    """``tapp simulate scenarios/leo_equatorial.toml -o leo.t13.h5 --tdm leo.tdm`` (the
+    scenario's iau2006)."""
+    out = tmp_path_factory.mktemp("readme")
+    res = runner.invoke(app, ["simulate", str(SCENARIOS / "leo_equatorial.toml"), "-o",
+                              str(out / "leo.t13.h5"), "--tdm", str(out / "leo.tdm"), "--json"])
+    assert res.exit_code == 0, res.output
+    return out / "leo.tdm"
+
+
+def test_simulate_tdm_states_the_earth_orientation(readme_tdm: Path) -> None:
+    text = readme_tdm.read_text()
+    for line in ("COMMENT tapp: earth_orientation = iau2006",
+                 "COMMENT tapp: eop = finals2000A.all", "COMMENT tapp: frame = GCRS"):
+        assert f"\n{line}\n" in text
+    # in the header, before the first segment
+    assert text.index("COMMENT tapp: frame") < text.index("META_START")
+
+
+def test_the_readme_tdm_under_the_study_model_is_refused(readme_tdm: Path,
+                                                        tmp_path: Path) -> None:
+    """The issue's example: the iau2006 TDM fitted under the study file's gmst is bad input,
+    one line naming both models and the option, and --save-obs writes nothing."""
+    line = _refused(["dc", "--orbit", "SATORB1", "--obs", str(readme_tdm), "--truth", "5x5",
+                     "--stm", "5x5", "--save-obs", str(tmp_path / "obs.h5")],
+                    f"error: {readme_tdm}: earth_orientation: expected observations made "
+                    "under the fit's Earth orientation model gmst", tmp_path)
+    assert line.endswith("(got 'iau2006')")
+    assert "--earth-orientation iau2006 fits them under theirs" in line
+    assert "--earth-orientation gmst under gmst regardless" in line
+    _refused(["ekf", "--orbit", "SATORB1", "--obs", str(readme_tdm), "--arc", "6h"],
+             f"error: {readme_tdm}: earth_orientation:", tmp_path)
+
+
+def test_the_readme_fit_forced_under_gmst_exits_7_with_rms_and_bound(readme_tdm: Path) -> None:
+    """With --earth-orientation gmst the analyst asks for the mismatched fit: it runs (a note
+    on stderr says what the file states), settles 41.5 km from the orbit at an RMS above the
+    99.9 % χ² bound of its 1180 residuals (1.0614, from SciPy here), and exits 7, not 0."""
+    args = ["dc", "--orbit", "SATORB1", "--obs", str(readme_tdm), "--truth", "5x5", "--stm",
+            "5x5", "--earth-orientation", "gmst"]
+    bound = _chi2_rms_bound(README_MEASUREMENTS)
+    assert f"{bound:.4f}" == "1.0614"
+    res = runner.invoke(app, [*args, "--json"])
+    assert res.exit_code == 7, res.output
+    out = json.loads(res.stdout)
+    assert out["status"] == "converged, residuals inconsistent with the noise model"
+    assert out["exit_code"] == 7 and out["converged"] is False
+    assert out["converged_at"] == out["iterations"]  # the iteration did converge
+    assert out["measurements"] == README_MEASUREMENTS
+    assert out["rms_bound"] == pytest.approx(bound, rel=1e-9)
+    assert out["noise_model_probability"] == 0.999
+    assert out["rms"][-1] > bound
+    assert out["position_error_km"] > TEN_KM_km
+    assert out["observations_made_under"] == {"earth_orientation": "iau2006",
+                                              "eop": "finals2000A.all", "frame": "GCRS"}
+    (note,) = res.stderr.strip().splitlines()
+    assert note.startswith(f"note: {readme_tdm} states observations made under iau2006")
+    assert "fitted under gmst" in note and "as --earth-orientation asks" in note
+    text = runner.invoke(app, args)
+    assert text.exit_code == 7
+    flat = " ".join(text.stdout.split())
+    assert "gmst: converged, residuals inconsistent with the noise model" in flat
+    assert (f"residuals: RMS {out['rms'][-1]:.5g} against {bound:.5g}, the 99.9 % χ² bound "
+            f"of {README_MEASUREMENTS} residuals and 6 estimated parameters: inconsistent "
+            "with the noise model") in flat
+
+
+def test_the_readme_tdm_under_a_study_file_of_its_model_converges(readme_tdm: Path,
+                                                                  tmp_path: Path) -> None:
+    """The study file set to iau2006 (no option): the models match, no note, exit 0, the
+    epoch state recovered to a millimetre and the RMS within the bound."""
+    study = _study(tmp_path, 'earth_orientation = "gmst"', 'earth_orientation = "iau2006"')
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--obs", str(readme_tdm), "--truth",
+                              "5x5", "--stm", "5x5", "--scenario", str(study), "--json"])
+    assert res.exit_code == 0, res.output
+    assert res.stderr == ""
+    out = json.loads(res.stdout)
+    assert out["status"] == "converged" and out["position_error_km"] < ONE_MM_km
+    assert out["rms"][-1] < out["rms_bound"]
+
+
+@pytest.mark.parametrize("suffix", [".h5", ".csv"])
+def test_saved_observations_state_and_check_their_model(tmp_path: Path, suffix: str) -> None:
+    """HDF5 and CSV record and check the same as a TDM: data simulated and saved under
+    iau2006 are refused under the study's gmst (dc and ekf), fitted under iau2006."""
+    saved = tmp_path / "out" / f"obs{suffix}"
+    saved.parent.mkdir()
+    first = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--save-obs",
+                                str(saved), "--earth-orientation", "iau2006"])
+    assert first.exit_code == 0, first.output
+    back = read_observations(saved, load_stations(setup.load_study(), "study"),
+                             setup.tracking().sigma)
+    assert back.made_under == MadeUnder("iau2006", "finals2000A.all", "GCRS")
+    for command in ("dc", "ekf"):
+        _refused([command, "--orbit", "SATORB1", "--arc", "5h", "--obs", str(saved)],
+                 f"error: {saved}: earth_orientation: expected observations made under the "
+                 "fit's Earth orientation model gmst", tmp_path)
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "5h", "--obs", str(saved),
+                              "--earth-orientation", "iau2006", "--json"])
+    assert res.exit_code == 0, res.output
+    assert res.stderr == "" and json.loads(res.stdout)["status"] == "converged"
+
+
+def test_an_eop_mismatch_is_refused(tmp_path: Path) -> None:
+    """Both iau2006, the data made with the IERS table, the study file asking for none (UT1 =
+    UTC, no polar motion: tens of metres at the stations): refused, naming eop."""
+    saved = tmp_path / "out" / "obs.h5"
+    saved.parent.mkdir()
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--save-obs",
+                              str(saved), "--earth-orientation", "iau2006"])
+    assert res.exit_code == 0, res.output
+    study = tmp_path / "no_eop.toml"
+    study.write_text(STUDY.read_text().replace('earth_orientation = "gmst"',
+                                               'earth_orientation = "iau2006"')
+                     .replace('eop = "iers"', 'eop = "none"'))
+    line = _refused(["dc", "--orbit", "SATORB1", "--arc", "6h", "--obs", str(saved),
+                     "--scenario", str(study)], f"error: {saved}: eop: expected observations "
+                    "made under the fit's EOP source none (UT1 = UTC, no polar motion)",
+                    tmp_path)
+    assert f"{study}'s eop" in line and line.endswith("(got 'finals2000A.all')")
+
+
+@pytest.mark.parametrize(("stated", "field"), [
+    ({"earth_orientation": "iau2006"}, "eop"),  # partial
+    ({"earth_orientation": "itrf", "eop": "x", "frame": "ITRF"}, "earth_orientation"),
+    # a self-contradictory record: gmst's model and EOP, iau2006's frame
+    ({"earth_orientation": "gmst", "eop": "not used", "frame": "GCRS"}, "frame"),
+])
+def test_a_bad_statement_of_the_model_is_refused(tmp_path: Path, small_obs, stated: dict,
+                                                 field: str) -> None:
+    path = tmp_path / "obs.csv"
+    write_observations(path, dataclasses.replace(small_obs, made_under=None))
+    path.write_text("".join(f"# {k} = {v}\n" for k, v in stated.items()) + path.read_text())
+    line = _refused(["dc", "--orbit", "SATORB1", "--arc", "5h", "--obs", str(path)],
+                    f"error: {path}: {field}:", tmp_path)
+    assert "\n" not in line
+
+
+def test_a_file_that_states_no_model_is_fitted_under_the_runs_with_a_note(
+        tmp_path: Path, small_obs) -> None:
+    """A file written by another tool states no model: not refused, not assumed wrong; taken
+    as made under the study's gmst (what these data were made under: the fit is exact), one
+    note on stderr saying so, JSON null."""
+    path = tmp_path / "obs.tdm"
+    write_observations(path, dataclasses.replace(small_obs, made_under=None),
+                       epoch=setup.epoch(), spacecraft="SATORB1")
+    assert "tapp:" not in path.read_text()
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--obs", str(path),
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["status"] == "converged" and out["observations_made_under"] is None
+    (note,) = res.stderr.strip().splitlines()
+    assert note == (f"note: {path} states no Earth orientation its observations were made "
+                    "under (earth_orientation, eop, frame); taken as the fit's, gmst (EOP not "
+                    "used, frame EME2000)")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import tomllib
 from pathlib import Path
 
@@ -167,3 +168,73 @@ def test_the_tracking_sweep_body_switches_stations_off(parts) -> None:
     assert np.isfinite(all3["dv_total_99_m_s"]) and all3["dv_total_99_m_s"] > 0
     with pytest.raises(Exception, match="network: value: expected a whole number 0..1"):
         tracking_case(network=2.0, **common)
+
+
+def _tracking_sweep(folder: Path, pipeline: Path) -> Path:
+    """The shipped tracking sweep made small: 2 networks x 1 data interval, 1,000 samples,
+    on the 3-day pipeline ``pipeline``, named by a path relative to the sweep's folder."""
+    sweep = tomllib.loads((SCENARIOS / "iter_pipeline_tracking.toml").read_text())
+    sweep["body"]["files"]["pipeline"] = os.path.relpath(pipeline, folder)
+    sweep["body"]["constants"]["samples"] = 1000
+    sweep["loop"][0].update(sets=2, vary=[0.0, 2.0])  # three complexes; Goldstone alone
+    sweep["loop"][1].update(sets=1, vary=[600.0])
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / "tracking.toml"
+    path.write_text(tomli_w.dumps(sweep))
+    return path
+
+
+def test_the_tracking_sweep_runs_every_case_from_another_directory(parts, tmp_path,
+                                                                    monkeypatch) -> None:
+    """Issue 18: from outside the repository root every case failed, and the exit was 0."""
+    _tracking_sweep(tmp_path / "sweeps", parts["pipeline"])
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    res = runner.invoke(app, ["iter", "../sweeps/tracking.toml", "-o", "out.h5", "--serial",
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    assert (summary["n_cases"], summary["n_succeeded"], summary["n_failed"]) == (2, 2, 0)
+    from iter import read_hdf5
+
+    rows = read_hdf5(tmp_path / "elsewhere" / "out.h5").table.rows
+    # Goldstone alone leaves a wider final B-plane dispersion than the three complexes
+    assert rows[1].outputs["bplane_semi_major_km"] > rows[0].outputs["bplane_semi_major_km"]
+
+
+def _broken_deck(parts, folder: Path) -> Path:
+    """A copy of the 3-day pipeline whose deck has a misspelt key."""
+    folder.mkdir()
+    for name in ("scenario", "guidance", "pipeline"):
+        (folder / parts[name].name).write_text(parts[name].read_text())
+    deck = tomllib.loads(parts["deck"].read_text())
+    deck["stations_offf"] = []
+    (folder / parts["deck"].name).write_text(tomli_w.dumps(deck))
+    return folder / parts["pipeline"].name
+
+
+@pytest.mark.parametrize("broken", ["missing pipeline", "misspelt deck key", "bad network"])
+def test_bad_tracking_sweep_input_is_refused_before_any_case_runs(parts, tmp_path,
+                                                                   broken) -> None:
+    pipeline = parts["pipeline"]
+    if broken == "missing pipeline":
+        pipeline = tmp_path / "no_such_pipeline.toml"
+    elif broken == "misspelt deck key":
+        pipeline = _broken_deck(parts, tmp_path / "broken")
+    path = _tracking_sweep(tmp_path / "sweeps", pipeline)
+    if broken == "bad network":
+        sweep = tomllib.loads(path.read_text())
+        sweep["body"]["constants"]["networks"] = "WOOMERA; GOLDSTONE"
+        path.write_text(tomli_w.dumps(sweep))
+    expected = {
+        "missing pipeline": f"{path}: body.files.pipeline: expected an existing file",
+        "misspelt deck key": (f"{tmp_path / 'broken' / 'deck.toml'} (overridden: stations_off):"
+                              " stations_offf: expected no such key"),
+        "bad network": "networks: stations: expected stations of the scenario",
+    }[broken]
+    out = tmp_path / "out.h5"
+    res = runner.invoke(app, ["iter", str(path), "-o", str(out), "--serial"])
+    assert res.exit_code == 2, res.output
+    assert res.stderr.startswith(f"error: {expected}"), res.stderr
+    assert res.stderr.count("\n") == 1
+    assert not out.exists()

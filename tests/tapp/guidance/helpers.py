@@ -28,25 +28,31 @@ SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
 DAY_S = 86400.0
 #: Execution errors of the tests (1σ): 2 %, 10 mrad, 1 mm/s.
 EXECUTION = {"sigma_proportional": 0.02, "sigma_pointing_mrad": 10.0, "sigma_fixed_mm_s": 1.0}
+#: A miss without B-plane or flight-time components: classical elements about the Earth.
+ELEMENTS = ("a_km", "e", "i_rad")
 
 
-@lru_cache(maxsize=1)
-def deep_space_t13() -> T13:
-    """The deep-space T13 tape of the first 3 days (module docstring)."""
+@lru_cache(maxsize=2)
+def deep_space_t13(elements: bool = False) -> T13:
+    """The deep-space T13 tape of the first 3 days (module docstring); ``elements``: with
+    the geocentric :data:`ELEMENTS` at the time of the periapsis as its miss instead."""
     doc = read_toml(SCENARIOS / "deep_space.toml")
     doc["tracking"]["end"] = 3 * DAY_S
     doc["times"]["end"] = 3 * DAY_S
     doc["times"]["epochs"] = []
+    if elements:
+        doc["miss"] = {"kind": "classical", "time": doc["miss"]["time"],
+                       "quantities": list(ELEMENTS)}
     return simulate(parse_scenario(doc, "deep_space.toml")).tape
 
 
-@lru_cache(maxsize=1)
-def deep_space_t32() -> T32:
+@lru_cache(maxsize=2)
+def deep_space_t32(elements: bool = False) -> T32:
     """Its T32 tape: recycles 1, 2, 3 at days 1, 2, 3 (module docstring)."""
     deck = read_toml(SCENARIOS / "tapp3_deep_space.toml")
     deck["times"]["print"] = [1, 2, 3]
     deck["commands"]["print"] = []
-    data = memory_pairs(deep_space_t13())
+    data = memory_pairs(deep_space_t13(elements))
     plan = bind(validate(Deck, deck, "deck.toml"), data.header, "deck.toml")
     return build_t32(process(data, plan), plan, data.header, {"deck_source": "deck.toml"})
 

@@ -4,6 +4,7 @@ one, the ill-conditioning diagnosis, and what fitting iau2006 data with gmst doe
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -15,6 +16,7 @@ from tapp.errors import InputError, TooFewMeasurementsError
 from tapp.frames.orientation import EarthOrientation
 from tapp.od import setup
 from tapp.od.batch import (
+    NOISE_MODEL_PROBABILITY,
     DCIteration,
     DCOutcome,
     DCSettings,
@@ -23,6 +25,7 @@ from tapp.od.batch import (
     _linearise,
     contraction_factor,
     differential_correction,
+    rms_bound,
 )
 from tapp.od.observations import simulate
 from tapp.od.rate import predicted_rate
@@ -71,8 +74,63 @@ def test_ci_contrast_j2j2_converges_j2j0_diverges(satorb1, model: str) -> None:
 
 
 def _chi2_bound(n_measurements: int) -> float:
-    """The RMS a correct model exceeds with probability 0.1 %: m RMS² ~ χ²(m - 6)."""
+    """The RMS a correct model exceeds with probability 0.1 %: m RMS² ~ χ²(m - 6), from
+    SciPy's quantile directly (not through :func:`rms_bound`)."""
     return math.sqrt(chi2.ppf(0.999, n_measurements - 6) / n_measurements)
+
+
+#: The RMS of m ≈ 300 residuals scatters by 1/sqrt(2m) ≈ 4 % about its expected value: 10 %.
+RMS_SCATTER = 0.1
+#: Agreement of two evaluations of the same χ² quantile (SciPy's ppf inverts its cdf to
+#: ~1e-12 relative; the closed form below is exact).
+QUANTILE_ROUNDING = 1e-9
+
+
+def test_rms_bound_is_the_chi2_quantile() -> None:
+    """ν = 2: χ²₂ is exponential with mean 2, so its quantile is −2 ln(1 − p) in closed
+    form: 13.8155 at p = 0.999, and with m = 8 residuals the RMS bound is
+    sqrt(13.8155 / 8) = 1.31413. Larger ν against SciPy's quantile; ν = 0 interpolates (0);
+    fewer residuals than parameters is refused."""
+    assert NOISE_MODEL_PROBABILITY == 0.999
+    closed_form = math.sqrt(-2.0 * math.log(1.0 - 0.999) / 8)
+    assert closed_form == pytest.approx(1.31413, abs=1e-5)
+    assert rms_bound(8) == pytest.approx(closed_form, rel=QUANTILE_ROUNDING)
+    for m in (7, 100, 1180, 100_000):
+        assert rms_bound(m) == pytest.approx(_chi2_bound(m), rel=QUANTILE_ROUNDING)
+    # with an a priori, ν = m
+    assert rms_bound(50, 0) == pytest.approx(math.sqrt(chi2.ppf(0.999, 50) / 50),
+                                             rel=QUANTILE_ROUNDING)
+    # the bound tends to 1 from above as m grows (χ²_ν / ν → 1)
+    assert rms_bound(100) > rms_bound(1180) > rms_bound(100_000) > 1.0
+    assert rms_bound(6) == 0.0
+    with pytest.raises(InputError, match="residuals"):
+        rms_bound(5)
+
+
+@pytest.mark.parametrize(("noise_scale", "status"), [
+    (1.0, DCOutcome.CONVERGED), (1.5, DCOutcome.INCONSISTENT)])
+def test_noise_larger_than_stated_is_inconsistent(satorb1, noise_scale: float,
+                                                  status: str) -> None:
+    """Matching models, SATORB1 over 6 h, data drawn with noise_scale × the σ the
+    observations state. At the stated noise the DC converges with its RMS within the bound;
+    at 1.5 σ it settles near RMS 1.5, above the bound (1.12 for these 294 residuals): its
+    own outcome, the iteration converged (``settled``, ``converged_at``) but not
+    ``converged``."""
+    x_true, x_start = satorb1
+    prop = Propagator(earth_model("J2"))
+    orient = EarthOrientation.gmst_angle(0.0)
+    sigma = setup.tracking().sigma
+    t = np.arange(0.0, 6 * 3600.0 + 1, 30.0)
+    drawn = simulate(prop, x_true, _network(x_true), t, noise_scale * sigma,
+                     np.random.default_rng(18), orient)
+    obs = dataclasses.replace(drawn, sigma=sigma)
+    res = differential_correction(obs, prop, x_start, orientation=orient)
+    assert res.status == status and res.settled and res.converged_at == len(res.iterations)
+    assert res.rms_bound == pytest.approx(_chi2_bound(obs.count), rel=QUANTILE_ROUNDING)
+    assert res.rms[-1] == pytest.approx(noise_scale, rel=RMS_SCATTER)
+    assert res.converged == (status == DCOutcome.CONVERGED)
+    if status == DCOutcome.INCONSISTENT:
+        assert f"{res.rms_bound:.4g}, the 99.9 % χ² bound of {obs.count} residuals" in res.reason
 
 
 def test_gmst_does_not_fit_iau2006_data(satorb1) -> None:
@@ -81,7 +139,8 @@ def test_gmst_does_not_fit_iau2006_data(satorb1) -> None:
     of km off (31.5 km at Goldstone): residuals of thousands of σ. The gmst DC "fits" only by
     rotating the orbit with the frame: it ends 41 km from the true state, and the residual
     RMS stays above the noise by more than a χ² test allows (the polar motion and the
-    rotation rates are not absorbed), though under the fit limit. The iau2006 DC on the same
+    rotation rates are not absorbed), though under the fit limit: its outcome is "converged,
+    residuals inconsistent with the noise model", not "converged". The iau2006 DC on the same
     data converges to the truth and passes the χ² test."""
     x_true, x_start = satorb1
     iau, gmst = setup.orientation(model="iau2006"), setup.orientation(model="gmst")
@@ -98,6 +157,7 @@ def test_gmst_does_not_fit_iau2006_data(satorb1) -> None:
     assert right.rms[-1] < _chi2_bound(obs.count)
     wrong = differential_correction(obs, Propagator(j2_gmst), x_start, orientation=gmst)
     assert wrong.rms[-1] > _chi2_bound(obs.count) * 1.2
+    assert wrong.status == DCOutcome.INCONSISTENT and not wrong.converged
     assert np.linalg.norm(wrong.x0[:3] - x_true[:3]) > TEN_KM_km
 
 

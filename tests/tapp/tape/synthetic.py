@@ -1,9 +1,15 @@
-"""Synthetic tapes of any size for the tape tests (random values of the right symmetry)."""
+"""Synthetic tapes of any size for the tape tests (random values of the right structure).
+
+The tapes carry square-root information: every normal matrix or covariance is given by an
+upper-triangular factor K with a non-negative diagonal (KᵀK = M), made here as the
+triangularised stack of random rows (:func:`tapp.estimation.factors.triangularize`).
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
+from tapp.estimation.factors import triangularize
 from tapp.frames.time import Epoch
 from tapp.tape.t13 import (
     T13,
@@ -30,11 +36,14 @@ def parameters(n_o: int) -> TapeParameters:
                           np.linspace(1.0, 2.0, n_o))
 
 
-def normal(rng: np.random.Generator, lead: tuple[int, ...], n: int, rank: int = 4
-           ) -> np.ndarray:
-    """Random symmetric positive semi-definite matrices (*lead, n, n): sums of AᵀA."""
-    a = rng.normal(size=(*lead, rank, n))
-    return np.swapaxes(a, -1, -2) @ a
+def factors(rng: np.random.Generator, lead: tuple[int, ...], n: int, rank: int = 4,
+            scale: float = 1.0) -> np.ndarray:
+    """Random upper-triangular factors (*lead, n, n), diagonal >= 0: the triangularised
+    ``rank`` rows of ``scale`` times N(0, 1) entries (so KᵀK is positive semi-definite of that
+    rank, the rows of K below ``rank`` zero when rank < n)."""
+    rows = scale * rng.normal(size=(*lead, rank, n))
+    flat = rows.reshape(-1, rank, n)
+    return np.array([triangularize(a) for a in flat]).reshape(*lead, n, n)
 
 
 def t13_tape(rng: np.random.Generator, *, n_o: int = 8, n_it: int = 6, n_ts: int = 3,
@@ -45,8 +54,9 @@ def t13_tape(rng: np.random.Generator, *, n_o: int = 8, n_it: int = 6, n_ts: int
     keep[0, 0] = True
     k, station = (v + 1 for v in np.nonzero(keep))  # row-major: sorted by (k, station)
     n_pairs = k.size
-    parts = normal(rng, (n_pairs, 3), n_o)
-    parts[:, 1] *= 0.1
+    parts = factors(rng, (n_pairs, 3), n_o)
+    parts[:, 1] *= np.sqrt(0.1)  # the bias part a tenth of the others
+    total = np.array([triangularize(*p) for p in parts])  # R̃ᵀR̃ = the sum of the parts'
     times = np.arange(n_it + 1) * 600.0
     is_epoch = np.zeros(n_it + 1, dtype=bool)
     is_epoch[[0, n_it // 2]] = True
@@ -61,8 +71,8 @@ def t13_tape(rng: np.random.Generator, *, n_o: int = 8, n_it: int = 6, n_ts: int
         records=TapeRecords(times, is_epoch, ~is_epoch | (times == 0), j,
                             np.arange(1, n_it + 1), rng.normal(size=(n_it, 6)),
                             rng.normal(size=(n_it, n_p, n_o))),
-        pairs=TapePairs(k, station, rng.integers(1, 100, n_pairs), normal(rng, (n_pairs,), n_o),
-                        parts.sum(axis=1), parts),
+        pairs=TapePairs(k, station, rng.integers(1, 100, n_pairs),
+                        factors(rng, (n_pairs,), n_o), total, parts),
         passes=TapePasses(np.array([1]), np.array([10.0]), np.array([500.0]), np.array([20])),
         provenance={"scenario": "{}", "scenario_source": "synthetic"},
     )
@@ -73,6 +83,22 @@ def symmetric(rng: np.random.Generator, n: int, scale: float = 1.0) -> np.ndarra
     a = rng.normal(size=(n + 2, n))
     m = scale * (a.T @ a)
     return 0.5 * (m + m.T)
+
+
+def factor(rng: np.random.Generator, n: int, scale: float = 1.0) -> np.ndarray:
+    """A random upper-triangular n x n factor, diagonal > 0, of a positive-definite matrix:
+    the triangularised n + 2 rows of N(0, ``scale``) entries (KᵀK about ``scale`` times that
+    of unit rows, as :func:`symmetric` of the same scale)."""
+    return factors(rng, (), n, rank=n + 2, scale=np.sqrt(scale))
+
+
+def transition(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """A random invertible n x n transition T = Q diag(d) and its adjoint T⁻ᵀ = Q diag(1/d),
+    Q orthogonal, d in [1/e, e] (condition number <= e²): the adjoint in closed form, not by
+    the solve the version-1 reader uses."""
+    q = np.linalg.qr(rng.normal(size=(n, n)))[0]
+    d = np.exp(rng.uniform(-1.0, 1.0, n))
+    return q * d, q / d
 
 
 def t32_tape(rng: np.random.Generator, *, n_o: int = 9, n_recycles: int = 3) -> T32:
@@ -95,6 +121,7 @@ def t32_tape(rng: np.random.Generator, *, n_o: int = 9, n_recycles: int = 3) -> 
     recycles = []
     for i in range(n_recycles):
         k, last = 2 * (i + 1), 2 * i
+        t, t_adjoint = transition(rng, n_o)
         entities = (
             T32Entity(1, "I; 0,-,pk; 1,2,fp", "partials pk wrt fp@recycle", par.name[:6],
                       names["fit"][:6], rng.normal(size=(6, 6))),
@@ -105,16 +132,16 @@ def t32_tape(rng: np.random.Generator, *, n_o: int = 9, n_recycles: int = 3) -> 
         )
         recycles.append(T32Recycle(
             number=i + 1, k=k, l=last, j=max(0, last - 1), t_s=600.0 * k, t_l_s=600.0 * last,
-            info=rng.normal(size=6), S_fit=symmetric(rng, n_o), Lambda_fit=symmetric(rng, n_o),
-            Lambda_real=symmetric(rng, n_o, 2.0), L=rng.normal(size=(n_o, n_o)),
-            Sigma=symmetric(rng, n_o, 0.1), J=symmetric(rng, n_o), Jt=symmetric(rng, n_o),
-            B=rng.normal(size=(3, n_o)), transition=rng.normal(size=(n_o, n_o)),
-            entities=entities))
+            info=rng.normal(size=6), S_fit_factor=factor(rng, n_o),
+            Lambda_fit_factor=factor(rng, n_o), Lambda_real_factor=factor(rng, n_o, 2.0),
+            L=rng.normal(size=(n_o, n_o)), Sigma_factor=factor(rng, n_o, 0.1),
+            J_factor=factor(rng, n_o), Jt_factor=factor(rng, n_o), B=rng.normal(size=(3, n_o)),
+            transition=t, transition_adjoint=t_adjoint, entities=entities))
     return T32(
         iden="SYNTHETIC", epoch=EPOCH, n_p=6, parameters=par, miss_name=miss,
         miss_unit=("km", "", ""),
         systems={"common": np.eye(n_o), "fit": chain_fit, "real": np.eye(n_o)},
-        system_names=names, partitions=partitions, S0_fit=symmetric(rng, n_o, 1e-3),
-        Lambda0_real=symmetric(rng, n_o, 1e3), recycles=tuple(recycles),
+        system_names=names, partitions=partitions, S0_fit_factor=factor(rng, n_o, 1e-3),
+        Lambda0_real_factor=factor(rng, n_o, 1e3), recycles=tuple(recycles),
         provenance={"deck": '{"recycle": [2, 4, 6]}', "deck_source": "deck.toml",
                     "t13_source": "run.t13.h5", "t13_iden": "SYNTHETIC"})

@@ -1,5 +1,6 @@
 """The lazy pair reader (open_t13) and its in-memory twin (memory_pairs): same header, same
-blocks, checks of each block when it is read, memory bounded by the block."""
+blocks (the pair factors packed "TR"), checks of each block when it is read, memory bounded by
+the block."""
 
 from __future__ import annotations
 
@@ -17,10 +18,20 @@ from tapp.tape.packing import pack_tr, tr_diagonal, tr_size
 from tapp.tape.t13 import T13, PairBlock
 from tapp.tape.t13_hdf5 import open_t13, write_t13
 from tapp.tracking.simulate import simulate
+from tests.tapp.tape.legacy import (
+    gram,
+    refactored_tol,
+    t13_read_warnings,
+    upper_from_rows,
+    write_t13_version,
+)
 from tests.tapp.tape.synthetic import t13_tape
-from tests.tapp.tracking.helpers import leo_scenario
+from tests.tapp.tracking.helpers import leo_scenario, scaled_close
 
 BLOCK_FIELDS = [f.name for f in dataclasses.fields(PairBlock)]
+# A normal matrix of a version-1 tape against the Gram of the factor read from it, on the
+# scale sqrt(J_aa J_bb): n_o² ε, n_o = 23 (legacy.refactored_tol).
+REFACTORED = refactored_tol(23)
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +59,7 @@ def _assert_same_header(a: T13, b: T13) -> None:
                 np.testing.assert_array_equal(x, y, err_msg=f"{group}/{f.name}")
             else:
                 assert x == y, f"{group}/{f.name}"
-    for name in ("dJ", "dJt", "dJt_parts"):
+    for name in ("R", "Rt", "Rt_parts"):
         assert getattr(a.pairs, name) is None and getattr(b.pairs, name) is None
     for key, value in b.provenance.items():
         assert a.provenance[key] == value
@@ -60,7 +71,8 @@ def test_file_and_memory_give_identical_headers_and_blocks(tmp_path: Path, tape:
     path = write_t13(tmp_path / "run.t13.h5", tape, packing=packing)
     mem = memory_pairs(tape)
     with open_t13(path) as f:
-        assert f.packing == packing and f.has_parts and f.version == 2
+        assert f.packing == packing and f.has_parts and f.version == 3
+        assert f.names == ("pairs/R", "pairs/Rt", "pairs/Rt_parts")
         _assert_same_header(f.header, mem.header)
         n_it = f.header.n_it
         for k_first in range(1, n_it + 1):
@@ -69,11 +81,13 @@ def test_file_and_memory_give_identical_headers_and_blocks(tmp_path: Path, tape:
                 _assert_same_block(block, mem.pair_block(k_first, k_last))
                 assert np.all((block.k >= k_first) & (block.k <= k_last))
         whole = f.pair_block(1, n_it)
-    # the block of every record is the tape's pairs, packed TR
+    # the block of every record is the tape's pairs, factors packed TR
     np.testing.assert_array_equal(whole.k, tape.pairs.k)
-    np.testing.assert_array_equal(whole.dJ, pack_tr(tape.pairs.dJ))
-    np.testing.assert_array_equal(whole.dJt_parts, pack_tr(tape.pairs.dJt_parts))
-    assert whole.dJ.shape == (tape.pairs.k.size, tr_size(tape.n_o))
+    for name in ("R", "Rt", "Rt_parts"):
+        np.testing.assert_array_equal(getattr(whole, name), pack_tr(getattr(tape.pairs, name)),
+                                      err_msg=name)
+    assert whole.R.shape == (tape.pairs.k.size, tr_size(tape.n_o))
+    assert whole.Rt_parts.shape == (tape.pairs.k.size, 3, tr_size(tape.n_o))
 
 
 def test_blocks_cover_the_records_in_order_with_whole_records(tmp_path: Path) -> None:
@@ -109,65 +123,98 @@ def test_a_record_without_pairs_gives_an_empty_block(tmp_path: Path) -> None:
     keep = tape.pairs.k != 3
     p = tape.pairs
     tape = dataclasses.replace(tape, pairs=t13.TapePairs(
-        p.k[keep], p.station[keep], p.n_obs[keep], p.dJ[keep], p.dJt[keep],
-        p.dJt_parts[keep]))
+        p.k[keep], p.station[keep], p.n_obs[keep], p.R[keep], p.Rt[keep],
+        p.Rt_parts[keep]))
     with open_t13(write_t13(tmp_path / "gap.h5", tape)) as f:
         block = f.pair_block(3, 3)
         _assert_same_block(block, memory_pairs(tape).pair_block(3, 3))
-    assert block.k.size == 0 and block.dJ.shape == (0, tr_size(tape.n_o))
-    assert block.dJt_parts.shape == (0, 3, tr_size(tape.n_o))
+    assert block.k.size == 0 and block.R.shape == (0, tr_size(tape.n_o))
+    assert block.Rt.shape == (0, tr_size(tape.n_o))
+    assert block.Rt_parts.shape == (0, 3, tr_size(tape.n_o))
 
 
-def test_a_bad_matrix_fails_only_the_block_that_reads_it(tmp_path: Path, tape: T13) -> None:
-    path = write_t13(tmp_path / "run.h5", tape)
+@pytest.mark.parametrize(("version", "dataset", "message"), [
+    (3, "pairs/R", r"expected factors with a non-negative diagonal \(the canonical sign of a "
+                   r"QR\) \(got -1 in pair {pair}, row 2\)"),
+    (2, "pairs/dJ", r"expected a non-negative diagonal \(normal matrices\) \(got -1 in pair "
+                    r"{pair}, row 2\)"),
+])
+def test_a_bad_matrix_fails_only_the_block_that_reads_it(tmp_path: Path, tape: T13,
+                                                         version: int, dataset: str,
+                                                         message: str) -> None:
+    path = write_t13_version(tmp_path / "run.h5", tape, version)
     bad_pair = int(np.flatnonzero(tape.pairs.k == 3)[0])
+    message = f"run.h5: {dataset}: " + message.format(pair=bad_pair)
 
     def negative(f: h5py.File) -> None:
-        data = f["pairs/dJ"][()]
+        data = f[dataset][()]
         data[bad_pair, tr_diagonal(tape.n_o)[2]] = -1.0
-        attrs = dict(f["pairs/dJ"].attrs)
-        del f["pairs/dJ"]
-        hdf5io.write_numbers(f["pairs"], "dJ", data, "")
-        f["pairs/dJ"].attrs.update(attrs)
+        attrs = dict(f[dataset].attrs)
+        del f[dataset]
+        hdf5io.write_numbers(f["pairs"], dataset.removeprefix("pairs/"), data, "")
+        f[dataset].attrs.update(attrs)
 
     with h5py.File(path, "r+") as f:
         negative(f)
-    with open_t13(path) as f:  # the header is fine
+    with t13_read_warnings(version), open_t13(path) as f:  # the header is fine
         f.pair_block(1, 2)
-        with pytest.raises(TapeError, match=rf"run.h5: pairs/dJ: expected a non-negative "
-                                            rf"diagonal \(normal matrices\) \(got -1 in pair "
-                                            rf"{bad_pair}, row 2\)"):
+        with pytest.raises(TapeError, match=message):
             f.pair_block(2, 3)
-    with pytest.raises(TapeError, match=rf"pairs/dJ: expected a non-negative diagonal.*pair "
-                                        rf"{bad_pair}, row 2"):
+    with t13_read_warnings(version), pytest.raises(TapeError, match=message):
         t13_hdf5.read_t13(path)
 
 
-def test_an_asymmetric_full_matrix_fails_its_block(tmp_path: Path, tape: T13) -> None:
+def test_a_full_factor_non_zero_below_its_diagonal_fails_its_block(tmp_path: Path, tape: T13
+                                                                   ) -> None:
+    n = tape.n_o
     path = write_t13(tmp_path / "full.h5", tape, packing="full")
+    with h5py.File(path, "r+") as f:
+        ds = f["pairs/Rt"]
+        row = ds[5]
+        assert row[n] == 0.0
+        row[n] = 1e-6 * row[0]  # entry (1, 0) of pair 5 (record 3)
+        ds[5] = row
+    with open_t13(path) as f:
+        f.pair_block(1, 2)
+        with pytest.raises(TapeError, match=r"full.h5: pairs/Rt: expected upper-triangular "
+                                            r"factors \(zero below the diagonal\) \(got .* in "
+                                            r"pair 5, row 1, column 0\)$"):
+            f.pair_block(3, 3)
+
+
+def test_an_asymmetric_full_matrix_of_version_2_fails_its_block(tmp_path: Path, tape: T13
+                                                                ) -> None:
+    path = write_t13_version(tmp_path / "full.h5", tape, 2, "full")
     with h5py.File(path, "r+") as f:
         ds = f["pairs/dJt"]
         row = ds[5]
         row[1] *= 1.0 + 1e-6  # entry (0, 1) of pair 5 (record 3), not (1, 0)
         ds[5] = row
-    with open_t13(path) as f:
+    with t13_read_warnings(2), open_t13(path) as f:
         f.pair_block(1, 2)
         with pytest.raises(TapeError, match=r"full.h5: pairs/dJt: expected symmetric normal "
                                             r"matrices .* in pair 5\)"):
             f.pair_block(3, 3)
 
 
-def test_parts_not_summing_fail_their_block(tmp_path: Path, tape: T13) -> None:
-    path = write_t13(tmp_path / "run.h5", tape)
+@pytest.mark.parametrize(("version", "dataset", "message"), [
+    (3, "pairs/Rt_parts", r"expected parts whose Gram matrices sum to R̃ᵀR̃ \(diagonal, "
+                          r"relative difference <= 1e-10\) \(got [0-9.e-]+ in pair 5\)$"),
+    (2, "pairs/dJt_parts", r"expected parts summing to pairs/dJt \(relative difference <= "
+                           r"1e-10\) \(got [0-9.e-]+ in pair 5\)$"),
+])
+def test_parts_not_summing_fail_their_block(tmp_path: Path, tape: T13, version: int,
+                                            dataset: str, message: str) -> None:
+    path = write_t13_version(tmp_path / "run.h5", tape, version)
     with h5py.File(path, "r+") as f:
-        ds = f["pairs/dJt_parts"]
+        ds = f[dataset]
         row = ds[5]
-        row[2] *= 1.001
+        row[2] *= 1.001  # the correlated part of pair 5 (record 3)
         ds[5] = row
-    with open_t13(path) as f:
+    with t13_read_warnings(version), open_t13(path) as f:
         f.pair_block(1, 2)
-        with pytest.raises(TapeError, match=r"pairs/dJt_parts: expected parts summing to "
-                                            r"pairs/dJt .* in pair 5\)"):
+        f.pair_block(3, 3, parts=False)  # the parts unread: nothing to check
+        with pytest.raises(TapeError, match=f"{dataset}: {message}"):
             f.pair_block(3, 3)
 
 
@@ -176,8 +223,8 @@ def test_a_corrupt_chunk_fails_only_the_blocks_that_read_it(tmp_path: Path, tape
     monkeypatch.setattr(hdf5io, "CHUNK_BYTES", 8)  # one pair per chunk
     path = write_t13(tmp_path / "run.h5", tape)
     with h5py.File(path, "r") as f:
-        assert f["pairs/dJ"].chunks[0] == 1
-        offset = f["pairs/dJ"].id.get_chunk_info(5).byte_offset
+        assert f["pairs/R"].chunks[0] == 1
+        offset = f["pairs/R"].id.get_chunk_info(5).byte_offset
     with path.open("r+b") as fh:
         fh.seek(offset + 2)
         byte = fh.read(1)[0]
@@ -186,7 +233,7 @@ def test_a_corrupt_chunk_fails_only_the_blocks_that_read_it(tmp_path: Path, tape
     with open_t13(path) as f:
         assert f.header.pairs.k[5] == 3
         f.pair_block(1, 2)
-        with pytest.raises(TapeError, match=r"run.h5: pairs/dJ: expected data matching its "
+        with pytest.raises(TapeError, match=r"run.h5: pairs/R: expected data matching its "
                                             r"Fletcher-32 checksum"):
             f.pair_block(3, 3)
 
@@ -194,12 +241,12 @@ def test_a_corrupt_chunk_fails_only_the_blocks_that_read_it(tmp_path: Path, tape
 def test_open_checks_the_header_and_the_stored_shapes(tmp_path: Path, tape: T13) -> None:
     path = write_t13(tmp_path / "run.h5", tape)
     with h5py.File(path, "r+") as f:
-        data = f["pairs/dJt"][()][:, :-1]
-        attrs = dict(f["pairs/dJt"].attrs)
-        del f["pairs/dJt"]
-        hdf5io.write_numbers(f["pairs"], "dJt", data, "")
-        f["pairs/dJt"].attrs.update(attrs)
-    with pytest.raises(TapeError, match=r"run.h5: pairs/dJt: expected shape \(6, 276\) \(TR "
+        data = f["pairs/Rt"][()][:, :-1]
+        attrs = dict(f["pairs/Rt"].attrs)
+        del f["pairs/Rt"]
+        hdf5io.write_numbers(f["pairs"], "Rt", data, "")
+        f["pairs/Rt"].attrs.update(attrs)
+    with pytest.raises(TapeError, match=r"run.h5: pairs/Rt: expected shape \(6, 276\) \(TR "
                                         r"packing, order 23\) \(got \(6, 275\)\)"):
         open_t13(path)
     with pytest.raises(InputError, match="expected an existing T13 tape file"):
@@ -221,24 +268,41 @@ def test_closed_file_and_version_1(tmp_path: Path, tape: T13) -> None:
         f.pair_block(1, 1)
     with pytest.raises(InputError, match="pair_block after close"):
         f.pair_block(1, 1)
-    path = tmp_path / "v1.h5"
-    with h5py.File(path, "w") as out:
-        t13_hdf5._write(out, tape, "TR", version=1)
-    bare = dataclasses.replace(tape, pairs=dataclasses.replace(tape.pairs, dJt_parts=None))
-    with pytest.warns(UserWarning, match="version 1"), open_t13(path) as old:
+    path = write_t13_version(tmp_path / "v1.h5", tape, 1)
+    bare = dataclasses.replace(tape, pairs=dataclasses.replace(tape.pairs, Rt_parts=None))
+    with t13_read_warnings(1), open_t13(path) as old:
         assert old.version == 1 and not old.has_parts
-        _assert_same_block(old.pair_block(1, 3), memory_pairs(bare).pair_block(1, 3))
+        assert old.names == ("pairs/dJ", "pairs/dJt", "pairs/dJt_parts")
+        block = old.pair_block(1, 3)
+    mine = memory_pairs(bare).pair_block(1, 3)
+    # the same pairs; the factors those of the normal matrices the tape carries, RᵀR = dJ
+    for name in ("k", "station", "n_obs"):
+        np.testing.assert_array_equal(getattr(block, name), getattr(mine, name), err_msg=name)
+    assert block.Rt_parts is None and mine.Rt_parts is None
+    for name in ("R", "Rt"):
+        packed = getattr(block, name)
+        assert packed.shape == getattr(mine, name).shape, name
+        assert np.all(packed[:, tr_diagonal(tape.n_o)] >= 0), name
+        scaled_close(gram(upper_from_rows(packed, tape.n_o)),
+                     gram(upper_from_rows(getattr(mine, name), tape.n_o)), REFACTORED)
 
 
 def test_memory_pairs_validates_the_tape(tape: T13) -> None:
     bad = dataclasses.replace(tape, pairs=dataclasses.replace(
-        tape.pairs, dJ=-tape.pairs.dJ))
-    with pytest.raises(TapeError, match="T13: pairs/dJ: expected a non-negative diagonal"):
+        tape.pairs, R=-tape.pairs.R))
+    with pytest.raises(TapeError, match="T13: pairs/R: expected factors with a non-negative "
+                                        "diagonal"):
+        memory_pairs(bad)
+    lower = tape.pairs.Rt_parts.copy()
+    lower[1, 2, 3, 0] = 1e-300  # below the diagonal of a part's factor
+    bad = dataclasses.replace(tape, pairs=dataclasses.replace(tape.pairs, Rt_parts=lower))
+    with pytest.raises(TapeError, match=r"T13: pairs/Rt_parts: expected upper-triangular "
+                                        r"factors \(zero below the diagonal\)"):
         memory_pairs(bad)
 
 
 def test_open_reads_no_pair_matrix_and_a_block_only_its_rows(tmp_path: Path) -> None:
-    """n_o = 40, 1200 pairs: 39 MB of packed matrices (dJ, dJt, 3 parts); opening, and the
+    """n_o = 40, 1200 pairs: 39 MB of packed factors (R, Rt, 3 parts); opening, and the
     block of two records (40 pairs), stay below a tenth of it (the case of 20,000 pairs of
     n_o = 50, 800 MB unpacked, is this scaled up)."""
     tape = t13_tape(np.random.default_rng(5), n_o=40, n_it=60, n_ts=20, skip=0.0)

@@ -1,4 +1,5 @@
-"""Small scenarios for the TAPP I tests: a 3-hour LEO arc that simulates in well under 1 s."""
+"""Small scenarios for the TAPP I tests: a 3-hour LEO arc that simulates in well under 1 s, and
+a 12-hour GEO track."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import math
 
 import numpy as np
 
-from tapp.constants import GM_EARTH_km3_s2
+from tapp.constants import GM_EARTH_km3_s2, OMEGA_EARTH_rad_s
 from tapp.tracking.scenario import Scenario, parse_scenario
 
 SOURCE = "test_scenario.toml"
@@ -71,6 +72,38 @@ def leo_document(**tables) -> dict:
 def leo_scenario(**tables) -> Scenario:
     """Return the parsed base scenario with :func:`leo_document` changes."""
     return parse_scenario(leo_document(**tables), SOURCE)
+
+
+# A 12 h GEO track longer than max_pass_s (issue 18: the passes were cut, the rest dropped).
+GEO_A_KM = (GM_EARTH_km3_s2 / OMEGA_EARTH_rad_s**2) ** (1.0 / 3.0)  # one sidereal day
+GEO_DT_S = 600.0
+GEO_MAX_PASS_S = 28800.0
+GEO_END_S = 43200.0
+GEO_BIAS_M = 5.0
+
+
+def geo_document() -> dict:
+    """A geostationary spacecraft (two-body) seen all the time by two stations, one under it
+    at t = 0 and one 40° east at 30° N (elevation about 34°), sampled every 600 s from 600 s
+    to 12 h, passes of at most 8 h, one T13 record (so that the real world's blocks are the
+    passes alone)."""
+    v = math.sqrt(GM_EARTH_km3_s2 / GEO_A_KM)
+    base = leo_scenario()
+    lon_deg = math.degrees(-base.orientation.theta0_rad)  # under the spacecraft at t = 0
+    doc = leo_document(
+        injection={"r_km": [GEO_A_KM, 0.0, 0.0], "v_km_s": [0.0, v, 0.0]},
+        model={"gravity": "J0", "var_gravity": "J0"},
+        parameters={"dynamic": [], "station_location": "none", "station_biases": ["range"]},
+        stations={"UNDER": {"lat_deg": 0.0, "lon_deg": lon_deg, "h_km": 0.0,
+                            "elev_mask_deg": 10.0},
+                  "EAST": {"lat_deg": 30.0, "lon_deg": lon_deg + 40.0, "h_km": 0.5,
+                           "elev_mask_deg": 10.0}},
+        tracking={"stations": ["UNDER", "EAST"], "data_interval_s": GEO_DT_S,
+                  "start": GEO_DT_S, "max_pass_s": GEO_MAX_PASS_S, "station": {}},
+        noise={"fit": {"sigma_range_m": 10.0, "sigma_range_rate_mm_s": 1.0},
+               "real": {"bias_range_m": GEO_BIAS_M}},
+        times={"input": [GEO_END_S], "input_step_s": None, "end": None})
+    return doc
 
 
 def scaled_close(a: np.ndarray, b: np.ndarray, tol: float) -> float:
