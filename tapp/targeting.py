@@ -102,6 +102,7 @@ from tapp.ephemeris import position_km, utc_to_tdb_jd
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.orbit import lambert
 from tapp.orbits import check_perigee, check_state_bounds
 from tapp.schema import (
     EarthOrientationName,
@@ -123,6 +124,8 @@ MAX_PERIAPSIS_ITERATIONS = 6
 #: Most closest-approach scan steps (max_flight_time_s / scan_step_s), checked before the
 #: scan grid is allocated (a horizon of 1e308 s would otherwise exhaust memory).
 MAX_SCAN_STEPS = 1_000_000
+#: Times of the grid that refines a closest approach over two scan steps (1 s for 600 s steps).
+CLOSEST_APPROACH_SAMPLES = 1201
 
 # Central-difference step for the target's velocity and acceleration from DE421 positions:
 # a 4th-order stencil with h = 60 s has truncation ~1e-17 km/s for the Moon, round-off
@@ -156,6 +159,25 @@ class FailedCaseError(TappError):
         self.x = np.array(x, dtype=float)
         values = ", ".join(f"{v:.9f}" for v in self.x)
         super().__init__(f"search case {case} at v0 = [{values}] km/s failed: {reason}")
+
+
+@dataclass(frozen=True, slots=True)
+class ClosestApproach:
+    """The closest approach of a trajectory to the target (:meth:`BPlaneProgram.closest_approach`).
+
+    Attributes
+    ----------
+    t_s : float
+        Time, s from the injection (the scenario epoch).
+    distance_km : float
+        Distance between the spacecraft and the target's centre, km.
+    soi_km : float
+        The target's sphere of influence at that time (:meth:`BPlaneProgram.soi_radius_km`), km.
+    """
+
+    t_s: float
+    distance_km: float
+    soi_km: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -289,7 +311,7 @@ class BPlaneProgram:
         t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))
         h = _EPHEMERIS_STEP_s
         offsets = np.array([-2.0, -1.0, 0.0, 1.0, 2.0]) * h
-        p = self._position_km(self.target, (t[:, None] + offsets[None, :]).ravel())
+        p = self.body_position_km(self.target, (t[:, None] + offsets[None, :]).ravel())
         p = p.reshape(t.size, 5, 3)
         vel = (8.0 * (p[:, 3] - p[:, 1]) - (p[:, 4] - p[:, 0])) / (12.0 * h)
         acc = (-p[:, 4] + 16.0 * p[:, 3] - 30.0 * p[:, 2] + 16.0 * p[:, 1] - p[:, 0]) / (
@@ -300,7 +322,7 @@ class BPlaneProgram:
         """Return the state model's acceleration (3,), km/s^2, at one time and state (6,)."""
         eqs, _ = self.propagator.compiled()
         t = np.array([t_s], dtype=np.float64)
-        rb = [self._position_km(body, t)[0] for body in eqs.bodies]
+        rb = [self.body_position_km(body, t)[0] for body in eqs.bodies]
         if eqs.oriented:
             rb.append((self.orientation.slow_terms(t) if eqs.oriented == "full"
                        else self.orientation.pole(t)).ravel())
@@ -308,7 +330,7 @@ class BPlaneProgram:
                            np.concatenate([np.zeros(0), *rb]))
         return np.asarray(xdot, dtype=np.float64).ravel()[3:6]
 
-    def _position_km(self, body: str, t_s: np.ndarray) -> np.ndarray:
+    def body_position_km(self, body: str, t_s: np.ndarray) -> np.ndarray:
         """Position (N, 3) km of ``body`` relative to the centre, at TDB (TT with gmst)."""
         center = self.propagator.state_model.center
         scales = self.orientation.scales
@@ -334,13 +356,42 @@ class BPlaneProgram:
 
     # --- the program ----------------------------------------------------------------------
 
+    def _relative_states(self, v0: np.ndarray, t_s: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """Target-relative states (N, 6) and the target's states (N, 6) at t_s (N,), s."""
+        body, _ = self.target_state(t_s)
+        return self._propagate(v0, t_s, stm=False).states - body, body
+
+    def _scan_grid(self) -> np.ndarray:
+        """The scan's times scan_step_s, 2 scan_step_s, ..., max_flight_time_s, s."""
+        n = int(math.ceil(self.max_flight_time_s / self.scan_step_s))
+        return np.minimum(self.scan_step_s * np.arange(1, n + 1), self.max_flight_time_s)
+
+    def closest_approach(self, v0_km_s: ArrayLike) -> ClosestApproach:
+        """Return the trajectory's closest approach to the target within the horizon.
+
+        The smallest distance on the scan grid (``scan_step_s`` over ``max_flight_time_s``,
+        inside the sphere of influence or not), refined on a grid of
+        :data:`CLOSEST_APPROACH_SAMPLES` times over the two scan steps around it (time to
+        ``2 scan_step_s / (CLOSEST_APPROACH_SAMPLES - 1)``, 1 s by default): two state-only
+        propagations from the injection. The sphere of influence is reported at that time.
+        """
+        v0 = np.asarray(v0_km_s, dtype=np.float64)
+        t = self._scan_grid()
+        k = int(np.argmin(np.linalg.norm(self._relative_states(v0, t)[0][:, :3], axis=1)))
+        fine = np.linspace(t[k - 1] if k else 0.0, t[min(k + 1, t.size - 1)],
+                           CLOSEST_APPROACH_SAMPLES)
+        z, body = self._relative_states(v0, fine)
+        dist = np.linalg.norm(z[:, :3], axis=1)
+        j = int(np.argmin(dist))
+        return ClosestApproach(
+            t_s=float(fine[j]), distance_km=float(dist[j]),
+            soi_km=float(self.soi_radius_km(np.linalg.norm(body[j, :3]))))
+
     def _closest_approach_time(self, v0: np.ndarray) -> float:
         """Scan for the first closest approach inside the SOI; return the Newton start (s)."""
-        n = int(math.ceil(self.max_flight_time_s / self.scan_step_s))
-        t = np.minimum(self.scan_step_s * np.arange(1, n + 1), self.max_flight_time_s)
-        states = self._propagate(v0, t, stm=False).states
-        body, _ = self.target_state(t)
-        z = states - body
+        t = self._scan_grid()
+        z, body = self._relative_states(v0, t)
         dist = np.linalg.norm(z[:, :3], axis=1)
         rdotv = np.sum(z[:, :3] * z[:, 3:], axis=1)
         soi = self.soi_radius_km(np.linalg.norm(body[:, :3], axis=1))
@@ -459,12 +510,22 @@ class BPlaneProgram:
         return np.array(self.evaluate(v0_km_s).y)
 
 
+#: How the first nominal case of a search is chosen (:attr:`BPlaneSearch.first_guess`).
+FIRST_GUESSES = ("injection", "conic")
+
+
 @dataclass(frozen=True, slots=True)
 class BPlaneSearch:
     """A complete B-plane targeting problem: the program, the start and SEARCH's inputs.
 
     Arrays have shape (3,), in the order of :data:`X_NAMES` (km/s) and :data:`Y_NAMES`
     (km, km, s). ``target_increments`` are SEARCH's theta (y_T = y_0 + theta where != 0).
+    The search is n by n over ``vary`` (indices into :data:`X_NAMES`: the velocity components
+    SEARCH moves; the others keep their value of ``v0_km_s``) and ``targeted`` (indices into
+    :data:`Y_NAMES`); the entries of the arrays outside them are not used. ``first_guess`` is
+    "injection" (the first nominal case is ``v0_km_s``, as in the seed) or "conic" (the
+    patched-conic velocity of :func:`patched_conic_guess`, with ``v0_km_s`` giving only the
+    direction of motion).
     """
 
     program: BPlaneProgram
@@ -478,6 +539,84 @@ class BPlaneSearch:
     analytic_partials: bool = False
     broyden: bool = False
     step_halving: bool = False
+    vary: tuple[int, ...] = (0, 1, 2)
+    targeted: tuple[int, ...] = (0, 1, 2)
+    first_guess: str = "injection"
+
+    def __post_init__(self) -> None:
+        for name, values in (("vary", self.vary), ("targeted", self.targeted)):
+            if len(set(values)) != len(values) or not set(values) <= {0, 1, 2}:
+                raise InputError("targeting", name, "distinct indices among 0, 1, 2", values)
+        if len(self.vary) != len(self.targeted):
+            raise InputError("targeting", "vary", f"one varied component per targeted quantity "
+                             f"({len(self.targeted)})", self.vary)
+        if self.first_guess not in FIRST_GUESSES:
+            raise InputError("targeting", "first_guess", f"one of {FIRST_GUESSES}",
+                             self.first_guess)
+        if self.first_guess == "conic" and np.any(self.target_increments[list(self.targeted)]):
+            raise InputError("targeting", "target_increments", "none with a conic first guess "
+                             "(theta is relative to the first case, which the conic sets)",
+                             self.target_increments)
+
+    @property
+    def x_names(self) -> tuple[str, ...]:
+        """Names of the independent variables searched."""
+        return tuple(X_NAMES[i] for i in self.vary)
+
+    @property
+    def y_names(self) -> tuple[str, ...]:
+        """Names of the dependent variables targeted."""
+        return tuple(Y_NAMES[i] for i in self.targeted)
+
+    def start_km_s(self) -> np.ndarray:
+        """The injection velocity (3,) of the first nominal case, km/s (``first_guess``)."""
+        if self.first_guess == "injection":
+            return np.array(self.v0_km_s, dtype=np.float64)
+        arrival_s = (float(self.targets[2]) if 2 in self.targeted
+                     else self.program.closest_approach(self.v0_km_s).t_s)
+        return patched_conic_guess(self.program, float(self.targets[0]),
+                                   float(self.targets[1]), arrival_s,
+                                   np.cross(self.program.r0_km, self.v0_km_s))
+
+
+class FirstGuessError(TappError):
+    """The patched-conic first guess cannot be formed (the geometry is degenerate)."""
+
+
+def patched_conic_guess(program: BPlaneProgram, b_dot_r_km: float, b_dot_t_km: float,
+                        arrival_s: float, pole: ArrayLike) -> np.ndarray:
+    r"""Return the injection velocity (3,), km/s, of the patched conic through the aim point.
+
+    The central body's two-body conic (:func:`tapp.orbit.lambert`, prograde about ``pole``)
+    from the injection position to the target's centre at ``arrival_s`` gives the arrival
+    velocity relative to the target, taken as the incoming asymptote :math:`\hat S`; the
+    B-plane axes :math:`\hat T, \hat R` follow from it and the program's reference plane
+    (:func:`tapp.bplane.b_plane`). A second conic to the aim point
+    :math:`\mathbf r_b + (B\cdot T)\,\hat T + (B\cdot R)\,\hat R` gives the velocity
+    returned: the patched-conic B vector is the miss of the asymptote, which the target's
+    gravity then bends into the hyperbola whose B-plane point this is (seed TM 33-203,
+    section II: the first partials or initial values may come from "a conic").
+
+    Raises
+    ------
+    FirstGuessError
+        The target at arrival is collinear with the injection position (a transfer of half a
+        revolution has no plane): start from the injection instead.
+    """
+    r0, gm = program.r0_km, program.propagator.state_model.gm_center_km3_s2
+    body = program.target_state(np.array([arrival_s]))[0][0]
+    try:
+        arrival = lambert(r0, body[:3], arrival_s, gm, pole=pole)[1]
+        s_hat = (arrival - body[3:]) / np.linalg.norm(arrival - body[3:])
+        t_hat = np.cross(s_hat, REFERENCE_POLES[program.reference])
+        t_hat /= np.linalg.norm(t_hat)
+        aim = body[:3] + b_dot_t_km * t_hat + b_dot_r_km * np.cross(s_hat, t_hat)
+        return lambert(r0, aim, arrival_s, gm, pole=pole)[0]
+    except InputError as exc:
+        raise FirstGuessError(
+            f"no patched-conic first guess to the {program.target} at t = {arrival_s:.0f} s: "
+            f"{exc.field}: expected {exc.expected} (got {exc.got}); start from the injection "
+            "(first_guess = \"injection\")") from exc
 
 
 @dataclass(frozen=True, slots=True)
@@ -493,11 +632,14 @@ class TargetingRun:
     propagations : int
         Numerical integrations run by all cases (scan + periapsis steps; analytic partials
         ride on the cases' own integrations).
+    start_km_s : numpy.ndarray, shape (3,)
+        The injection velocity of the first nominal case (:meth:`BPlaneSearch.start_km_s`).
     """
 
     result: SearchResult
     encounter: Encounter
     propagations: int
+    start_km_s: np.ndarray
 
     @property
     def trajectories(self) -> int:
@@ -525,45 +667,52 @@ def run_search(problem: BPlaneSearch, *, analytic_partials: bool | None = None) 
     FailedCaseError
         A case missed the target, was not hyperbolic there, or could not be integrated (see
         the module docstring for why the search stops there).
+    FirstGuessError
+        A conic first guess that cannot be formed (:func:`patched_conic_guess`).
     """
     program = problem.program
     analytic = problem.analytic_partials if analytic_partials is None else analytic_partials
+    start = problem.start_km_s()
+    cols, rows = list(problem.vary), list(problem.targeted)
     encounters: dict[bytes, Encounter] = {}
     counts = {"cases": 0, "propagations": 0}
 
     def evaluate(x: np.ndarray, case: int) -> Encounter:
-        key = np.asarray(x, dtype=np.float64).tobytes()
+        v0 = start.copy()
+        v0[cols] = x
+        key = v0.tobytes()
         if key not in encounters:
             try:
-                encounters[key] = program.evaluate(x, partials=analytic)
+                encounters[key] = program.evaluate(v0, partials=analytic)
             except (NotHyperbolicError, PropagationError, DivergenceError) as exc:
-                raise FailedCaseError(case, x, exc) from exc
+                raise FailedCaseError(case, v0, exc) from exc
             counts["propagations"] += encounters[key].propagations
         return encounters[key]
 
     def f(x: np.ndarray) -> np.ndarray:
         counts["cases"] += 1  # search.solve runs f exactly once per case, in case order
-        return np.array(evaluate(x, counts["cases"]).y)
+        return np.array(evaluate(x, counts["cases"]).y[rows])
 
     def partials(x: np.ndarray) -> np.ndarray:
         # The nominal of a set has always just been run at this very x: a cache hit.
-        return np.array(evaluate(x, counts["cases"]).partials)
+        return np.array(evaluate(x, counts["cases"]).partials[np.ix_(rows, cols)])
 
     result = solve(
         f,
-        problem.v0_km_s,
-        problem.targets,
-        tolerances=problem.tolerances,
-        increments=problem.increments,
+        start[cols],
+        problem.targets[rows],
+        tolerances=problem.tolerances[rows],
+        increments=problem.increments[cols],
         iterations_per_partials=problem.iterations_per_partials,
         partial_sets=problem.partial_sets,
-        target_increments=problem.target_increments,
+        target_increments=problem.target_increments[rows],
         partials=partials if analytic else None,
         broyden=problem.broyden,
         step_halving=problem.step_halving,
     )
     final = evaluate(result.x, result.n_cases)
-    return TargetingRun(result=result, encounter=final, propagations=counts["propagations"])
+    return TargetingRun(result=result, encounter=final, propagations=counts["propagations"],
+                        start_km_s=_frozen(start))
 
 
 # --- scenario tables ----------------------------------------------------------------------
@@ -601,14 +750,19 @@ class SearchModel(Schema):
     atol: Tolerance = 1e-13
 
 
-class SearchTarget(Schema):
+class ScanTable(Schema):
+    """The program's closest-approach scan and periapsis iteration (:class:`BPlaneProgram`)."""
+
+    max_flight_time_s: _Positive = 8.0 * SECONDS_PER_DAY
+    scan_step_s: _Positive = 600.0
+    periapsis_time_tol_s: _Positive = 1e-3
+
+
+class SearchTarget(ScanTable):
     """``[target]``: the target body, B-plane reference and the closest-approach scan."""
 
     body: str = "moon"
     reference: Literal[tuple(REFERENCE_POLES)] = "earth_equator"  # type: ignore[valid-type]
-    max_flight_time_s: _Positive = 8.0 * SECONDS_PER_DAY
-    scan_step_s: _Positive = 600.0
-    periapsis_time_tol_s: _Positive = 1e-3
 
 
 class YValues(Schema):
@@ -635,26 +789,72 @@ class YTolerances(Schema):
     flight_time_s: _Positive
 
 
+_Increment = Annotated[float, AfterValidator(_nonzero)]
+
+
 class XIncrements(Schema):
     """Difference increments of the injection velocity, km/s, != 0."""
 
-    vx_km_s: Annotated[float, AfterValidator(_nonzero)]
-    vy_km_s: Annotated[float, AfterValidator(_nonzero)]
-    vz_km_s: Annotated[float, AfterValidator(_nonzero)]
+    vx_km_s: _Increment
+    vy_km_s: _Increment
+    vz_km_s: _Increment
 
 
-class SearchTable(Schema):
+class SearchControls(Schema):
+    """SEARCH's iteration control (seed Table 1: ITER, NPR, AP) and the opt-in improvements."""
+
+    iterations_per_partials: _Count = 3
+    partial_sets: _Count = 3
+    analytic_partials: bool = False
+    broyden: bool = False
+    step_halving: bool = False
+
+
+class SearchTable(SearchControls):
     """``[search]``: targets, tolerances, increments and SEARCH's iteration control."""
 
     targets: YValues
     target_increments: YIncrements = YIncrements()
     tolerances: YTolerances
     increments: XIncrements
-    iterations_per_partials: _Count = 3
-    partial_sets: _Count = 3
-    analytic_partials: bool = False
-    broyden: bool = False
-    step_halving: bool = False
+
+
+class AimPoint(Schema):
+    """``[targeting.targets]``: the B-plane aim point (km) and, optionally, the flight time (s,
+    from the injection to periapsis)."""
+
+    b_dot_r_km: float
+    b_dot_t_km: float
+    flight_time_s: _Positive | None = None
+
+
+class AimTolerances(YTolerances):
+    """``[targeting.tolerances]``: SEARCH's EPSD, by default those of the shipped SEARCH
+    scenario (1 km, 1 km, 1 s)."""
+
+    b_dot_r_km: _Positive = 1.0
+    b_dot_t_km: _Positive = 1.0
+    flight_time_s: _Positive = 1.0
+
+
+class AimIncrements(XIncrements):
+    """``[targeting.increments]``: SEARCH's DELI, by default those of the shipped SEARCH
+    scenario (1 cm/s)."""
+
+    vx_km_s: _Increment = 1e-5
+    vy_km_s: _Increment = 1e-5
+    vz_km_s: _Increment = 1e-5
+
+
+class TargetingTable(SearchControls, ScanTable):
+    """``[targeting]`` of a tracking scenario (:func:`scenario_targeting` for the keys)."""
+
+    first_guess: Literal[FIRST_GUESSES] = "conic"  # type: ignore[valid-type]
+    vary: Annotated[list[Literal[X_NAMES]],  # type: ignore[valid-type]
+                    Field(min_length=2, max_length=3), Unique] | None = None
+    targets: AimPoint
+    tolerances: AimTolerances = AimTolerances()
+    increments: AimIncrements = AimIncrements()
 
 
 class SearchFile(Schema):
@@ -737,20 +937,8 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     if tgt.body not in bodies:
         raise InputError(source, "target.body", f"one of model.third_bodies {list(bodies)}",
                          tgt.body)
-    if tgt.scan_step_s >= tgt.max_flight_time_s:
-        raise InputError(source, "target.scan_step_s",
-                         f"a step shorter than target.max_flight_time_s = "
-                         f"{tgt.max_flight_time_s:g} s", tgt.scan_step_s)
-    if tgt.max_flight_time_s / tgt.scan_step_s > MAX_SCAN_STEPS:
-        raise InputError(source, "target.max_flight_time_s",
-                         f"at most {MAX_SCAN_STEPS:,} scan steps of target.scan_step_s = "
-                         f"{tgt.scan_step_s:g} s", f"{tgt.max_flight_time_s:g} s, "
-                         f"{tgt.max_flight_time_s / tgt.scan_step_s:.3g} steps")
-    program = BPlaneProgram(
-        epoch=epoch, r0_km=r0, propagator=propagator, target=tgt.body, reference=tgt.reference,
-        max_flight_time_s=tgt.max_flight_time_s, scan_step_s=tgt.scan_step_s,
-        periapsis_time_tol_s=tgt.periapsis_time_tol_s, orientation=orientation)
-
+    program = _program(tgt, source, "target", epoch=epoch, r0_km=r0, propagator=propagator,
+                       target=tgt.body, reference=tgt.reference, orientation=orientation)
     srch = doc.search
     return BPlaneSearch(
         program=program,
@@ -759,9 +947,82 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
         target_increments=_values(srch.target_increments, Y_NAMES),
         tolerances=_values(srch.tolerances, Y_NAMES),
         increments=_values(srch.increments, X_NAMES),
-        iterations_per_partials=srch.iterations_per_partials,
-        partial_sets=srch.partial_sets,
-        analytic_partials=srch.analytic_partials,
-        broyden=srch.broyden,
-        step_halving=srch.step_halving,
+        **_controls(srch),
+    )
+
+
+def _program(scan: ScanTable, source: str, table: str, **kwargs) -> BPlaneProgram:
+    """The program with the scan of ``scan`` (the file's table ``table``), checked first."""
+    if scan.scan_step_s >= scan.max_flight_time_s:
+        raise InputError(source, f"{table}.scan_step_s",
+                         f"a step shorter than {table}.max_flight_time_s = "
+                         f"{scan.max_flight_time_s:g} s", scan.scan_step_s)
+    if scan.max_flight_time_s / scan.scan_step_s > MAX_SCAN_STEPS:
+        raise InputError(source, f"{table}.max_flight_time_s",
+                         f"at most {MAX_SCAN_STEPS:,} scan steps of {table}.scan_step_s = "
+                         f"{scan.scan_step_s:g} s", f"{scan.max_flight_time_s:g} s, "
+                         f"{scan.max_flight_time_s / scan.scan_step_s:.3g} steps")
+    return BPlaneProgram(max_flight_time_s=scan.max_flight_time_s, scan_step_s=scan.scan_step_s,
+                         periapsis_time_tol_s=scan.periapsis_time_tol_s, **kwargs)
+
+
+def _controls(table: SearchControls) -> dict:
+    """SEARCH's iteration control of a table, as :class:`BPlaneSearch` keywords."""
+    return {name: getattr(table, name) for name in SearchControls.model_fields}
+
+
+def scenario_targeting(table: TargetingTable, source: str, *, epoch: Epoch,
+                       state_km_km_s: np.ndarray, propagator: Propagator, body: str,
+                       reference: str, orientation: EarthOrientation) -> BPlaneSearch:
+    """Build the :class:`BPlaneSearch` of a tracking scenario's ``[targeting]`` table.
+
+    The program flies the scenario's own models (``propagator``: its state and variational
+    force models and tolerances, no parameters) under its Earth orientation, from its
+    injection ``state_km_km_s`` (6,) (position kept, velocity the first guess), to the
+    B-plane of its miss body and reference plane. Keys (SEARCH's names and defaults where
+    SEARCH has them):
+
+    - ``targets``: ``b_dot_r_km``, ``b_dot_t_km`` (the aim point) and optionally
+      ``flight_time_s`` (s from the injection to periapsis, below ``max_flight_time_s``);
+      no theta: the aim point is absolute (y_0 + theta would move with the first guess).
+    - ``vary``: the velocity components SEARCH moves, one per target: default all three with
+      a flight time; two of them must be named without one.
+    - ``first_guess``: "conic" (default; :func:`patched_conic_guess`, arriving at the target
+      flight time or, without one, at the injection's own closest approach) or "injection".
+    - ``tolerances`` (default 1 km, 1 km, 1 s), ``increments`` (default 1e-5 km/s),
+      ``iterations_per_partials``, ``partial_sets``, ``analytic_partials``, ``broyden``,
+      ``step_halving`` (:class:`SearchControls`), and the scan ``max_flight_time_s``,
+      ``scan_step_s``, ``periapsis_time_tol_s`` (:class:`ScanTable`).
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and the ``targeting.*`` field.
+    """
+    aim = table.targets
+    targeted = (0, 1) if aim.flight_time_s is None else (0, 1, 2)
+    if table.vary is None and len(targeted) == 2:
+        raise InputError(source, "targeting.vary", "two of vx_km_s, vy_km_s, vz_km_s (one "
+                         "per target b_dot_r_km, b_dot_t_km; all three vary when "
+                         "targeting.targets.flight_time_s is given)")
+    vary = tuple(X_NAMES.index(name) for name in (table.vary or X_NAMES))
+    if len(vary) != len(targeted):
+        raise InputError(source, "targeting.vary", f"{len(targeted)} components, one per "
+                         f"target ({', '.join(Y_NAMES[i] for i in targeted)})", table.vary)
+    if aim.flight_time_s is not None and aim.flight_time_s >= table.max_flight_time_s:
+        raise InputError(source, "targeting.targets.flight_time_s", "a flight time below "
+                         f"targeting.max_flight_time_s = {table.max_flight_time_s:g} s",
+                         aim.flight_time_s)
+    program = _program(table, source, "targeting", epoch=epoch,
+                       r0_km=state_km_km_s[:3], propagator=propagator, target=body,
+                       reference=reference, orientation=orientation)
+    return BPlaneSearch(
+        program=program,
+        v0_km_s=_frozen(state_km_km_s[3:]),
+        targets=_frozen([aim.b_dot_r_km, aim.b_dot_t_km, aim.flight_time_s or 0.0]),
+        target_increments=_frozen(np.zeros(3)),
+        tolerances=_values(table.tolerances, Y_NAMES),
+        increments=_values(table.increments, X_NAMES),
+        vary=vary, targeted=targeted, first_guess=table.first_guess,
+        **_controls(table),
     )

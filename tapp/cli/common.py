@@ -10,7 +10,9 @@ Exit codes (every command keeps this contract)
     missing, misspelt, of the wrong type or out of range, a truncated or corrupt tape or
     ITER results file, a checksum that does not match), an output path that is an input or
     another output (symbolic links and relative paths resolved) or cannot be written, an
-    epoch outside the ephemeris' coverage. ``tapp iter`` also refuses, before any case runs,
+    epoch outside the ephemeris' coverage, a scenario whose B-plane miss has no encounter
+    (``tapp simulate``, ``tapp pipeline``: the message names the closest approach;
+    :mod:`tapp.tracking.encounter`). ``tapp iter`` also refuses, before any case runs,
     input that every case would meet: checked on the first case, a file the body reads
     missing (``body.files``) or invalid (the body's own input check, which names that file
     and its field), a body that cannot be imported or found, an argument the body does not
@@ -26,11 +28,16 @@ Exit codes (every command keeps this contract)
     inconsistent with the noise model (7: the weighted residual RMS settled above its
     99.9 % χ² bound for the number of residuals and estimated parameters; the RMS and the
     bound are printed, and the estimate is not to be used as an orbit)
-    (:mod:`tapp.cli.od`); ``tapp search`` diverged (3) or met a singular matrix (4).
+    (:mod:`tapp.cli.od`); ``tapp search`` diverged (3) or met a singular matrix (4)
+    (``--write-scenario`` is then not written: a scenario that misses its aim point is no
+    answer). ``tapp simulate`` of a scenario with a ``[targeting]`` table whose SEARCH
+    diverged (3) or met a singular matrix (4): one line on stderr, and no tape (there is no
+    injection to simulate).
 1
-    Anything else: a computation that could not be completed (``tapp search``: a trajectory
-    that misses the target's sphere of influence; ``tapp dc``, ``tapp ekf``: too few
-    measurements in the arc; ``tapp iter``: every case of the sweep failed, the message
+    Anything else: a computation that could not be completed (``tapp search``, or the
+    ``[targeting]`` of ``tapp simulate``: a trajectory that misses the target's sphere of
+    influence, or a conic first guess that cannot be formed; ``tapp dc``, ``tapp ekf``: too
+    few measurements in the arc; ``tapp iter``: every case of the sweep failed, the message
     giving the first case's error, after the summary is printed and the results file, which
     records every failure, is written), or an internal failure (a bug; out of memory). Also
     one line on stderr.
@@ -253,10 +260,10 @@ def run_guarded(fn: Callable[[], T]) -> T:
     try:
         return fn()
     except (InputError, TapeError) as exc:
-        typer.echo(f"error: {_one_line(exc)}", err=True)
+        echo_error(exc)
         raise typer.Exit(EXIT_INPUT) from None
     except TappError as exc:
-        typer.echo(f"error: {_one_line(exc)}", err=True)
+        echo_error(exc)
         raise typer.Exit(EXIT_FAILURE) from None
     except OSError as exc:
         if exc.filename is None:
@@ -270,8 +277,10 @@ def run_guarded(fn: Callable[[], T]) -> T:
         raise typer.Exit(EXIT_FAILURE) from None
 
 
-def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split())
+def echo_error(exc: BaseException) -> None:
+    """Write ``error: MESSAGE`` on stderr, the message on one line."""
+    message = " ".join(str(exc).split())
+    typer.echo(f"error: {message}", err=True)
 
 
 def _to_jsonable(obj: object) -> object:

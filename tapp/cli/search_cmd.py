@@ -1,22 +1,36 @@
 """``tapp search``: SEARCH's Newton-Raphson targeting of a B-plane scenario.
 
-Prints SEARCH's report in the spirit of the seed's Figs. 4 and 5 (inputs, each case's
-dependent variables, the partials, their inverse, the increments and total increments, the
-exit taken) followed by the encounter of the final trajectory, or one JSON object with
-``--json``. Exit codes follow SEARCH's three non-standard exits (:data:`search.EXIT_FLAG`):
-0 converged, FLAG + 1 otherwise (3 diverged, 4 singular), so that they stay clear of 1 (a
-failed case or any other error) and 2 (bad input, one line on stderr naming file and field).
+The scenario is a SEARCH file (``scenarios/search_bplane.toml``: a ``[search]`` table) or a
+tracking scenario with a ``[targeting]`` table (:func:`tapp.targeting.scenario_targeting`: the
+aim point of its B-plane miss, SEARCH on its own models). Prints SEARCH's report in the
+spirit of the seed's Figs. 4 and 5 (inputs, each case's dependent variables, the partials,
+their inverse, the increments and total increments, the exit taken) followed by the encounter
+of the final trajectory, or one JSON object with ``--json``. Exit codes follow SEARCH's three
+non-standard exits (:data:`search.EXIT_FLAG`): 0 converged, FLAG + 1 otherwise (3 diverged,
+4 singular), so that they stay clear of 1 (a failed case or any other error) and 2 (bad
+input, one line on stderr naming file and field).
+
+``--write-scenario PATH`` writes the input file again with the targeted injection (position
+and velocity, ``[injection]`` as ``r_km`` and ``v_km_s``) and, for a tracking scenario,
+without its ``[targeting]`` table: a scenario that ``tapp simulate`` flies to the aim point
+as it stands. A SEARCH file gets the targets reached instead of its theta (``[search.targets]``
+with ``y_0 + theta``, no ``[search.target_increments]``), so that searching it again starts
+converged. Comments and layout are kept; the file is written atomically, never over an
+input, and only when SEARCH converged.
 """
 
 from __future__ import annotations
 
+import datetime as dt
 import time
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 
 from search import EXIT_FLAG, format_report
+from tapp.atomic import atomic_write
 from tapp.cli.common import (
     EarthOrientationOpt,
     app,
@@ -25,16 +39,18 @@ from tapp.cli.common import (
     run_guarded,
 )
 from tapp.constants import SECONDS_PER_DAY, RADIUS_km
+from tapp.errors import InputError
 from tapp.frames.time import Epoch
+from tapp.outputs import check_paths
 from tapp.targeting import (
-    X_NAMES,
     Y_NAMES,
     BPlaneSearch,
     TargetingRun,
     run_search,
     scenario_search,
 )
-from tapp.tomlfile import read_toml
+from tapp.tomlfile import read_toml, replace_tables
+from tapp.tracking.scenario import parse_scenario
 
 #: Exit code of each SEARCH exit: 0 converged, the seed's FLAG + 1 otherwise.
 EXIT_CODE = {status: 0 if status == "converged" else flag + 1
@@ -45,15 +61,57 @@ _X_LABELS = ("VX (KM/S)", "VY (KM/S)", "VZ (KM/S)")
 _Y_LABELS = ("B.R (KM)", "B.T (KM)", "TF (S)")
 
 
+def is_tracking_scenario(data: dict) -> bool:
+    """Whether a parsed file is a tracking scenario (else a SEARCH file)."""
+    return "tracking" in data or "targeting" in data
+
+
 def read_scenario(path: Path, earth_orientation: str | None = None) -> BPlaneSearch:
-    """Read and validate a B-plane search scenario (TOML); errors name the file and field.
+    """Read and validate a B-plane search scenario (TOML): a SEARCH file, or a tracking
+    scenario with a ``[targeting]`` table; errors name the file and field.
 
     ``earth_orientation`` overrides the file's model (``--earth-orientation``).
     """
-    data = read_toml(path)
+    return problem_of(read_toml(path), path, earth_orientation)
+
+
+def problem_of(data: dict, path: Path, earth_orientation: str | None) -> BPlaneSearch:
+    """The search problem of a parsed scenario file (:func:`read_scenario`)."""
+    if is_tracking_scenario(data):
+        problem = parse_scenario(data, str(path), earth_orientation).targeting
+        if problem is None:
+            raise InputError(str(path), "targeting", "a [targeting] table (the aim point) in "
+                             "a tracking scenario given to tapp search")
+        return problem
     if earth_orientation is not None:
         data["earth_orientation"] = earth_orientation
     return scenario_search(data, str(path))
+
+
+def _written_scenario(path: Path, data: dict, problem: BPlaneSearch, run: TargetingRun
+                      ) -> str:
+    """The text of ``path`` (``data`` as read) with the targeted injection (and without
+    ``[targeting]``)."""
+    text = path.read_text()
+    injection = {"r_km": problem.program.r0_km.tolist(),
+                 "v_km_s": run.encounter.v0_km_s.tolist()}
+    if data["injection"].get("allow_subsurface"):
+        injection["allow_subsurface"] = True
+    result = run.result
+    tables: dict = {"injection": injection}
+    if is_tracking_scenario(data):
+        tables["targeting"] = None
+    else:  # the targets reached, theta resolved: searching the file again starts converged
+        tables["search.targets"] = dict(zip(Y_NAMES, problem.targets.tolist(), strict=True))
+        tables["search.targets"].update(zip(problem.y_names, result.targets.tolist(),
+                                            strict=True))
+        tables["search.target_increments"] = None
+    reached = ", ".join(f"{name} = {value:.6f} (target {target:.6f})" for name, value, target
+                        in zip(problem.y_names, result.y, result.targets, strict=True))
+    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+    comment = (f"Targeted by tapp search from {path.name} on {stamp}: SEARCH converged in "
+               f"{result.n_cases} cases to\n{reached}")
+    return replace_tables(text, str(path), tables, comment=comment)
 
 
 def _periapsis_utc(problem: BPlaneSearch, t_s: float) -> str:
@@ -97,14 +155,17 @@ def _json(path: Path, problem: BPlaneSearch, run: TargetingRun, analytic: bool,
         "status": result.status,
         "flag": result.flag,
         "exit_code": EXIT_CODE[result.status],
-        "x_names": list(X_NAMES),
-        "y_names": list(Y_NAMES),
+        "x_names": list(problem.x_names),
+        "y_names": list(problem.y_names),
         "x": result.x,
         "y": result.y,
         "targets": result.targets,
         "miss": result.miss,
         "tolerances": result.inputs.tolerances,
         "total_increments_km_s": result.x - result.inputs.x0,
+        "first_guess": problem.first_guess,
+        "v0_km_s": run.encounter.v0_km_s,
+        "v0_first_case_km_s": run.start_km_s,
         "cases_run": result.n_cases,
         "cases": {"nominal": result.n_nominal, "perturbed": result.n_perturbed,
                   "applied": result.n_applied},
@@ -120,7 +181,7 @@ def _json(path: Path, problem: BPlaneSearch, run: TargetingRun, analytic: bool,
 def _summary(problem: BPlaneSearch, run: TargetingRun, analytic: bool,
              elapsed_s: float) -> str:
     enc = _encounter_dict(problem, run)
-    dv_m_s = 1e3 * float(sum((run.result.x - run.result.inputs.x0) ** 2) ** 0.5)
+    dv_m_s = 1e3 * float(np.linalg.norm(run.encounter.v0_km_s - problem.v0_km_s))
     partials = "ANALYTIC (VARIATIONAL EQUATIONS)" if analytic else "DIFFERENCED"
     return (
         f"ENCOUNTER WITH THE {enc['body'].upper()}: PERIAPSIS {enc['periapsis_utc']} UTC "
@@ -139,15 +200,29 @@ def search_command(
         "--analytic-partials",
         help="Partials from the variational equations (overrides the scenario).")] = False,
     earth_orientation: EarthOrientationOpt = None,
+    write_scenario: Annotated[Path | None, typer.Option(
+        "--write-scenario", help="Also write the scenario again with the targeted injection "
+        "(and, for a tracking scenario, without its [targeting] table), if SEARCH "
+        "converged.")] = None,
 ) -> None:
     """Target the injection velocity to B·R, B·T and flight time at the target body.
 
-    Exit codes: 0 converged, 3 diverged, 4 singular, 2 bad input, 1 a case that failed (the
-    trajectory missed the target's sphere of influence, or was not hyperbolic there).
+    SCENARIO is a SEARCH file or a tracking scenario with a [targeting] table. Exit codes: 0
+    converged, 3 diverged, 4 singular (no --write-scenario then), 2 bad input, 1 a case that
+    failed (the trajectory missed the target's sphere of influence, or was not hyperbolic
+    there).
     """
 
     def body() -> int:
-        problem = read_scenario(scenario, earth_orientation_option(earth_orientation))
+        check_paths({"SCENARIO": scenario}, {"--write-scenario": write_scenario})
+        orientation = earth_orientation_option(earth_orientation)
+        data = read_toml(scenario)
+        problem = problem_of(dict(data), scenario, orientation)
+        if write_scenario is not None and orientation is not None and orientation != problem_of(
+                dict(data), scenario, None).program.orientation.model:
+            raise InputError("--write-scenario", str(write_scenario), "no --earth-orientation "
+                             "other than the file's (the written scenario states the file's "
+                             "model)", orientation)
         analytic = analytic_partials or problem.analytic_partials
         start = time.perf_counter()
         run = run_search(problem, analytic_partials=analytic)
@@ -155,8 +230,18 @@ def search_command(
         if json_out:
             print_json(_json(scenario, problem, run, analytic, elapsed))
         else:
-            typer.echo(format_report(run.result, _X_LABELS, _Y_LABELS), nl=False)
+            labels = (tuple(_X_LABELS[i] for i in problem.vary),
+                      tuple(_Y_LABELS[i] for i in problem.targeted))
+            typer.echo(format_report(run.result, *labels), nl=False)
             typer.echo(_summary(problem, run, analytic, elapsed), nl=False)
+        if write_scenario is not None:
+            if run.result.status == "converged":
+                text = _written_scenario(scenario, data, problem, run)
+                atomic_write(write_scenario, lambda tmp: tmp.write_text(text, encoding="utf-8"),
+                             option="--write-scenario")
+            else:
+                typer.echo(f"note: --write-scenario {write_scenario} not written: SEARCH "
+                           f"{run.result.status}", err=True)
         return EXIT_CODE[run.result.status]
 
     code = run_guarded(body)

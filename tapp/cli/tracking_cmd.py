@@ -9,6 +9,7 @@ OEM and the TDM are written together or not at all (:class:`tapp.outputs.OutputS
 from __future__ import annotations
 
 import dataclasses
+import json
 import time
 from pathlib import Path
 from typing import Annotated
@@ -20,19 +21,23 @@ from rich.table import Table
 
 from tapp.ccsds.tdm import format_tdm, tdm_from_tracks, tracks_from_rows
 from tapp.cli.common import (
+    EXIT_FAILURE,
     EarthOrientationOpt,
     app,
     earth_orientation_option,
+    echo_error,
     print_json,
     run_guarded,
 )
+from tapp.cli.search_cmd import EXIT_CODE as SEARCH_EXIT_CODE
 from tapp.od.observations import MadeUnder
 from tapp.od.obsfile import TDM_PREFIX, made_under_statements
 from tapp.outputs import OutputSet, check_paths
 from tapp.tape.files import describe
-from tapp.tape.t13 import summary
+from tapp.tape.t13 import T13, summary, utc_at
 from tapp.tape.t13_hdf5 import write_t13
 from tapp.tape.t32 import format_t32_summary
+from tapp.tracking.encounter import TargetingError
 from tapp.tracking.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem, oem_trajectory
 from tapp.tracking.scenario import Scenario, read_scenario
 from tapp.tracking.simulate import Simulation
@@ -94,6 +99,34 @@ def _tdm_text(sim: Simulation, scenario: Path, parsed: Scenario) -> str:
         "noise-free", *made_under_statements(MadeUnder.of(parsed.orientation), TDM_PREFIX))))
 
 
+def _encounter_dict(tape: T13) -> tuple[dict, dict | None]:
+    """The tape's miss (kind, time, names, nominal values) and its retargeting record."""
+    miss = tape.miss
+    record = tape.provenance.get("targeting")
+    return ({"kind": miss.kind, "t_s": miss.t_s, "utc": utc_at(tape.epoch, miss.t_s),
+             "names": list(miss.name), "nominal": miss.nominal.tolist()},
+            json.loads(record) if record else None)
+
+
+def _print_encounter(console: Console, miss: dict, targeting: dict | None) -> None:
+    """The targeted injection (when SEARCH moved it) and the miss achieved on the tape."""
+    aim = {} if targeting is None else targeting["aim"]
+    if targeting is not None:
+        v0, before = targeting["v0_targeted_km_s"], targeting["v0_file_km_s"]
+        change_m_s = 1e3 * sum((a - b) ** 2 for a, b in zip(v0, before, strict=True)) ** 0.5
+        console.print(
+            f"Injection retargeted by SEARCH ({targeting['first_guess']} first guess; "
+            f"{', '.join(targeting['vary'])} varied)\n  {targeting['status']} in "
+            f"{targeting['cases']} cases, {targeting['partial_sets']} sets of partials, "
+            f"{targeting['wall_time_s']:.2f} s; periapsis radius "
+            f"{targeting['periapsis_radius_km']:.3f} km\n  v0 = "
+            f"[{', '.join(f'{v:.9f}' for v in v0)}] km/s (changed by {change_m_s:.3f} m/s)")
+    console.print(f"Miss ({miss['kind']}) at {miss['utc']} UTC (t = {miss['t_s']:.3f} s):")
+    for name, value in zip(miss["names"], miss["nominal"], strict=True):
+        console.print(f"  {name} = {value:.10g}"
+                      + (f" (aim {aim[name]:.10g})" if name in aim else ""))
+
+
 @app.command()
 def simulate(
     scenario: Annotated[Path, typer.Argument(help="Scenario file (TOML).")],
@@ -108,15 +141,24 @@ def simulate(
     earth_orientation: EarthOrientationOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
-    """TAPP I: simulate the tracking of a scenario and write its T13 tape."""
+    """TAPP I: simulate the tracking of a scenario and write its T13 tape.
 
-    def body() -> None:
+    A B-plane miss must be an encounter (exit 2 naming the closest approach otherwise); a
+    [targeting] table retargets the injection by SEARCH first (exit 3 diverged, 4 singular,
+    1 a case that failed; no tape then).
+    """
+
+    def body() -> int:
         check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
                                              "--tdm": tdm})
-        sim, wall_s, parsed = _simulate_with_bar(scenario, raw or tdm is not None,
-                                                 quiet=json_out,
-                                                 earth_orientation=earth_orientation_option(
-                                                     earth_orientation))
+        try:
+            sim, wall_s, parsed = _simulate_with_bar(scenario, raw or tdm is not None,
+                                                     quiet=json_out,
+                                                     earth_orientation=earth_orientation_option(
+                                                         earth_orientation))
+        except TargetingError as exc:
+            echo_error(exc)
+            return SEARCH_EXIT_CODE.get(exc.status, EXIT_FAILURE)
         tdm_text = None
         if tdm is not None:
             tdm_text = _tdm_text(sim, scenario, parsed)
@@ -142,9 +184,10 @@ def simulate(
                "stations": summary(tape)["stations"], "raw": raw,
                "oem": None if oem is None else str(oem),
                "tdm": None if tdm is None else str(tdm), "wall_s": wall_s}
+        out["miss"], out["targeting"] = _encounter_dict(tape)
         if json_out:
             print_json(out)
-            return
+            return 0
         console = Console(width=100)
         console.print(f"T13 tape {output} ({out['bytes'] / 1e6:.2f} MB) written in "
                       f"{wall_s:.2f} s: n_o = {tape.n_o}, n_p = {tape.n_p}, n_m = {tape.n_m}, "
@@ -155,8 +198,12 @@ def simulate(
             console.print(f"OEM {oem} ({oem_states} states)")
         if tdm is not None:
             console.print(f"TDM {tdm} ({out['observations']} observations)")
+        _print_encounter(console, out["miss"], out["targeting"])
+        return 0
 
-    run_guarded(body)
+    code = run_guarded(body)
+    if code:
+        raise typer.Exit(code)
 
 
 def _editing_table(stations: list[dict]) -> Table:
@@ -215,6 +262,10 @@ def _print_t13(info: dict) -> None:
                   f"{prov.get('created_utc', '?')} from {prov.get('scenario_source', '?')}; "
                   f"Earth orientation {prov.get('earth_orientation', 'gmst (not recorded)')}"
                   + (f", EOP {prov['eop']}" if prov.get("eop") else ""))
+    if prov.get("targeting"):
+        record = json.loads(prov["targeting"])
+        console.print(f"injection retargeted by SEARCH ({record['status']} in {record['cases']} "
+                      "cases) to " + ", ".join(f"{n} = {v:g}" for n, v in record["aim"].items()))
 
 
 @tape_app.command("info")

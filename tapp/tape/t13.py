@@ -51,8 +51,10 @@ from tapp.tape.checks import PACKINGS, SYMMETRY_TOL, Checker, frozen
 from tapp.tape.packing import pack_tr, scaled_difference, tr_diagonal, tr_size
 
 #: Provenance attributes the simulator stamps: the scenario (JSON) and its file, the Earth
-#: orientation model ("iau2006" or "gmst") and the EOP source of the run.
-SCENARIO_PROVENANCE = ("scenario", "scenario_source", "earth_orientation", "eop")
+#: orientation model ("iau2006" or "gmst"), the EOP source of the run and, when SEARCH
+#: retargeted the injection (a ``[targeting]`` table), its record (JSON: aim point, achieved
+#: values, first and targeted injection velocities, cases; empty otherwise).
+SCENARIO_PROVENANCE = ("scenario", "scenario_source", "earth_orientation", "eop", "targeting")
 
 
 def frame_of(provenance: dict[str, str]) -> str:

@@ -3,6 +3,8 @@
 - :mod:`tapp.tracking.scenario`: TOML scenario -> frozen dataclasses;
 - :mod:`tapp.tracking.noise`: fit-world and real-world noise, per-pass AᵀWA and AᵀWMWA;
 - :mod:`tapp.tracking.simulate`: trajectory, partials, records, miss partials -> :class:`T13`;
+- :mod:`tapp.tracking.encounter`: a B-plane miss must be an encounter; ``[targeting]``
+  retargets the injection by SEARCH first;
 - :mod:`tapp.tracking.oem`: CCSDS OEM 2.0 (KVN) writer.
 """
 

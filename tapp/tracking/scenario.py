@@ -48,8 +48,16 @@ ISO strings or TOML dates)::
                        after t_0 = 0; re-epoching as in seed TAPP III §4.1)
     [miss]             kind = "bplane" (body, reference; b_dot_r_km, b_dot_t_km, ltof_s,
                        flight_time_s) | "equinoctial" (a_km, ex, ey, hx, hy, lambda_m_rad) |
-                       "classical" (a_km, e, i_rad, raan_rad, argp_rad, M_rad); time;
-                       quantities (default: all of the kind but flight_time_s)
+                       "classical" (a_km, e, i_rad, raan_rad, argp_rad, M_rad); time (a
+                       B-plane's may be "periapsis": the trajectory's first periapsis at the
+                       body, found as SEARCH finds it); quantities (default: all of the kind
+                       but flight_time_s). A B-plane miss must be an encounter
+                       (tapp.tracking.encounter), checked before anything is written.
+    [targeting]        optional: retarget the injection velocity to a B-plane aim point of the
+                       miss body by SEARCH before simulating (tapp.targeting.scenario_targeting:
+                       targets.b_dot_r_km, targets.b_dot_t_km, targets.flight_time_s, vary,
+                       first_guess, tolerances, increments, SEARCH's iteration control and
+                       scan); needs miss.time = "periapsis" and nominal parameter values
 """
 
 from __future__ import annotations
@@ -87,6 +95,7 @@ from tapp.schema import (
     validate,
 )
 from tapp.stations_file import StationTable
+from tapp.targeting import BPlaneSearch, TargetingTable, scenario_targeting
 from tapp.tomlfile import read_toml
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
@@ -222,7 +231,9 @@ class MissSpec:
     """Miss parameters: ``quantities`` of ``kind`` at time ``t_s`` (s from the epoch).
 
     For "bplane", ``body`` is the target (a third body of the state model) and ``reference``
-    the B-plane reference plane (``tapp.bplane.REFERENCE_POLES``).
+    the B-plane reference plane (``tapp.bplane.REFERENCE_POLES``). ``at_periapsis``: the
+    time is the trajectory's periapsis at the body, NaN here until the simulator finds it
+    (:func:`tapp.tracking.encounter.prepare_encounter`).
     """
 
     kind: str
@@ -230,6 +241,7 @@ class MissSpec:
     quantities: tuple[str, ...]
     body: str = ""
     reference: str = "earth_equator"
+    at_periapsis: bool = False
 
     @property
     def units(self) -> tuple[str, ...]:
@@ -256,6 +268,8 @@ class Scenario:
     stations : tracking stations, numbered 1..n_ts.
     schedule, times, miss : see their classes.
     document_json : the scenario tables as JSON (tape provenance).
+    targeting : the SEARCH problem of a ``[targeting]`` table, run before simulating; None
+        without one (or once run: :func:`tapp.tracking.encounter.prepare_encounter`).
     """
 
     source: str
@@ -275,6 +289,7 @@ class Scenario:
     times: TapeTimes
     miss: MissSpec
     document_json: str
+    targeting: BPlaneSearch | None = None
 
     def propagator(self) -> Propagator:
         """The (state model, variational model, dynamic parameters) propagator."""
@@ -497,6 +512,7 @@ class ScenarioFile(Schema):
     noise: NoiseTable
     times: TimesTable
     miss: MissTable
+    targeting: TargetingTable | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -725,7 +741,11 @@ def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -
             if q not in names:
                 p.fail(f"miss.quantities[{i}]", f"names among {', '.join(names)}", q)
         quantities = tuple(miss.quantities)
-    t_s = p.time_s(last_s if miss.time is None else miss.time, "miss.time")
+    at_periapsis = miss.time == "periapsis"
+    if at_periapsis and kind != "bplane":
+        p.fail("miss.time", 'a time (s or UTC date): "periapsis" is a B-plane\'s', miss.time)
+    t_s = math.nan if at_periapsis else p.time_s(last_s if miss.time is None else miss.time,
+                                                 "miss.time")
     if t_s <= 0:
         p.fail("miss.time", "a time after the injection (> 0 s)", t_s)
     if kind != "bplane":
@@ -738,7 +758,29 @@ def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -
         p.fail("miss.body", f"one of model.third_bodies {list(state_model.third_bodies)}",
                miss.body)
     reference = "earth_equator" if miss.reference is None else miss.reference
-    return MissSpec(kind, t_s, quantities, miss.body, reference)
+    return MissSpec(kind, t_s, quantities, miss.body, reference, at_periapsis)
+
+
+def _targeting(p: _Parser, doc: ScenarioFile, miss: MissSpec, values: tuple,
+               x0: np.ndarray, propagator: Propagator, orientation: EarthOrientation
+               ) -> BPlaneSearch | None:
+    """The SEARCH problem of ``[targeting]`` (None without one), with the rules between it and
+    the other tables: a B-plane miss at "periapsis" (the targeted encounter's time moves with
+    the injection) and nominal model parameters (SEARCH's program flies the nominal model)."""
+    if doc.targeting is None:
+        return None
+    if miss.kind != "bplane":
+        p.fail("miss.kind", '"bplane" with [targeting] (the aim point is in the miss body\'s '
+               "B-plane)", miss.kind)
+    if not miss.at_periapsis:
+        p.fail("miss.time", '"periapsis" with [targeting] (the targeted encounter\'s time moves '
+               "with the injection)", doc.miss.time)
+    if values:
+        p.fail("parameters.values", "no values other than nominal with [targeting] (SEARCH's "
+               "program flies the nominal model)", dict(values))
+    return scenario_targeting(doc.targeting, p.source, epoch=p.epoch, state_km_km_s=x0,
+                              propagator=propagator, body=miss.body, reference=miss.reference,
+                              orientation=orientation)
 
 
 def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = None
@@ -775,9 +817,11 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     orientation.check_covers(np.array([0.0, last_s, schedule.end_s]), source)
     document = json.dumps(data, default=str, sort_keys=True)
     x0.setflags(write=False)
+    targeting = _targeting(p, doc, miss, values, x0, Propagator(state_model, var_model, rtol=rtol,
+                                                                  atol=atol), orientation)
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,
-                    dynamic, values, stations, schedule, times, miss, document)
+                    dynamic, values, stations, schedule, times, miss, document, targeting)
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

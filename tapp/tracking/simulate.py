@@ -95,6 +95,7 @@ from tapp.tape.t13 import (
     TapeStations,
 )
 from tapp.targeting import BPlaneProgram
+from tapp.tracking.encounter import prepare_encounter
 from tapp.tracking.noise import PARTS, pass_rows
 from tapp.tracking.scenario import (
     BIAS_KINDS,
@@ -472,7 +473,9 @@ def _difference(f: Callable[[np.ndarray], np.ndarray], x: np.ndarray, steps: np.
 def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """Return the nominal miss parameters (n_m,) and B = ∂m/∂x(t_0) (n_m, n_o).
 
-    Equations in the module docstring (item 4).
+    Equations in the module docstring (item 4). The miss time must be resolved (a
+    ``"periapsis"`` one is found by :func:`tapp.tracking.encounter.prepare_encounter`, which
+    :func:`simulate` runs first).
 
     Raises
     ------
@@ -531,14 +534,22 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     raw : also keep the per-observation rows (``tape.raw``) for validation.
     progress : called with (stage, step, total) as the work advances.
 
+    A B-plane miss is first checked for an encounter, after the ``[targeting]`` of the
+    scenario has retargeted its injection (:func:`tapp.tracking.encounter.prepare_encounter`):
+    the tape and the trajectory are those of the targeted injection.
+
     Raises
     ------
     InputError
         A schedule that yields no observation (naming the scenario file and ``tracking``);
-        classical miss elements at a singular orbit.
+        classical miss elements at a singular orbit; a B-plane miss without an encounter
+        (:class:`tapp.tracking.encounter.NoEncounterError`).
+    TargetingError
+        SEARCH did not reach the ``[targeting]`` aim point.
     PropagationError, NotHyperbolicError, DivergenceError
         From the integrator, the B-plane and the light-time iteration.
     """
+    scenario, encounter = prepare_encounter(scenario)
     times = scenario.times
     t13, is_epoch, is_input = times.t13_s, times.is_epoch, times.is_input
     n_it = t13.size - 1
@@ -624,7 +635,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                     "earth_orientation": scenario.orientation.model,
                     "eop": scenario.orientation.eop_note + (
                         " (predicted values used)" if scenario.orientation.uses_predicted_eop(
-                            t13) else "")},
+                            t13) else ""), **encounter},
     )
     t_out = np.concatenate([[0.0], arc.t_s])
     states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -15,10 +16,17 @@ from typer.testing import CliRunner
 
 import tapp.cli.tracking_cmd  # noqa: F401  (registers the commands until tapp.cli imports it)
 from tapp.cli.common import app
+from tapp.tape.t13 import utc_at
 from tapp.tape.t13_hdf5 import read_t13
 from tapp.tracking.oem import INTERPOLATION_TOL_KM, INTERPOLATION_TOL_KM_S
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario import parse_scenario, read_scenario
 from tapp.tracking.simulate import EDITING_RULES, simulate
+from tests.tapp.tracking.encounter_reference import (
+    AIM,
+    TARGETING,
+    Reference,
+    moved_deep_space,
+)
 from tests.tapp.tracking.helpers import geo_document, leo_document
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
@@ -178,3 +186,162 @@ def test_oem_read_by_the_oem_package_is_the_simulated_trajectory(
                                    atol=INTERPOLATION_TOL_KM + PRINTED_KM)
         np.testing.assert_allclose(got.velocity, x[3:], rtol=0,
                                    atol=INTERPOLATION_TOL_KM_S + PRINTED_KM_S)
+
+
+# --- encounters and [targeting] (tapp.tracking.encounter) -----------------------------------
+
+DEEP = SCENARIOS / "deep_space.toml"
+#: The brief's 1 km on the aim point; the closest approach's time is refined to 1 s and its
+#: distance printed to 0.1 km; the tape's miss and the reference agree to 1e-4 km, 1e-4 s.
+ONE_KM = 1.0
+TWO_SECONDS = 2.0
+LAST_PRINTED_DIGIT_km = 0.1
+ONE_METRE_km = 1e-3
+ONE_MILLISECOND_s = 1e-3
+#: The retargeting of the moved epoch moves the injection velocity by 1.2 km/s (measured).
+A_HUNDRED_M_PER_S_km_s = 0.1
+
+
+def _moved(tmp_path: Path, targeting: str | None = None, name: str = "moved.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(moved_deep_space(DEEP.read_text(), targeting=targeting))
+    return path
+
+
+def test_moved_epoch_is_refused_naming_the_closest_approach(tmp_path: Path) -> None:
+    """deep_space.toml one day later with its injection unchanged: exit 2, one line naming
+    the file, the miss and the closest approach (km from the Moon's centre, UTC, s from the
+    epoch) as the reference trajectory has it, and how to retarget; nothing written."""
+    path = _moved(tmp_path)
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "run.t13.h5")])
+    assert res.exit_code == 2, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {path}: miss: expected a moon "
+                                                   "encounter at the miss time"), lines
+    assert "[targeting]" in lines[0]
+    found = re.search(r"closest approach ([\d,.]+) km from the moon's centre at (\S+) UTC "
+                      r"\(t = (\d+) s from the epoch\)", lines[0])
+    distance_km, utc, t_s = float(found[1].replace(",", "")), found[2], float(found[3])
+    scenario = read_scenario(path)
+    ref = Reference(scenario, np.array(scenario.x0), t_s + 3600.0)
+    fine = np.arange(t_s - 1800.0, t_s + 1800.0, 0.5)
+    distance = ref.distance_km(fine)
+    assert distance_km == pytest.approx(distance.min(), abs=LAST_PRINTED_DIGIT_km)
+    assert t_s == pytest.approx(fine[np.argmin(distance)], abs=TWO_SECONDS)
+    assert utc == utc_at(scenario.epoch, t_s)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["moved.toml"]
+
+
+@pytest.fixture(scope="module")
+def retargeted_run(tmp_path_factory) -> tuple[Path, dict, str]:
+    """``tapp simulate`` of the moved scenario with a [targeting] table: (tape, JSON, text)."""
+    folder = tmp_path_factory.mktemp("retarget")
+    path = _moved(folder, TARGETING)
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(folder / "run.t13.h5"),
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    text = runner.invoke(app, ["simulate", str(path), "-o", str(folder / "text.t13.h5")])
+    assert text.exit_code == 0, text.output
+    return folder / "run.t13.h5", json.loads(res.stdout), text.stdout
+
+
+def test_retargeted_tape_lands_on_the_aim_point(retargeted_run) -> None:
+    """The tape's injection (its orbit parameters' nominal values), flown by the reference
+    trajectory, has its periapsis B-plane within 1 km of the aim point; the tape's own miss
+    agrees with the reference and the tape records the retargeting."""
+    tape_path, out, _ = retargeted_run
+    tape = read_t13(tape_path)
+    record = json.loads(tape.provenance["targeting"])
+    assert out["targeting"] == record and record["status"] == "converged"
+    x0 = tape.parameters.nominal[:6]
+    np.testing.assert_array_equal(x0[3:], record["v0_targeted_km_s"])
+    assert np.linalg.norm(x0[3:] - record["v0_file_km_s"]) > A_HUNDRED_M_PER_S_km_s
+    scenario = read_scenario(tape.provenance["scenario_source"])
+    ref = Reference(scenario, x0, tape.miss.t_s + 7200.0)
+    t_p, b_r, b_t = ref.periapsis_b_plane(tape.miss.t_s)
+    assert abs(b_r - AIM["b_dot_r_km"]) < ONE_KM and abs(b_t - AIM["b_dot_t_km"]) < ONE_KM
+    np.testing.assert_allclose(tape.miss.nominal[:2], [b_r, b_t], rtol=0, atol=ONE_METRE_km)
+    assert tape.miss.nominal[2] == pytest.approx(t_p, abs=ONE_MILLISECOND_s)
+    assert out["miss"]["names"] == ["b_dot_r_km", "b_dot_t_km", "flight_time_s"]
+
+
+def test_simulate_prints_the_targeted_injection_and_the_miss(retargeted_run) -> None:
+    _, out, text = retargeted_run
+    v0 = out["targeting"]["v0_targeted_km_s"]
+    assert "Injection retargeted by SEARCH (conic first guess" in text
+    assert f"v0 = [{v0[0]:.9f}, {v0[1]:.9f}, {v0[2]:.9f}] km/s" in text
+    assert f"b_dot_t_km = {out['miss']['nominal'][1]:.10g} (aim 5300)" in text
+
+
+@pytest.mark.parametrize(("edit", "field"), [
+    (("b_dot_r_km = -2000.0", 'b_dot_r_km = "-2000"'), "targeting.targets.b_dot_r_km"),
+    (("flight_time_s = 309958.384", "flight_time_s = -1.0"),
+     "targeting.targets.flight_time_s"),
+    (("flight_time_s = 309958.384", "flight_time_s = 9e9"), "targeting.targets.flight_time_s"),
+    (("flight_time_s = 309958.384", ""), "targeting.vary"),
+    (('first_guess = "conic"', 'first_guess = "conic"\nvary = ["vx_km_s", "vw_km_s"]'),
+     "targeting.vary[1]"),
+    (('first_guess = "conic"', 'first_guess = "conic"\nvary = ["vx_km_s", "vy_km_s"]'),
+     "targeting.vary"),
+    (('first_guess = "conic"', 'first_guess = "lambert"'), "targeting.first_guess"),
+    (('first_guess = "conic"', 'first_guess = "conic"\npartial_sets = 0'),
+     "targeting.partial_sets"),
+    (('first_guess = "conic"', 'first_guess = "conic"\nscan_step_s = 1e9'),
+     "targeting.scan_step_s"),
+    (('first_guess = "conic"', 'first_guess = "conic"\naim = 1.0'), "targeting.aim"),
+    (("b_dot_r_km = 0.1", "b_dot_r_km = 0.0"), "targeting.tolerances.b_dot_r_km"),
+    (("[targeting.tolerances]", "[targeting.increments]\nvz_km_s = 0.0\n\n"
+      "[targeting.tolerances]"), "targeting.increments.vz_km_s"),
+    (('time = "periapsis"', 'time = "2026-03-15T02:05:58.384"'), "miss.time"),
+    (('dynamic = ["GM", "GM_moon"]', 'dynamic = ["GM", "GM_moon"]\nvalues = {GM_moon = 4900.0}'),
+     "parameters.values"),
+])
+def test_bad_targeting_fields_are_one_line_naming_the_field(tmp_path: Path, edit, field: str
+                                                            ) -> None:
+    old, new = edit
+    text = moved_deep_space(DEEP.read_text(), targeting=TARGETING)
+    assert old in text, old
+    path = tmp_path / "bad.toml"
+    path.write_text(text.replace(old, new, 1))
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "run.t13.h5")])
+    assert res.exit_code == 2, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {path}: {field}: expected"), lines
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]
+
+
+def test_targeting_needs_a_b_plane_miss(tmp_path: Path) -> None:
+    path = tmp_path / "leo.toml"
+    path.write_text(LEO.read_text() + TARGETING)
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "run.t13.h5")])
+    assert res.exit_code == 2
+    assert res.stderr.startswith(f"error: {path}: miss.kind: expected \"bplane\" with")
+
+
+@pytest.mark.parametrize(("table", "code", "says"), [
+    (TARGETING.replace('first_guess = "conic"', 'first_guess = "conic"\n'
+                       "iterations_per_partials = 1\npartial_sets = 1"), 3, "SEARCH diverged"),
+    (TARGETING.replace('first_guess = "conic"', 'first_guess = "injection"'), 1,
+     'SEARCH failed: search case'),
+])
+def test_a_search_that_does_not_converge_writes_no_tape(tmp_path: Path, table: str, code: int,
+                                                        says: str) -> None:
+    """Diverged: SEARCH's exit 3; a case that left the Moon's sphere of influence (from the
+    stale injection): exit 1. One line each, no tape."""
+    path = _moved(tmp_path, table)
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "run.t13.h5")])
+    assert res.exit_code == code, res.output
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {path}: targeting: {says}"), lines
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["moved.toml"]
+
+
+def test_tape_info_says_the_injection_was_retargeted(retargeted_run, tmp_path: Path) -> None:
+    tape_path, out, _ = retargeted_run
+    res = runner.invoke(app, ["tape", "info", str(tape_path)])
+    assert res.exit_code == 0, res.output
+    assert (f"injection retargeted by SEARCH (converged in {out['targeting']['cases']} cases) "
+            "to b_dot_r_km = -2000, b_dot_t_km = 5300") in " ".join(res.stdout.split())
+    plain = tmp_path / "leo.t13.h5"
+    assert runner.invoke(app, ["simulate", str(LEO), "-o", str(plain)]).exit_code == 0
+    assert "retargeted" not in runner.invoke(app, ["tape", "info", str(plain)]).stdout
