@@ -164,9 +164,11 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
                        n_cases=sweep.n_cases, created_utc=created_utc,
                        updated_utc=_utc_now())
 
+    console = Console(stderr=True)  # the bar on a terminal only: elsewhere it adds lines
     bar = Progress(TextColumn("[bold]iter"), BarColumn(), MofNCompleteColumn(),
                    TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(),
-                   TimeRemainingColumn(), console=Console(stderr=True), disable=not progress)
+                   TimeRemainingColumn(), console=console,
+                   disable=not progress or not console.is_terminal)
     with open_executor(execution) as executor, bar:
         chunk_size = execution.chunk_size or (
             1 if execution.serial else default_chunk_size(len(pending), executor.slots))

@@ -73,6 +73,8 @@ from typing import Annotated, Any, TypeVar
 
 import numpy as np
 import typer
+from rich.console import Console
+from rich.progress import Progress, ProgressColumn
 from typer.core import TyperGroup
 
 from tapp import __version__
@@ -275,6 +277,14 @@ def run_guarded(fn: Callable[[], T]) -> T:
         typer.echo("error: out of memory (an input asks for more than this machine has)",
                    err=True)
         raise typer.Exit(EXIT_FAILURE) from None
+
+
+def progress_bar(*columns: ProgressColumn | str, quiet: bool) -> Progress:
+    """A transient rich progress bar on stderr, shown on a terminal only: elsewhere rich
+    draws nothing but leaves an empty line, which would sit above a failure's one line."""
+    console = Console(stderr=True)
+    return Progress(*columns, console=console, disable=quiet or not console.is_terminal,
+                    transient=True)
 
 
 def echo_error(exc: BaseException) -> None:

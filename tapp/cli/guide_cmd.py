@@ -17,8 +17,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
 from iter import SchedulerError
 from iter.execute import CONNECT_TIMEOUT_S, Execution
@@ -30,6 +29,7 @@ from tapp.cli.common import (
     app,
     execution_options,
     print_json,
+    progress_bar,
     run_guarded,
     scheduler_error,
 )
@@ -59,8 +59,7 @@ def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Executio
     t32 = read_t32(tape)
     columns = (TextColumn("{task.description:<8}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("samples"), TimeElapsedColumn())
-    with Progress(*columns, console=Console(stderr=True), disable=quiet,
-                  transient=True) as bar:
+    with progress_bar(*columns, quiet=quiet) as bar:
         task = bar.add_task("TAPP II", total=samples)
 
         def progress(done: int, total: int) -> None:

@@ -14,7 +14,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
 from iter import SchedulerError
 from iter.execute import CONNECT_TIMEOUT_S
@@ -28,6 +28,7 @@ from tapp.cli.common import (
     earth_orientation_option,
     execution_options,
     print_json,
+    progress_bar,
     run_guarded,
     scheduler_error,
 )
@@ -64,8 +65,7 @@ def pipeline_cmd(
         execution = execution_options(scheduler, workers, connect_timeout_s, serial)
         columns = (TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(),
                    TimeElapsedColumn())
-        with Progress(*columns, console=Console(stderr=True), disable=json_out,
-                      transient=True) as bar:
+        with progress_bar(*columns, quiet=json_out) as bar:
             task = bar.add_task("pipeline", total=None)
 
             def progress(stage: str, done: int, total: int) -> None:

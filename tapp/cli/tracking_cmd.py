@@ -16,7 +16,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from tapp.ccsds.tdm import format_tdm, tdm_from_tracks, tracks_from_rows
@@ -27,6 +27,7 @@ from tapp.cli.common import (
     earth_orientation_option,
     echo_error,
     print_json,
+    progress_bar,
     run_guarded,
 )
 from tapp.cli.search_cmd import EXIT_CODE as SEARCH_EXIT_CODE
@@ -56,8 +57,7 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: st
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
         "{task.completed}/{task.total}"), TimeElapsedColumn())
-    with Progress(*columns, console=Console(stderr=True), disable=quiet,
-                  transient=True) as bar:
+    with progress_bar(*columns, quiet=quiet) as bar:
         task = bar.add_task("TAPP I", total=None)
 
         def progress(stage: str, done: int, total: int) -> None:
