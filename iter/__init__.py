@@ -23,7 +23,15 @@ of :mod:`iter.execute`) does not load h5py.
 import importlib
 
 from .body import CallableBody, ProgramBody, input_check, resolve_callable, run_case
-from .errors import AllCasesFailed, IterError, ResultFileError, SchedulerError, SweepInputError
+from .errors import (
+    AllCasesFailed,
+    ClusterError,
+    IterError,
+    ResultFileError,
+    ResultWriteError,
+    SchedulerError,
+    SweepInputError,
+)
 from .execute import Execution, probe_scheduler
 from .loops import Case, Loop, case_count, generate_cases
 from .sweep import Sweep
@@ -31,11 +39,12 @@ from .sweepfile import load_sweep, parse_sweep
 from .table import CaseResult, CaseStatus, ResultTable
 
 __all__ = [
-    "AllCasesFailed", "CallableBody", "Case", "CaseResult", "CaseStatus", "Execution",
-    "IterError", "Loop", "ProgramBody", "ResultFileError", "ResultTable", "SchedulerError",
-    "Sweep", "SweepInputError", "SweepResult", "SweepSummary", "case_count", "generate_cases",
-    "input_check", "load_sweep", "parse_sweep", "probe_scheduler", "read_hdf5",
-    "resolve_callable", "run_case", "run_sweep", "write_csv", "write_hdf5",
+    "AllCasesFailed", "CallableBody", "Case", "CaseResult", "CaseStatus", "ClusterError",
+    "Execution", "IterError", "Loop", "ProgramBody", "ResultFileError", "ResultTable",
+    "ResultWriteError", "SchedulerError", "Sweep", "SweepInputError", "SweepResult",
+    "SweepSummary", "case_count", "generate_cases", "input_check", "load_sweep", "parse_sweep",
+    "probe_scheduler", "read_hdf5", "resolve_callable", "run_case", "run_sweep", "write_csv",
+    "write_hdf5",
 ]
 
 #: Public names imported on first use, and their modules (which load h5py).

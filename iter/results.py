@@ -51,7 +51,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .errors import ResultFileError
+from .errors import ResultFileError, ResultWriteError
 from .table import CaseResult, CaseStatus, OutputValue, ResultTable
 
 FORMAT_NAME = "iter-results"
@@ -143,8 +143,7 @@ def _atomic_path(path: Path) -> Iterator[Path]:
         yield tmp
         os.replace(tmp, path)
     except OSError as exc:
-        raise ResultFileError(str(path), "file", "a writable file",
-                              exc.strerror or type(exc).__name__) from None
+        raise ResultWriteError(str(path), exc) from None
     finally:
         if tmp.exists():  # False, not an error, when the directory is unusable
             tmp.unlink()
