@@ -65,10 +65,18 @@ file and CSV, which record the failures.
 
 from __future__ import annotations
 
+import fcntl
+import io
 import json
 import math
+import os
+import shutil
+import signal
 import sys
-from collections.abc import Callable, Sequence
+import tempfile
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
 import numpy as np
@@ -77,6 +85,7 @@ from rich.console import Console
 from rich.progress import Progress, ProgressColumn
 from typer.core import TyperGroup
 
+from iter.errors import ClusterError
 from tapp import __version__
 from tapp.errors import InputError, TapeError, TappError
 
@@ -85,25 +94,178 @@ _ClickException = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "C
 
 
 class _OneLineErrors(TyperGroup):
-    """The root group: a usage error (a bad or missing option) is one line, exit 2."""
+    """The root group, the CLI's edge: a usage error (a bad or missing option) is one line,
+    exit 2; SIGINT and SIGTERM stop the run with one line (exit 130 and 143,
+    :class:`Interrupted`); standard output that cannot be written is one line, exit 1; the
+    run's temporaries live in a private folder removed at the end (:func:`run_folder`)."""
 
     def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,
              complete_var: str | None = None, standalone_mode: bool = True,
              **extra: Any) -> Any:
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        _hold_standard_output()
         try:
-            code = super().main(args, prog_name, complete_var, False, **extra)
+            with stopping_on_signals(), run_folder():
+                code = super().main(args, prog_name, complete_var, False, **extra)
+                sys.stdout.flush()  # here, where a failure is one line, not at exit
         except _ClickException as exc:
             if type(exc).__name__ == "NoArgsIsHelpError":  # `tapp` alone: the help
                 exc.show()
                 sys.exit(exc.exit_code)
             typer.echo(f"error: {_usage_message(exc)}", err=True)
-            sys.exit(exc.exit_code)
+            code = exc.exit_code
         except typer.Abort:
             typer.echo("error: aborted", err=True)
-            sys.exit(EXIT_FAILURE)
+            code = EXIT_FAILURE
+        except Interrupted as exc:
+            typer.echo(f"error: {exc.what} ({exc})", err=True)
+            code = exc.exit_code
+        except OSError as exc:
+            code = report_os_error(exc)
         sys.exit(code if isinstance(code, int) else 0)
+
+
+#: The signals that stop a run cleanly (:class:`Interrupted`).
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: Prefix of the private temporary folder of each command-line run (:func:`run_folder`).
+RUN_FOLDER_PREFIX = "tapp-run-"
+
+
+class Interrupted(BaseException):
+    """SIGINT (Ctrl-C) or SIGTERM asked the run to stop.
+
+    Raised by the CLI's signal handlers (:func:`stopping_on_signals`) in place of a
+    KeyboardInterrupt, which click turns into a silent exit and SIGTERM does not raise at
+    all: it unwinds the stack like any exception, so every ``finally`` and context manager
+    runs (temporaries removed, an ITER sweep checkpointed, a Dask cluster stopped), up to the
+    root command, which prints one line and exits 128 + the signal's number.
+    """
+
+    def __init__(self, signum: int):
+        self.signum = signum
+        self.exit_code = 128 + signum
+        self.what = "interrupted" if signum == signal.SIGINT else "terminated"
+        super().__init__(signal.Signals(signum).name)
+
+
+def _stop(signum: int, frame: object) -> None:
+    for sig in STOP_SIGNALS:  # a second Ctrl-C would cut the clean-up short
+        signal.signal(sig, signal.SIG_IGN)
+    raise Interrupted(signum)
+
+
+@contextmanager
+def stopping_on_signals() -> Iterator[None]:
+    """While the block runs, SIGINT and SIGTERM raise :class:`Interrupted` (once: while the
+    run cleans up, further ones are ignored; SIGKILL still stops it, and the next run
+    removes what it left)."""
+    saved = {sig: signal.signal(sig, _stop) for sig in STOP_SIGNALS}
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+
+
+class StandardOutputError(OSError):
+    """Standard output could not be written: closed, full, or nothing reads it (a broken
+    pipe). Its own class: rich turns a BrokenPipeError into a silent exit."""
+
+
+class _StandardOutput(io.FileIO):
+    """File descriptor 1, whose failed writes raise :class:`StandardOutputError`."""
+
+    def write(self, data: Any) -> int | None:
+        try:
+            return super().write(data)
+        except OSError as exc:
+            raise StandardOutputError(exc.errno, exc.strerror) from None
+
+
+def _hold_standard_output() -> None:
+    """Write standard output through :class:`_StandardOutput` (a test harness's own stream
+    is left alone).
+
+    Standard output closed at start (``>&-``) is held open on /dev/null for reading: writes
+    then fail as on a closed stream (EBADF), and no file the run opens takes descriptor 1.
+    """
+    current = sys.stdout
+    if current is not None and current is not sys.__stdout__:
+        return
+    if current is None:
+        fd = os.open(os.devnull, os.O_RDONLY)
+        if fd != 1:
+            os.dup2(fd, 1)
+            os.close(fd)
+    else:
+        current.flush()
+    sys.stdout = io.TextIOWrapper(
+        io.BufferedWriter(_StandardOutput(1, "w", closefd=False)),
+        encoding=getattr(current, "encoding", None) or "utf-8",
+        errors=getattr(current, "errors", None), line_buffering=bool(
+            getattr(current, "line_buffering", False)))
+
+
+def report_os_error(exc: OSError) -> int:
+    """Write the one line of an OSError that no command turned into a TappError (standard
+    output that cannot be written, named so); return the exit code, 1."""
+    if isinstance(exc, StandardOutputError):
+        typer.echo(f"error: standard output: not written ({exc.strerror})", err=True)
+        devnull = os.open(os.devnull, os.O_WRONLY)  # what is still buffered: dropped at exit
+        os.dup2(devnull, 1)
+        os.close(devnull)
+    else:
+        echo_error(exc)
+    return EXIT_FAILURE
+
+
+@contextmanager
+def run_folder() -> Iterator[Path]:
+    """Give the run, and every process it starts, a private temporary folder; remove it when
+    the block ends, however it ends.
+
+    The folder ``tapp-run-<random>`` is made in the system's temporary folder and becomes
+    :mod:`tempfile`'s and, through ``TMPDIR``, that of the processes the run starts: the
+    Dask cluster's scratch space, ITER's case processes and what they make all go with it.
+    It is locked (``flock``) while the run lives, and folders of earlier runs that are no
+    longer locked (killed by SIGKILL) are removed on entering.
+    """
+    base = Path(tempfile.gettempdir())
+    _remove_unlocked(base.glob(f"{RUN_FOLDER_PREFIX}*"))
+    # Locked before it takes a name another run's clean-up looks for.
+    new = Path(tempfile.mkdtemp(prefix=f".{RUN_FOLDER_PREFIX}"))
+    lock = os.open(new, os.O_RDONLY)
+    fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    folder = new.rename(base / new.name[1:])
+    saved = tempfile.tempdir, os.environ.get("TMPDIR")
+    tempfile.tempdir = os.environ["TMPDIR"] = str(folder)
+    try:
+        yield folder
+    finally:
+        tempfile.tempdir = saved[0]
+        if saved[1] is None:
+            del os.environ["TMPDIR"]
+        else:
+            os.environ["TMPDIR"] = saved[1]
+        shutil.rmtree(folder, ignore_errors=True)
+        os.close(lock)
+
+
+def _remove_unlocked(folders: Iterator[Path]) -> None:
+    """Remove the run folders that no live run holds locked."""
+    for folder in folders:
+        try:
+            fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+        except OSError:  # gone meanwhile, not a folder, or another user's
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            shutil.rmtree(folder, ignore_errors=True)
+        except BlockingIOError:  # a live run holds it
+            pass
+        finally:
+            os.close(fd)
 
 
 def _usage_message(exc: Exception) -> str:
@@ -264,12 +426,12 @@ def run_guarded(fn: Callable[[], T]) -> T:
     except (InputError, TapeError) as exc:
         echo_error(exc)
         raise typer.Exit(EXIT_INPUT) from None
-    except TappError as exc:
+    except (TappError, ClusterError) as exc:
         echo_error(exc)
         raise typer.Exit(EXIT_FAILURE) from None
     except OSError as exc:
-        if exc.filename is None:
-            raise
+        if exc.filename is None:  # standard output among them
+            raise typer.Exit(report_os_error(exc)) from None
         typer.echo(f"error: {exc.filename}: file: expected an accessible file "
                    f"(got {exc.strerror or type(exc).__name__!r})", err=True)
         raise typer.Exit(EXIT_INPUT) from None

@@ -36,7 +36,7 @@ from tapp.od.obsfile import TDM_PREFIX, made_under_statements
 from tapp.outputs import OutputSet, check_paths
 from tapp.tape.files import describe
 from tapp.tape.t13 import T13, summary, utc_at
-from tapp.tape.t13_hdf5 import write_t13
+from tapp.tape.t13_hdf5 import t13_file_writer
 from tapp.tape.t32 import format_t32_summary
 from tapp.tracking.encounter import TargetingError
 from tapp.tracking.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem, oem_trajectory
@@ -72,7 +72,7 @@ def _outputs(output: Path, sim: Simulation, oem: Path | None,
              tdm_text: str | None = None) -> OutputSet:
     """The tape, the OEM and the TDM, to be written together or not at all."""
     outputs = OutputSet()
-    outputs.add("-o/--output", output, lambda tmp: write_t13(tmp, sim.tape))
+    outputs.add("-o/--output", output, t13_file_writer(sim.tape, source=str(output)))
     if oem is not None:
         outputs.add("--oem", oem, lambda tmp: tmp.write_text(oem_text, encoding="utf-8"))
     if tdm is not None:

@@ -6,8 +6,10 @@ between the three commands (the T13 tape is written, then read lazily by the pro
 T32 tape is written, then read back by the guidance study), so the pipeline gives the same
 numbers as the three commands run one after another (tested).
 
-Outputs (:data:`OUTPUTS`) are written into a hidden directory beside ``out_dir`` and renamed
-to it at the end: a failed or interrupted run leaves no partial directory.
+Outputs (:data:`OUTPUTS`) are written into a hidden directory ``.NAME.<random>.tmp`` beside
+``out_dir`` and renamed to it at the end: a failed or interrupted run leaves no partial
+directory, and no folder it made to hold ``out_dir``; the hidden directory of an earlier run
+that was killed (SIGKILL) is removed by the next run to the same ``out_dir``.
 """
 
 from __future__ import annotations
@@ -27,14 +29,22 @@ from iter.execute import Execution
 from tapp.errors import InputError
 from tapp.guidance.guidefile import GuideFile
 from tapp.guidance.study import GuidanceResult, check_samples, check_seed, guidance_study
+from tapp.outputs import (
+    check_folder,
+    make_folders,
+    remove_empty_folders,
+    remove_stale_temporaries,
+    temporary_name,
+    unwritable,
+)
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
 from tapp.pipeline.steps import process_tape
 from tapp.processor.deck import Deck
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.schema import validate
-from tapp.tape.t13_hdf5 import write_t13
-from tapp.tape.t32_hdf5 import read_t32, write_t32
+from tapp.tape.t13_hdf5 import t13_file_writer
+from tapp.tape.t32_hdf5 import read_t32, t32_file_writer
 from tapp.tracking.scenario import Scenario, parse_scenario
 from tapp.tracking.simulate import simulate
 
@@ -69,18 +79,29 @@ def _nothing(stage: str, done: int, total: int) -> None:
     """The default progress callback."""
 
 
+#: The option that names a pipeline's directory, in messages.
+OUTPUT_OPTION = "-o/--output"
+
+
 def check_out_dir(out_dir: Path) -> Path:
-    """Return ``out_dir`` if it does not exist or is an empty directory, else raise.
+    """Return ``out_dir`` if it does not exist or is an empty directory in a folder that can
+    be written, else raise.
 
     Raises
     ------
     InputError
-        Naming ``-o`` : a file, or a directory with something in it (never overwritten).
+        Naming ``-o`` : a file, a directory with something in it (never overwritten), a
+        symbolic link (the run's directory is renamed into place: it would replace the
+        link), or a path in a folder that is a file or cannot be written.
     """
     out_dir = Path(out_dir)
+    if out_dir.is_symlink():
+        raise InputError(OUTPUT_OPTION, "directory", "a new or empty directory, not a symbolic "
+                         "link (the finished run is renamed into place)", str(out_dir))
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
-        raise InputError("-o/--output", "directory", "a new or empty directory (a pipeline "
+        raise InputError(OUTPUT_OPTION, "directory", "a new or empty directory (a pipeline "
                          "never overwrites an earlier run)", str(out_dir))
+    check_folder(OUTPUT_OPTION, out_dir)
     return out_dir
 
 
@@ -91,19 +112,30 @@ def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | No
     Raises
     ------
     InputError
-        From any part (naming its file or the pipeline file and the part), or ``out_dir``.
+        From any part (naming its file or the pipeline file and the part), or ``out_dir``
+        (naming ``-o``, also when it cannot be written).
+    WriteError
+        ``out_dir`` could not be written for want of room, or a device error.
     """
     out_dir = check_out_dir(out_dir)
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
+    work = temporary_name(out_dir)
+    created: list[Path] = []
     try:
+        created += make_folders(out_dir.parent)
+        remove_stale_temporaries(out_dir)
+        work.mkdir()
         result = _run(pipeline, work, execution, plots, progress)
         if out_dir.exists():
             out_dir.rmdir()
         work.rename(out_dir)
-    except BaseException:
-        shutil.rmtree(work, ignore_errors=True)
-        raise
+    except OSError as exc:
+        # A failed write() names no file: the run writes only into its directory.
+        if exc.filename is not None and not Path(exc.filename).is_relative_to(out_dir.parent):
+            raise  # not the output's (a file read on the way)
+        raise unwritable(OUTPUT_OPTION, out_dir, exc, "a writable directory") from None
+    finally:
+        shutil.rmtree(work, ignore_errors=True)  # renamed away when the run succeeded
+        remove_empty_folders(created)  # the one holding out_dir is not empty: kept
     return replace(result, directory=out_dir)
 
 
@@ -132,7 +164,7 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
     sim = simulate(scenario, progress=lambda stage, done, total: progress(
         f"TAPP I: {stage}", done, total))
     t13_path = work / OUTPUTS["t13"]
-    write_t13(t13_path, sim.tape)
+    t13_file_writer(sim.tape, source=t13_path.name)(t13_path)
     wall["simulate"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -143,8 +175,8 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
                                               str(t13_path.name)), "utf-8")
     (work / OUTPUTS["process_json"]).write_text(json.dumps(content), "utf-8")
     t32_path = work / OUTPUTS["t32"]
-    write_t32(t32_path, build_t32(run, plan, header, t32_provenance(
-        header, deck, pipeline.deck.source, t13_path.name)))
+    t32_file_writer(build_t32(run, plan, header, t32_provenance(
+        header, deck, pipeline.deck.source, t13_path.name)), source=t32_path.name)(t32_path)
     wall["process"] = time.perf_counter() - start
 
     start = time.perf_counter()
