@@ -16,36 +16,28 @@ failure).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
-from iter import (
-    Execution,
-    IterError,
-    ResultFileError,
-    SchedulerError,
-    SweepInputError,
-    SweepResult,
-    load_sweep,
-    run_sweep,
-)
 from iter.execute import CONNECT_TIMEOUT_S
-from iter.table import CaseStatus
 from tapp.cli.common import (
+    STDOUT,
     ConnectTimeoutOpt,
+    JsonOpt,
     SchedulerOpt,
     SerialOpt,
     WorkersOpt,
     app,
-    print_json,
+    json_file,
     run_guarded,
     scheduler_error,
+    write_json,
 )
 from tapp.errors import InputError, TappError
-from tapp.outputs import check_paths
+
+if TYPE_CHECKING:
+    from iter import SweepResult
 
 #: Failed cases listed under the summary table (the rest are in the results file).
 MAX_FAILURES_SHOWN = 10
@@ -69,30 +61,39 @@ def iter_command(
         int | None, typer.Option("--chunk-size", help="Cases per Dask task [default: auto].")
     ] = None,
     connect_timeout_s: ConnectTimeoutOpt = CONNECT_TIMEOUT_S,
-    json_output: Annotated[
-        bool, typer.Option("--json", help="Print the summary as one JSON object.")
-    ] = False,
+    json_out: JsonOpt = None,
 ) -> None:
     """Run every case of SWEEP_FILE (seed section VI, ITER) and write the results table.
 
     Paths in the sweep file are taken from its folder. Failing cases are recorded with their
     message and do not stop the sweep; if every case fails, the command exits 1 with the
     first case's error. Running again with the same results file resumes: cases already OK
-    are skipped.
+    are skipped. --json: the summary.
     """
     h5_path = output if output is not None else Path(sweep_file.stem + ".h5")
 
     def run() -> None:
-        check_paths({"SWEEP_FILE": sweep_file}, {"-o/--output": h5_path, "--csv": csv})
+        from iter import (
+            Execution,
+            IterError,
+            ResultFileError,
+            SchedulerError,
+            SweepInputError,
+            load_sweep,
+            run_sweep,
+        )
+        from tapp.outputs import check_paths
+
+        check_paths({"SWEEP_FILE": sweep_file}, {"-o/--output": h5_path, "--csv": csv,
+                                                 "--json": json_file(json_out)})
         try:
             execution = Execution(serial=serial, scheduler=scheduler, workers=workers,
                                   chunk_size=chunk_size, connect_timeout_s=connect_timeout_s)
             sweep = load_sweep(sweep_file)
             result = run_sweep(sweep, output_h5=h5_path, output_csv=csv, execution=execution,
-                               progress=not json_output)
-            if json_output:
-                print_json(_summary_dict(result))
-            else:
+                               progress=json_out != STDOUT)
+            write_json(json_out, _summary_dict(result))
+            if json_out != STDOUT:
                 _print_summary(result)
             result.raise_if_all_failed()
         except SweepInputError as exc:
@@ -110,6 +111,8 @@ def iter_command(
 
 
 def _summary_dict(result: SweepResult) -> dict[str, object]:
+    from iter import CaseStatus
+
     summary = result.summary
     return {
         "n_cases": summary.n_cases, "n_succeeded": summary.n_succeeded,
@@ -122,6 +125,11 @@ def _summary_dict(result: SweepResult) -> dict[str, object]:
 
 
 def _print_summary(result: SweepResult) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    from iter import CaseStatus
+
     summary = result.summary
     table = Table(title="ITER sweep", show_header=False)
     table.add_column("item", style="bold")
