@@ -157,12 +157,12 @@ import argparse, json
 parser = argparse.ArgumentParser()
 parser.add_argument("--azimuth_deg", type=float, required=True)
 parser.add_argument("--scale", type=float, required=True)
-parser.add_argument("--json", action="store_true")
+parser.add_argument("--json")
 args = parser.parse_args()
 if args.azimuth_deg == 102.0:
     raise SystemExit("refusing 102 deg")
 print(json.dumps({"scaled_deg": args.scale * args.azimuth_deg, "r_km": [1, 2],
-                  "meta": {"json_flag": args.json, "label": "ok", "none": None}}))
+                  "meta": {"json_to": args.json, "label": "ok", "none": None}}))
 """
 
 
@@ -178,7 +178,7 @@ def test_program_body_outputs_and_failures():
     outputs = dict(rows[0].outputs)
     assert math.isnan(outputs.pop("meta.none"))
     assert outputs == {"scaled_deg": 192.0, "r_km[0]": 1.0, "r_km[1]": 2.0,
-                       "meta.json_flag": 1.0, "meta.label": "ok"}
+                       "meta.json_to": "-", "meta.label": "ok"}
     assert rows[2].error == (f"CaseFailure: {sys.executable} exited with status 1: "
                              "refusing 102 deg")
 
