@@ -52,11 +52,11 @@ MAX_WORKERS_PER_CORE = 4
 #: Address schemes accepted for ``scheduler``.
 SCHEDULER_SCHEMES = ("tcp", "tls")
 #: Projected serial work, s, below which an automatic execution runs in this process: on 2
-#: cores a local cluster of 2 workers costs about 3 s more than this process (starting and
+#: cores a local cluster of 2 workers costs 3 to 7 s more than this process (starting and
 #: stopping it, the body imported in the workers) and saves at most half of every second of
-#: work, so it pays from about 6 s of work (``make bench``, section ``cli``: 5.4 s on a
-#: loaded machine, cases of 0.09 s).
-DASK_MIN_WORK_S = 6.0
+#: work; it paid from 5.4, 11.9 and 13.9 s of work in three runs of ``make bench``
+#: (section ``cli``, cases of 0.07-0.1 s, the machine's load average 3 to 7).
+DASK_MIN_WORK_S = 10.0
 #: Settings of Dask's ``distributed.nanny.pre-spawn-environ`` for a local cluster's workers:
 #: one BLAS thread each (the workers share the cores: more threads only compete for them,
 #: which made small solves up to 10x slower on a loaded machine), and no

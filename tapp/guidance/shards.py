@@ -27,11 +27,12 @@ SHARDS_PER_SLOT = 4
 #: Largest automatic shard, blocks (keeps the progress bar moving and worker memory small).
 MAX_AUTO_SHARD_BLOCKS = 50
 #: Fewest samples an automatic execution runs on a local Dask cluster: below, this process
-#: is faster. Measured on the shipped deep-space study (3 manoeuvres, n_o = 23) on a loaded
-#: 2-core machine: a local cluster of 2 workers costs about 6 s more (starting it, tapp
-#: imported in the workers, stopping it) and saves 1.8 µs of the 5.8 µs a sample takes in
-#: this process, so it pays from about 3.3 million samples (``make bench``, section ``cli``).
-DASK_MIN_SAMPLES = 3_000_000
+#: is faster. On the shipped deep-space study (3 manoeuvres, n_o = 23), on 2 cores, a local
+#: cluster of 2 workers costs 6 to 14 s more (starting it, tapp imported in the workers,
+#: stopping it) and saves at most half of the 3.5 to 12 µs a sample takes in this process:
+#: it paid from 3.3 and 5.5 million samples in two runs of ``make bench`` (section ``cli``,
+#: the machine's load average 3 and 5-7), and not below 3 million in a third (load 3-4).
+DASK_MIN_SAMPLES = 4_000_000
 
 
 @dataclass(frozen=True, slots=True)
