@@ -1,13 +1,15 @@
 """``tapp guide``: TAPP II on a T32 tape and a guidance file -> ΔV and miss statistics.
 
-The Monte Carlo runs in shards on Dask (a local cluster by default, ``--scheduler`` for a
-running one) and prints Markdown tables, Monte Carlo beside linear covariance, with the
-linear values the Monte Carlo contradicts marked (:mod:`tapp.guidance.agreement`);
-``--json`` writes every statistic and check, ``--plots`` the B-plane scatter and the ΔV
-histograms. Bad input (the tape, the guidance file or its fields, a corridor on a component
-not targeted, an option, an output path that is an input, a scheduler that does not answer)
-is one line on stderr naming the file or option and the field, exit 2; all outputs are
-written together or none (:class:`tapp.outputs.OutputSet`).
+The Monte Carlo runs in shards: in this process below
+:data:`tapp.guidance.shards.DASK_MIN_SAMPLES` samples and on a local Dask cluster from there
+(by default; ``--serial``, ``--workers`` and ``--scheduler`` choose), and prints Markdown
+tables, Monte Carlo beside linear covariance, with the linear values the Monte Carlo
+contradicts marked (:mod:`tapp.guidance.agreement`); ``--json`` writes every statistic and
+check, ``--plots`` the B-plane scatter and the ΔV histograms. Bad input (the tape, the
+guidance file or its fields, a corridor on a component not targeted, an option, an output
+path that is an input, a scheduler that does not answer) is one line on stderr naming the
+file or option and the field, exit 2; all outputs are written together or none
+(:class:`tapp.outputs.OutputSet`).
 """
 
 from __future__ import annotations
@@ -94,7 +96,12 @@ def guide_cmd(
     plots: Annotated[Path | None, typer.Option(
         "--plots", help="Write the PNG plots into this folder.")] = None,
 ) -> None:
-    """TAPP II: Monte Carlo midcourse guidance from a T32 tape, beside linear covariance."""
+    """TAPP II: Monte Carlo midcourse guidance from a T32 tape, beside linear covariance.
+
+    Samples: 2 to 5,000,000. In this process below 4,000,000 samples, on a local Dask
+    cluster from there, unless --serial, --workers or --scheduler says otherwise; the
+    numbers are the same wherever they run.
+    """
 
     def body() -> None:
         from tapp.guidance.statistics import bplane_rows

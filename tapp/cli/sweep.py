@@ -1,4 +1,5 @@
-"""``tapp iter``: run an ITER sweep file, locally on Dask, on a cluster, or serially.
+"""``tapp iter``: run an ITER sweep file, in this process, on a local Dask cluster or on a
+running one.
 
 The engine is the ``iter`` package; this module only turns options into an
 :class:`iter.Execution`, maps ``iter``'s errors onto tapp's (so bad input, including a results
@@ -68,7 +69,10 @@ def iter_command(
     Paths in the sweep file are taken from its folder. Failing cases are recorded with their
     message and do not stop the sweep; if every case fails, the command exits 1 with the
     first case's error. Running again with the same results file resumes: cases already OK
-    are skipped. --json: the summary.
+    are skipped. --json: the summary. At most 1,000,000 cases. By default the first two
+    cases run in this process, and the rest too unless their serial work, projected from
+    those, reaches 10 s: then on a local Dask cluster (--serial, --workers and --scheduler
+    choose).
     """
     h5_path = output if output is not None else Path(sweep_file.stem + ".h5")
 

@@ -113,6 +113,20 @@ def test_the_brackets_checked_include_those_once_eaten():
     assert "scenario, deck, guidance, [simulate], [guide]." in pipeline_help
 
 
+def test_the_limits_and_crossovers_stated_are_those_applied():
+    from iter.execute import DASK_MIN_WORK_S
+    from iter.loops import MAX_CASES
+    from tapp.guidance.shards import DASK_MIN_SAMPLES
+    from tapp.guidance.study import MAX_SAMPLES
+
+    guide_help = _squashed(runner.invoke(app, ["guide", "--help"], env=WIDE).stdout)
+    iter_help = _squashed(runner.invoke(app, ["iter", "--help"], env=WIDE).stdout)
+    assert f"Samples: 2 to {MAX_SAMPLES:,}. In this process below {DASK_MIN_SAMPLES:,} " \
+           "samples" in guide_help
+    assert f"At most {MAX_CASES:,} cases." in iter_help
+    assert f"reaches {DASK_MIN_WORK_S:g} s" in iter_help
+
+
 @pytest.mark.parametrize("path", COMMANDS, ids=" ".join)
 def test_a_default_an_option_states_is_stated_in_one_form(path: tuple[str, ...]):
     for text in _help_texts(_command(path)):
