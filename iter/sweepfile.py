@@ -70,7 +70,6 @@ booleans are not numbers nor numbers strings. Errors name the file and the field
 from __future__ import annotations
 
 import os
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Any
@@ -79,6 +78,7 @@ from pydantic import Field, model_validator
 
 from .body import Body, CallableBody, ProgramBody, names_a_path
 from .errors import SweepInputError
+from .inputfile import read_toml
 from .loops import Loop
 from .schema import Invalid, Schema, validate
 from .sweep import Sweep
@@ -169,15 +169,7 @@ def load_sweep(path: str | Path, *, check_body: bool = True) -> Sweep:
         names the file and the field.
     """
     source = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SweepInputError(source, "file", "a readable sweep file (TOML)",
-                              exc.strerror) from None
-    try:
-        document = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SweepInputError(source, "file", "valid TOML", str(exc)) from None
+    document = read_toml(path, "sweep file")
     return parse_sweep(document, source=source, check_body=check_body,
                        base_dir=Path(path).parent)
 

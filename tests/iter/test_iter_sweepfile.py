@@ -133,11 +133,11 @@ def test_program_body_is_read_with_its_options():
 
 def test_file_errors_name_the_file(tmp_path):
     missing = tmp_path / "missing.toml"
-    with pytest.raises(SweepInputError, match="missing.toml: file: expected a readable"):
+    with pytest.raises(SweepInputError, match="missing.toml: file: expected an existing sweep file"):
         load_sweep(missing)
     broken = tmp_path / "broken.toml"
     broken.write_text("[body\n")
-    with pytest.raises(SweepInputError, match="broken.toml: file: expected valid TOML"):
+    with pytest.raises(SweepInputError, match="broken.toml: TOML: expected valid TOML"):
         load_sweep(broken)
 
 
