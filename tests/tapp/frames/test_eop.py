@@ -149,7 +149,8 @@ def test_synthetic_file_read_like_astropy_with_bulletin_b_and_predictions(tmp_pa
     ut1 = 0.1 - 1e-3 * np.arange(mjd.size)
     xp, yp = rng.uniform(-0.2, 0.3, mjd.size), rng.uniform(0.2, 0.5, mjd.size)
     dx, dy = rng.uniform(-0.3, 0.3, mjd.size), rng.uniform(-0.3, 0.3, mjd.size)
-    bulletin_b = {k: (0.1 + 0.001 * k, 0.4, 0.05, 0.123, -0.456) for k in range(5)}
+    # Bulletin B 0.2 ms off A: a real revision (a jump would be refused as a length of day)
+    bulletin_b = {k: (0.1 + 0.001 * k, 0.4, ut1[k] - 2e-4, 0.123, -0.456) for k in range(5)}
     path = write_finals2000a(tmp_path / "finals2000A.test", mjd, ut1, xp, yp, dx, dy,
                              predicted_from_mjd=61420.0, bulletin_b=bulletin_b)
     ours = finals2000a(path)
@@ -158,7 +159,7 @@ def test_synthetic_file_read_like_astropy_with_bulletin_b_and_predictions(tmp_pa
     assert np.array_equal(ours.mjd, mjd) and np.array_equal(theirs["MJD"].value, mjd)
     assert ours.predicted_from_mjd == theirs.meta["predictive_mjd"] == 61420.0
     # Bulletin B replaces A in the first five rows; the rest are A, as printed (6-7 digits).
-    assert np.allclose(ours.ut1_minus_utc_s[:5], 0.05, rtol=0, atol=1e-12)
+    assert np.allclose(ours.ut1_minus_utc_s[:5], ut1[:5] - 2e-4, rtol=0, atol=0.5e-7)
     assert np.allclose(ours.ut1_minus_utc_s[5:], ut1[5:], rtol=0, atol=0.5e-7)
     assert np.allclose(ours.xp_rad[:5] / ARCSEC_rad, 0.1 + 0.001 * np.arange(5), atol=1e-12)
     assert np.allclose(ours.xp_rad[5:] / ARCSEC_rad, xp[5:], rtol=0, atol=0.5e-6)
@@ -194,6 +195,6 @@ def test_file_without_rows_is_an_input_error_naming_it(tmp_path, content):
 
 def test_missing_file_is_an_input_error_naming_it(tmp_path):
     path = tmp_path / "no_such_finals2000A.all"
-    with pytest.raises(InputError, match="readable IERS finals2000A file") as info:
+    with pytest.raises(InputError, match="an existing IERS finals2000A file") as info:
         finals2000a(path)
     assert str(path) in str(info.value)
