@@ -51,8 +51,10 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
 In the sigma-table form every parameter of the tape needs a σ in the fit world (a parameter
 with σ = 0 is fixed, i.e. constrained) and in the real world (σ = 0: certain); the fit and
 real permutations that put the fitted/uncertain parameters first are then built by keeping the
-tape's order (stable). Fit normal matrices and real covariances given as matrices are checked
-symmetric; a real-world covariance must be positive semi-definite.
+tape's order (stable). A priori σ's lie in :data:`SIGMA_RANGE` (the reason is given there);
+fit normal matrices and real covariances given as matrices must have their diagonal in the
+matching range, be symmetric and positive semi-definite, each entry on its own scale
+√(a_ii a_jj); constraint coefficients are bounded by :data:`MAX_CONSTRAINT`.
 """
 
 from __future__ import annotations
@@ -65,21 +67,45 @@ import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
+from tapp.estimation.factors import scaled_min_eigenvalue
 from tapp.frames.time import parse_epoch
 from tapp.processor.commands import ROC, Command, Side, parse_command
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.plan import Plan, StationOff
 from tapp.processor.representations import ISOLATED_SETS, Systems
 from tapp.schema import InfFloat, Schema, load
+from tapp.tape.packing import symmetry_defect
 
 Ref = int | str
 TimeRef = int | float | str
 #: Time coincidence with a T13 time, s (tape times are stored to the microsecond).
 TIME_MATCH_S = 1e-3
-#: Largest negative eigenvalue of a real-world correlation matrix taken as rounding.
+#: Largest negative eigenvalue of an a priori matrix scaled to a unit diagonal (a correlation
+#: matrix) taken as rounding (:func:`tapp.estimation.factors.scaled_min_eigenvalue`).
 PSD_TOL = 1e-10
-#: Finite a priori σ's must lie in this range (any unit): σ² and 1/σ² stay finite doubles.
-SIGMA_RANGE = (1e-150, 1e150)
+#: Largest relative asymmetry |a_ij − a_ji| / √(a_ii a_jj) of an a priori matrix taken as
+#: rounding (:func:`tapp.tape.packing.symmetry_defect`).
+SYMMETRY_TOL = 1e-12
+#: Finite a priori σ's must lie in this range (any unit). Not for lack of doubles (σ² and
+#: 1/σ² are finite up to 1e154), but for what the programs do with them: a covariance is
+#: mapped by partials and transitions, squared into Gram matrices, and TAPP II raises its
+#: Δv's to the 4th power for the sampling error of a variance. With σ = 1e149 the LEO deck's
+#: Gram matrices overflowed (NaN in the JSON, variances printed as 0). At σ = 1e30 on every
+#: parameter, on the shipped tapes, every output stays finite with orders of magnitude to
+#: spare (tests/tapp/processor/test_deck_limits.py); and no quantity of these programs has a
+#: σ beyond 1e30 or below 1e-30 in any unit they use (km, km/s, s, rad, km³/s²).
+SIGMA_RANGE = (1e-30, 1e30)
+#: Diagonal entries of a priori matrices given whole: a covariance σ² and a normal matrix
+#: 1/σ², for σ in :data:`SIGMA_RANGE` (0: certain, or no information).
+COVARIANCE_RANGE = (SIGMA_RANGE[0] ** 2, SIGMA_RANGE[1] ** 2)
+NORMAL_RANGE = (SIGMA_RANGE[1] ** -2, SIGMA_RANGE[0] ** -2)
+#: Largest |e| of a constraint x(a) <- x(a) − e x(b), (unit of a)/(unit of b). e σ_b is a σ of
+#: the constrained system, and the links of two systems compose (the common world's, then the
+#: fit or real world's): e² σ_b stays within 1e50 for σ_b in SIGMA_RANGE, leaving the 1e10
+#: that transitions may add below the tapes' bound (:data:`tapp.tape.checks.MAX_MAGNITUDE`;
+#: the Table D-1 deck at σ = 1e30 and e = 1e20 wrote a factor of 1e70). The seed's
+#: coefficients are ratios of σ's (Table D-1: up to 3e5 km per unit of J2).
+MAX_CONSTRAINT = 1e10
 #: The seed's nominal optional miss partitions (Appendix A.1), (tail, head).
 NOMINAL_MISS = {"m1": (0, 6), "m2": (0, 3), "m3": (3, 6), "m4": (6, 12), "m5": (12, 18)}
 
@@ -284,6 +310,9 @@ class _Binder:
             where = f"{field}[{i}]"
             if len(tr) != 3 or isinstance(tr[2], bool) or not isinstance(tr[2], int | float):
                 raise self.fail(where, "a triple [a, b, e]: x(a) <- x(a) - e x(b)", tr)
+            if not abs(tr[2]) <= MAX_CONSTRAINT:
+                raise self.fail(where, f"a coefficient |e| <= {MAX_CONSTRAINT:g} (e σ_b is a σ "
+                                "of the constrained system)", tr[2])
             out.append((self.position(tr[0], order, where), self.position(tr[1], order, where),
                         float(tr[2])))
         return Constraint.from_triples(out, self.n_o, self.n_p, f"{self.source}: {field}")
@@ -390,24 +419,43 @@ class _Binder:
                             {order[i]: float(out[i]) for i in bad})
         return out
 
-    def _matrix(self, rows: list[list[float]], n: int, field: str) -> np.ndarray:
+    def _matrix(self, rows: list[list[float]], n: int, field: str, order: list[str],
+                kind: str) -> np.ndarray:
+        """An a priori matrix given whole (kind "normal" or "covariance"), n x n over the
+        first n parameters of ``order``: a diagonal in :data:`NORMAL_RANGE` or
+        :data:`COVARIANCE_RANGE` (or 0), symmetric and positive semi-definite, each entry
+        on its own scale √(a_ii a_jj) (:data:`SYMMETRY_TOL`, :data:`PSD_TOL`)."""
         m = np.array(rows, dtype=float) if rows and all(len(r) == len(rows) for r in rows) \
             else None
         if m is None or m.shape != (n, n):
             raise self.fail(field, f"a {n} x {n} matrix", None if m is None else m.shape)
-        if not np.allclose(m, m.T, rtol=0, atol=1e-12 * np.max(np.abs(m))):
-            raise self.fail(field, "a symmetric matrix")
-        return 0.5 * (m + m.T)
+        names = [name.rstrip("'") for name in order[:n]]
+        diag = np.diagonal(m)
+        lo, hi = NORMAL_RANGE if kind == "normal" else COVARIANCE_RANGE
+        what = "1/σ²" if kind == "normal" else "σ²"
+        wild = np.flatnonzero((diag != 0) & ~((diag >= lo) & (diag <= hi)))
+        if wild.size:
+            raise self.fail(field, f"a diagonal of 0 or {what} between {lo:g} and {hi:g} (σ "
+                            f"within {SIGMA_RANGE[0]:g} .. {SIGMA_RANGE[1]:g})",
+                            {names[i]: float(diag[i]) for i in wild})
+        defect = float(symmetry_defect(m))
+        if defect > SYMMETRY_TOL:
+            raise self.fail(field, f"a symmetric matrix (|a_ij − a_ji| <= {SYMMETRY_TOL:g} "
+                            "√(a_ii a_jj))", f"{defect:.3g} √(a_ii a_jj)")
+        m = 0.5 * (m + m.T)
+        smallest = scaled_min_eigenvalue(m)
+        if smallest < -PSD_TOL:
+            raise self.fail(field, f"a positive semi-definite {kind} matrix (eigenvalues of "
+                            f"the matrix scaled to a unit diagonal >= {-PSD_TOL:g})",
+                            f"smallest {smallest:.3g}")
+        return m
 
     def fit_normal(self, order: list[str], n_f1: int) -> np.ndarray:
         ap = self.deck.fit.apriori
         if (ap.sigma is None) == (ap.normal is None):
             raise self.fail("fit.apriori", "exactly one of sigma or normal")
         if ap.normal is not None:
-            s0 = self._matrix(ap.normal, n_f1, "fit.apriori.normal")
-            if np.min(np.linalg.eigvalsh(s0)) < -PSD_TOL * max(1.0, np.max(np.diag(s0))):
-                raise self.fail("fit.apriori.normal", "a positive semi-definite normal matrix")
-            return s0
+            return self._matrix(ap.normal, n_f1, "fit.apriori.normal", order, "normal")
         sigma = self._sigmas(ap.sigma, order, n_f1, "fit.apriori")
         return np.diag(1.0 / sigma**2)
 
@@ -418,31 +466,27 @@ class _Binder:
         if ap.covariance is not None:
             if ap.correlation:
                 raise self.fail("real.apriori.correlation", "no correlations with a covariance")
-            lam = self._matrix(ap.covariance, n_r1, "real.apriori.covariance")
-            d = np.sqrt(np.abs(np.diag(lam)))
-            corr = lam / np.where(np.outer(d, d) > 0, np.outer(d, d), 1.0)
-        else:
-            sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori")
-            if np.any(~np.isfinite(sigma)):
-                raise self.fail("real.apriori.sigma", "finite σ's")
-            corr = np.eye(n_r1)
-            for i, tr in enumerate(ap.correlation):
-                where = f"real.apriori.correlation[{i}]"
-                if len(tr) != 3 or isinstance(tr[2], bool) or not isinstance(tr[2], int | float):
-                    raise self.fail(where, "a triple [a, b, ρ]", tr)
-                a, b = (self.position(r, order, where) for r in tr[:2])
-                if a >= n_r1 or b >= n_r1 or a == b or not -1 <= tr[2] <= 1:
-                    raise self.fail(where, "two different uncertain parameters and -1 <= ρ <= 1",
-                                    tr)
-                corr[a, b] = corr[b, a] = float(tr[2])
-            lam = corr * np.outer(sigma, sigma)
-        w = np.linalg.eigvalsh(corr)
-        if w[0] < -PSD_TOL:
-            field = "covariance" if ap.covariance is not None else "correlation"
-            raise self.fail(f"real.apriori.{field}", "a positive semi-definite real-world "
-                            "covariance", f"smallest eigenvalue {w[0]:.3g} of its correlation "
-                            "matrix")
-        return lam
+            return self._matrix(ap.covariance, n_r1, "real.apriori.covariance", order,
+                                "covariance")
+        sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori")
+        if np.any(~np.isfinite(sigma)):
+            raise self.fail("real.apriori.sigma", "finite σ's")
+        corr = np.eye(n_r1)
+        for i, tr in enumerate(ap.correlation):
+            where = f"real.apriori.correlation[{i}]"
+            if len(tr) != 3 or isinstance(tr[2], bool) or not isinstance(tr[2], int | float):
+                raise self.fail(where, "a triple [a, b, ρ]", tr)
+            a, b = (self.position(r, order, where) for r in tr[:2])
+            if a >= n_r1 or b >= n_r1 or a == b or not -1 <= tr[2] <= 1:
+                raise self.fail(where, "two different uncertain parameters and -1 <= ρ <= 1",
+                                tr)
+            corr[a, b] = corr[b, a] = float(tr[2])
+        smallest = scaled_min_eigenvalue(corr)
+        if smallest < -PSD_TOL:
+            raise self.fail("real.apriori.correlation", "a positive semi-definite real-world "
+                            "covariance", f"smallest eigenvalue {smallest:.3g} of its "
+                            "correlation matrix")
+        return corr * np.outer(sigma, sigma)
 
     # --- the rest -----------------------------------------------------------------------------
 
