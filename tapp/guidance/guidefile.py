@@ -17,7 +17,7 @@ Layout (units at the edge: mrad, mm/s, deg; the code works in rad, km/s)::
     [execution]                     # 1σ, Gates-type (tapp.guidance.execution)
     sigma_proportional = 0.02       # magnitude error, fraction of |Δv|, < 1
     sigma_pointing_mrad = 10.0      # per axis perpendicular to Δv, <= 200 (small angles)
-    sigma_fixed_mm_s = 1.0          # per axis, isotropic
+    sigma_fixed_mm_s = 1.0          # per axis, isotropic, <= 1e6 (1 km/s)
     [corridor]                      # optional: about the aim point
     radius_km = 100.0               # a circle in the B-plane, or
     # semi_axes_km = [150.0, 80.0]  # an ellipse, the first axis at angle_deg
@@ -48,6 +48,10 @@ from tapp.tape.t32 import T32
 
 #: Largest pointing σ, mrad: the model adds pointing errors as small angles.
 MAX_POINTING_MRAD = 200.0
+#: Largest fixed σ per axis, mm/s: 1 km/s, more than the whole budget of a spacecraft's
+#: propulsion (shut-off transients and attitude coupling are mm/s to cm/s). Without a bound,
+#: 1e150 mm/s failed in the linear algebra and 1e300 overflowed its square.
+MAX_FIXED_MM_S = 1e6
 
 Positive = Annotated[float, Field(gt=0)]
 
@@ -71,7 +75,7 @@ class Navigation(Schema):
 class ExecutionTable(Schema):
     sigma_proportional: Annotated[float, Field(ge=0, lt=1)] = 0.0
     sigma_pointing_mrad: Annotated[float, Field(ge=0, le=MAX_POINTING_MRAD)] = 0.0
-    sigma_fixed_mm_s: Annotated[float, Field(ge=0)] = 0.0
+    sigma_fixed_mm_s: Annotated[float, Field(ge=0, le=MAX_FIXED_MM_S)] = 0.0
 
 
 class CorridorTable(Schema):
@@ -182,4 +186,4 @@ def bind(guide: GuideFile, t32: T32, source: str, tape_source: str = "T32") -> S
                  navigation, guide.title)
 
 
-__all__ = ["GuideFile", "MAX_POINTING_MRAD", "Study", "bind", "read_guide"]
+__all__ = ["GuideFile", "MAX_FIXED_MM_S", "MAX_POINTING_MRAD", "Study", "bind", "read_guide"]
