@@ -6,9 +6,10 @@ position as in the seed; times are T13 time indices (TOML integers, as the seed'
 seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 times. Layout::
 
     title = "..."
-    [tape]                      # optional expectations checked against the tape
-    iden = "DSN-LUNAR-2026-03-10"
-    n_o = 23
+    [tape]                      # optional expectations checked against the tape; a deck
+    iden = "DSN-LUNAR-2026-03-10"   # that gives parameters by position (numbers, σ lists,
+    n_o = 23                    # matrices, permutations) must say which tape they refer to:
+    # parameters = ["x_km", ...]  # its iden, or its parameter names in order
     [times]
     print = [1, 86400.0, "2026-03-14T02:05:58.384"]   # print output times (k = 0 always)
     recycle = [2, 3]            # recycle (midcourse) times
@@ -61,9 +62,10 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
+from pydantic import Field
 
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
@@ -106,6 +108,19 @@ NORMAL_RANGE = (SIGMA_RANGE[1] ** -2, SIGMA_RANGE[0] ** -2)
 #: the Table D-1 deck at σ = 1e30 and e = 1e20 wrote a factor of 1e70). The seed's
 #: coefficients are ratios of σ's (Table D-1: up to 3e5 km per unit of J2).
 MAX_CONSTRAINT = 1e10
+#: Most commands in a list (``commands.print``, ``commands.recycle``): the seed's Table B-5
+#: has 16 recycle commands; 10,000 print commands took 71 s, 3.3 GB and a 507 MB JSON.
+MAX_COMMANDS = 500
+#: Most times in ``times.print`` or ``times.recycle``, and windows in ``stations_off``:
+#: each is matched against the tape's times (a tape has 10 to 1,000 of them).
+MAX_TIMES = 10_000
+#: Most output entities of a run (each print time by the print commands, each recycle by the
+#: recycle commands), and most numbers in their matrices. Measured on the LEO tape (n_o =
+#: 38, 2 shared cores): 2,000 real-world orbit covariances (6 x 6, with error budgets) ran in
+#: 8 s with 330 MB and wrote a 24 MB JSON and an 18 MB O3; 1,000,000 numbers (692 covariances
+#: of the 38 parameters) 16 s, 730 MB, 58 MB and 109 MB, hence half of that.
+MAX_ENTITIES = 2_000
+MAX_ENTITY_NUMBERS = 500_000
 #: The seed's nominal optional miss partitions (Appendix A.1), (tail, head).
 NOMINAL_MISS = {"m1": (0, 6), "m2": (0, 3), "m3": (3, 6), "m4": (6, 12), "m5": (12, 18)}
 
@@ -113,19 +128,21 @@ NOMINAL_MISS = {"m1": (0, 6), "m2": (0, 3), "m3": (3, 6), "m4": (6, 12), "m5": (
 class TapeExpect(Schema):
     iden: str | None = None
     n_o: int | None = None
+    parameters: list[str] | None = None
 
 
 class Times(Schema):
-    print: list[TimeRef] = []
-    recycle: list[TimeRef] = []
+    print: Annotated[list[TimeRef], Field(max_length=MAX_TIMES)] = []
+    recycle: Annotated[list[TimeRef], Field(max_length=MAX_TIMES)] = []
     print_output: bool = True
     recycle_print: bool = True
     recycle_tape: bool = True
 
 
 class Commands(Schema):
-    print: list[str] = []
-    recycle: list[str] | Literal["standard"] = "standard"
+    print: Annotated[list[str], Field(max_length=MAX_COMMANDS)] = []
+    recycle: Annotated[list[str], Field(max_length=MAX_COMMANDS)] | Literal["standard"] = \
+        "standard"
 
 
 class StationsOff(Schema):
@@ -188,7 +205,7 @@ class Deck(Schema):
     tape: TapeExpect = TapeExpect()
     times: Times = Times()
     commands: Commands = Commands()
-    stations_off: list[StationsOff] = []
+    stations_off: Annotated[list[StationsOff], Field(max_length=MAX_TIMES)] = []
     common: Common = Common()
     fit: Fit
     real: Real
@@ -215,6 +232,8 @@ class _Binder:
         self.names = tuple(header.parameters.name)
         self.n_o, self.n_p = len(self.names), int(header.n_p)
         self.times = np.asarray(header.records.times_s, dtype=float)
+        #: Fields that refer to parameters by position (checked in :meth:`_check_positions`).
+        self.positional: list[str] = []
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -230,6 +249,7 @@ class _Binder:
         if isinstance(ref, int):
             if not 1 <= ref <= self.n_o:
                 raise self.fail(field, f"a position 1..{self.n_o}", ref)
+            self.positional.append(field)
             return ref - 1
         bare = [n.rstrip("'") for n in order]
         if ref not in bare:
@@ -274,6 +294,7 @@ class _Binder:
                      ) -> Permutation | None:
         if not pairs:
             return None
+        self.positional.append(field)
         out = []
         for i, pair in enumerate(pairs):
             if len(pair) != 2 or not isinstance(pair[0], int) or isinstance(pair[0], bool):
@@ -372,9 +393,12 @@ class _Binder:
 
     # --- a priori -----------------------------------------------------------------------------
 
-    def _key(self, key: str) -> str:
+    def _key(self, key: str, field: str) -> str:
         """A σ-table key: a name, or a 1-based position on the tape (the standard order)."""
-        return self.names[int(key) - 1] if key.isdigit() and 1 <= int(key) <= self.n_o else key
+        if key.isdigit() and 1 <= int(key) <= self.n_o:
+            self.positional.append(f"{field}.sigma.{key}")
+            return self.names[int(key) - 1]
+        return key
 
     def _sigma_zero(self, sigma, order: list[str], n_c1: int, field: str) -> list[str]:
         """Names with σ = 0 in a σ table that covers the common parameters (readable form)."""
@@ -382,7 +406,7 @@ class _Binder:
             return []
         zero = []
         for key, value in sigma.items():
-            pos = self.position(self._key(key), order, f"{field}.sigma.{key}")
+            pos = self.position(self._key(key, field), order, f"{field}.sigma.{key}")
             if value == 0 and pos < n_c1:
                 zero.append(order[pos].rstrip("'"))
         return zero
@@ -390,6 +414,7 @@ class _Binder:
     def _sigmas(self, sigma, order: list[str], n1: int, field: str) -> np.ndarray:
         """σ of the first n1 parameters of ``order`` from a list or a table."""
         if isinstance(sigma, list):
+            self.positional.append(f"{field}.sigma")
             if len(sigma) != n1:
                 raise self.fail(f"{field}.sigma", f"{n1} values (one per parameter of the set, "
                                 "in system order)", len(sigma))
@@ -397,7 +422,7 @@ class _Binder:
         else:
             out = np.full(n1, np.nan)
             for key, value in sigma.items():
-                pos = self.position(self._key(key), order, f"{field}.sigma.{key}")
+                pos = self.position(self._key(key, field), order, f"{field}.sigma.{key}")
                 if pos < n1:
                     out[pos] = value
                 elif value != 0:
@@ -429,6 +454,7 @@ class _Binder:
             else None
         if m is None or m.shape != (n, n):
             raise self.fail(field, f"a {n} x {n} matrix", None if m is None else m.shape)
+        self.positional.append(field)  # in the system's order
         names = [name.rstrip("'") for name in order[:n]]
         diag = np.diagonal(m)
         lo, hi = NORMAL_RANGE if kind == "normal" else COVARIANCE_RANGE
@@ -577,13 +603,52 @@ class _Binder:
             raise self.fail("plots.partition", exc.expected, text) from None
         return cmd.rows
 
+    def _check_positions(self) -> None:
+        """Refuse parameters given by position in a deck that does not say which tape they
+        refer to: positions fit any tape with enough parameters (the Table D-1 deck ran on
+        the LEO tape and exited 0), names only the right one."""
+        tape = self.deck.tape
+        if self.positional and tape.iden is None and tape.parameters is None:
+            raise self.fail(self.positional[0], "parameter names, or positions with a [tape] "
+                            "table that names the tape they refer to (parameters = its "
+                            "parameter names in order, or iden)", "positions, and no "
+                            "[tape] parameters or iden")
+
+    def _check_output_size(self, systems: Systems, n_print: int, poc: tuple[Command, ...],
+                           n_recycle: int, roc: tuple[Command, ...]) -> None:
+        """Refuse a run of more than :data:`MAX_ENTITIES` entities or
+        :data:`MAX_ENTITY_NUMBERS` numbers in their matrices, before any is computed."""
+
+        def numbers(cmd: Command) -> int:
+            rows, cols = (systems.bounds(side.rho) for side in (cmd.rows, cmd.cols))
+            return (rows[2] - rows[1]) * (cols[2] - cols[1])
+
+        entities = n_print * len(poc) + n_recycle * len(roc)
+        size = n_print * sum(map(numbers, poc)) + n_recycle * sum(map(numbers, roc))
+        field = "commands.print" if n_print * len(poc) >= n_recycle * len(roc) \
+            else "commands.recycle"
+        if entities > MAX_ENTITIES or size > MAX_ENTITY_NUMBERS:
+            raise self.fail(field, f"at most {MAX_ENTITIES:,} output entities with at most "
+                            f"{MAX_ENTITY_NUMBERS:,} numbers in all (print times x print "
+                            "commands + recycles x recycle commands)",
+                            f"{entities:,} entities, {size:,} numbers")
+
     def plan(self) -> Plan:
         d = self.deck
         if d.tape.iden is not None and d.tape.iden != self.h.iden:
             raise self.fail("tape.iden", f"the tape's iden {self.h.iden!r}", d.tape.iden)
         if d.tape.n_o is not None and d.tape.n_o != self.n_o:
             raise self.fail("tape.n_o", f"the tape's n_o = {self.n_o}", d.tape.n_o)
+        if d.tape.parameters is not None and tuple(d.tape.parameters) != self.names:
+            given = tuple(d.tape.parameters)
+            i = next((i for i, (a, b) in enumerate(zip(given, self.names, strict=False))
+                      if a != b), min(len(given), self.n_o))
+            tape_has = self.names[i] if i < self.n_o else "none (the tape ends)"
+            raise self.fail("tape.parameters", f"the tape's {self.n_o} parameter names in "
+                            f"order (position {i + 1}: {tape_has})",
+                            given[i] if i < len(given) else "none (the list ends)")
         systems, s0, lam0 = self.systems()
+        self._check_positions()
         prints = (0, *self.time_list(d.times.print, "times.print", first=0))
         recycles = self.time_list(d.times.recycle, "times.recycle", first=1)
         poc = tuple(self.command(c, f"commands.print[{i}]", systems)
@@ -597,6 +662,9 @@ class _Binder:
                     systems.bounds(side.rho)
         hist = self.history()
         systems.bounds(hist.rho)
+        self._check_output_size(systems, len(prints) if d.times.print_output else 0, poc,
+                                len(recycles) if d.times.recycle_print or d.times.recycle_tape
+                                else 0, roc)
         return Plan(systems, s0, lam0, tuple(sorted(set(prints))), recycles,
                     d.times.print_output, d.times.recycle_print, d.times.recycle_tape, poc, roc,
                     self.stations_off(), d.budget.enabled, self.budget_groups(systems), hist)
