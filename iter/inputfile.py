@@ -10,8 +10,9 @@ never comes nor reads an endless device until memory runs out. A text input larg
 bound is refused from its size, and is never read past the bound even if it grows meanwhile
 (or is a file whose size the system reports as 0).
 
-Text is opened with ``O_NONBLOCK`` and checked with ``fstat`` on the open descriptor, so that
-a file swapped for a FIFO between the check and the open cannot block either.
+Text is checked with ``stat``, then opened with ``O_NONBLOCK`` and checked again with
+``fstat`` on the open descriptor, so that a file swapped for a FIFO between the check and the
+open cannot block either.
 
 This is the mechanism behind ``tapp``'s readers as well (``iter`` may not import ``tapp``):
 each function takes the error class to raise, called ``error(source, field, expected, got)``
@@ -93,16 +94,19 @@ def read_bytes(path: str | Path, what: str, *, max_bytes: int, source: str | Non
     """Return the content of the regular file ``path``, at most ``max_bytes`` bytes; else
     raise (:func:`regular_file`'s refusals, and a file that holds more)."""
     source = str(path) if source is None else source
+    regular_file(path, what, source=source, max_bytes=max_bytes, error=error)
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except OSError as exc:
         raise _os_error(exc, source, what, error) from None
-    with os.fdopen(fd, "rb") as stream:
+    try:
         _check_stat(os.fstat(fd), source, what, max_bytes, error)
-        try:
+        with os.fdopen(fd, "rb", closefd=False) as stream:
             data = stream.read(max_bytes + 1)
-        except OSError as exc:
-            raise _os_error(exc, source, what, error) from None
+    except OSError as exc:
+        raise _os_error(exc, source, what, error) from None
+    finally:
+        os.close(fd)
     if len(data) > max_bytes:
         raise error(source, "file", f"a {what} of at most {max_bytes:,} bytes",
                     f"more than {max_bytes:,} bytes")
@@ -119,7 +123,7 @@ def read_text(path: str | Path, what: str, *, max_bytes: int, source: str | None
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise error(source, "file", f"a {what} in UTF-8 text",
-                    f"byte {exc.start}: {data[exc.start:exc.start + 8]!r}") from None
+                    f"byte 0x{data[exc.start]:02x} at offset {exc.start}") from None
 
 
 def read_toml(path: str | Path, what: str, *, error: type[Exception] = SweepInputError

@@ -133,7 +133,7 @@ def test_program_body_is_read_with_its_options():
 
 def test_file_errors_name_the_file(tmp_path):
     missing = tmp_path / "missing.toml"
-    with pytest.raises(SweepInputError, match="missing.toml: file: expected an existing sweep file"):
+    with pytest.raises(SweepInputError, match="missing.toml: file: expected an existing sweep"):
         load_sweep(missing)
     broken = tmp_path / "broken.toml"
     broken.write_text("[body\n")
