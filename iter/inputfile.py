@@ -39,8 +39,10 @@ from .errors import SweepInputError
 __all__ = ["MAX_TOML_BYTES", "read_bytes", "read_text", "read_toml", "regular_file"]
 
 #: Largest TOML input (scenario, deck, guidance, pipeline, study or sweep file), bytes: a
-#: deck with a 400 x 400 a priori matrix written out is ~4 MB; tomllib parses 4 MiB of
-#: numbers in ~0.7 s, and the worst 4 MiB (a million inline tables) in ~2 s and ~150 MB.
+#: deck with a 400 x 400 a priori matrix written out is ~4 MB, the shipped files 1 to 12 kB.
+#: Measured at the bound on 2 shared cores (load ~5): tomllib parsed 4 MiB of numbers in
+#: 2.2 s and a million empty inline tables, the worst, in 6.4 s; ``tapp process`` refused
+#: either deck (an unknown key) in 11 to 14 s with 160 to 230 MB at its peak.
 MAX_TOML_BYTES = 4 * 2**20
 
 _KINDS = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),

@@ -53,7 +53,8 @@ MAS_rad = ARCSEC_rad / 1000.0
 #: Modified Julian date = Julian date - MJD_OFFSET.
 MJD_OFFSET = 2400000.5
 #: Largest EOP file read, bytes: finals2000A.all is 3.8 MB (1973-2026) and grows by ~68 kB a
-#: year; 16 MiB parses in ~2 s.
+#: year; the 51,135 daily rows that MJD_RANGE allows take 9.6 MB in this format. Measured:
+#: the shipped file reads in 0.5 s, 51,135 rows in 0.4 s with 23 MB (2 shared cores).
 MAX_EOP_BYTES = 16 * 2**20
 #: Dates of an EOP row, UTC MJD: 1960-01-01 (the IERS and BIH series start in 1962) to
 #: 2100-01-01 (no measurement, nor any prediction of the IERS, reaches it).
