@@ -2,7 +2,8 @@
 
 1. The propagation demo (foundation): SATORB2 with (J2,J2) and (J2,J0), 24 h.
 2. The approximate-STM study: every run of the brief -> results/approx_stm/report.md.
-3. SEARCH: the lunar B-plane targeting of scenarios/search_bplane.toml -> results/search/.
+3. SEARCH: the lunar B-plane targeting of scenarios/search_bplane.toml, differenced and
+   analytic partials -> results/search/ (the seed's report, and the same run as JSON).
 4. TAPP I: tracking simulations of leo_equatorial.toml and deep_space.toml -> T13 tapes,
    their summaries and trajectories (CCSDS OEM) in results/tapp1/.
 5. TAPP III: each TAPP I tape through its deck (scenarios/tapp3_*.toml) -> O3 printouts, JSON,
@@ -13,7 +14,8 @@
    final-miss statistics, Monte Carlo beside linear covariance, plots).
 7. ITER: the seed's examples (five azimuths, type 1 and 2; 30 days x 5 azimuths), the
    departure-day sweep with SEARCH as the body, and the tracking trade study with the whole
-   pipeline as the body, on a local Dask cluster -> results/iter/.
+   pipeline as the body, on a local Dask cluster -> results/iter/ (report.md; summary.json:
+   the cases, failures and wall time of each sweep).
 """
 
 from __future__ import annotations
@@ -70,10 +72,12 @@ def search_targeting() -> None:
     out = RESULTS / "search"
     out.mkdir(parents=True, exist_ok=True)
     for mode, extra in (("differenced", ()), ("analytic", ("--analytic-partials",))):
-        proc = _tapp("search", str(ROOT / "scenarios" / "search_bplane.toml"), *extra)
-        (out / f"report_{mode}.txt").write_text(proc.stdout)
-        if proc.returncode != 0:
-            raise SystemExit(f"tapp search ({mode}) exited {proc.returncode}: {proc.stderr}")
+        for suffix, form in (("txt", ()), ("json", ("--json",))):  # the seed's report; numbers
+            proc = _tapp("search", str(ROOT / "scenarios" / "search_bplane.toml"), *extra, *form)
+            (out / f"report_{mode}.{suffix}").write_text(proc.stdout)
+            if proc.returncode != 0:
+                raise SystemExit(f"tapp search ({mode}) exited {proc.returncode}: "
+                                 f"{proc.stderr}")
     print(f"SEARCH lunar B-plane targeting -> {out}")
 
 
@@ -188,18 +192,24 @@ def sweeps() -> None:
     out = RESULTS / "iter"
     out.mkdir(parents=True, exist_ok=True)
     lines = ["# ITER sweeps\n"]
-    tables = {}
+    tables, summary = {}, {}
     for name in ("iter_azimuth_type1", "iter_azimuth_type2", "iter_days_azimuths",
                  "iter_lunar_departure", "iter_pipeline_tracking"):
         sweep = load_sweep(ROOT / "scenarios" / f"{name}.toml")
         h5 = out / f"{name}.h5"
         h5.unlink(missing_ok=True)  # a fresh run, not a resume
+        start = time.perf_counter()
         res = run_sweep(sweep, output_h5=h5, output_csv=out / f"{name}.csv",
                         execution=Execution(workers=2), progress=True)
+        wall_s = time.perf_counter() - start
         res.raise_if_all_failed()  # no answer to report: stop here, the failures recorded
         tables[name] = res.table
+        summary[name] = {"cases": res.summary.n_cases, "succeeded": res.summary.n_succeeded,
+                         "failed": res.summary.n_failed, "workers": 2, "wall_s": wall_s}
         lines.append(f"- `{name}`: {res.summary.n_cases} cases, {res.summary.n_succeeded} "
-                     f"succeeded, {res.summary.n_failed} failed -> `{name}.csv`")
+                     f"succeeded, {res.summary.n_failed} failed in {wall_s:.0f} s on 2 "
+                     f"workers -> `{name}.csv`")
+    (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     tab = tables["iter_lunar_departure"]
     day = np.asarray(tab.column("departure_day"), dtype=float)
     ok = tab.column("status") == int(CaseStatus.OK)
