@@ -12,7 +12,9 @@ The rounding rule. A real figure is stored and printed to the significant digits
 it (``digits``: the digits the README quoted it with, most of them those the run's own report
 prints), so a rerun that moves a figure below its last digit changes neither the data file
 nor the README, while one that changes a quoted digit shows in both (``git diff``). Trailing
-zeros are kept (0.90 to two digits); below 1e-3 a figure is printed as 1.3e-10. A figure
+zeros are kept (0.90 to two digits); below 1e-3 a figure is printed as 1.3e-10. A wall time
+(``digits`` = :data:`WALL_TIME`), which varies with the machine and its load, is rounded to the
+nearest 1, 2, 3 or 5 times a power of ten (9.4 s and 14 s are both "10 s"). A figure
 without ``digits`` is exact: a count (printed 106,846), a grid value (arc hours, degrees,
 days, printed as ``:g``), a flag or a text (an outcome, a run's label).
 """
@@ -38,16 +40,24 @@ _DAY_S = 86400.0
 _M_PER_KM = 1e3
 #: Below this magnitude a real figure is printed with an exponent (1.3e-10).
 _EXPONENT_BELOW = 1e-3
+#: ``digits`` of a wall time: the nearest of 1, 2, 3 and 5 times a power of ten, geometrically.
+WALL_TIME = 0
+_WALL_STEPS = (1.0, 2.0, 3.0, 5.0, 10.0)
 #: The statuses of a DC whose RMS settled (tapp.od.batch.DCResult.settled).
 _SETTLED = (DCOutcome.CONVERGED, DCOutcome.INCONSISTENT)
 
 
 def significant(value: float, digits: int) -> float:
-    """``value`` rounded to ``digits`` significant digits.
+    """``value`` rounded to ``digits`` significant digits (a wall time: :data:`WALL_TIME`).
 
     >>> significant(0.56645, 3), significant(3295.4, 3), significant(1.2559e-10, 2)
     (0.566, 3300.0, 1.3e-10)
+    >>> significant(9.4, WALL_TIME), significant(14.0, WALL_TIME), significant(27.8, WALL_TIME)
+    (10.0, 10.0, 30.0)
     """
+    if digits == WALL_TIME:
+        scale = 10.0 ** math.floor(math.log10(value))
+        return scale * min(_WALL_STEPS, key=lambda step: abs(math.log(value / scale / step)))
     return float(f"{value:.{digits - 1}e}")
 
 
@@ -65,7 +75,7 @@ def format_value(value: Scalar, digits: int | None = None) -> str:
         return f"{value:,}"
     if digits is None:
         return f"{value:g}"
-    value = significant(value, digits)
+    value, digits = significant(value, digits), max(digits, 1)
     if value == 0:
         return "0"
     if abs(value) < _EXPONENT_BELOW:
@@ -109,7 +119,8 @@ class Figures:
     def dumps(self) -> str:
         """The data file's text: sorted, so that a rerun's ``git diff`` shows only changes."""
         return json.dumps({"rule": "real figures rounded to their significant digits "
-                                   "(digits); no digits: exact (scenarios/figures.py)",
+                                   "(digits; 0: a wall time, to 1, 2, 3 or 5 x 10^n); no "
+                                   "digits: exact (scenarios/figures.py)",
                            "figures": {k: self.figures[k].as_dict()
                                        for k in sorted(self.figures)},
                            "claims": dict(sorted(self.claims.items()))},
@@ -235,7 +246,7 @@ def _label(r: dict) -> str:
 
 def _approx_stm(ex: _Extraction) -> None:
     raw = ex.json("results/approx_stm/results.json")
-    ex.real("approx_stm.elapsed_s", raw["elapsed_s"], 1)
+    ex.real("approx_stm.elapsed_s", raw["elapsed_s"], WALL_TIME)
     dc = {(r["orbit"], r["truth"], r["stm"], r["arc_h"]): r for r in raw["dc"]}
     ex.real("approx_stm.eccentric_first_rms",
             [min(r["rms"][0] for r in raw["dc"] if r["orbit"] in _ECCENTRIC),
@@ -415,7 +426,7 @@ def _sweeps(ex: _Extraction) -> None:
     ex.exact("iter.nested_cases", summary["iter_days_azimuths"]["cases"])
     ex.exact("iter.departure_cases", summary["iter_lunar_departure"]["cases"])
     ex.exact("iter.tracking_cases", summary["iter_pipeline_tracking"]["cases"])
-    ex.real("iter.tracking_wall_s", summary["iter_pipeline_tracking"]["wall_s"], 1)
+    ex.real("iter.tracking_wall_s", summary["iter_pipeline_tracking"]["wall_s"], WALL_TIME)
     ex.exact("iter.tracking_workers", summary["iter_pipeline_tracking"]["workers"])
     tab = read_hdf5(ex.path("results/iter/iter_lunar_departure.h5")).table
     ok = tab.column("status") == int(CaseStatus.OK)
