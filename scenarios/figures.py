@@ -194,11 +194,11 @@ RunKey = tuple[str, str, str, float]
 
 @dataclass(frozen=True, slots=True)
 class OutcomeRow:
-    """A row of the README's outcome table: its label and its runs. ``details``: "fit" adds
-    the RMS at the first and last iteration and the epoch position error; "rate" the observed
-    factor and whether the dominant eigenvalues are a complex pair. ``note`` (status, text):
-    the text follows the outcome when every run of the row ends with that status. ``rho``:
-    "each" run's ρ joined by ``sep``, or the "largest"."""
+    """A row of the README's outcome table: its label and its runs. ``details``, of the row's
+    first run: "fit" adds the RMS at the first and last iteration and the epoch position
+    error; "rate" the observed factor and whether the dominant eigenvalues are a complex pair.
+    ``note`` (status, text): the text follows the outcome when every run of the row ends with
+    that status. ``rho``: "each" run's ρ joined by ``sep``, or the "largest"."""
 
     label: str
     runs: tuple[RunKey, ...]

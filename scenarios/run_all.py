@@ -16,6 +16,9 @@
    departure-day sweep with SEARCH as the body, and the tracking trade study with the whole
    pipeline as the body, on a local Dask cluster -> results/iter/ (report.md; summary.json:
    the cases, failures and wall time of each sweep).
+8. The README's figures: read from results/ into scenarios/readme_figures.json and rendered
+   into the README's generated blocks, then checked against results/ read again, with the
+   claims of the prose around them (scenarios/readme.py); ``git diff`` shows what changed.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from iter import CaseStatus, Execution, load_sweep, run_sweep
+from scenarios import readme
 from tapp.od.study import planned_cases, run_study
 from tapp.report.approx_stm import write_report
 from tapp.report.markdown import table
@@ -226,6 +230,12 @@ def sweeps() -> None:
     print(f"ITER sweeps -> {out / 'report.md'}")
 
 
+def readme_figures() -> None:
+    if readme.main([]) != 0:
+        raise SystemExit("the README's figures disagree with results/ (listed above)")
+    print(f"README figures -> {readme.README} ({readme.DATA})")
+
+
 def main() -> None:
     propagation_demo()
     approx_stm_study()
@@ -234,6 +244,7 @@ def main() -> None:
     matrix_processor()
     pipeline_run()
     sweeps()
+    readme_figures()
 
 
 if __name__ == "__main__":
