@@ -5,7 +5,8 @@ Grammar of an orbit spec (the ``--orbit`` option):
 - ``a=6550.524,e=0,i=30,raan=0,argp=0,M=0``: classical elements, a in km, angles in degrees
   (M is the mean anomaly; ``nu=`` may replace it with the true anomaly);
 - ``x=..,y=..,z=..,vx=..,vy=..,vz=..``: Cartesian position (km) and velocity (km/s);
-- ``NAME``: an orbit of the ``[orbits.NAME]`` tables of a scenario file, whose keys are
+- ``NAME``: an orbit of the ``[orbits.NAME]`` tables of a study file (by default the shipped
+  :data:`tapp.examples.STUDY_FILE`), whose keys are
   ``a_km, e, i_deg, raan_deg, argp_deg, M_deg`` (or ``nu_deg``) or ``x_km, ..., vz_km_s``,
   and optionally ``allow_subsurface = true`` (schema: :class:`OrbitTable`).
 
@@ -29,6 +30,7 @@ from pydantic import model_validator
 
 from tapp.constants import GM_EARTH_km3_s2, R_EARTH_km
 from tapp.errors import InputError
+from tapp.examples import STUDY_FILE
 from tapp.frames.elements import elements_to_cartesian, true_to_mean_anomaly
 from tapp.schema import Invalid, Schema, validate
 from tapp.tomlfile import read_toml
@@ -42,8 +44,6 @@ MAX_DISTANCE_km = 1e9
 MAX_ECCENTRICITY = 1e6
 #: Largest speed component, km/s (0.3 % of c; solar escape at 1 au is 42 km/s).
 MAX_SPEED_km_s = 1e3
-#: The study's scenario file, found beside the package in a source checkout.
-DEFAULT_SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "approx_stm.toml"
 
 
 def perigee_radius_km(x: np.ndarray, mu_km3_s2: float = GM_EARTH_km3_s2) -> float:
@@ -247,7 +247,7 @@ def parse_orbit(text: str, *, scenario: Path | None = None, source: str = "--orb
     if "=" in text:
         x = _from_mapping(_parse_pairs(text, source, "orbit"), source, "orbit")
         return check_perigee(x, source, "orbit", allow_subsurface=allow_subsurface)
-    path = scenario or DEFAULT_SCENARIO
+    path = scenario or STUDY_FILE
     orbits = named_orbits(path, allow_subsurface=allow_subsurface)
     if text not in orbits:
         raise InputError(source, "orbit", f"elements, a Cartesian state or an orbit named in "

@@ -877,7 +877,7 @@ def _values(table: Schema, names: tuple[str, ...]) -> np.ndarray:
 def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     """Build a :class:`BPlaneSearch` from a parsed scenario table (TOML), validating it all.
 
-    Tables and keys (units in the names; the file ``scenarios/search_bplane.toml`` is the
+    Tables and keys (units in the names; the example ``search_bplane.toml`` is the
     commented example; the schema is :class:`SearchFile`):
 
     - ``epoch``: UTC date of the injection (t = 0); ``title``: free text (optional);

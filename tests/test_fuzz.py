@@ -35,9 +35,10 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from tapp.cli import app
+from tapp.examples import FOLDER as EXAMPLES
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENARIOS = ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 runner = CliRunner()
 
 #: Tables whose keys are names chosen by the user (stations, orbits, constants, a sweep

@@ -5,13 +5,13 @@ networks, the tracking (data rate, span, noise, seed) and the brief's initial of
 commands and the study runner share these functions so a single run and the full study use
 the same data.
 
-The study file (``scenarios/approx_stm.toml``) is validated as a whole against one schema,
-:class:`StudyFile` (``tapp.schema``: unknown keys and sections are errors, booleans are not
-numbers, ...): ``epoch``, ``[orbits.NAME]`` (:class:`tapp.orbits.OrbitTable`),
-``[stations.NAME]`` and ``[networks]`` (:mod:`tapp.stations_file`), ``[tracking]``,
-``[initial_offset]``, ``[dc_settings]``, ``[[dc]]``, ``[ekf]`` with ``[ekf.apriori]`` and
-``[rsig]``. Gravity specs are checked by :func:`tapp.dynamics.parse_gravity`, orbit and
-station names against their tables.
+The study file (the shipped ``approx_stm.toml``, :data:`tapp.examples.STUDY_FILE`) is
+validated as a whole against one schema, :class:`StudyFile` (``tapp.schema``: unknown keys
+and sections are errors, booleans are not numbers, ...): ``epoch``, ``[orbits.NAME]``
+(:class:`tapp.orbits.OrbitTable`), ``[stations.NAME]`` and ``[networks]``
+(:mod:`tapp.stations_file`), ``[tracking]``, ``[initial_offset]``, ``[dc_settings]``,
+``[[dc]]``, ``[ekf]`` with ``[ekf.apriori]`` and ``[rsig]``. Gravity specs are checked by
+:func:`tapp.dynamics.parse_gravity`, orbit and station names against their tables.
 
 Earth orientation: top-level ``earth_orientation`` ("iau2006", the default, or "gmst"; see
 :mod:`tapp.frames.orientation`) and ``eop`` ("iers", the default, "none" or a finals2000A file
@@ -37,13 +37,14 @@ from pydantic import AfterValidator, Field, model_validator
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import ForceModel, Propagator, earth_model, parse_gravity
 from tapp.errors import InputError
+from tapp.examples import STUDY_FILE
 from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.frames.orientation import EarthOrientation, check_model, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements.stations import Station
 from tapp.od.batch import MAX_ITERATIONS
 from tapp.od.observations import MadeUnder, Observations, simulate
-from tapp.orbits import DEFAULT_SCENARIO, OrbitTable, parse_orbit
+from tapp.orbits import OrbitTable, parse_orbit
 from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, validate
 from tapp.stations_file import StationTable, load_network
 from tapp.tomlfile import read_toml
@@ -265,17 +266,17 @@ def _study(path: Path) -> tuple[dict, StudyFile]:
     return data, validate(StudyFile, data, str(path))
 
 
-def study_file(path: Path = DEFAULT_SCENARIO) -> StudyFile:
+def study_file(path: Path = STUDY_FILE) -> StudyFile:
     """Return the validated study file (cached); errors name the file and the field."""
     return _study(Path(path))[1]
 
 
-def load_study(path: Path = DEFAULT_SCENARIO) -> dict:
+def load_study(path: Path = STUDY_FILE) -> dict:
     """Return the parsed study TOML (cached), validated against :class:`StudyFile` first."""
     return _study(Path(path))[0]
 
 
-def epoch(path: Path = DEFAULT_SCENARIO) -> Epoch:
+def epoch(path: Path = STUDY_FILE) -> Epoch:
     """Return the study's epoch (UTC), the t = 0 of its observations."""
     text = study_file(path).epoch
     if isinstance(text, dt.datetime):
@@ -283,7 +284,7 @@ def epoch(path: Path = DEFAULT_SCENARIO) -> Epoch:
     return parse_epoch(text, source=str(path))
 
 
-def tracking(path: Path = DEFAULT_SCENARIO) -> Tracking:
+def tracking(path: Path = STUDY_FILE) -> Tracking:
     """Return the ``[tracking]`` settings."""
     table = study_file(path).tracking
     sigma = np.array([table.sigma_range_m * 1e-3, table.sigma_range_rate_mm_s * 1e-6])
@@ -291,7 +292,7 @@ def tracking(path: Path = DEFAULT_SCENARIO) -> Tracking:
                     math.radians(table.equatorial_below_deg))
 
 
-def earth_orientation_name(path: Path = DEFAULT_SCENARIO, model: str | None = None) -> str:
+def earth_orientation_name(path: Path = STUDY_FILE, model: str | None = None) -> str:
     """Return the Earth orientation model of a run: ``model`` (a CLI override) or the file's."""
     if model is not None:
         return check_model(model, "--earth-orientation", "value")
@@ -307,7 +308,7 @@ def _orientation(path: Path, model: str) -> EarthOrientation:
     return orient
 
 
-def orientation(path: Path = DEFAULT_SCENARIO, model: str | None = None) -> EarthOrientation:
+def orientation(path: Path = STUDY_FILE, model: str | None = None) -> EarthOrientation:
     """Return the study's Earth orientation (cached per file and model; module docstring).
 
     ``model`` overrides the file's ``earth_orientation`` (the CLI's ``--earth-orientation``).
@@ -341,14 +342,14 @@ def _describe_made_under(made: MadeUnder) -> str:
 
 
 def check_made_under(obs: Observations, orient: EarthOrientation, source: str,
-                     path: Path = DEFAULT_SCENARIO, chosen: bool = False) -> str | None:
+                     path: Path = STUDY_FILE, chosen: bool = False) -> str | None:
     """Check observations read from ``source`` against the run's Earth orientation
     ``orient``; return a note for the user (one line) or None, or raise InputError.
 
     Where data meet a model: observations made under one Earth orientation and fitted under
     another are off by the difference of the station places (31.5 km at Goldstone between
     iau2006 and gmst on 2026-01-01), and a DC on them settles tens of km from the orbit
-    (41.5 km for ``tapp simulate``'s TDM of ``scenarios/leo_equatorial.toml`` fitted under
+    (41.5 km for ``tapp simulate``'s TDM of ``leo_equatorial.toml`` fitted under
     the study's gmst). The file's record (``obs.made_under``, :mod:`tapp.od.obsfile`):
 
     - states the run's model, EOP source and frame: None;
@@ -402,12 +403,12 @@ def force_model(spec: str, orient: EarthOrientation, source: str, field: str) ->
     return earth_model(spec, source=source, field=field, earth_orientation=orient.model)
 
 
-def sigma_by_kind(path: Path = DEFAULT_SCENARIO) -> dict[str, float]:
+def sigma_by_kind(path: Path = STUDY_FILE) -> dict[str, float]:
     """Return the study's measurement standard deviations by observable kind (km, km/s)."""
     return dict(zip(KINDS, tracking(path).sigma.tolist(), strict=True))
 
 
-def offset(path: Path = DEFAULT_SCENARIO) -> Offset:
+def offset(path: Path = STUDY_FILE) -> Offset:
     """Return the ``[initial_offset]`` of the brief."""
     table = study_file(path).initial_offset
     return Offset(table.da_m * 1e-3, table.de or 0.0, math.radians(table.di_deg), table.e)
@@ -431,7 +432,7 @@ def initial_estimate(x_true: np.ndarray, off: Offset) -> np.ndarray:
     return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
-def true_orbit(spec: str, path: Path = DEFAULT_SCENARIO, *, allow_subsurface: bool = False
+def true_orbit(spec: str, path: Path = STUDY_FILE, *, allow_subsurface: bool = False
                ) -> np.ndarray:
     """Return the true initial state of an orbit name or spec (see :mod:`tapp.orbits`).
 
@@ -441,7 +442,7 @@ def true_orbit(spec: str, path: Path = DEFAULT_SCENARIO, *, allow_subsurface: bo
     return parse_orbit(spec, scenario=path, allow_subsurface=allow_subsurface)
 
 
-def network_for(x_true: np.ndarray, name: str | None, path: Path = DEFAULT_SCENARIO
+def network_for(x_true: np.ndarray, name: str | None, path: Path = STUDY_FILE
                 ) -> tuple[Station, ...]:
     """Return the named network/station, or the default for the orbit's inclination."""
     if name is None:
@@ -452,7 +453,7 @@ def network_for(x_true: np.ndarray, name: str | None, path: Path = DEFAULT_SCENA
 
 
 def simulated_observations(x_true: np.ndarray, truth_spec: str, stations: tuple[Station, ...],
-                           path: Path = DEFAULT_SCENARIO, seed: int | None = None,
+                           path: Path = STUDY_FILE, seed: int | None = None,
                            span_s: float | None = None, noise: bool = True,
                            orient: EarthOrientation | None = None) -> Observations:
     """Simulate the study's 5-day observation file for one orbit and truth model.
@@ -472,6 +473,6 @@ def simulated_observations(x_true: np.ndarray, truth_spec: str, stations: tuple[
     return simulate(truth, x_true, stations, t, trk.sigma, rng, orient)
 
 
-def named_orbit_names(path: Path = DEFAULT_SCENARIO) -> list[str]:
+def named_orbit_names(path: Path = STUDY_FILE) -> list[str]:
     """Names of the orbits of the scenario file."""
     return list(study_file(path).orbits)

@@ -1,7 +1,7 @@
 """The approximate-STM study end to end: every run of the brief, as data.
 
 The runs are read from the study's scenario file (``[[dc]]``, ``[ekf]``, ``[rsig]``,
-``[rate_vs_arc]``, ``[rate_vs_inclination]``; see ``scenarios/approx_stm.toml``, validated by
+``[rate_vs_arc]``, ``[rate_vs_inclination]``; see ``approx_stm.toml``, validated by
 :class:`tapp.od.setup.StudyFile`); each DC run uses the brief's offset initial estimate and the
 5-day simulated observation file of its orbit and truth model, cut to the run's arc. Beside
 each DC run go the predicted convergence rate ρ of its (J_N, J_M) pair on the same
@@ -25,13 +25,13 @@ import numpy as np
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator
 from tapp.errors import TooFewMeasurementsError
+from tapp.examples import STUDY_FILE
 from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.od import setup
 from tapp.od.batch import DCResult, DCSettings, differential_correction
 from tapp.od.ekf import EKFResult, extended_kalman_filter
 from tapp.od.rate import PredictedRate, predicted_rate
 from tapp.od.rsig import RSignature, r_signature
-from tapp.orbits import DEFAULT_SCENARIO
 from tapp.stations_file import load_network
 
 
@@ -115,7 +115,7 @@ class StudyResults:
     earth_orientation: dict = field(default_factory=dict)
 
 
-def planned_cases(path: Path = DEFAULT_SCENARIO) -> int:
+def planned_cases(path: Path = STUDY_FILE) -> int:
     """Number of runs the study will make (for a progress bar)."""
     study = setup.study_file(path)
     n = sum(len(b.orbits) * len(b.stm) * len(b.arcs_h) for b in study.dc)
@@ -149,7 +149,7 @@ def with_inclination(x: np.ndarray, inclination_rad: float) -> np.ndarray:
     return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
-def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = lambda _: None,
+def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _: None,
               earth_orientation: str | None = None) -> StudyResults:
     """Run every case of the study; ``advance(label)`` is called after each case.
 

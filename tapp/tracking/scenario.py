@@ -3,7 +3,7 @@
 A scenario gives the trajectory (epoch, injection state, state and variational force models),
 the parameter vector x = [p; q], the tracking stations and schedule, the fit-world and
 real-world noise, the T13 times (input times and epoch times) and the miss parameters.
-``scenarios/leo_equatorial.toml`` and ``scenarios/deep_space.toml`` are commented examples.
+The examples ``leo_equatorial.toml`` and ``deep_space.toml`` (``tapp examples``) are commented.
 The file is validated against one declared schema, :class:`ScenarioFile` (``tapp.schema``):
 unknown tables and keys are errors naming the allowed keys, booleans are not numbers, numbers
 are not strings; the rules between tables and the physics are checked while it is built.

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tapp.examples import FOLDER as EXAMPLES
 from tests.bench.common import REPO_ROOT, Section, logger, markdown_table
 
 NAME = "kernels"
@@ -40,7 +41,7 @@ KERNELS = {"SkylakeX": "avx512f", "Haswell": "avx2", "Zen": "avx2", "Sandybridge
 SAMPLES = 20_000
 TARGET_COVARIANCE = 1e-9
 TARGET_GUIDANCE = 1e-8
-SCENARIOS = REPO_ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 log = logger(NAME)
 
 

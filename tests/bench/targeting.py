@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import time
 import tomllib
-from pathlib import Path
 
 import numpy as np
 
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.targeting import BPlaneSearch, run_search, scenario_search
 
-SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "search_bplane.toml"
+SCENARIO = EXAMPLES / "search_bplane.toml"
 REPEATS = 5
 
 

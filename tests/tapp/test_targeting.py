@@ -8,7 +8,6 @@ B·T = 5300 km and the first guess's flight time + 1 h.
 from __future__ import annotations
 
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +18,7 @@ from tapp.constants import SECONDS_PER_DAY, GM_km3_s2
 from tapp.dynamics import Propagator
 from tapp.ephemeris import position_km
 from tapp.errors import InputError, NotHyperbolicError
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.targeting import (
     BPlaneProgram,
     FailedCaseError,
@@ -27,7 +27,7 @@ from tapp.targeting import (
     scenario_search,
 )
 
-SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "search_bplane.toml"
+SCENARIO = EXAMPLES / "search_bplane.toml"
 
 # Named tolerances (STYLE 7).
 one_metre_km = 1e-3

@@ -11,11 +11,11 @@ import pytest
 
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.errors import InputError
+from tapp.examples import STUDY_FILE
 from tapp.frames.elements import cartesian_to_elements
 from tapp.od import setup
-from tapp.orbits import DEFAULT_SCENARIO
 
-SHIPPED = DEFAULT_SCENARIO.read_text()
+SHIPPED = STUDY_FILE.read_text()
 
 
 def _study(tmp_path: Path, old: str, new: str) -> Path:

@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 
 from tapp.errors import InputError
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.tracking.scenario import parse_scenario, read_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import SOURCE, leo_document, leo_scenario
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 
 
 def test_the_base_scenario_parses_to_named_parameters_with_units() -> None:
