@@ -7,6 +7,7 @@ exit code through :func:`tapp.cli.common.run_guarded`.
 
 from __future__ import annotations
 
+from tapp.cli import examples_cmd as _examples_cmd  # noqa: F401
 from tapp.cli import guide_cmd as _guide_cmd  # noqa: F401
 from tapp.cli import info as _info  # noqa: F401  (each import registers its commands)
 from tapp.cli import od as _od  # noqa: F401
