@@ -9,9 +9,14 @@ The study file (the shipped ``approx_stm.toml``, :data:`tapp.examples.STUDY_FILE
 validated as a whole against one schema, :class:`StudyFile` (``tapp.schema``: unknown keys
 and sections are errors, booleans are not numbers, ...): ``epoch``, ``[orbits.NAME]``
 (:class:`tapp.orbits.OrbitTable`), ``[stations.NAME]`` and ``[networks]``
-(:mod:`tapp.stations_file`), ``[tracking]``, ``[initial_offset]``, ``[dc_settings]``,
-``[[dc]]``, ``[ekf]`` with ``[ekf.apriori]`` and ``[rsig]``. Gravity specs are checked by
-:func:`tapp.dynamics.parse_gravity`, orbit and station names against their tables.
+(:mod:`tapp.stations_file`), ``[tracking]``, ``[noise.fit]`` (:mod:`tapp.noise_file`),
+``[initial_offset]``, ``[dc_settings]``, ``[[dc]]``, ``[ekf]`` with ``[ekf.apriori]``,
+``[rsig]``, ``[rate_vs_arc]`` and ``[rate_vs_inclination]`` (reference:
+``docs/reference/study.md``). The runs name their models as every file does: ``gravity`` (the
+state model, which simulates the data) and ``var_gravity`` (the variational models, one run
+each); ``truth``, ``stm`` and ``[tracking]``'s σ keys are refused, naming the new key. Gravity
+specs are checked by :func:`tapp.dynamics.parse_gravity`, orbit and station names against
+their tables.
 
 Earth orientation: top-level ``earth_orientation`` ("iau2006", the default, or "gmst"; see
 :mod:`tapp.frames.orientation`) and ``eop`` ("iers", the default, "none" or a finals2000A file
@@ -32,20 +37,22 @@ from pathlib import Path
 from typing import Annotated
 
 import numpy as np
-from pydantic import AfterValidator, Field, model_validator
+from pydantic import Field, model_validator
 
 from tapp.constants import GM_EARTH_km3_s2
-from tapp.dynamics import ForceModel, Propagator, earth_model, parse_gravity
+from tapp.dynamics import ForceModel, Propagator, earth_model
 from tapp.errors import InputError
 from tapp.examples import STUDY_FILE
 from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.frames.orientation import EarthOrientation, check_model, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements.stations import Station
+from tapp.models_file import GravityName
+from tapp.noise_file import FitTable
 from tapp.od.batch import MAX_ITERATIONS
 from tapp.od.observations import MadeUnder, Observations, simulate
 from tapp.orbits import OrbitTable, parse_orbit
-from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, validate
+from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, UtcDate, validate
 from tapp.stations_file import StationTable, load_network
 from tapp.tomlfile import read_toml
 
@@ -54,27 +61,39 @@ Positive = Annotated[float, Field(gt=0)]
 KINDS = ("range", "range_rate")
 
 
-def _gravity(spec: str) -> str:
-    try:
-        parse_gravity(spec)
-    except InputError as exc:
-        raise Invalid(exc.expected) from None
-    return spec
-
-
-#: A gravity spec: J0, Jn or NxM (checked by ``tapp.dynamics.parse_gravity``).
-GravityName = Annotated[str, AfterValidator(_gravity)]
-
-
 class StudyTracking(Schema):
-    """``[tracking]``: simulated tracking of the study (units in the names)."""
+    """``[tracking]``: the study's simulated tracking (its DATASIM): a file per orbit and
+    gravity model, sampled while a station sees the spacecraft above its mask."""
 
-    data_interval_s: Positive
-    span_days: Positive
-    sigma_range_m: Positive
-    sigma_range_rate_mm_s: Positive
-    seed: Annotated[int, Field(ge=0)] = 0
-    equatorial_below_deg: Annotated[float, Field(gt=0, le=180)]
+    renamed_keys = {key: f"[noise.fit] {key}" for key in ("sigma_range_m",
+                                                            "sigma_range_rate_mm_s")}
+
+    data_interval_s: Positive = Field(description="Time between samples of each station.")
+    span_days: Positive = Field(description="Span of each simulated observation file, from "
+                                "the epoch; a run's arc is cut from it.")
+    seed: Annotated[int, Field(ge=0)] = Field(0, description="Seed of the simulated noise "
+                                              "(numpy SeedSequence).")
+    equatorial_below_deg: Annotated[float, Field(gt=0, le=180)] = Field(
+        description="Orbits inclined below this track from the network 'equatorial', the "
+        "others from 'global', when a run names no network.")
+
+
+class StudyNoise(Schema):
+    """``[noise]``: the white noise of the simulated data, which every fit also assumes."""
+
+    fit: FitTable = Field(description="σ of range and range rate (the study tracks no angles).")
+
+    @model_validator(mode="after")
+    def _range_and_range_rate(self) -> StudyNoise:
+        for key in ("sigma_azimuth_deg", "sigma_elevation_deg"):
+            if getattr(self.fit, key) is not None:
+                raise Invalid("no angle σ (the study tracks range and range rate)",
+                              getattr(self.fit, key), f"fit.{key}")
+        for key in ("sigma_range_m", "sigma_range_rate_mm_s"):
+            if getattr(self.fit, key) is None:
+                raise Invalid("a value (the study tracks range and range rate)", None,
+                              f"fit.{key}")
+        return self
 
 
 class InitialOffset(Schema):
@@ -86,10 +105,13 @@ class InitialOffset(Schema):
     brief, kept so that study files written for it still read; give one of the two.
     """
 
-    da_m: float
-    de: float | None = None
-    e: Annotated[float, Field(ge=0, lt=1)] | None = None
-    di_deg: float
+    da_m: float = Field(description="Error added to the semi-major axis.")
+    de: float | None = Field(None, description="Error added to the eccentricity (or e).",
+                             json_schema_extra={"unit": "1"})
+    e: Annotated[float, Field(ge=0, lt=1)] | None = Field(
+        None, description="The eccentricity every initial estimate starts from, in place of "
+        "de (an earlier reading of the brief).", json_schema_extra={"unit": "1"})
+    di_deg: float = Field(description="Error added to the inclination.")
 
     @model_validator(mode="after")
     def _one_e(self) -> InitialOffset:
@@ -100,55 +122,88 @@ class InitialOffset(Schema):
 
 
 class DCSettingsTable(Schema):
-    """``[dc_settings]``: fields of :class:`tapp.od.batch.DCSettings`."""
+    """``[dc_settings]``: the iteration control of every DC run
+    (:class:`tapp.od.batch.DCSettings`)."""
 
-    max_iterations: Annotated[int, Field(ge=2, le=MAX_ITERATIONS)] = 15
-    rms_rel_tol: Positive = 1e-3
-    divergence_ratio: Annotated[float, Field(gt=1)] = 10.0
-    rms_floor: Positive = 1e-6
-    rms_fit_limit: Positive = 3.0
-    trend_window: Annotated[int, Field(ge=2)] = 10
-    max_condition: Annotated[float, Field(gt=1)] = 1e10
+    max_iterations: Annotated[int, Field(ge=2, le=MAX_ITERATIONS)] = Field(
+        15, description="Iterations at most; a DC still converging then ends as such.")
+    rms_rel_tol: Positive = Field(1e-3, description="The weighted RMS has settled when it "
+                                  "changes by less than this, relative.",
+                                  json_schema_extra={"unit": "1"})
+    divergence_ratio: Annotated[float, Field(gt=1)] = Field(
+        10.0, description="Diverged when the RMS exceeds this times its smallest value so far.",
+        json_schema_extra={"unit": "1"})
+    rms_floor: Positive = Field(1e-6, description="Converged when the RMS falls below this "
+                                "(a noise-free fit).", json_schema_extra={"unit": "1"})
+    rms_fit_limit: Positive = Field(3.0, description="A settled RMS above this is a stall: "
+                                    "the data are not fitted.", json_schema_extra={"unit": "1"})
+    trend_window: Annotated[int, Field(ge=2)] = Field(
+        10, description="Iterations over which the contraction factor is measured (at least).")
+    max_condition: Annotated[float, Field(gt=1)] = Field(
+        1e10, description="A normal matrix (scaled to a unit diagonal) of a larger condition "
+        "number at the first iteration is diagnosed, not iterated on.",
+        json_schema_extra={"unit": "1"})
+
+
+#: The study's own names of the two models, renamed to the vocabulary of every other file.
+_MODEL_RENAMED = {"truth": "gravity", "stm": "var_gravity"}
+_GRAVITY = ("The Earth's gravity field of the state model: the data are simulated with it "
+            "and every fit's trajectory moves under it.")
+_VAR_GRAVITY = ("The variational models, one run each: the Earth field whose Jacobian drives "
+                "the fit's STM (the truncated variational equations).")
 
 
 class DCBlock(Schema):
-    """One ``[[dc]]`` block: orbits x STM models x arcs, one truth model."""
+    """One ``[[dc]]`` block: a batch DC for every orbit x variational model x arc."""
 
-    title: str | None = None
-    orbits: Annotated[list[str], Field(min_length=1)]
-    truth: GravityName
-    stm: Annotated[list[GravityName], Field(min_length=1)]
-    arcs_h: Annotated[list[Positive], Field(min_length=1)]
+    renamed_keys = _MODEL_RENAMED
+
+    title: str | None = Field(None, description="Heading of the block's table in the report.")
+    orbits: Annotated[list[str], Field(min_length=1)] = Field(
+        description="Names of [orbits.NAME] tables.")
+    gravity: GravityName = Field(description=_GRAVITY)
+    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
+        description=_VAR_GRAVITY)
+    arcs_h: Annotated[list[Positive], Field(min_length=1)] = Field(
+        description="Arc lengths, from the epoch.")
 
 
 class EKFBlock(Schema):
-    """``[ekf]``: one orbit and truth, STM models x a priori σ (x, y, z km; vx, vy, vz km/s)."""
+    """``[ekf]``: an extended Kalman filter for one orbit, every variational model x a priori."""
 
-    title: str = "EKF"
-    orbit: str
-    truth: GravityName
-    stm: Annotated[list[GravityName], Field(min_length=1)]
-    arc_h: Positive
-    last_passes: Annotated[int, Field(ge=1)] = 6
-    apriori: dict[str, Annotated[list[Positive], Field(min_length=6, max_length=6)]] = {}
+    renamed_keys = _MODEL_RENAMED
+
+    title: str = Field("EKF", description="Heading of the EKF table in the report.")
+    orbit: str = Field(description="Name of an [orbits.NAME] table.")
+    gravity: GravityName = Field(description=_GRAVITY)
+    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
+        description=_VAR_GRAVITY)
+    arc_h: Positive = Field(description="Arc length, from the epoch.")
+    last_passes: Annotated[int, Field(ge=1)] = Field(
+        6, description="Passes at the end of the arc whose largest |O-C| the report shows.")
+    apriori: dict[str, Annotated[list[Positive], Field(min_length=6, max_length=6)]] = Field(
+        {}, description="A priori σ by label: x, y, z (km), vx, vy, vz (km/s).",
+        json_schema_extra={"unit": "km, km/s"})
 
 
 class RSigBlock(Schema):
-    """``[rsig]``: R(t) curves of (truth, STM) pairs over ``hours`` sampled every ``step_s``."""
+    """``[rsig]``: the error-growth signature R(t) of (state, variational) model pairs."""
 
-    orbit: str
-    hours: Positive
-    step_s: Positive
-    cases: list[Annotated[list[GravityName], Field(min_length=2, max_length=2)]]
+    orbit: str = Field(description="Name of an [orbits.NAME] table.")
+    hours: Positive = Field(description="Span of the curves, from the epoch.",
+                            json_schema_extra={"unit": "h"})
+    step_s: Positive = Field(description="Sampling of the curves.")
+    cases: list[Annotated[list[GravityName], Field(min_length=2, max_length=2)]] = Field(
+        description="[gravity, var_gravity] pairs, one curve each.")
 
 
 class Grid(Schema):
     """A grid ``first``, ``first + step``, ... up to ``last`` (inclusive), in the field's
     units."""
 
-    first: Annotated[float, Field(ge=0)]
-    last: Annotated[float, Field(ge=0)]
-    step: Positive
+    first: Annotated[float, Field(ge=0)] = Field(description="The first point.")
+    last: Annotated[float, Field(ge=0)] = Field(description="The last point (inclusive).")
+    step: Positive = Field(description="The spacing (at most 1000 points).")
 
     @model_validator(mode="after")
     def _ordered(self) -> Grid:
@@ -166,24 +221,31 @@ class Grid(Schema):
 
 
 class RateVsArcBlock(Schema):
-    """``[rate_vs_arc]``: ρ against arc length (h) for one orbit, truth and STM models."""
+    """``[rate_vs_arc]``: the predicted DC rate ρ against arc length, for one orbit."""
 
-    orbit: str
-    truth: GravityName
-    stm: Annotated[list[GravityName], Field(min_length=1)]
-    arcs_h: Grid
+    renamed_keys = _MODEL_RENAMED
+
+    orbit: str = Field(description="Name of an [orbits.NAME] table.")
+    gravity: GravityName = Field(description=_GRAVITY)
+    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
+        description="The variational models, one curve each.")
+    arcs_h: Grid = Field(description="The arc lengths, as a grid {first, last, step} (h).")
 
 
 class RateVsInclinationBlock(Schema):
     """``[rate_vs_inclination]``: ρ against inclination (deg) of ``orbit``'s elements over one
     arc, seen from one ``network`` (the same stations at every inclination)."""
 
-    orbit: str
-    truth: GravityName
-    stm: Annotated[list[GravityName], Field(min_length=1)]
-    arc_h: Positive
-    network: str
-    inclinations_deg: Grid
+    renamed_keys = _MODEL_RENAMED
+
+    orbit: str = Field(description="Name of an [orbits.NAME] table given by elements.")
+    gravity: GravityName = Field(description=_GRAVITY)
+    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
+        description="The variational models, one curve each.")
+    arc_h: Positive = Field(description="Arc length, from the epoch.")
+    network: str = Field(description="A network of [networks], or a station name.")
+    inclinations_deg: Grid = Field(description="The inclinations, as a grid {first, last, "
+                                   "step} within 0..180 (deg).")
 
     @model_validator(mode="after")
     def _range(self) -> RateVsInclinationBlock:
@@ -194,22 +256,29 @@ class RateVsInclinationBlock(Schema):
 
 
 class StudyFile(Schema):
-    """Schema of the study file (module docstring)."""
+    """Schema of the study file."""
 
-    epoch: str | dt.datetime
+    epoch: UtcDate = Field(description="UTC at t = 0: the orbits' epoch and the "
+                                     "start of the simulated tracking.")
     earth_orientation: EarthOrientationName = "iau2006"
     eop: EopSource = "iers"
-    orbits: dict[str, OrbitTable] = {}
-    stations: dict[str, StationTable] = {}
-    networks: dict[str, list[str]] = {}
-    tracking: StudyTracking
-    initial_offset: InitialOffset
-    dc_settings: DCSettingsTable = DCSettingsTable()
-    dc: list[DCBlock] = []
-    ekf: EKFBlock | None = None
-    rsig: RSigBlock | None = None
-    rate_vs_arc: RateVsArcBlock | None = None
-    rate_vs_inclination: RateVsInclinationBlock | None = None
+    orbits: dict[str, OrbitTable] = Field({}, description="The true orbits, by name (--orbit "
+                                          "NAME).")
+    stations: dict[str, StationTable] = Field({}, description="Ground stations by name.")
+    networks: dict[str, list[str]] = Field(
+        {}, description="Named lists of stations; \"equatorial\" and \"global\" serve runs "
+        "that name none.")
+    tracking: StudyTracking = Field(description="The simulated tracking.")
+    noise: StudyNoise = Field(description="The noise of the simulated data.")
+    initial_offset: InitialOffset = Field(description="The error of every initial estimate.")
+    dc_settings: DCSettingsTable = Field(DCSettingsTable(), description="Iteration control "
+                                         "of every DC.")
+    dc: list[DCBlock] = Field([], description="Batch DC runs.")
+    ekf: EKFBlock | None = Field(None, description="EKF runs.")
+    rsig: RSigBlock | None = Field(None, description="R(t) curves.")
+    rate_vs_arc: RateVsArcBlock | None = Field(None, description="ρ against arc length.")
+    rate_vs_inclination: RateVsInclinationBlock | None = Field(
+        None, description="ρ against inclination.")
 
     @model_validator(mode="after")
     def _names_exist(self) -> StudyFile:
@@ -286,8 +355,9 @@ def epoch(path: Path = STUDY_FILE) -> Epoch:
 
 def tracking(path: Path = STUDY_FILE) -> Tracking:
     """Return the ``[tracking]`` settings."""
-    table = study_file(path).tracking
-    sigma = np.array([table.sigma_range_m * 1e-3, table.sigma_range_rate_mm_s * 1e-6])
+    study = study_file(path)
+    table, fit = study.tracking, study.noise.fit
+    sigma = np.array([fit.sigma_range_m * 1e-3, fit.sigma_range_rate_mm_s * 1e-6])
     return Tracking(table.data_interval_s, table.span_days * 86400.0, sigma, table.seed,
                     math.radians(table.equatorial_below_deg))
 

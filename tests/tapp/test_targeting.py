@@ -188,7 +188,7 @@ def test_failed_case_stops_the_search_naming_the_case(problem) -> None:
 @pytest.mark.parametrize(("table", "values", "field"), [
     ("injection", {"r_km": [1.0, 2.0]}, "injection.r_km"),
     ("injection", {"v_km_s": [1.0, "a", 2.0]}, "injection.v_km_s[1]"),
-    ("injection", {"r_km": [100.0, 0.0, 0.0]}, "injection.r_km"),
+    ("injection", {"r_km": [100.0, 0.0, 0.0]}, "injection"),
     ("injection", {"v_km_s": [0.0, 0.0, 1.0]}, "injection"),
     ("model", {"gravity": "J99"}, "model.gravity"),
     ("model", {"third_bodies": ["sun", "pluto"]}, "model.third_bodies[1]"),
