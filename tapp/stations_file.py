@@ -64,10 +64,13 @@ class StationTable(Schema):
 
 
 class StationsSection(Schema):
-    """Schema of the ``[stations.*]`` tables and ``[networks]`` of a file (other keys apart)."""
+    """Schema of the ``[stations.*]`` tables and ``[networks]`` of a file (other keys apart);
+    the files that have them (tracking scenarios, the study) derive their schema from it."""
 
-    stations: dict[str, StationTable] = {}
-    networks: dict[str, list[str]] = {}
+    stations: dict[str, StationTable] = Field({}, description="Ground stations, by name.")
+    networks: dict[str, list[str]] = Field(
+        {}, description="Named lists of stations (names of [stations.NAME] tables); the "
+        "study's runs track from \"equatorial\" or \"global\" when they name none.")
 
     @model_validator(mode="after")
     def _networks_name_stations(self) -> StationsSection:

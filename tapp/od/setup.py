@@ -53,7 +53,7 @@ from tapp.od.batch import MAX_ITERATIONS
 from tapp.od.observations import MadeUnder, Observations, simulate
 from tapp.orbits import OrbitTable, parse_orbit
 from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, UtcDate, validate
-from tapp.stations_file import StationTable, load_network
+from tapp.stations_file import StationsSection, load_network
 from tapp.tomlfile import read_toml
 
 Positive = Annotated[float, Field(gt=0)]
@@ -145,39 +145,35 @@ class DCSettingsTable(Schema):
         json_schema_extra={"unit": "1"})
 
 
-#: The study's own names of the two models, renamed to the vocabulary of every other file.
-_MODEL_RENAMED = {"truth": "gravity", "stm": "var_gravity"}
-_GRAVITY = ("The Earth's gravity field of the state model: the data are simulated with it "
-            "and every fit's trajectory moves under it.")
-_VAR_GRAVITY = ("The variational models, one run each: the Earth field whose Jacobian drives "
-                "the fit's STM (the truncated variational equations).")
+class StudyModels(Schema):
+    """The two models of a study run, named as in every other file (the study's own
+    ``truth`` and ``stm`` are refused, naming the new key)."""
+
+    renamed_keys = {"truth": "gravity", "stm": "var_gravity"}
+
+    gravity: GravityName = Field(
+        description="The Earth's gravity field of the state model: the data are simulated "
+        "with it and every fit's trajectory moves under it.")
+    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
+        description="The variational models, one run (or curve) each: the Earth field whose "
+        "Jacobian drives the fit's STM (the truncated variational equations).")
 
 
-class DCBlock(Schema):
+class DCBlock(StudyModels):
     """One ``[[dc]]`` block: a batch DC for every orbit x variational model x arc."""
-
-    renamed_keys = _MODEL_RENAMED
 
     title: str | None = Field(None, description="Heading of the block's table in the report.")
     orbits: Annotated[list[str], Field(min_length=1)] = Field(
         description="Names of [orbits.NAME] tables.")
-    gravity: GravityName = Field(description=_GRAVITY)
-    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
-        description=_VAR_GRAVITY)
     arcs_h: Annotated[list[Positive], Field(min_length=1)] = Field(
         description="Arc lengths, from the epoch.")
 
 
-class EKFBlock(Schema):
+class EKFBlock(StudyModels):
     """``[ekf]``: an extended Kalman filter for one orbit, every variational model x a priori."""
-
-    renamed_keys = _MODEL_RENAMED
 
     title: str = Field("EKF", description="Heading of the EKF table in the report.")
     orbit: str = Field(description="Name of an [orbits.NAME] table.")
-    gravity: GravityName = Field(description=_GRAVITY)
-    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
-        description=_VAR_GRAVITY)
     arc_h: Positive = Field(description="Arc length, from the epoch.")
     last_passes: Annotated[int, Field(ge=1)] = Field(
         6, description="Passes at the end of the arc whose largest |O-C| the report shows.")
@@ -220,28 +216,18 @@ class Grid(Schema):
         return self.first + self.step * np.arange(n + 1)
 
 
-class RateVsArcBlock(Schema):
+class RateVsArcBlock(StudyModels):
     """``[rate_vs_arc]``: the predicted DC rate ρ against arc length, for one orbit."""
 
-    renamed_keys = _MODEL_RENAMED
-
     orbit: str = Field(description="Name of an [orbits.NAME] table.")
-    gravity: GravityName = Field(description=_GRAVITY)
-    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
-        description="The variational models, one curve each.")
     arcs_h: Grid = Field(description="The arc lengths, as a grid {first, last, step} (h).")
 
 
-class RateVsInclinationBlock(Schema):
+class RateVsInclinationBlock(StudyModels):
     """``[rate_vs_inclination]``: ρ against inclination (deg) of ``orbit``'s elements over one
     arc, seen from one ``network`` (the same stations at every inclination)."""
 
-    renamed_keys = _MODEL_RENAMED
-
     orbit: str = Field(description="Name of an [orbits.NAME] table given by elements.")
-    gravity: GravityName = Field(description=_GRAVITY)
-    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
-        description="The variational models, one curve each.")
     arc_h: Positive = Field(description="Arc length, from the epoch.")
     network: str = Field(description="A network of [networks], or a station name.")
     inclinations_deg: Grid = Field(description="The inclinations, as a grid {first, last, "
@@ -255,7 +241,7 @@ class RateVsInclinationBlock(Schema):
         return self
 
 
-class StudyFile(Schema):
+class StudyFile(StationsSection):
     """Schema of the study file."""
 
     epoch: UtcDate = Field(description="UTC at t = 0: the orbits' epoch and the "
@@ -264,10 +250,6 @@ class StudyFile(Schema):
     eop: EopSource = "iers"
     orbits: dict[str, OrbitTable] = Field({}, description="The true orbits, by name (--orbit "
                                           "NAME).")
-    stations: dict[str, StationTable] = Field({}, description="Ground stations by name.")
-    networks: dict[str, list[str]] = Field(
-        {}, description="Named lists of stations; \"equatorial\" and \"global\" serve runs "
-        "that name none.")
     tracking: StudyTracking = Field(description="The simulated tracking.")
     noise: StudyNoise = Field(description="The noise of the simulated data.")
     initial_offset: InitialOffset = Field(description="The error of every initial estimate.")
@@ -298,11 +280,6 @@ class StudyFile(Schema):
                 self.stations:
             raise Invalid(f"a network of [networks] ({', '.join(self.networks)}) or a station",
                           inc.network, "rate_vs_inclination.network")
-        for network, names in self.networks.items():
-            for i, name in enumerate(names):
-                if name not in self.stations:
-                    raise Invalid(f"names of [stations.*] tables ({', '.join(self.stations)})",
-                                  name, f"networks.{network}[{i}]")
         return self
 
 

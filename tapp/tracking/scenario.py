@@ -95,7 +95,7 @@ from tapp.schema import (
     UtcDate,
     validate,
 )
-from tapp.stations_file import StationTable
+from tapp.stations_file import StationsSection
 from tapp.targeting import BPlaneSearch, TargetingTable, scenario_targeting
 from tapp.tomlfile import read_toml
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
@@ -446,7 +446,7 @@ class MissTable(Schema):
         "\"earth_equator\".")
 
 
-class ScenarioFile(Schema):
+class ScenarioFile(StationsSection):
     """Schema of a TAPP I tracking scenario (module docstring for the tables)."""
 
     title: str = Field("", description="Free text, kept on the tape.")
@@ -460,10 +460,6 @@ class ScenarioFile(Schema):
     model: ModelTable = Field(description="The state and variational force models.")
     parameters: ParametersTable = Field(ParametersTable(),
                                         description="The parameters q beside the state.")
-    stations: dict[str, StationTable] = Field({}, description="Ground stations by name.")
-    networks: dict[str, list[str]] = Field(
-        {}, description="Named lists of stations (as in the study file; TAPP I tracks "
-        "tracking.stations).")
     tracking: TrackingTable = Field(description="Who tracks, what and when.")
     noise: NoiseTable = Field(description="Fit-world and real-world measurement noise.")
     times: TimesTable = Field(description="The T13 times.")

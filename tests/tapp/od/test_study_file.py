@@ -87,7 +87,8 @@ def test_a_misspelled_seed_is_named_with_the_allowed_keys(tmp_path: Path) -> Non
 
 def test_an_unknown_section_is_refused(tmp_path: Path) -> None:
     err = _error(_study(tmp_path, "[initial_offset]", "[extras]\nx = 1\n\n[initial_offset]"))
-    assert err.field == "extras" and err.expected.startswith("no such key (allowed: epoch, ")
+    assert err.field == "extras" and err.expected.startswith(
+        "no such key (allowed: stations, networks, epoch, ")
 
 
 @pytest.mark.parametrize(("old", "new", "field", "expected"), [
