@@ -1,9 +1,9 @@
 """Benchmark of TAPP II: the deep-space guidance study, 10⁶ samples, serially and on Dask.
 
-Set-up (timed apart, in a temporary folder): TAPP I on ``scenarios/deep_space.toml`` -> T13
-tape, TAPP III with ``scenarios/tapp3_deep_space.toml`` -> T32 tape, through the library calls
+Set-up (timed apart, in a temporary folder): TAPP I on the example ``deep_space.toml`` -> T13
+tape, TAPP III with the example ``tapp3_deep_space.toml`` -> T32 tape, through the library calls
 ``tapp simulate``, ``tapp process --tape`` and the pipeline make. Measured, with the guidance
-file ``scenarios/tapp2_deep_space.toml`` (three manoeuvres, B·R, B·T and the flight time
+file the example ``tapp2_deep_space.toml`` (three manoeuvres, B·R, B·T and the flight time
 targeted, "inflate" navigation) and :data:`N_SAMPLES` samples:
 
 (a) the study serially in this process (``Execution(serial=True)``);

@@ -1,4 +1,4 @@
-"""Benchmark of the B-plane targeting case (scenarios/search_bplane.toml).
+"""Benchmark of the B-plane targeting case (the example search_bplane.toml).
 
 ``run()`` returns a Markdown section: wall time and trajectories flown by SEARCH with
 differenced partials (the seed's perturbed cases) and with analytic partials from the

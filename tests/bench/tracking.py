@@ -1,4 +1,4 @@
-"""Benchmark of TAPP I on scenarios/deep_space.toml (30 days, DSN, one sample per minute).
+"""Benchmark of TAPP I on the example deep_space.toml (30 days, DSN, one sample per minute).
 
 ``run()`` returns a section (Markdown and raw numbers): wall time of reading the scenario,
 simulating and writing the T13 tape (without and with the raw rows), the tape sizes and what

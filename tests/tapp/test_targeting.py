@@ -1,6 +1,6 @@
 """B-plane targeting through the integrator: values, analytic partials, failures, scenario.
 
-The scenario is ``scenarios/search_bplane.toml``: a trans-lunar injection from a 185 km
+The scenario is the example ``search_bplane.toml``: a trans-lunar injection from a 185 km
 parking orbit (2026-03-10 12:00 UTC, J2 + Sun + Moon from DE421) targeted to B·R = -2000 km,
 B·T = 5300 km and the first guess's flight time + 1 h.
 """

@@ -379,7 +379,7 @@ def _chi2_rms_bound(m: int) -> float:
 
 @pytest.fixture(scope="module")
 def readme_tdm(tmp_path_factory) -> Path:
-    """``tapp simulate scenarios/leo_equatorial.toml -o leo.t13.h5 --tdm leo.tdm`` (the
+    """``tapp simulate leo_equatorial.toml -o leo.t13.h5 --tdm leo.tdm`` (the
     scenario's iau2006)."""
     out = tmp_path_factory.mktemp("readme")
     res = runner.invoke(app, ["simulate", str(SCENARIOS / "leo_equatorial.toml"), "-o",

@@ -1,4 +1,4 @@
-"""``tapp search`` end to end through the typer app, on scenarios/search_bplane.toml."""
+"""``tapp search`` end to end through the typer app, on the example search_bplane.toml."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """A small deep-space T32 tape for the TAPP II tests, and guidance files.
 
-The tape is ``scenarios/deep_space.toml`` cut to its first 3 days (the injection, DSN tracking,
+The tape is the example ``deep_space.toml`` cut to its first 3 days (the injection, DSN tracking,
 the lunar B-plane miss at periapsis, day 3.59) processed with
-``scenarios/tapp3_deep_space.toml`` (GM of the Moon held fixed in the fit world, white-noise
+the example ``tapp3_deep_space.toml`` (GM of the Moon held fixed in the fit world, white-noise
 weights against biased and correlated real noise; recycles at days 1, 2 and 3): the same
 physics as the shipped study, made in well under a second.
 """

@@ -1,6 +1,6 @@
 """The coding example of seed TAPP III Appendix D (Table D-1, n_o = 29) on a simulated tape.
 
-``scenarios/tapp1_table_d1.toml`` gives a T13 tape with n_o = 29; ``scenarios/tapp3_table_d1.toml``
+The example ``tapp1_table_d1.toml`` gives a T13 tape with n_o = 29; ``tapp3_table_d1.toml``
 codes its systems exactly as Table D-1 does (P_c with the reconstruction (12, 27), chosen
 constraint coefficients; see the deck's comments). The expected orders, links and variances
 here are derived by hand from the table's pairs and triples, not from the code under test.
