@@ -1,8 +1,8 @@
 """Property-based fuzzing of every command with bad input (issue 10, "tests that must be able
 to fail").
 
-Every shipped TOML file under scenarios/ is mutated (a key dropped or misspelt, a value of the
-wrong type, NaN, infinities, huge or negative numbers, an emptied table) and every numeric CLI
+Every shipped example (tapp/examples/*.toml) is mutated (a key dropped or misspelt, a value of
+the wrong type, NaN, infinities, huge or negative numbers, an emptied table) and every numeric CLI
 option is given extreme values; each command runs in-process (typer's CliRunner). For every
 case: the exit code is 0, 2 or a documented numerical code; a refusal is at most one line on
 stderr, with no traceback; the input files are byte-identical afterwards; and the output
@@ -35,9 +35,10 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from tapp.cli import app
+from tapp.examples import FOLDER as EXAMPLES
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENARIOS = ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 runner = CliRunner()
 
 #: Tables whose keys are names chosen by the user (stations, orbits, constants, a sweep

@@ -69,6 +69,7 @@ from tapp.cli.common import (
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator
 from tapp.errors import InputError
+from tapp.examples import STUDY_FILE
 from tapp.frames.elements import cartesian_to_elements
 from tapp.frames.orientation import EarthOrientation
 from tapp.od import setup
@@ -89,7 +90,6 @@ from tapp.od.observations import Observations
 from tapp.od.obsfile import observations_file_writer, read_observations
 from tapp.od.rate import PredictedRate, predicted_rate
 from tapp.od.rsig import r_signature
-from tapp.orbits import DEFAULT_SCENARIO
 from tapp.outputs import OutputSet, check_paths
 from tapp.stations_file import load_stations
 
@@ -226,7 +226,7 @@ def dc(
                                              "TDM .tdm) instead of simulated data.")] = None,
     save_obs: Annotated[Path | None, typer.Option(help="Write the observations used (.h5, "
                                                   ".csv or .tdm).")] = None,
-    scenario: ScenarioOpt = DEFAULT_SCENARIO,
+    scenario: ScenarioOpt = STUDY_FILE,
     allow_subsurface: SubsurfaceOpt = False,
     earth_orientation: EarthOrientationOpt = None,
     json_out: JsonOpt = False,
@@ -399,7 +399,7 @@ def ekf(
     seed: Annotated[int | None, typer.Option(help="Noise seed.")] = None,
     obs: Annotated[Path | None, typer.Option(help="Observation file (.h5, .csv or a CCSDS "
                                              "TDM .tdm).")] = None,
-    scenario: ScenarioOpt = DEFAULT_SCENARIO,
+    scenario: ScenarioOpt = STUDY_FILE,
     allow_subsurface: SubsurfaceOpt = False,
     earth_orientation: EarthOrientationOpt = None,
     json_out: JsonOpt = False,
@@ -450,7 +450,7 @@ def rsig(
     stm: StmOpt = "J2",
     hours: Annotated[float, typer.Option(help="Span, hours (> 0).")] = 48.0,
     step: Annotated[float, typer.Option(help="Output step, s (> 0).")] = 300.0,
-    scenario: ScenarioOpt = DEFAULT_SCENARIO,
+    scenario: ScenarioOpt = STUDY_FILE,
     allow_subsurface: SubsurfaceOpt = False,
     earth_orientation: EarthOrientationOpt = None,
     json_out: JsonOpt = False,

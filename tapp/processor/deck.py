@@ -126,92 +126,154 @@ NOMINAL_MISS = {"m1": (0, 6), "m2": (0, 3), "m3": (3, 6), "m4": (6, 12), "m5": (
 
 
 class TapeExpect(Schema):
-    iden: str | None = None
-    n_o: int | None = None
-    parameters: list[str] | None = None
+    """``[tape]``: what the deck expects of the tape, checked when it is bound. A deck that
+    gives parameters by position must say which tape they refer to: ``iden`` or
+    ``parameters``."""
+
+    iden: str | None = Field(None, description="The tape's identification (the scenario's "
+                             "iden).")
+    n_o: int | None = Field(None, description="The tape's number of parameters.")
+    parameters: list[str] | None = Field(None, description="The tape's parameter names in "
+                                         "order, which the deck's positions refer to.")
+
+
+_TIMES = ("T13 times: indices (integers), seconds from the tape epoch (numbers) or UTC dates "
+          "(text)")
+_PERMUTATION = ("The seed's coding of the permutation: pairs [a, b], position a (1-based) "
+                "takes parameter b (name or position).")
+_CONSTRAINTS = "Triples [a, b, e]: x(a) <- x(a) - e x(b) (parameters by name or position)."
 
 
 class Times(Schema):
-    print: Annotated[list[TimeRef], Field(max_length=MAX_TIMES)] = []
-    recycle: Annotated[list[TimeRef], Field(max_length=MAX_TIMES)] = []
-    print_output: bool = True
-    recycle_print: bool = True
-    recycle_tape: bool = True
+    """``[times]``: when to print and when to recycle (midcourse times), and the flags."""
+
+    print: Annotated[list[TimeRef], Field(max_length=MAX_TIMES)] = Field(
+        [], description=f"Print output times, {_TIMES}; the epoch (k = 0) is always printed.")
+    recycle: Annotated[list[TimeRef], Field(max_length=MAX_TIMES)] = Field(
+        [], description=f"Recycle (midcourse) times, {_TIMES}.")
+    print_output: bool = Field(True, description="Print at the print times (the seed's δ_PM).")
+    recycle_print: bool = Field(True, description="Print at the recycle times (δ_P).")
+    recycle_tape: bool = Field(True, description="Write the recycle outputs to the T32 tape "
+                               "(δ_T).")
 
 
 class Commands(Schema):
-    print: Annotated[list[str], Field(max_length=MAX_COMMANDS)] = []
-    recycle: Annotated[list[str], Field(max_length=MAX_COMMANDS)] | Literal["standard"] = \
-        "standard"
+    """``[commands]``: the entities printed and the recycle commands."""
+
+    print: Annotated[list[str], Field(max_length=MAX_COMMANDS)] = Field(
+        [], description="Print commands, in the seed's notation (\"I; 0,-,pk; 1,2,fp\") or as "
+        "aliases (\"cov real orbit@current\").")
+    recycle: Annotated[list[str], Field(max_length=MAX_COMMANDS)] | Literal["standard"] = Field(
+        "standard", description="Recycle commands, or \"standard\": the seed's Table B-5 list.")
 
 
 class StationsOff(Schema):
-    station: Ref
-    start: TimeRef | None = None
-    end: TimeRef | None = None
+    """``[[stations_off]]``: a time-station flag: no data from a station in a window."""
+
+    station: Ref = Field(description="The station, by name or number.")
+    start: TimeRef | None = Field(None, description=f"Start of the window ({_TIMES}); default: "
+                                  "the first T13 time.")
+    end: TimeRef | None = Field(None, description="End of the window; default: the last T13 "
+                                "time.")
 
 
 class Common(Schema):
-    n_c1: int | None = None
-    permutation: list[list[Ref]] = []
-    eliminated: list[Ref] = []
-    constraints: list[list[Ref | float]] = []
+    """``[common]``: the common system: a permutation P_c with n_c1, and constraints K_c."""
+
+    n_c1: int | None = Field(None, description="Parameters kept (the rest are eliminated); "
+                             "with permutation.")
+    permutation: list[list[Ref]] = Field([], description=_PERMUTATION)
+    eliminated: list[Ref] = Field([], description="Parameters moved last and fixed in both "
+                                  "worlds (the readable form of permutation and n_c1).")
+    constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
 
 
 class FitApriori(Schema):
-    sigma: dict[str, InfFloat] | list[InfFloat] | None = None
-    normal: list[list[float]] | None = None
+    """``[fit.apriori]``: the fit world's a priori information: σ's or a normal matrix."""
+
+    sigma: dict[str, InfFloat] | list[InfFloat] | None = Field(
+        None, description="σ by parameter name (every parameter), or a list over f1 (the seed's "
+        "coding); 0: held fixed, inf: no information.", json_schema_extra={"unit": "the "
+                                                                            "parameter's"})
+    normal: list[list[float]] | None = Field(None, description="The n_f1 x n_f1 a priori "
+                                             "normal matrix S₀ (symmetric).")
 
 
 class Fit(Schema):
-    n_f1: int | None = None
-    permutation: list[list[Ref]] = []
-    fixed: list[Ref] = []
-    constraints: list[list[Ref | float]] = []
-    apriori: FitApriori = FitApriori()
+    """``[fit]``: the fit system: permutation P_f with n_f1, constraints K_f, a priori."""
+
+    n_f1: int | None = Field(None, description="Parameters the fit estimates; with "
+                             "permutation.")
+    permutation: list[list[Ref]] = Field([], description=_PERMUTATION)
+    fixed: list[Ref] = Field([], description="Parameters the fit holds fixed (the readable "
+                             "form of permutation and n_f1).")
+    constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
+    apriori: FitApriori = Field(FitApriori(), description="The fit world's a priori.")
 
 
 class RealApriori(Schema):
-    sigma: dict[str, float] | list[float] | None = None
-    correlation: list[list[Ref | float]] = []
-    covariance: list[list[float]] | None = None
+    """``[real.apriori]``: the real world's a priori covariance: σ's with correlations, or a
+    matrix."""
+
+    sigma: dict[str, float] | list[float] | None = Field(
+        None, description="σ by parameter name (every parameter), or a list over r1; 0: "
+        "certain.", json_schema_extra={"unit": "the parameter's"})
+    correlation: list[list[Ref | float]] = Field(
+        [], description="Triples [a, b, ρ]: the correlation of parameters a and b.")
+    covariance: list[list[float]] | None = Field(
+        None, description="The n_r1 x n_r1 a priori covariance Λ₀ (positive semi-definite).")
 
 
 class Real(Schema):
-    n_r1: int | None = None
-    permutation: list[list[Ref]] = []
-    certain: list[Ref] = []
-    constraints: list[list[Ref | float]] = []
-    apriori: RealApriori = RealApriori()
+    """``[real]``: the real system: permutation P_r with n_r1, constraints K_r, a priori."""
+
+    n_r1: int | None = Field(None, description="Uncertain parameters; with permutation.")
+    permutation: list[list[Ref]] = Field([], description=_PERMUTATION)
+    certain: list[Ref] = Field([], description="Parameters known exactly in the real world "
+                               "(the readable form of permutation and n_r1).")
+    constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
+    apriori: RealApriori = Field(RealApriori(), description="The real world's a priori.")
 
 
 class Miss(Schema):
-    partitions: dict[str, list[Ref]] = {}
+    """``[miss]``: optional partitions of the miss parameters."""
+
+    partitions: dict[str, list[Ref]] = Field(
+        {}, description="By name (m1 ... m5 as the seed's): [tail, head] positions, or the "
+        "names of miss quantities.")
 
 
 class BudgetTable(Schema):
-    enabled: bool = True
-    groups: dict[str, list[Ref]] = {}
+    """``[budget]``: the error budget of every printed real-world covariance."""
+
+    enabled: bool = Field(True, description="Print error budgets.")
+    groups: dict[str, list[Ref]] = Field(
+        {}, description="Named groups of parameters whose a priori errors count as one "
+        "source.")
 
 
 class Plots(Schema):
-    partition: str = "p@current"
+    """``[plots]``: what ``--plots`` draws."""
+
+    partition: str = Field("p@current", description="The set whose σ are plotted against "
+                           "time.")
 
 
 class Deck(Schema):
     """The deck file (module docstring); validated strictly, unknown keys are errors."""
 
-    title: str = ""
-    tape: TapeExpect = TapeExpect()
-    times: Times = Times()
-    commands: Commands = Commands()
-    stations_off: Annotated[list[StationsOff], Field(max_length=MAX_TIMES)] = []
-    common: Common = Common()
-    fit: Fit
-    real: Real
-    miss: Miss = Miss()
-    budget: BudgetTable = BudgetTable()
-    plots: Plots = Plots()
+    title: str = Field("", description="Free text, printed in the O3 heading.")
+    tape: TapeExpect = Field(TapeExpect(), description="Expectations checked against the tape.")
+    times: Times = Field(Times(), description="Print and recycle times.")
+    commands: Commands = Field(Commands(), description="Print and recycle commands.")
+    stations_off: Annotated[list[StationsOff], Field(max_length=MAX_TIMES)] = Field(
+        [], description="Time-station flags.")
+    common: Common = Field(Common(), description="The common system.")
+    fit: Fit = Field(description="The fit world: what the orbit determination assumes.")
+    real: Real = Field(description="The real world: what is true.")
+    miss: Miss = Field(Miss(), description="Miss partitions.")
+    budget: BudgetTable = Field(BudgetTable(), description="Error budgets.")
+    plots: Plots = Field(Plots(), description="Plots.")
 
 
 def read_deck(path: Path | str) -> Deck:

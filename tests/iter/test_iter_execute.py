@@ -28,9 +28,10 @@ from iter import (
     run_sweep,
 )
 from iter.execute import local_cluster
+from tapp.examples import FOLDER as EXAMPLES
 
 HERE = Path(__file__).resolve().parent
-SCENARIOS = HERE.parents[1] / "scenarios"
+SCENARIOS = EXAMPLES
 SERIAL = Execution(serial=True, checkpoint_interval_s=0.0)
 AZIMUTHS = Loop(type=2, names=("azimuth_deg",), sets=5, vary=(96.0,), delta=(3.0,))
 

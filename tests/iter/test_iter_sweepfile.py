@@ -7,8 +7,9 @@ from pathlib import Path
 import pytest
 
 from iter import CallableBody, ProgramBody, SweepInputError, load_sweep, parse_sweep
+from tapp.examples import FOLDER as EXAMPLES
 
-SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+SCENARIOS = EXAMPLES
 
 
 def test_five_azimuth_scenarios_type_1_and_type_2_give_the_same_cases():

@@ -16,10 +16,10 @@ import pytest
 from typer.testing import CliRunner
 
 from tapp.cli import app
+from tapp.examples import FOLDER as EXAMPLES
 from tests.deadline import guarded
 
-ROOT = Path(__file__).resolve().parents[3]
-SCENARIOS = ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 runner = CliRunner()
 
 

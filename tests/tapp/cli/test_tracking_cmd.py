@@ -16,6 +16,7 @@ from typer.testing import CliRunner
 
 import tapp.cli.tracking_cmd  # noqa: F401  (registers the commands until tapp.cli imports it)
 from tapp.cli.common import app
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.tape.t13 import utc_at
 from tapp.tape.t13_hdf5 import read_t13
 from tapp.tracking.oem import INTERPOLATION_TOL_KM, INTERPOLATION_TOL_KM_S
@@ -30,7 +31,7 @@ from tests.tapp.tracking.encounter_reference import (
 )
 from tests.tapp.tracking.helpers import geo_document, leo_document
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 LEO = SCENARIOS / "leo_equatorial.toml"
 runner = CliRunner()
 

@@ -21,6 +21,7 @@ from typer.testing import CliRunner
 
 from tapp.cli.common import app
 from tapp.errors import InputError
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.processor.deck import (
     COVARIANCE_RANGE,
     MAX_COMMANDS,
@@ -39,7 +40,7 @@ from tapp.tape.t32 import validate as validate_t32
 from tests.tapp.processor.helpers import deck, leo_tape, run, sigmas
 from tests.test_fuzz import dumps_toml
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 runner = CliRunner()
 
 

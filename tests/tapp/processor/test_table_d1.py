@@ -1,6 +1,6 @@
 """The coding example of seed TAPP III Appendix D (Table D-1, n_o = 29) on a simulated tape.
 
-``scenarios/tapp1_table_d1.toml`` gives a T13 tape with n_o = 29; ``scenarios/tapp3_table_d1.toml``
+The example ``tapp1_table_d1.toml`` gives a T13 tape with n_o = 29; ``tapp3_table_d1.toml``
 codes its systems exactly as Table D-1 does (P_c with the reconstruction (12, 27), chosen
 constraint coefficients; see the deck's comments). The expected orders, links and variances
 here are derived by hand from the table's pairs and triples, not from the code under test.
@@ -17,6 +17,7 @@ from typer.testing import CliRunner
 
 from tapp.cli.common import app
 from tapp.errors import InputError
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.processor.deck import Deck, bind, read_deck
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.sequencing import Processor, Run
@@ -27,7 +28,7 @@ from tapp.tomlfile import read_toml
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 TAPP1 = SCENARIOS / "tapp1_table_d1.toml"
 DECK = SCENARIOS / "tapp3_table_d1.toml"
 
