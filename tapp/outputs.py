@@ -7,6 +7,9 @@ Two mechanisms, used by every command that writes files:
   :func:`os.path.samefile`), and every output must be creatable (not a folder, in a folder
   that is writable). It raises :class:`~tapp.errors.InputError` naming both options, as the
   user typed them (``-o/--output``, ``--oem``, ``SCENARIO``).
+* :func:`new_directory`, for a command whose output is a whole folder (``tapp pipeline``,
+  ``tapp examples``): the folder must be new or empty; its content is written into a hidden
+  folder beside it, renamed to it only once complete, and removed on any failure.
 * :class:`OutputSet`, which writes a command's outputs together: each to a hidden temporary
   ``.NAME.<random>.tmp`` beside its target, and only once every temporary is complete are
   they renamed over their targets, one after the other, at the end. If any write fails every
@@ -27,7 +30,10 @@ from __future__ import annotations
 import os
 import re
 import secrets
-from collections.abc import Callable, Mapping
+import shutil
+import tempfile
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -135,6 +141,52 @@ def check_paths(inputs: Mapping[str, Path | None], outputs: Mapping[str, Path | 
                                  "(one would overwrite the other)")
     for name, out in given_out:
         check_writable(name, out)
+
+
+def check_new_directory(out_dir: Path, option: str, why: str) -> Path:
+    """Return ``out_dir`` if it does not exist or is an empty folder, else raise.
+
+    Raises
+    ------
+    InputError
+        Naming ``option``: a file, or a folder with something in it (never overwritten;
+        ``why`` says so in the command's words).
+    """
+    out_dir = Path(out_dir)
+    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
+        raise InputError(option, "directory", f"a new or empty directory ({why})",
+                         str(out_dir))
+    return out_dir
+
+
+@contextmanager
+def new_directory(out_dir: Path, option: str, why: str) -> Iterator[Path]:
+    """Yield a hidden folder beside ``out_dir`` to write into; rename it to ``out_dir`` when
+    the block completes, remove it if the block raises.
+
+    ``out_dir`` must be new or empty (:func:`check_new_directory`); a missing parent is
+    created.
+
+    Examples
+    --------
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with new_directory(folder / "run", "-o", "never overwritten") as work:
+    ...     _ = (work / "a.txt").write_text("a")
+    >>> [p.name for p in (folder / "run").iterdir()], [p.name for p in folder.iterdir()]
+    (['a.txt'], ['run'])
+    >>> shutil.rmtree(folder)
+    """
+    out_dir = check_new_directory(out_dir, option, why)
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
+    try:
+        yield work
+        if out_dir.exists():
+            out_dir.rmdir()
+        work.rename(out_dir)
+    except BaseException:
+        shutil.rmtree(work, ignore_errors=True)
+        raise
 
 
 @dataclass(frozen=True, slots=True)

@@ -19,10 +19,11 @@ from pathlib import Path
 
 import pytest
 
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.tape.t13_hdf5 import read_t13
 
 ROOT = Path(__file__).resolve().parents[1]
-LEO = ROOT / "scenarios" / "leo_equatorial.toml"
+LEO = EXAMPLES / "leo_equatorial.toml"
 SEEDS = (1, 2, 3)
 
 

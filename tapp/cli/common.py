@@ -19,7 +19,14 @@ Exit codes (every command keeps this contract)
     take or one it needs and is not given. The message is one line on stderr,
     ``error: SOURCE: FIELD: expected WHAT (got VALUE)``, where SOURCE is the option as typed
     (``--process-noise``, ``-o/--output``) when an option is at fault, and the file when a
-    file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).
+    file is, with the field (``noise.fit.sigma_range_m``, ``records/info``). Input files
+    are regular files: a FIFO, a device (a symbolic link to ``/dev/zero``), a socket or a
+    directory is refused before it is read (:mod:`iter.inputfile`); a user's EOP table is
+    checked field by field (:mod:`tapp.frames.eop`, naming the line); matrices of decks and
+    tapes are checked symmetric and positive semi-definite on each entry's own scale, and
+    numbers that would overflow downstream are refused where they are read (deck σ's within
+    1e-30..1e30, tape numbers within 1e60); ``tapp guide`` refuses a tape whose linear
+    covariance overflows or has a Δv σ at the speed of light.
 3, 4, 5, 6, 7
     A numerical outcome, with its output still printed and written: ``tapp dc`` diverged
     (3), found the normal matrix too ill-conditioned to iterate (4; the condition number and
@@ -45,12 +52,16 @@ Exit codes (every command keeps this contract)
     Interrupted (Ctrl-C).
 
 Limits checked before allocating: output grids of at most :data:`MAX_GRID_SAMPLES` samples
-(``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases (the product
-of the loops' ``sets``), TAPP II Monte Carlos of ``tapp.guidance.study.MIN_SAMPLES`` to
-``MAX_SAMPLES`` samples, SEARCH scans of at most ``tapp.targeting.MAX_SCAN_STEPS`` steps,
-local Dask clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (no
-limit with ``--scheduler``); each message gives the size that would be needed and the option
-or field to change.
+(``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases (the product of
+the loops' ``sets``), TAPP II Monte Carlos of ``tapp.guidance.study.MIN_SAMPLES`` to
+``MAX_SAMPLES`` samples, SEARCH scans of at most ``tapp.targeting.MAX_SCAN_STEPS`` steps, local
+Dask clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (no limit with
+``--scheduler``), TOML files of at most ``iter.inputfile.MAX_TOML_BYTES`` (4 MiB), TDM and CSV
+observation files of ``tapp.od.obsfile.MAX_TEXT_BYTES`` (64 MiB), EOP tables of
+``tapp.frames.eop.MAX_EOP_BYTES`` (16 MiB), TAPP III decks of at most
+``tapp.processor.deck.MAX_COMMANDS`` commands a list and runs of at most ``MAX_ENTITIES``
+output entities and ``MAX_ENTITY_NUMBERS`` numbers in them; each message gives the size that
+would be needed and the option or field to change.
 
 Conventions of every command: ``--json PATH`` writes the command's results as one JSON
 object to PATH, with the other outputs (all or none), and ``--json -`` prints it on

@@ -97,7 +97,7 @@ OrbitOpt = Annotated[str, typer.Option(help="Orbit name (SATORB1..8) or a=..,e=.
 TruthOpt = Annotated[str, typer.Option(help="State model of the data and the estimator.")]
 StmOpt = Annotated[str, typer.Option(help="Variational model of the estimator.")]
 ScenarioOpt = Annotated[Path | None, typer.Option(
-    help="Study scenario file [default: scenarios/approx_stm.toml].")]
+    help="Study scenario file [default: the shipped approx_stm.toml].")]
 SubsurfaceOpt = Annotated[bool, typer.Option(
     "--allow-subsurface", help="Accept an orbit whose perigee is below the Earth's surface.")]
 
@@ -125,10 +125,10 @@ def parse_duration_s(text: str, option: str = "--arc") -> float:
 
 
 def _scenario(scenario: Path | None) -> Path:
-    """The ``--scenario`` file, or the approximate-STM study's."""
-    from tapp.orbits import DEFAULT_SCENARIO
+    """The ``--scenario`` file, or the shipped approximate-STM study's."""
+    from tapp.examples import STUDY_FILE
 
-    return DEFAULT_SCENARIO if scenario is None else scenario
+    return STUDY_FILE if scenario is None else scenario
 
 
 def _orientation(scenario: Path, earth_orientation: str | None) -> EarthOrientation:

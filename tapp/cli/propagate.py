@@ -53,7 +53,8 @@ def propagate(
     tol: Annotated[float, typer.Option(help="Relative and absolute tolerance, in [1e-15, "
                                        "1e-6].")] = 1e-13,
     scenario: Annotated[Path | None, typer.Option(
-        help="Scenario file with named orbits [default: scenarios/approx_stm.toml].")] = None,
+        help="Scenario file with named orbits [default: the shipped approx_stm.toml].")]
+    = None,
     json_out: JsonOpt = None,
     allow_subsurface: Annotated[bool, typer.Option(
         "--allow-subsurface", help="Accept an orbit whose perigee is below the Earth's "

@@ -1,6 +1,6 @@
 """``tapp search``: SEARCH's Newton-Raphson targeting of a B-plane scenario.
 
-The scenario is a SEARCH file (``scenarios/search_bplane.toml``: a ``[search]`` table) or a
+The scenario is a SEARCH file (the example ``search_bplane.toml``: a ``[search]`` table) or a
 tracking scenario with a ``[targeting]`` table (:func:`tapp.targeting.scenario_targeting`: the
 aim point of its B-plane miss, SEARCH on its own models). Prints SEARCH's report in the
 spirit of the seed's Figs. 4 and 5 (inputs, each case's dependent variables, the partials,

@@ -13,7 +13,6 @@ to it at the end: a failed or interrupted run leaves no partial directory.
 from __future__ import annotations
 
 import json
-import shutil
 import tempfile
 import time
 from collections.abc import Callable
@@ -27,6 +26,7 @@ from iter.execute import Execution
 from tapp.errors import InputError
 from tapp.guidance.guidefile import GuideFile
 from tapp.guidance.study import GuidanceResult, check_samples, check_seed, guidance_study
+from tapp.outputs import check_new_directory, new_directory
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
 from tapp.pipeline.steps import process_tape
 from tapp.processor.deck import Deck
@@ -49,6 +49,8 @@ OUTPUTS = {
     "report": "report.md",
     "plots": "plots",
 }
+
+_NEVER_OVERWRITES = "a pipeline never overwrites an earlier run"
 
 #: Progress callback: (stage, done, total).
 Progress = Callable[[str, int, int], None]
@@ -77,11 +79,7 @@ def check_out_dir(out_dir: Path) -> Path:
     InputError
         Naming ``-o`` : a file, or a directory with something in it (never overwritten).
     """
-    out_dir = Path(out_dir)
-    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
-        raise InputError("-o/--output", "directory", "a new or empty directory (a pipeline "
-                         "never overwrites an earlier run)", str(out_dir))
-    return out_dir
+    return check_new_directory(out_dir, "-o/--output", _NEVER_OVERWRITES)
 
 
 def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | None = None,
@@ -93,17 +91,8 @@ def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | No
     InputError
         From any part (naming its file or the pipeline file and the part), or ``out_dir``.
     """
-    out_dir = check_out_dir(out_dir)
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
-    try:
+    with new_directory(out_dir, "-o/--output", _NEVER_OVERWRITES) as work:
         result = _run(pipeline, work, execution, plots, progress)
-        if out_dir.exists():
-            out_dir.rmdir()
-        work.rename(out_dir)
-    except BaseException:
-        shutil.rmtree(work, ignore_errors=True)
-        raise
     return replace(result, directory=out_dir)
 
 

@@ -1,9 +1,9 @@
 """Benchmark of TAPP II: the deep-space guidance study, 10⁶ samples, serially and on Dask.
 
-Set-up (timed apart, in a temporary folder): TAPP I on ``scenarios/deep_space.toml`` -> T13
-tape, TAPP III with ``scenarios/tapp3_deep_space.toml`` -> T32 tape, through the library calls
+Set-up (timed apart, in a temporary folder): TAPP I on the example ``deep_space.toml`` -> T13
+tape, TAPP III with the example ``tapp3_deep_space.toml`` -> T32 tape, through the library calls
 ``tapp simulate``, ``tapp process --tape`` and the pipeline make. Measured, with the guidance
-file ``scenarios/tapp2_deep_space.toml`` (three manoeuvres, B·R, B·T and the flight time
+file the example ``tapp2_deep_space.toml`` (three manoeuvres, B·R, B·T and the flight time
 targeted, "inflate" navigation) and :data:`N_SAMPLES` samples:
 
 (a) the study serially in this process (``Execution(serial=True)``);
@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from iter.execute import Execution, local_cluster
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.guidance.guidefile import GuideFile, bind, read_guide
 from tapp.guidance.linear import linear_covariance
 from tapp.guidance.statistics import linear_outcome
@@ -52,7 +53,6 @@ from tapp.tape.t32_hdf5 import read_t32, write_t32
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 from tests.bench.common import (
-    REPO_ROOT,
     Section,
     logger,
     markdown_table,
@@ -62,7 +62,7 @@ from tests.bench.common import (
 )
 
 NAME = "guidance"
-SCENARIOS = REPO_ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 SCENARIO = SCENARIOS / "deep_space.toml"
 DECK = SCENARIOS / "tapp3_deep_space.toml"
 GUIDE = SCENARIOS / "tapp2_deep_space.toml"

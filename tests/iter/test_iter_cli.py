@@ -13,8 +13,9 @@ from typer.testing import CliRunner
 import tapp.cli.sweep  # noqa: F401  (registers the iter command on the app)
 from iter import CaseStatus, read_hdf5
 from tapp.cli.common import EXIT_FAILURE, EXIT_INPUT, app
+from tapp.examples import FOLDER as EXAMPLES
 
-SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+SCENARIOS = EXAMPLES
 runner = CliRunner()
 
 

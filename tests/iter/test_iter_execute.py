@@ -30,9 +30,10 @@ from iter import (
 )
 from iter.execute import available_cores, local_cluster
 from iter.run import PROBE_CASES
+from tapp.examples import FOLDER as EXAMPLES
 
 HERE = Path(__file__).resolve().parent
-SCENARIOS = HERE.parents[1] / "scenarios"
+SCENARIOS = EXAMPLES
 SERIAL = Execution(serial=True, checkpoint_interval_s=0.0)
 AZIMUTHS = Loop(type=2, names=("azimuth_deg",), sets=5, vary=(96.0,), delta=(3.0,))
 

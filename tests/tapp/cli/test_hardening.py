@@ -17,9 +17,10 @@ from typer.testing import CliRunner
 from iter.results import values_digest
 from tapp.cli import app
 from tapp.cli.common import EXIT_INPUT
+from tapp.examples import FOLDER as EXAMPLES
 
 ROOT = Path(__file__).resolve().parents[3]
-SCENARIOS = ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 LEO = SCENARIOS / "leo_equatorial.toml"
 SWEEP = SCENARIOS / "iter_azimuth_type1.toml"
 runner = CliRunner()

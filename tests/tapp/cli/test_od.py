@@ -18,6 +18,7 @@ from typer.testing import CliRunner
 
 from tapp.cli import app
 from tapp.cli.od import parse_duration_s
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.od import setup
 from tapp.od.observations import MadeUnder
 from tapp.od.obsfile import read_observations, write_observations
@@ -204,7 +205,7 @@ def test_simulate_writes_a_tdm_that_dc_fits_exactly(tmp_path: Path) -> None:
     """TAPP I's noise-free observations of SATORB1 in a 5x5 field, through a TDM, fitted by the
     DC with the same models and the same Earth orientation (iau2006): the epoch state comes
     back to within a millimetre."""
-    scenario = Path(__file__).resolve().parents[3] / "scenarios" / "leo_equatorial.toml"
+    scenario = EXAMPLES / "leo_equatorial.toml"
     tape, tdm = tmp_path / "run.t13.h5", tmp_path / "run.tdm"
     sim = runner.invoke(app, ["simulate", str(scenario), "-o", str(tape), "--tdm", str(tdm),
                               "--earth-orientation", "iau2006", "--json", "-"])
@@ -252,7 +253,7 @@ def test_bad_observation_file_names_file_and_field(tmp_path: Path, text: str,
 
 # --- the Earth orientation switch ---------------------------------------------------------
 
-STUDY = Path(__file__).resolve().parents[3] / "scenarios" / "approx_stm.toml"
+STUDY = EXAMPLES / "approx_stm.toml"
 
 
 def _study(tmp_path: Path, old: str, new: str) -> Path:
@@ -378,7 +379,7 @@ def test_saved_observations_record_the_earth_orientation(tmp_path: Path) -> None
 
 # --- where observations meet a model: what the files state they were made under -----------
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 #: The README's example: TAPP I's noise-free TDM of SATORB1 (5x5 field, one day, equatorial
 #: network) made under the scenario's iau2006, 590 range and range-rate pairs.
 README_MEASUREMENTS = 1180
@@ -396,7 +397,7 @@ def _chi2_rms_bound(m: int) -> float:
 
 @pytest.fixture(scope="module")
 def readme_tdm(tmp_path_factory) -> Path:
-    """``tapp simulate scenarios/leo_equatorial.toml -o leo.t13.h5 --tdm leo.tdm`` (the
+    """``tapp simulate leo_equatorial.toml -o leo.t13.h5 --tdm leo.tdm`` (the
     scenario's iau2006)."""
     out = tmp_path_factory.mktemp("readme")
     res = runner.invoke(app, ["simulate", str(SCENARIOS / "leo_equatorial.toml"), "-o",

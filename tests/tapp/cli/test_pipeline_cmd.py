@@ -20,10 +20,11 @@ from typer.testing import CliRunner
 
 import tapp.cli  # noqa: F401  (registers every command)
 from tapp.cli.common import app
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.pipeline.run import OUTPUTS, tracking_case
 
 runner = CliRunner()
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 DAY_S = 86400.0
 SAMPLES, SEED = 3000, 7
 

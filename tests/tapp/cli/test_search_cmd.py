@@ -1,4 +1,4 @@
-"""``tapp search`` end to end through the typer app, on scenarios/search_bplane.toml."""
+"""``tapp search`` end to end through the typer app, on the example search_bplane.toml."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ import tapp.cli.tracking_cmd  # noqa: F401  (tapp simulate, for the written scen
 from search import EXIT_FLAG
 from tapp.cli.common import app
 from tapp.cli.search_cmd import exit_code
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.tape.t13_hdf5 import read_t13
 from tapp.tracking.scenario import read_scenario
 from tests.tapp.tracking.encounter_reference import (
@@ -24,7 +25,7 @@ from tests.tapp.tracking.encounter_reference import (
     moved_deep_space,
 )
 
-SCENARIO = Path(__file__).resolve().parents[3] / "scenarios" / "search_bplane.toml"
+SCENARIO = EXAMPLES / "search_bplane.toml"
 runner = CliRunner()
 
 
