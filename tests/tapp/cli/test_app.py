@@ -134,8 +134,7 @@ def test_a_default_an_option_states_is_stated_in_one_form(path: tuple[str, ...])
         assert not re.search(r"\(default:|[;,] default:", text), text
 
 
-@pytest.mark.parametrize("path", [p for p in COMMANDS if p not in {("examples",), ("schema",)}],
-                         ids=" ".join)
+@pytest.mark.parametrize("path", COMMANDS, ids=" ".join)
 def test_every_command_takes_json_as_a_path(path: tuple[str, ...]):
     [option] = [p for p in _command(path).params if "--json" in getattr(p, "opts", ())]
     common = typing.get_args(JsonOpt)[1]  # the typer.Option of tapp.cli.common
