@@ -11,7 +11,7 @@ Format
     [body]                       # exactly one of `callable` or `program`
     callable = "iter.examples:launch_azimuth_case"   # "module:function"
     # program = ["tapp", "propagate"]                # argv of a command-line program
-    # json = true          # program only: append --json (default true)
+    # json = true          # program only: append --json - (default true)
     # dashes = false       # program only: --azimuth-deg instead of --azimuth_deg (default false)
     # timeout_s = 600.0    # wall-time limit per case, s: program default 3600; a callable
     #                      # with a limit runs each case in a child process (default: none)

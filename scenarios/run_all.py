@@ -54,7 +54,7 @@ def propagation_demo() -> None:
     out.mkdir(parents=True, exist_ok=True)
     for stm in ("J2", "J0"):
         cmd = [sys.executable, "-m", "tapp.cli", "propagate", "--orbit", "SATORB2", "--hours",
-               "24", "--step", "60", "--truth", "J2", "--stm", stm, "--json"]
+               "24", "--step", "60", "--truth", "J2", "--stm", stm, "--json", "-"]
         proc = subprocess.run(cmd, capture_output=True, text=True, check=True)
         (out / f"satorb2_J2_{stm}.json").write_text(proc.stdout)
     print(f"propagation demo -> {out}")
@@ -80,7 +80,7 @@ def search_targeting() -> None:
     out = RESULTS / "search"
     out.mkdir(parents=True, exist_ok=True)
     for mode, extra in (("differenced", ()), ("analytic", ("--analytic-partials",))):
-        for suffix, form in (("txt", ()), ("json", ("--json",))):  # the seed's report; numbers
+        for suffix, form in (("txt", ()), ("json", ("--json", "-"))):  # the seed's report; numbers
             proc = _tapp("search", str(EXAMPLES / "search_bplane.toml"), *extra, *form)
             (out / f"report_{mode}.{suffix}").write_text(proc.stdout)
             if proc.returncode != 0:

@@ -243,21 +243,21 @@ class FileCase:
 
 def _simulate(path: Path, out: Path) -> list[str]:
     return ["simulate", str(path), "-o", str(out / "run.t13.h5"), "--oem", str(out / "run.oem"),
-            "--json"]
+            "--json", "-"]
 
 
 def _dc(path: Path, out: Path) -> list[str]:
     return ["dc", "--orbit", "SATORB1", "--arc", "2h", "--scenario", str(path), "--save-obs",
-            str(out / "obs.h5"), "--json"]
+            str(out / "obs.h5"), "--json", "-"]
 
 
 def _search(path: Path, out: Path) -> list[str]:
-    return ["search", str(path), "--json"]
+    return ["search", str(path), "--json", "-"]
 
 
 def _iter(path: Path, out: Path) -> list[str]:
     return ["iter", str(path), "-o", str(out / "r.h5"), "--csv", str(out / "r.csv"),
-            "--serial", "--json"]
+            "--serial", "--json", "-"]
 
 
 def _deck_scenario(deck: str) -> Path:
@@ -299,7 +299,7 @@ def _guide(path: Path, out: Path) -> list[str]:
 
 
 def _pipeline(path: Path, out: Path) -> list[str]:
-    return ["pipeline", str(path), "-o", str(out / "run"), "--serial", "--json"]
+    return ["pipeline", str(path), "-o", str(out / "run"), "--serial", "--json", "-"]
 
 
 def _pipeline_parts_absolute(document: dict) -> dict:
@@ -435,7 +435,7 @@ def test_numeric_options_keep_the_contract(base: list[str], options: tuple[str, 
     def run(option: str, value: str) -> None:
         with tempfile.TemporaryDirectory() as folder:
             out = Path(folder)
-            args = [*base, option, value, "--json"]
+            args = [*base, option, value, "--json", "-"]
             outputs: tuple[str, ...] = ()
             if base[0] == "iter":
                 args += ["-o", str(out / "r.h5")]

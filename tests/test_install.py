@@ -132,7 +132,7 @@ COMMANDS = {
     "info": (["info"], "DE421 ephemeris", None),
     "schema": (["schema", "scenario"], '"var_gravity"', None),
     "propagate": (["propagate", "--orbit", "SATORB1", "--hours", "1", "--step", "600",
-                   "--json"], '"stm"', None),
+                   "--json", "-"], '"stm"', None),
     "ekf": (["ekf", "--orbit", "SATORB1", "--arc", "2h"], "max|O-C| range", None),
     "rsig": (["rsig", "--orbit", "SATORB1", "--hours", "2", "--step", "600", "--stm", "J0"],
              "R(t) SATORB1", None),

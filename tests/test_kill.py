@@ -37,7 +37,7 @@ def _scenario(folder: Path, iden: str) -> Path:
 
 def _command(scenario: Path, out: Path) -> list[str]:
     return [sys.executable, "-m", "tapp.cli", "simulate", str(scenario), "-o",
-            str(out / "out.t13.h5"), "--oem", str(out / "out.oem"), "--raw", "--json"]
+            str(out / "out.t13.h5"), "--oem", str(out / "out.oem"), "--raw", "--json", "-"]
 
 
 def _run(scenario: Path, out: Path) -> float:

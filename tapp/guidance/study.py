@@ -159,8 +159,10 @@ def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
     guide : the validated guidance file.
     samples : Monte Carlo samples, MIN_SAMPLES..MAX_SAMPLES.
     seed : root seed, >= 0.
-    execution : where the shards run (``iter.Execution``); None: a local Dask cluster, one
-        worker per core; ``Execution(serial=True)`` runs in this process.
+    execution : where the shards run (``iter.Execution``); None: automatic, in this process
+        below :data:`tapp.guidance.shards.DASK_MIN_SAMPLES` samples and on a local Dask
+        cluster of one worker per core from there; ``Execution(serial=True)`` runs in this
+        process.
     shard_samples : samples per shard, a multiple of BLOCK_SAMPLES; None chooses.
     progress : called with (samples done, samples) as shards complete.
     guide_source, tape_source : named in errors and in the result.

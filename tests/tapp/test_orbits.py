@@ -91,7 +91,7 @@ def test_the_commands_refuse_a_subsurface_orbit_in_one_line(command: str) -> Non
 
 def test_propagate_accepts_a_subsurface_orbit_when_told() -> None:
     result = runner.invoke(app, ["propagate", "--orbit", BELOW, "--allow-subsurface",
-                                 "--hours", "0.1", "--json"])
+                                 "--hours", "0.1", "--json", "-"])
     assert result.exit_code == 0, result.output
 
 

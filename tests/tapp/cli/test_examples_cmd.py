@@ -26,6 +26,9 @@ def test_examples_copies_every_shipped_file_and_lists_its_kind(tmp_path: Path) -
         assert (out / name).read_bytes() == (EXAMPLES / name).read_bytes()
         assert f"{kind}" in result.output and str(out / name) in result.output
     assert [p.name for p in tmp_path.iterdir()] == ["start"]  # no temporary left
+    listed = runner.invoke(app, ["examples", str(tmp_path / "again"), "--json", "-"])
+    assert json.loads(listed.stdout)["files"] == [
+        {"kind": kind, "path": str(tmp_path / "again" / name)} for name, kind in FILES.items()]
 
 
 def test_examples_never_writes_over_files(tmp_path: Path) -> None:
@@ -45,6 +48,8 @@ def test_schema_prints_the_json_schema_and_the_reference_page(kind: str) -> None
     assert json.loads(result.output) == json_schema(kind)
     page = runner.invoke(app, ["schema", kind, "--markdown"])
     assert page.exit_code == 0 and page.output == markdown(kind)
+    compact = runner.invoke(app, ["schema", kind, "--json", "-"])
+    assert json.loads(compact.stdout) == json_schema(kind)
 
 
 def test_schema_of_an_unknown_kind_is_one_line_listing_the_kinds() -> None:

@@ -115,7 +115,7 @@ def test_a_failed_tape_write_leaves_the_old_oem_and_tape_and_no_temporary(
         Path(path).write_bytes(b"half a tape")
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr("tapp.cli.tracking_cmd.write_t13", no_space)
+    monkeypatch.setattr("tapp.tape.t13_hdf5.write_t13", no_space)
     line = _refused(["simulate", str(LEO), "-o", str(tape), "--oem", str(oem)])
     assert line == (f"error: -o/--output: {tape}: expected a writable file (got 'No space "
                     "left on device')")
@@ -240,5 +240,5 @@ def test_usage_errors_are_one_line_exit_2() -> None:
 
 def test_numerical_outcomes_keep_their_codes() -> None:
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "24h", "--stm", "J0",
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 3

@@ -192,7 +192,7 @@ def test_the_tracking_sweep_runs_every_case_from_another_directory(parts, tmp_pa
     (tmp_path / "elsewhere").mkdir()
     monkeypatch.chdir(tmp_path / "elsewhere")
     res = runner.invoke(app, ["iter", "../sweeps/tracking.toml", "-o", "out.h5", "--serial",
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
     assert (summary["n_cases"], summary["n_succeeded"], summary["n_failed"]) == (2, 2, 0)

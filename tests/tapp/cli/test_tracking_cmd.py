@@ -47,7 +47,7 @@ def _edited(tmp_path: Path, old: str, new: str, source: Path = LEO) -> Path:
 def test_leo_scenario_to_tape_with_raw_rows_and_oem(tmp_path: Path) -> None:
     out, oem = tmp_path / "leo.t13.h5", tmp_path / "leo.oem"
     res = runner.invoke(app, ["simulate", str(LEO), "-o", str(out), "--raw", "--oem", str(oem),
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     info = json.loads(res.stdout)
     assert (info["n_o"], info["n_p"], info["n_m"], info["n_ts"], info["n_it"]) == (
@@ -67,7 +67,7 @@ def test_deep_space_scenario_through_the_cli(tmp_path: Path) -> None:
     res = runner.invoke(app, ["simulate", str(SCENARIOS / "deep_space.toml"), "-o", str(out)])
     assert res.exit_code == 0, res.output
     assert "n_o = 23" in res.stdout and "n_ts = 3" in res.stdout
-    info = runner.invoke(app, ["tape", "info", str(out), "--json"])
+    info = runner.invoke(app, ["tape", "info", str(out), "--json", "-"])
     summary = json.loads(info.stdout)
     assert [s["name"] for s in summary["stations"]] == ["GOLDSTONE", "CANBERRA", "MADRID"]
     assert all(s["passes"] >= 25 and s["observations"] > 20000 for s in summary["stations"])
@@ -147,7 +147,7 @@ def test_geo_track_counts_printed_and_on_the_tape_add_up(tmp_path: Path) -> None
     what the tape says."""
     scenario, out = tmp_path / "geo.toml", tmp_path / "geo.t13.h5"
     scenario.write_text(tomli_w.dumps(geo_document()))
-    res = runner.invoke(app, ["simulate", str(scenario), "-o", str(out), "--json"])
+    res = runner.invoke(app, ["simulate", str(scenario), "-o", str(out), "--json", "-"])
     assert res.exit_code == 0, res.output
     printed = json.loads(res.stdout)["stations"]
     editing = read_t13(out).editing
@@ -262,7 +262,7 @@ def retargeted_run(tmp_path_factory) -> tuple[Path, dict, str]:
     folder = tmp_path_factory.mktemp("retarget")
     path = _moved(folder, TARGETING)
     res = runner.invoke(app, ["simulate", str(path), "-o", str(folder / "run.t13.h5"),
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     text = runner.invoke(app, ["simulate", str(path), "-o", str(folder / "text.t13.h5")])
     assert text.exit_code == 0, text.output
