@@ -104,7 +104,7 @@ class BodyTable(Schema):
         = Field(None, description="The argv of a program, run with --name value for each "
                 "constant, file and varied value; its stdout is one JSON object of outputs.")
     json_option: bool | None = Field(None, alias="json", description="Program only: append "
-                                     "--json; default true.")
+                                     "--json - (the outputs on standard output); default true.")
     dashes: bool | None = Field(None, description="Program only: --azimuth-deg instead of "
                                 "--azimuth_deg; default false.")
     timeout_s: _Positive | None = Field(None, description="Wall-time limit of a case (a "
