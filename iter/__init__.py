@@ -9,10 +9,11 @@ the paths in it (taken from the sweep file's folder) and the checks made before 
 
 This package knows nothing of ``tapp`` and never imports it. Inside it, use relative imports:
 ``import iter`` would shadow the builtin ``iter()``; from outside, ``from iter import ...`` or
-``import iter as sweeps``. The names of the modules that read and write the results files
-(:mod:`iter.results`, :mod:`iter.run`: the only ones that load h5py) are imported on first
-use, so that a program using only part of the package (say :mod:`iter.schema` or the executors
-of :mod:`iter.execute`) does not load h5py.
+``import iter as sweeps``. Every public name is imported from its module on first use, so
+that a program using only part of the package loads only what that part needs: the executors
+of :mod:`iter.execute` load neither h5py (which only :mod:`iter.results` and :mod:`iter.run`
+load), pydantic (the sweep-file schema) nor NumPy, and a command line that only shows its
+help and the defaults it takes from here (``tapp iter --help``) loads none of them.
 
 >>> from iter import Loop, generate_cases
 >>> azimuths = Loop(type=2, names=("azimuth_deg",), sets=5, vary=(96.0,), delta=(3.0,))
@@ -22,37 +23,25 @@ of :mod:`iter.execute`) does not load h5py.
 
 import importlib
 
-from .body import CallableBody, ProgramBody, input_check, resolve_callable, run_case
-from .errors import (
-    AllCasesFailed,
-    ClusterError,
-    IterError,
-    ResultFileError,
-    ResultWriteError,
-    SchedulerError,
-    SweepInputError,
-)
-from .execute import Execution, probe_scheduler
-from .loops import Case, Loop, case_count, generate_cases
-from .sweep import Sweep
-from .sweepfile import load_sweep, parse_sweep
-from .table import CaseResult, CaseStatus, ResultTable
+#: Every public name and the module it lives in, imported on first use (module docstring).
+_HOMES = {
+    "AllCasesFailed": "errors", "CallableBody": "body", "Case": "loops",
+    "CaseResult": "table", "CaseStatus": "table", "ClusterError": "errors",
+    "Execution": "execute",
+    "IterError": "errors", "Loop": "loops", "ProgramBody": "body",
+    "ResultFileError": "errors", "ResultTable": "table", "ResultWriteError": "errors",
+    "SchedulerError": "errors",
+    "Sweep": "sweep", "SweepInputError": "errors", "SweepResult": "run",
+    "SweepSummary": "run", "case_count": "loops", "generate_cases": "loops",
+    "input_check": "body", "load_sweep": "sweepfile", "parse_sweep": "sweepfile",
+    "probe_scheduler": "execute", "read_hdf5": "results", "resolve_callable": "body",
+    "run_case": "body", "run_sweep": "run", "write_csv": "results", "write_hdf5": "results",
+}
 
-__all__ = [
-    "AllCasesFailed", "CallableBody", "Case", "CaseResult", "CaseStatus", "ClusterError",
-    "Execution", "IterError", "Loop", "ProgramBody", "ResultFileError", "ResultTable",
-    "ResultWriteError", "SchedulerError", "Sweep", "SweepInputError", "SweepResult",
-    "SweepSummary", "case_count", "generate_cases", "input_check", "load_sweep", "parse_sweep",
-    "probe_scheduler", "read_hdf5", "resolve_callable", "run_case", "run_sweep", "write_csv",
-    "write_hdf5",
-]
-
-#: Public names imported on first use, and their modules (which load h5py).
-_ON_FIRST_USE = {"SweepResult": "run", "SweepSummary": "run", "run_sweep": "run",
-                 "read_hdf5": "results", "write_csv": "results", "write_hdf5": "results"}
+__all__ = sorted(_HOMES)
 
 
 def __getattr__(name: str) -> object:
-    if name in _ON_FIRST_USE:
-        return getattr(importlib.import_module(f".{_ON_FIRST_USE[name]}", __name__), name)
+    if name in _HOMES:
+        return getattr(importlib.import_module(f".{_HOMES[name]}", __name__), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

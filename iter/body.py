@@ -7,8 +7,9 @@ Two kinds, both picklable so Dask can ship them to workers:
   outputs.
 * :class:`ProgramBody`: a command-line program (a ``tapp`` subcommand or any executable),
   run once per case with each constant and varied value passed as ``--name value``, and
-  ``--json`` appended (unless turned off); its stdout must be one JSON object, which is taken
-  as the outputs.
+  ``--json -`` appended (unless turned off: "write the JSON to standard output", as every
+  ``tapp`` command takes it); its stdout must be one JSON object, which is taken as the
+  outputs.
 
 Both take ``files``: named paths passed like constants, each as an absolute path (the sweep
 file reader takes relative ones from the sweep file's folder); each must exist.
@@ -66,6 +67,8 @@ F = TypeVar("F", bound=Callable[..., object])
 
 #: Characters of a failing program's stderr kept in the error message (its tail).
 STDERR_TAIL_CHARS = 400
+#: Appended to a program body's command line: its outputs as JSON on standard output.
+JSON_TO_STDOUT = ("--json", "-")
 #: Wall-time limit of a program body's case when the sweep file gives none, s (one hour).
 DEFAULT_PROGRAM_TIMEOUT_S = 3600.0
 
@@ -378,7 +381,7 @@ class CallableBody:
 
 @dataclass(frozen=True, slots=True)
 class ProgramBody:
-    """A command-line program run once per case; its ``--json`` stdout is the outputs.
+    """A command-line program run once per case; its ``--json -`` stdout is the outputs.
 
     Parameters
     ----------
@@ -389,7 +392,7 @@ class ProgramBody:
         Passed to every case as ``--name value``; ``true`` as a bare ``--name`` flag, and
         ``false`` not at all.
     json_option : bool
-        Append ``--json`` to the command line (the ``json`` key of the sweep file).
+        Append ``--json -`` to the command line (the ``json`` key of the sweep file).
     dashes : bool
         Spell options with dashes, ``--azimuth-deg`` for ``azimuth_deg``, as typer/click
         programs (``tapp``) expect.
@@ -442,7 +445,7 @@ class ProgramBody:
             elif value is not False:
                 args += [option, repr(value) if isinstance(value, float) else str(value)]
         if self.json_option:
-            args.append("--json")
+            args += JSON_TO_STDOUT
         return args
 
     def __call__(self, case: Case) -> Mapping[str, object]:

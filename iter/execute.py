@@ -1,5 +1,11 @@
 """Where a sweep's cases run: serially, on a local Dask cluster, or on a running Dask cluster.
 
+An :class:`Execution` that asks for none of these (no ``serial``, ``scheduler`` or
+``workers``) is *automatic*: its work runs in this process unless the caller's projection of
+it is large enough to repay a local cluster's start (:data:`DASK_MIN_WORK_S`; the caller
+passes the verdict to :func:`open_executor`). A local cluster's workers are spawned with one
+BLAS thread each and without Dask's malloc trim threshold (:func:`local_cluster`).
+
 Cases are grouped into chunks (one Dask task per chunk) so the scheduling cost is paid per
 chunk, not per case. Chunks complete in any order; a chunk lost on Dask (a worker died)
 records each of its cases as FAILED, as a case whose body fails is. Running a whole sweep
@@ -11,7 +17,6 @@ Workers, local or remote, must be able to import ``iter`` and the body's module.
 
 from __future__ import annotations
 
-import asyncio
 import math
 import os
 import subprocess
@@ -23,13 +28,14 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 from urllib.parse import urlsplit
 
-from .body import Body, kill_session, run_chunk
 from .errors import ClusterError, SchedulerError, SweepInputError
-from .loops import Case
-from .table import CaseResult, CaseStatus
 
 if TYPE_CHECKING:
     from distributed import Client
+
+    from .body import Body
+    from .loops import Case
+    from .table import CaseResult
 
 #: Default connect timeout for a scheduler address, s.
 CONNECT_TIMEOUT_S = 5.0
@@ -49,6 +55,20 @@ MAX_WORKERS_PER_CORE = 4
 CLUSTER_STOP_S = 10.0
 #: Address schemes accepted for ``scheduler``.
 SCHEDULER_SCHEMES = ("tcp", "tls")
+#: Projected serial work, s, below which an automatic execution runs in this process: on 2
+#: cores a local cluster of 2 workers costs 3 to 7 s more than this process (starting and
+#: stopping it, the body imported in the workers) and saves at most half of every second of
+#: work; it paid from 5.4, 11.9 and 13.9 s of work in three runs of ``make bench``
+#: (section ``cli``, cases of 0.07-0.1 s, the machine's load average 3 to 7).
+DASK_MIN_WORK_S = 10.0
+#: Settings of Dask's ``distributed.nanny.pre-spawn-environ`` for a local cluster's workers:
+#: one BLAS thread each (the workers share the cores: more threads only compete for them,
+#: which made small solves up to 10x slower on a loaded machine), and no
+#: ``MALLOC_TRIM_THRESHOLD_`` (Dask's 64 kB also fixes glibc's mmap threshold at 128 kB,
+#: so every temporary array above that is a fresh mmap whose pages fault in again: a
+#: Monte Carlo block ran 1.3-1.4x slower in a worker than in this process).
+WORKER_ENVIRON = {"OMP_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1, "MKL_NUM_THREADS": 1,
+                  "MALLOC_TRIM_THRESHOLD_": None}
 
 
 def available_cores() -> int:
@@ -65,13 +85,15 @@ class Execution:
     Parameters
     ----------
     serial : bool
-        Run every case in this process, no Dask (debugging, tests).
+        Run every case in this process, no Dask.
     scheduler : str or None
-        ``tcp://HOST:PORT`` of a running dask.distributed scheduler; None starts a local
-        cluster.
+        ``tcp://HOST:PORT`` of a running dask.distributed scheduler.
     workers : int or None
-        Worker processes of the local cluster (one thread each), at most
-        :data:`MAX_WORKERS_PER_CORE` per available core; None for one per core.
+        Worker processes of a local cluster (one thread each), at most
+        :data:`MAX_WORKERS_PER_CORE` per available core. With none of ``serial``,
+        ``scheduler`` and ``workers`` the execution is automatic (:attr:`automatic`): in this
+        process when the work is too small to repay a local cluster, else on a local cluster
+        of one worker per core.
     chunk_size : int or None
         Cases per Dask task; None chooses about :data:`CHUNKS_PER_SLOT` chunks per worker
         (serial runs use 1, which only sets the checkpoint granularity).
@@ -129,6 +151,13 @@ class Execution:
                                   "cluster has its own workers)", self.workers)
 
 
+    @property
+    def automatic(self) -> bool:
+        """Whether neither a serial run, a scheduler nor a worker count was asked for: the
+        work then runs in this process unless it repays a local cluster."""
+        return not self.serial and self.scheduler is None and self.workers is None
+
+
 def _port(address: str) -> int | None:
     try:
         return urlsplit(address).port
@@ -148,13 +177,23 @@ class Executor(Protocol):
 
 
 class SerialExecutor:
-    """Runs every chunk in this process, in order."""
+    """Runs every chunk in this process, in order.
 
-    description = "serial"
+    Parameters
+    ----------
+    description : str
+        How the run is described in the summary.
+    """
+
     slots = 1
+
+    def __init__(self, description: str = "serial"):
+        self.description = description
 
     def run(self, body: Body, chunks: Sequence[Sequence[Case]]) -> Iterator[list[CaseResult]]:
         """Yield the rows of each chunk, in order."""
+        from .body import run_chunk
+
         for chunk in chunks:
             yield run_chunk(body, chunk)
 
@@ -179,6 +218,8 @@ class DaskExecutor:
         """Submit every chunk; yield each chunk's rows as it completes."""
         from distributed import as_completed
 
+        from .body import run_chunk
+
         pending = {self.client.submit(run_chunk, body, chunk, pure=False): chunk
                    for chunk in chunks}
         try:
@@ -199,6 +240,8 @@ class DaskExecutor:
 
 
 def _lost(case: Case, reason: str) -> CaseResult:
+    from .table import CaseResult, CaseStatus
+
     return CaseResult(index=case.index, values=case.values, outputs={},
                       status=CaseStatus.FAILED, error=f"chunk lost on Dask: {reason}")
 
@@ -217,6 +260,8 @@ def probe_scheduler(address: str, timeout_s: float) -> Mapping[str, object]:
         Nothing answered in time, the connection was refused, or what answered is not a
         Dask scheduler.
     """
+    import asyncio
+
     from distributed.comm import connect
 
     async def identity() -> object:
@@ -247,29 +292,37 @@ def probe_scheduler(address: str, timeout_s: float) -> Mapping[str, object]:
 def local_cluster(workers: int | None = None) -> Iterator[str]:
     """Start a dask.distributed LocalCluster; yield its scheduler address; stop it on exit.
 
-    One process per worker (``workers``, default one per core), one thread each. The
-    cluster runs in a process of its own (``python -m iter._cluster``), in a session of its
-    own, so that a Ctrl-C at a terminal, sent to the whole process group, reaches only this
-    process (whose exit stops the cluster), never the workers, at any moment, their start
-    included. The cluster's scratch space (the workers' ``local_directory``, and its
-    ``TMPDIR``) is a new folder of :mod:`tempfile`'s (the run's own, under ``tapp``'s CLI),
-    removed with the cluster. On leaving the block normally the cluster is asked to stop
-    (its stdin is closed) and given :data:`CLUSTER_STOP_S`; on an error or a signal, or
-    after that time, its session is killed. A parent killed outright closes the cluster's
-    stdin too: it stops by itself.
+    One process per worker (``workers``, default one per core), one thread each, spawned
+    with :data:`WORKER_ENVIRON` (a variable this process's environment sets is passed on as
+    it is); the dashboard on a free port. The cluster runs in a process of its own
+    (``python -m iter._cluster``), in a session of its own, so that a Ctrl-C at a terminal,
+    sent to the whole process group, reaches only this process (whose exit stops the
+    cluster), never the workers, at any moment, their start included. The cluster's scratch
+    space (the workers' ``local_directory``, and its ``TMPDIR``) is a new folder of
+    :mod:`tempfile`'s (the run's own, under ``tapp``'s CLI), removed with the cluster. On
+    leaving the block normally the cluster is asked to stop (its stdin is closed) and given
+    :data:`CLUSTER_STOP_S`; on an error or a signal, or after that time, its session is
+    killed. A parent killed outright closes the cluster's stdin too: it stops by itself.
+    The cluster and its workers import from this process's ``sys.path`` (passed on as
+    ``PYTHONPATH``), as workers spawned by this process itself would: a body's module found
+    here is found there.
 
     Raises
     ------
     ClusterError
         The cluster did not start (the last line of its log says why).
     """
+    from .body import kill_session
+
     n_workers = workers or available_cores()
     with tempfile.TemporaryDirectory(prefix="dask-cluster-") as scratch:
         log_path = os.path.join(scratch, "cluster.log")
         with (open(log_path, "wb") as log,
               subprocess.Popen([sys.executable, "-m", "iter._cluster", str(n_workers), scratch],
                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=log,
-                               start_new_session=True, env={**os.environ, "TMPDIR": scratch})
+                               start_new_session=True, env={
+                                   **os.environ, "TMPDIR": scratch,
+                                   "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)})
               as proc):
             try:
                 address = proc.stdout.readline().decode("utf-8", "replace").strip()
@@ -291,9 +344,31 @@ def _last_line(path: str) -> str:
     return lines[-1] if lines else "(nothing logged)"
 
 
+def too_small(unit: str, projected: float, crossover: float) -> str | None:
+    """Why ``projected`` work (in ``unit``: "samples", "s of work") is too small for a local
+    cluster to repay its start, or None when it is not: the verdict an automatic
+    :func:`open_executor` takes (e.g. "0.44 s of work, below the 6 s of work a local
+    cluster repays"). On one core a local cluster never pays.
+    """
+    if available_cores() < 2:
+        return "one core"
+    if projected < crossover:
+        return (f"{_amount(projected)} {unit}, below the {_amount(crossover)} {unit} a local "
+                "cluster repays")
+    return None
+
+
+def _amount(x: float) -> str:
+    return f"{x:,.0f}" if x >= 100 else f"{x:.2g}"
+
+
 @contextmanager
-def open_executor(execution: Execution) -> Iterator[Executor]:
+def open_executor(execution: Execution, *, small: str | None = None) -> Iterator[Executor]:
     """Yield the executor ``execution`` asks for; shut down what was started on exit.
+
+    An automatic execution (:attr:`Execution.automatic`) runs in this process when ``small``
+    says why the work is too small for a local cluster (:func:`too_small`), and on a local
+    cluster of one worker per core otherwise.
 
     Raises
     ------
@@ -303,6 +378,9 @@ def open_executor(execution: Execution) -> Iterator[Executor]:
     """
     if execution.serial:
         yield SerialExecutor()
+        return
+    if execution.automatic and small is not None:
+        yield SerialExecutor(f"this process ({small})")
         return
     from distributed import Client
 

@@ -52,6 +52,7 @@ import h5py
 import numpy as np
 
 from .errors import ResultFileError, ResultWriteError
+from .inputfile import regular_file
 from .table import CaseResult, CaseStatus, OutputValue, ResultTable
 
 FORMAT_NAME = "iter-results"
@@ -224,6 +225,7 @@ def read_hdf5(path: str | Path) -> StoredResults:
         numbers repeated or outside the sweep); the message names the dataset.
     """
     source = str(path)
+    regular_file(path, "HDF5 results file", error=ResultFileError)
     try:
         with h5py.File(path, "r") as f:
             if f.attrs.get("format") != FORMAT_NAME:

@@ -7,6 +7,12 @@ case whose body fails is recorded as FAILED with its message and the sweep goes 
 lost on Dask (a worker died) records each of its cases as FAILED the same way. A sweep whose
 every case failed gives no answer: :meth:`SweepResult.raise_if_all_failed` says so.
 
+Where the cases run (:class:`~iter.execute.Execution`): an automatic execution first runs
+:data:`PROBE_CASES` cases in this process, projects the rest's serial work from the cheaper
+of them (the first also pays for importing the body) and runs the rest in this process too
+when that work is below :data:`~iter.execute.DASK_MIN_WORK_S`, on a local cluster
+otherwise; the summary's ``mode`` says which, and why.
+
 With an output file the sweep is resumable: completed rows are written to the HDF5 file as
 chunks finish (at most every ``checkpoint_interval_s``, and at the end, also on an error or
 Ctrl-C), each time atomically. Running the same sweep again with the same file skips every
@@ -16,6 +22,7 @@ case already OK and runs the rest (cases that failed are tried again).
 from __future__ import annotations
 
 import time
+from contextlib import ExitStack
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -31,10 +38,21 @@ from rich.progress import (
 )
 
 from .errors import AllCasesFailed, SweepInputError
-from .execute import Execution, chunk_cases, default_chunk_size, open_executor
+from .execute import (
+    DASK_MIN_WORK_S,
+    Execution,
+    SerialExecutor,
+    chunk_cases,
+    default_chunk_size,
+    open_executor,
+    too_small,
+)
 from .results import read_hdf5, write_csv, write_hdf5
 from .sweep import Sweep
 from .table import CaseResult, CaseStatus, ResultTable
+
+#: Cases an automatic execution runs in this process to project the serial work of the rest.
+PROBE_CASES = 2
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,7 +142,7 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
     output_csv : str or Path or None
         CSV copy of the table, written at the end.
     execution : Execution or None
-        Where to run; None for a local Dask cluster with one worker per core.
+        Where to run; None for an automatic execution (module docstring).
     progress : bool
         Show a rich progress bar on stderr.
 
@@ -169,21 +187,43 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
                    TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(),
                    TimeRemainingColumn(), console=console,
                    disable=not progress or not console.is_terminal)
-    with open_executor(execution) as executor, bar:
-        chunk_size = execution.chunk_size or (
-            1 if execution.serial else default_chunk_size(len(pending), executor.slots))
+    with ExitStack() as stack:
+        # an executor asked for opens first: a scheduler that does not answer is said before
+        # any progress is shown
+        executor = None if execution.automatic else stack.enter_context(
+            open_executor(execution))
+        stack.enter_context(bar)
         task = bar.add_task("iter", total=sweep.n_cases, completed=n_resumed, failed=0)
         n_failed_now = 0
         checkpoint()  # fails fast on an unwritable output, before any case runs
         last_checkpoint_s = time.perf_counter()
+
+        def record(rows: list[CaseResult]) -> None:
+            nonlocal n_failed_now, last_checkpoint_s
+            results.update((row.index, row) for row in rows)
+            n_failed_now += sum(row.status is CaseStatus.FAILED for row in rows)
+            bar.update(task, advance=len(rows), failed=n_failed_now)
+            if time.perf_counter() - last_checkpoint_s >= execution.checkpoint_interval_s:
+                checkpoint()
+                last_checkpoint_s = time.perf_counter()
+
         try:
+            probed = ""
+            if executor is None:  # automatic (no case left to run: no work, no cluster)
+                probe, pending = pending[:PROBE_CASES], pending[PROBE_CASES:]
+                for rows in SerialExecutor().run(sweep.body, chunk_cases(probe, 1)):
+                    record(rows)
+                case_s = min((results[case.index].elapsed_s for case in probe), default=0.0)
+                executor = stack.enter_context(open_executor(execution, small=too_small(
+                    "s of work", case_s * len(pending), DASK_MIN_WORK_S)))
+                if not isinstance(executor, SerialExecutor):
+                    probed = f", after {len(probe)} cases in this process"
+            mode = executor.description + probed
+            chunk_size = execution.chunk_size or (
+                1 if isinstance(executor, SerialExecutor)
+                else default_chunk_size(len(pending), executor.slots))
             for rows in executor.run(sweep.body, chunk_cases(pending, chunk_size)):
-                results.update((row.index, row) for row in rows)
-                n_failed_now += sum(row.status is CaseStatus.FAILED for row in rows)
-                bar.update(task, advance=len(rows), failed=n_failed_now)
-                if time.perf_counter() - last_checkpoint_s >= execution.checkpoint_interval_s:
-                    checkpoint()
-                    last_checkpoint_s = time.perf_counter()
+                record(rows)
         finally:
             checkpoint()
     table = ResultTable.from_results(sweep.names, results)
@@ -191,7 +231,7 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
         write_csv(output_csv, table)
     summary = SweepSummary(n_cases=sweep.n_cases, n_succeeded=table.n_succeeded,
                            n_failed=table.n_failed, n_resumed=n_resumed,
-                           wall_s=time.perf_counter() - start_s, mode=executor.description,
+                           wall_s=time.perf_counter() - start_s, mode=mode,
                            output_h5=None if h5_path is None else str(h5_path),
                            output_csv=None if output_csv is None else str(output_csv),
                            source=sweep.source)

@@ -10,7 +10,8 @@ rules; in short, a :class:`Schema` subclass is a pydantic v2 model that
   an integer is accepted where a float is declared;
 - requires finite floats, unless the field is ``Annotated[float, AllowInf]`` (:data:`InfFloat`;
   infinities allowed, NaN still refused);
-- is frozen; a tuple field accepts a TOML array (lists are declared ``list[...]``).
+- is frozen; a tuple field accepts a TOML array (lists are declared ``list[...]``);
+- refuses a key it has renamed (:attr:`Schema.renamed_keys`), naming the new key.
 
 Checks beyond types raise :class:`Invalid` in validators; :func:`validate` reports them like
 type errors.
@@ -32,7 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from types import UnionType
-from typing import Annotated, Any, TypeVar, Union, get_args, get_origin
+from typing import Annotated, Any, ClassVar, TypeVar, Union, get_args, get_origin
 
 import pydantic
 from pydantic import AfterValidator, ConfigDict, model_validator
@@ -89,8 +90,18 @@ class Invalid(ValueError):
         super().__init__(expected)
 
 
+class _Unique:
+    """Marker metadata: the list's items must not repeat (JSON Schema ``uniqueItems``)."""
+
+    def __get_pydantic_core_schema__(self, source: Any, handler: Any) -> Any:
+        return handler(Annotated[source, AfterValidator(_unique)])
+
+    def __get_pydantic_json_schema__(self, core_schema: Any, handler: Any) -> Any:
+        return {**handler(core_schema), "uniqueItems": True}
+
+
 #: Use as ``Annotated[list[X], Unique]`` for a list whose items must not repeat.
-Unique = AfterValidator(_unique)
+Unique = _Unique()
 
 
 class Schema(pydantic.BaseModel):
@@ -98,11 +109,24 @@ class Schema(pydantic.BaseModel):
 
     Field names are the TOML keys; declare ``Field(alias="...")`` for a key that is not a
     Python identifier. Nested tables are nested ``Schema`` subclasses; ``[tables.NAME]`` are
-    ``dict[str, Sub]``.
+    ``dict[str, Sub]``. Describe every key with ``Field(description=...)``: the reference
+    pages are generated from the descriptions (:mod:`tapp.reference`).
     """
 
     model_config = ConfigDict(extra="forbid", strict=True, frozen=True, allow_inf_nan=False,
                               populate_by_name=False)
+
+    #: Keys this table had under another name, and what replaces each: a file that still
+    #: uses one is refused with the new key in the message (one vocabulary across files).
+    renamed_keys: ClassVar[Mapping[str, str]] = {}
+
+    @classmethod
+    def __get_pydantic_json_schema__(cls, core_schema: Any, handler: Any) -> Any:
+        """The JSON Schema of the table, with its renamed keys as ``renamedKeys``."""
+        json_schema = super().__get_pydantic_json_schema__(core_schema, handler)
+        if cls.renamed_keys:
+            handler.resolve_ref_schema(json_schema)["renamedKeys"] = dict(cls.renamed_keys)
+        return json_schema
 
     @model_validator(mode="before")
     @classmethod
@@ -110,6 +134,10 @@ class Schema(pydantic.BaseModel):
         if isinstance(data, Mapping):
             allowed = [f.alias or name for name, f in cls.model_fields.items()]
             for key in data:
+                if key in cls.renamed_keys and key not in allowed:
+                    raise PydanticCustomError(
+                        "renamed_key", "renamed", {"key": key, "new": cls.renamed_keys[key],
+                                                   "value": data[key]})
                 if key not in allowed:
                     raise PydanticCustomError(
                         "unknown_key", "no such key", {"key": key, "allowed": allowed,
@@ -153,6 +181,8 @@ _EXPECTED = {
     "missing": "a value (the key is required)",
     "none_required": "nothing",
 }
+#: Errors about a key itself (unknown, renamed), reported before any other.
+_KEY_ERRORS = ("unknown_key", "renamed_key")
 _BOUNDS = {"greater_than": ("gt", ">"), "greater_than_equal": ("ge", ">="),
            "less_than": ("lt", "<"), "less_than_equal": ("le", "<=")}
 
@@ -169,6 +199,8 @@ def _expected(err: Mapping) -> str:
         return f"one of {ctx['expected']}"
     if kind == "unknown_key":
         return f"no such key (allowed: {', '.join(ctx['allowed']) or 'none'})"
+    if kind == "renamed_key":
+        return f"{ctx['new']} in its place (the key was renamed)"
     if kind in ("too_short", "string_too_short"):
         return f"at least {ctx['min_length']} item{'s' * (ctx['min_length'] != 1)}"
     if kind in ("too_long", "string_too_long"):
@@ -238,13 +270,13 @@ def _translate(exc: pydantic.ValidationError, data: Mapping, prefix: str
     Errors at the same place from the members of a union are joined with "or".
     """
     errors = exc.errors(include_url=False)
-    errors.sort(key=lambda e: e["type"] != "unknown_key")
+    errors.sort(key=lambda e: e["type"] not in _KEY_ERRORS)
     located = []
     for err in errors:
         path, node = _path(data, err["loc"], keep_last=err["type"] == "missing")
         ctx = err.get("ctx") or {}
         got: object = None if err["type"] == "missing" else node
-        if err["type"] == "unknown_key":
+        if err["type"] in _KEY_ERRORS:
             path.append(ctx["key"])
             got = ctx["value"]
         if err["type"] in ("union_tag_invalid", "union_tag_not_found"):
@@ -285,7 +317,7 @@ def validate(model: type[M], data: Mapping, source: str, *, prefix: str = "",
     ------
     SweepInputError (or ``error``)
         ``source: dotted.field[2].path: expected <plain English> (got <value>)`` for the first
-        problem; unknown keys are reported before anything else.
+        problem; unknown and renamed keys are reported before anything else.
     """
     try:
         return model.model_validate(data)

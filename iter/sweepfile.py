@@ -11,7 +11,7 @@ Format
     [body]                       # exactly one of `callable` or `program`
     callable = "iter.examples:launch_azimuth_case"   # "module:function"
     # program = ["tapp", "propagate"]                # argv of a command-line program
-    # json = true          # program only: append --json (default true)
+    # json = true          # program only: append --json - (default true)
     # dashes = false       # program only: --azimuth-deg instead of --azimuth_deg (default false)
     # timeout_s = 600.0    # wall-time limit per case, s: program default 3600; a callable
     #                      # with a limit runs each case in a child process (default: none)
@@ -70,7 +70,6 @@ booleans are not numbers nor numbers strings. Errors name the file and the field
 from __future__ import annotations
 
 import os
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Any
@@ -79,6 +78,7 @@ from pydantic import Field, model_validator
 
 from .body import Body, CallableBody, ProgramBody, names_a_path
 from .errors import SweepInputError
+from .inputfile import read_toml
 from .loops import Loop
 from .schema import Invalid, Schema, validate
 from .sweep import Sweep
@@ -90,21 +90,31 @@ _Scalar = str | int | float | bool
 class SweepMeta(Schema):
     """``[sweep]``: free text kept with the results."""
 
-    title: str = ""
-    description: str = ""
+    title: str = Field("", description="A title.")
+    description: str = Field("", description="What the sweep is.")
 
 
 class BodyTable(Schema):
-    """``[body]``: exactly one of ``callable`` or ``program``, and their options."""
+    """``[body]``: what runs for each case: exactly one of ``callable`` or ``program``."""
 
-    callable: str | None = None
+    callable: str | None = Field(None, description="A Python function \"module:function\", "
+                                 "called with the constants, files and varied values as "
+                                 "keyword arguments; it returns a table of named outputs.")
     program: Annotated[list[Annotated[str, Field(min_length=1)]], Field(min_length=1)] | None \
-        = None
-    json_option: bool | None = Field(None, alias="json")
-    dashes: bool | None = None
-    timeout_s: _Positive | None = None
-    constants: dict[str, Any] = {}
-    files: dict[str, Annotated[str, Field(min_length=1)]] = {}
+        = Field(None, description="The argv of a program, run with --name value for each "
+                "constant, file and varied value; its stdout is one JSON object of outputs.")
+    json_option: bool | None = Field(None, alias="json", description="Program only: append "
+                                     "--json - (the outputs on standard output); default true.")
+    dashes: bool | None = Field(None, description="Program only: --azimuth-deg instead of "
+                                "--azimuth_deg; default false.")
+    timeout_s: _Positive | None = Field(None, description="Wall-time limit of a case (a "
+                                        "callable with one runs in a child process); default: "
+                                        "3600 s for a program, none for a callable.")
+    constants: dict[str, Any] = Field({}, description="Arguments passed unchanged to every "
+                                      "case, by name.")
+    files: dict[str, Annotated[str, Field(min_length=1)]] = Field(
+        {}, description="Paths the body reads, by argument name, relative to this file's "
+        "folder; each must exist.")
 
     @model_validator(mode="after")
     def _one_kind(self) -> BodyTable:
@@ -129,22 +139,26 @@ class BodyTable(Schema):
 
 
 class LoopTable(Schema):
-    """One ``[[loop]]`` table (the seed's TYPE, N, SETS, VARY, DELTA)."""
+    """``[[loop]]``: one loop, outermost first (the seed's TYPE, N, SETS, VARY, DELTA); inner
+    loops restart for every case of the outer ones."""
 
-    type: int = 1
-    names: list[str]
-    n: int | None = None
-    sets: int
-    vary: list[float]
-    delta: list[float] | None = None
+    type: int = Field(1, description="1: every value given in vary; 2: a start and "
+                      "increments.", json_schema_extra={"enum": [1, 2]})
+    names: list[str] = Field(description="The varied arguments; units in the names.")
+    n: int | None = Field(None, description="The seed's N, checked against len(names).")
+    sets: int = Field(description="Cases of this loop.", json_schema_extra={"minimum": 1})
+    vary: list[float] = Field(description="Type 1: sets x len(names) values, row by row; type "
+                              "2: the first row.")
+    delta: list[float] | None = Field(None, description="Type 2: the increment of each name.")
 
 
 class SweepFile(Schema):
     """Schema of a sweep file (module docstring)."""
 
-    sweep: SweepMeta = SweepMeta()
-    body: BodyTable
-    loop: Annotated[list[LoopTable], Field(min_length=1)]
+    sweep: SweepMeta = Field(SweepMeta(), description="Free text.")
+    body: BodyTable = Field(description="What runs for each case.")
+    loop: Annotated[list[LoopTable], Field(min_length=1)] = Field(
+        description="The loops, outermost first.")
 
 
 #: Keys of a program body only, and their attributes.
@@ -169,15 +183,7 @@ def load_sweep(path: str | Path, *, check_body: bool = True) -> Sweep:
         names the file and the field.
     """
     source = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SweepInputError(source, "file", "a readable sweep file (TOML)",
-                              exc.strerror) from None
-    try:
-        document = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SweepInputError(source, "file", "valid TOML", str(exc)) from None
+    document = read_toml(path, "sweep file")
     return parse_sweep(document, source=source, check_body=check_body,
                        base_dir=Path(path).parent)
 

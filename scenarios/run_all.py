@@ -1,19 +1,27 @@
 """`make scenario`: every reproduction run, results under results/.
 
+The input files are the examples shipped in the package (:mod:`tapp.examples`, the files
+`tapp examples DIR` copies).
+
 1. The propagation demo (foundation): SATORB2 with (J2,J2) and (J2,J0), 24 h.
 2. The approximate-STM study: every run of the brief -> results/approx_stm/report.md.
-3. SEARCH: the lunar B-plane targeting of scenarios/search_bplane.toml -> results/search/.
+3. SEARCH: the lunar B-plane targeting of search_bplane.toml, differenced and
+   analytic partials -> results/search/ (the seed's report, and the same run as JSON).
 4. TAPP I: tracking simulations of leo_equatorial.toml and deep_space.toml -> T13 tapes,
    their summaries and trajectories (CCSDS OEM) in results/tapp1/.
-5. TAPP III: each TAPP I tape through its deck (scenarios/tapp3_*.toml) -> O3 printouts, JSON,
+5. TAPP III: each TAPP I tape through its deck (tapp3_*.toml) -> O3 printouts, JSON,
    plots, T32 tapes and results/tapp3/report.md (fit vs real σ of the miss at each recycle, the
    error budget of the final miss covariance).
-6. The whole pipeline (TAPP I -> TAPP III -> TAPP II) of scenarios/pipeline_deep_space.toml
+6. The whole pipeline (TAPP I -> TAPP III -> TAPP II) of pipeline_deep_space.toml
    -> results/pipeline/ (report.md: fit vs real σ of the miss at each midcourse time, ΔV and
    final-miss statistics, Monte Carlo beside linear covariance, plots).
 7. ITER: the seed's examples (five azimuths, type 1 and 2; 30 days x 5 azimuths), the
    departure-day sweep with SEARCH as the body, and the tracking trade study with the whole
-   pipeline as the body, on a local Dask cluster -> results/iter/.
+   pipeline as the body, on a local Dask cluster -> results/iter/ (report.md; summary.json:
+   the cases, failures and wall time of each sweep).
+8. The README's figures: read from results/ into scenarios/readme_figures.json and rendered
+   into the README's generated blocks, then checked against results/ read again, with the
+   claims of the prose around them (scenarios/readme.py); ``git diff`` shows what changed.
 """
 
 from __future__ import annotations
@@ -29,6 +37,8 @@ import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from iter import CaseStatus, Execution, load_sweep, run_sweep
+from scenarios import readme
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.od.study import planned_cases, run_study
 from tapp.report.approx_stm import write_report
 from tapp.report.markdown import table
@@ -44,7 +54,7 @@ def propagation_demo() -> None:
     out.mkdir(parents=True, exist_ok=True)
     for stm in ("J2", "J0"):
         cmd = [sys.executable, "-m", "tapp.cli", "propagate", "--orbit", "SATORB2", "--hours",
-               "24", "--step", "60", "--truth", "J2", "--stm", stm, "--json"]
+               "24", "--step", "60", "--truth", "J2", "--stm", stm, "--json", "-"]
         proc = subprocess.run(cmd, capture_output=True, text=True, check=True)
         (out / f"satorb2_J2_{stm}.json").write_text(proc.stdout)
     print(f"propagation demo -> {out}")
@@ -70,10 +80,12 @@ def search_targeting() -> None:
     out = RESULTS / "search"
     out.mkdir(parents=True, exist_ok=True)
     for mode, extra in (("differenced", ()), ("analytic", ("--analytic-partials",))):
-        proc = _tapp("search", str(ROOT / "scenarios" / "search_bplane.toml"), *extra)
-        (out / f"report_{mode}.txt").write_text(proc.stdout)
-        if proc.returncode != 0:
-            raise SystemExit(f"tapp search ({mode}) exited {proc.returncode}: {proc.stderr}")
+        for suffix, form in (("txt", ()), ("json", ("--json", "-"))):  # the seed's report; numbers
+            proc = _tapp("search", str(EXAMPLES / "search_bplane.toml"), *extra, *form)
+            (out / f"report_{mode}.{suffix}").write_text(proc.stdout)
+            if proc.returncode != 0:
+                raise SystemExit(f"tapp search ({mode}) exited {proc.returncode}: "
+                                 f"{proc.stderr}")
     print(f"SEARCH lunar B-plane targeting -> {out}")
 
 
@@ -82,7 +94,7 @@ def tracking_simulations() -> None:
     out.mkdir(parents=True, exist_ok=True)
     for name in ("leo_equatorial", "deep_space"):
         tape = out / f"{name}.t13.h5"
-        proc = _tapp("simulate", str(ROOT / "scenarios" / f"{name}.toml"), "-o", str(tape),
+        proc = _tapp("simulate", str(EXAMPLES / f"{name}.toml"), "-o", str(tape),
                      "--oem", str(out / f"{name}.oem"))
         if proc.returncode != 0:
             raise SystemExit(f"tapp simulate {name} exited {proc.returncode}: {proc.stderr}")
@@ -116,19 +128,19 @@ def matrix_processor() -> None:
     out.mkdir(parents=True, exist_ok=True)
     lines = ["# TAPP III: fit world vs real world\n",
              "Each TAPP I tape of results/tapp1 (and the Table D-1 coding example) processed "
-             "with its deck from scenarios/: O3 printouts (`*.o3.txt`), JSON, T32 tapes and "
-             "plots (`plots/<name>/`).\n"]
+             "with its deck from the shipped examples: O3 printouts (`*.o3.txt`), JSON, T32 "
+             "tapes and plots (`plots/<name>/`).\n"]
     budgets: list[str] = []
     for scenario, deck in TAPP3_RUNS:
         tape = RESULTS / "tapp1" / f"{scenario}.t13.h5"
         if not tape.exists():
-            proc = _tapp("simulate", str(ROOT / "scenarios" / f"{scenario}.toml"), "-o",
+            proc = _tapp("simulate", str(EXAMPLES / f"{scenario}.toml"), "-o",
                          str(tape))
             if proc.returncode != 0:
                 raise SystemExit(f"tapp simulate {scenario} exited {proc.returncode}: "
                                  f"{proc.stderr}")
         start = time.perf_counter()
-        proc = _tapp("process", str(tape), str(ROOT / "scenarios" / f"{deck}.toml"),
+        proc = _tapp("process", str(tape), str(EXAMPLES / f"{deck}.toml"),
                      "--print", str(out / f"{scenario}.o3.txt"), "--tape",
                      str(out / f"{scenario}.t32.h5"), "--json", str(out / f"{scenario}.json"),
                      "--plots", str(out / "plots" / scenario))
@@ -136,7 +148,7 @@ def matrix_processor() -> None:
             raise SystemExit(f"tapp process {scenario} exited {proc.returncode}: {proc.stderr}")
         wall = time.perf_counter() - start
         content = json.loads((out / f"{scenario}.json").read_text())
-        lines += [f"## {scenario} (deck `scenarios/{deck}.toml`, {wall:.1f} s)", "",
+        lines += [f"## {scenario} (deck `{deck}.toml`, {wall:.1f} s)", "",
                   f"Miss parameters {', '.join(content['history']['miss'])}; σ at each "
                   "recycle (TAPP II's midcourse times), fit world vs real world:", ""]
         lines += [recycle_sigma_table(content)]
@@ -150,7 +162,7 @@ def matrix_processor() -> None:
 def pipeline_run() -> None:
     out = RESULTS / "pipeline"
     shutil.rmtree(out, ignore_errors=True)  # a pipeline never overwrites: this is a re-run
-    proc = _tapp("pipeline", str(ROOT / "scenarios" / "pipeline_deep_space.toml"), "-o",
+    proc = _tapp("pipeline", str(EXAMPLES / "pipeline_deep_space.toml"), "-o",
                  str(out), "--workers", "2")
     if proc.returncode != 0:
         raise SystemExit(f"tapp pipeline exited {proc.returncode}: {proc.stderr}")
@@ -188,18 +200,24 @@ def sweeps() -> None:
     out = RESULTS / "iter"
     out.mkdir(parents=True, exist_ok=True)
     lines = ["# ITER sweeps\n"]
-    tables = {}
+    tables, summary = {}, {}
     for name in ("iter_azimuth_type1", "iter_azimuth_type2", "iter_days_azimuths",
                  "iter_lunar_departure", "iter_pipeline_tracking"):
-        sweep = load_sweep(ROOT / "scenarios" / f"{name}.toml")
+        sweep = load_sweep(EXAMPLES / f"{name}.toml")
         h5 = out / f"{name}.h5"
         h5.unlink(missing_ok=True)  # a fresh run, not a resume
+        start = time.perf_counter()
         res = run_sweep(sweep, output_h5=h5, output_csv=out / f"{name}.csv",
                         execution=Execution(workers=2), progress=True)
+        wall_s = time.perf_counter() - start
         res.raise_if_all_failed()  # no answer to report: stop here, the failures recorded
         tables[name] = res.table
+        summary[name] = {"cases": res.summary.n_cases, "succeeded": res.summary.n_succeeded,
+                         "failed": res.summary.n_failed, "workers": 2, "wall_s": wall_s}
         lines.append(f"- `{name}`: {res.summary.n_cases} cases, {res.summary.n_succeeded} "
-                     f"succeeded, {res.summary.n_failed} failed -> `{name}.csv`")
+                     f"succeeded, {res.summary.n_failed} failed in {wall_s:.0f} s on 2 "
+                     f"workers -> `{name}.csv`")
+    (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     tab = tables["iter_lunar_departure"]
     day = np.asarray(tab.column("departure_day"), dtype=float)
     ok = tab.column("status") == int(CaseStatus.OK)
@@ -216,6 +234,12 @@ def sweeps() -> None:
     print(f"ITER sweeps -> {out / 'report.md'}")
 
 
+def readme_figures() -> None:
+    if readme.main([]) != 0:
+        raise SystemExit("the README's figures disagree with results/ (listed above)")
+    print(f"README figures -> {readme.README} ({readme.DATA})")
+
+
 def main() -> None:
     propagation_demo()
     approx_stm_study()
@@ -224,6 +248,7 @@ def main() -> None:
     matrix_processor()
     pipeline_run()
     sweeps()
+    readme_figures()
 
 
 if __name__ == "__main__":

@@ -5,9 +5,17 @@ simulation (TAPP I), the matrix processor (TAPP III), Monte Carlo guidance (TAPP
 batch/sequential estimators of the approximate-STM study.
 """
 
-from importlib.metadata import PackageNotFoundError, version
 
-try:
-    __version__ = version("tapp")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0.0.0+unknown"
+def __getattr__(name: str) -> str:
+    """``__version__``, read from the installed metadata on first use (reading it costs
+    more than the rest of ``import tapp``, which ``tapp --help`` waits for)."""
+    if name != "__version__":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        value = version("tapp")
+    except PackageNotFoundError:  # running from a source tree that is not installed
+        value = "0.0.0+unknown"
+    globals()["__version__"] = value
+    return value

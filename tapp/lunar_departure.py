@@ -1,6 +1,6 @@
 """Trans-lunar injection on a given departure day: a first guess and a SEARCH to a B-plane point.
 
-The body of the departure-day sweep (``scenarios/iter_lunar_departure.toml``): for each day,
+The body of the departure-day sweep (the example ``iter_lunar_departure.toml``): for each day,
 the first guess is the perigee of a transfer ellipse from the circular parking orbit
 (radius r_p) to 1.1 times the Earth-Moon distance at arrival, in the plane of the Moon's
 orbit, with perigee opposite the Moon's arrival position (a Hohmann-like half ellipse,

@@ -5,9 +5,11 @@ Grammar of an orbit spec (the ``--orbit`` option):
 - ``a=6550.524,e=0,i=30,raan=0,argp=0,M=0``: classical elements, a in km, angles in degrees
   (M is the mean anomaly; ``nu=`` may replace it with the true anomaly);
 - ``x=..,y=..,z=..,vx=..,vy=..,vz=..``: Cartesian position (km) and velocity (km/s);
-- ``NAME``: an orbit of the ``[orbits.NAME]`` tables of a scenario file, whose keys are
-  ``a_km, e, i_deg, raan_deg, argp_deg, M_deg`` (or ``nu_deg``) or ``x_km, ..., vz_km_s``,
-  and optionally ``allow_subsurface = true`` (schema: :class:`OrbitTable`).
+- ``NAME``: an orbit of the ``[orbits.NAME]`` tables of a study file (by default the shipped
+  :data:`tapp.examples.STUDY_FILE`), whose keys are those of every orbit table
+  (:class:`OrbitTable`, also a scenario's ``[injection]``): ``r_km = [x, y, z]`` and
+  ``v_km_s = [vx, vy, vz]``, or ``a_km, e, i_deg, raan_deg, argp_deg`` and ``M_deg`` (or
+  ``nu_deg``), and optionally ``allow_subsurface = true``.
 
 All states are EME2000 inertial, centred on the Earth, with the EGM96 GM.
 
@@ -23,17 +25,21 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Annotated
 
 import numpy as np
-from pydantic import model_validator
+from pydantic import Field, model_validator
 
 from tapp.constants import GM_EARTH_km3_s2, R_EARTH_km
 from tapp.errors import InputError
+from tapp.examples import STUDY_FILE
 from tapp.frames.elements import elements_to_cartesian, true_to_mean_anomaly
 from tapp.schema import Invalid, Schema, validate
 from tapp.tomlfile import read_toml
 
 _ELEMENT_KEYS = ("a", "e", "i", "raan", "argp")
+#: The element keys of an orbit table (:class:`OrbitTable`), with units.
+_ELEMENT_TABLE_KEYS = ("a_km", "e", "i_deg", "raan_deg", "argp_deg")
 _CART_KEYS = ("x", "y", "z", "vx", "vy", "vz")
 #: Largest Earth-centred distance of a state, km (6.7 au: beyond Jupiter; DE421 third bodies
 #: and an Earth-centred integration make no sense farther out, and squares stay finite).
@@ -42,8 +48,6 @@ MAX_DISTANCE_km = 1e9
 MAX_ECCENTRICITY = 1e6
 #: Largest speed component, km/s (0.3 % of c; solar escape at 1 au is 42 km/s).
 MAX_SPEED_km_s = 1e3
-#: The study's scenario file, found beside the package in a source checkout.
-DEFAULT_SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "approx_stm.toml"
 
 
 def perigee_radius_km(x: np.ndarray, mu_km3_s2: float = GM_EARTH_km3_s2) -> float:
@@ -166,54 +170,66 @@ def _from_mapping(values: Mapping[str, float], source: str, field: str) -> np.nd
                      ",".join(sorted(keys)))
 
 
-class OrbitTable(Schema):
-    """Schema of an ``[orbits.NAME]`` table: classical elements (km, deg) or a Cartesian state.
+#: A Cartesian vector of three components.
+Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 
-    Exactly one form: ``a_km, e, i_deg, raan_deg, argp_deg`` with one of ``M_deg``,
-    ``nu_deg``; or ``x_km, y_km, z_km, vx_km_s, vy_km_s, vz_km_s``. ``allow_subsurface``
-    lifts the perigee check (module docstring).
+
+class OrbitTable(Schema):
+    """An orbit, Earth-centred in the EME2000 (GCRS) axes, in exactly one form: ``r_km`` and
+    ``v_km_s``; or ``a_km, e, i_deg, raan_deg, argp_deg`` with one of ``M_deg``, ``nu_deg``
+    (osculating elements, the EGM96 GM). The same keys in every file: a scenario's or SEARCH
+    file's ``[injection]``, the study's ``[orbits.NAME]``.
     """
 
-    a_km: float | None = None
-    e: float | None = None
-    i_deg: float | None = None
-    raan_deg: float | None = None
-    argp_deg: float | None = None
-    M_deg: float | None = None
-    nu_deg: float | None = None
-    x_km: float | None = None
-    y_km: float | None = None
-    z_km: float | None = None
-    vx_km_s: float | None = None
-    vy_km_s: float | None = None
-    vz_km_s: float | None = None
-    allow_subsurface: bool = False
+    renamed_keys = {**{f"{k}_km": "r_km = [x_km, y_km, z_km]" for k in _CART_KEYS[:3]},
+                    **{f"{k}_km_s": "v_km_s = [vx_km_s, vy_km_s, vz_km_s]"
+                       for k in _CART_KEYS[3:]}}
+
+    r_km: Vector3 | None = Field(None, description="Position (x, y, z): the Cartesian form, "
+                                 "with v_km_s.")
+    v_km_s: Vector3 | None = Field(None, description="Velocity (vx, vy, vz): the Cartesian "
+                                   "form, with r_km.")
+    a_km: float | None = Field(None, description="Semi-major axis (< 0 for a hyperbola): the "
+                               "elements form, with e, i_deg, raan_deg, argp_deg and M_deg or "
+                               "nu_deg.")
+    e: float | None = Field(None, description="Eccentricity (>= 0; > 1 with a_km < 0).",
+                            json_schema_extra={"unit": "1"})
+    i_deg: float | None = Field(None, description="Inclination to the equator.")
+    raan_deg: float | None = Field(None, description="Right ascension of the ascending node.")
+    argp_deg: float | None = Field(None, description="Argument of periapsis.")
+    M_deg: float | None = Field(None, description="Mean anomaly at the epoch (or nu_deg).")
+    nu_deg: float | None = Field(None, description="True anomaly at the epoch (or M_deg).")
+    allow_subsurface: bool = Field(False, description="Accept an orbit whose perigee is below "
+                                   "the Earth's surface (refused otherwise).")
 
     @model_validator(mode="after")
     def _one_form(self) -> OrbitTable:
-        given = {k for k, v in self.values().items() if v is not None}
-        cart = {f"{k}_km" for k in _CART_KEYS[:3]} | {f"{k}_km_s" for k in _CART_KEYS[3:]}
-        elements = {"a_km", "e", "i_deg", "raan_deg", "argp_deg"}
-        if given == cart:
+        given = {k for k in type(self).model_fields
+                 if k != "allow_subsurface" and getattr(self, k) is not None}
+        if given == {"r_km", "v_km_s"}:
             return self
         anomaly = given & {"M_deg", "nu_deg"}
-        if given - anomaly == elements and len(anomaly) == 1:
+        if given - anomaly == set(_ELEMENT_TABLE_KEYS) and len(anomaly) == 1:
             return self
-        raise Invalid("a_km, e, i_deg, raan_deg, argp_deg and M_deg (or nu_deg), or x_km, "
-                      "y_km, z_km, vx_km_s, vy_km_s, vz_km_s", ",".join(sorted(given)))
+        raise Invalid("r_km and v_km_s, or a_km, e, i_deg, raan_deg, argp_deg and M_deg (or "
+                      "nu_deg)", ",".join(sorted(given)))
 
-    def values(self) -> dict[str, float | None]:
-        """The orbit's keys and values (None: not given), without ``allow_subsurface``."""
-        return {k: getattr(self, k) for k in type(self).model_fields if k != "allow_subsurface"}
+    def state(self, source: str, field: str, *, allow_subsurface: bool = False,
+              how_to_allow: str = "") -> np.ndarray:
+        """Return the Cartesian state (6,) km, km/s, perigee-checked (module docstring).
 
-    def state(self, source: str, field: str, *, allow_subsurface: bool = False) -> np.ndarray:
-        """Return the Cartesian state (6,) km, km/s, perigee-checked (module docstring)."""
-        renamed = {k.removesuffix("_km_s").removesuffix("_km").removesuffix("_deg"): v
-                   for k, v in self.values().items() if v is not None}
-        x = _from_mapping(renamed, source, field)
+        ``how_to_allow`` names what lifts the perigee check in the message (default: this
+        table's ``allow_subsurface`` and ``--allow-subsurface``).
+        """
+        if self.r_km is not None:
+            x = np.array([*self.r_km, *self.v_km_s], dtype=float)
+        else:
+            anomaly = "M_deg" if self.M_deg is not None else "nu_deg"
+            x = state_from_elements(*(getattr(self, k) for k in (*_ELEMENT_TABLE_KEYS, anomaly)),
+                                    true_anomaly=anomaly == "nu_deg", source=source, field=field)
         return check_perigee(x, source, field,
                              allow_subsurface=allow_subsurface or self.allow_subsurface,
-                             how_to_allow=f"{field}.allow_subsurface = true or "
+                             how_to_allow=how_to_allow or f"{field}.allow_subsurface = true or "
                              "--allow-subsurface")
 
 
@@ -247,7 +263,7 @@ def parse_orbit(text: str, *, scenario: Path | None = None, source: str = "--orb
     if "=" in text:
         x = _from_mapping(_parse_pairs(text, source, "orbit"), source, "orbit")
         return check_perigee(x, source, "orbit", allow_subsurface=allow_subsurface)
-    path = scenario or DEFAULT_SCENARIO
+    path = scenario or STUDY_FILE
     orbits = named_orbits(path, allow_subsurface=allow_subsurface)
     if text not in orbits:
         raise InputError(source, "orbit", f"elements, a Cartesian state or an orbit named in "

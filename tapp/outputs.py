@@ -7,6 +7,10 @@ Two mechanisms, used by every command that writes files:
   :func:`os.path.samefile`), and every output must be creatable (not a folder, in a folder
   that is writable). It raises :class:`~tapp.errors.InputError` naming both options, as the
   user typed them (``-o/--output``, ``--oem``, ``SCENARIO``).
+* :func:`new_directory`, for a command whose output is a whole folder (``tapp pipeline``,
+  ``tapp examples``): the folder must be new or empty (not a symbolic link); its content is
+  written into a hidden folder ``.NAME.<random>.tmp`` beside it, renamed to it only once
+  complete, and removed on any failure or signal, with any folder made to hold it.
 * :class:`OutputSet`, which writes a command's outputs together: each to a hidden temporary
   ``.NAME.<random>.tmp`` beside its target, and only once every temporary is complete are
   they renamed over their targets, one after the other, at the end. If any write fails (or
@@ -34,7 +38,8 @@ import os
 import re
 import secrets
 import shutil
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -92,11 +97,16 @@ def make_folders(folder: Path) -> list[Path]:
     """Create ``folder`` and its missing parents; return the folders created.
 
     Give the list to :func:`remove_empty_folders` once the outputs are written or have
-    failed: the folders of outputs that were not written are removed again.
+    failed: the folders of outputs that were not written are removed again. If a folder
+    cannot be made (OSError), those made before it are removed again.
     """
     folder = Path(folder)
     missing = list(itertools.takewhile(lambda p: not p.exists(), (folder, *folder.parents)))
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        remove_empty_folders(missing)
+        raise
     return missing
 
 
@@ -193,6 +203,82 @@ def check_paths(inputs: Mapping[str, Path | None], outputs: Mapping[str, Path | 
                                  "(one would overwrite the other)")
     for name, out in given_out:
         check_writable(name, out)
+
+
+def check_new_directory(out_dir: Path, option: str, why: str) -> Path:
+    """Return ``out_dir`` if it does not exist or is an empty folder, in a folder that can be
+    written, else raise.
+
+    Raises
+    ------
+    InputError
+        Naming ``option``: a file, a folder with something in it (never overwritten; ``why``
+        says so in the command's words), a symbolic link (the finished folder is renamed
+        into place: it would replace the link), or a path in a folder that is a file or
+        cannot be written.
+    """
+    out_dir = Path(out_dir)
+    if out_dir.is_symlink():
+        raise InputError(option, "directory", "a new or empty directory, not a symbolic link "
+                         "(the finished run is renamed into place)", str(out_dir))
+    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
+        raise InputError(option, "directory", f"a new or empty directory ({why})",
+                         str(out_dir))
+    check_folder(option, out_dir)
+    return out_dir
+
+
+@contextmanager
+def new_directory(out_dir: Path, option: str, why: str) -> Iterator[Path]:
+    """Yield a hidden folder beside ``out_dir`` to write into; rename it to ``out_dir`` when
+    the block completes, remove it if the block raises (or a signal stops it).
+
+    ``out_dir`` must be new or empty (:func:`check_new_directory`); missing parents are
+    created, and removed again unless the block completes. The hidden folder is named
+    :func:`temporary_name` of ``out_dir``: those that runs killed outright left are removed
+    first (:func:`remove_stale_temporaries`).
+
+    Raises
+    ------
+    InputError
+        ``out_dir`` is not new or empty, or its folder cannot be written (names ``option``).
+    WriteError
+        The folder could not be written for want of room, or a device error (an OSError
+        that names no file, or one in the hidden folder: :func:`unwritable`).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with new_directory(folder / "run", "-o", "never overwritten") as work:
+    ...     _ = (work / "a.txt").write_text("a")
+    >>> [p.name for p in (folder / "run").iterdir()], [p.name for p in folder.iterdir()]
+    (['a.txt'], ['run'])
+    >>> shutil.rmtree(folder)
+    """
+    out_dir = check_new_directory(out_dir, option, why)
+    work = temporary_name(out_dir)
+    created: list[Path] = []
+    try:
+        try:
+            created += make_folders(out_dir.parent)
+            remove_stale_temporaries(out_dir)
+            work.mkdir()
+        except OSError as exc:
+            raise unwritable(option, out_dir, exc, "a writable directory") from None
+        yield work
+        if out_dir.exists():
+            out_dir.rmdir()
+        work.rename(out_dir)
+    except OSError as exc:
+        # A failed write() names no file; a file read on the way (elsewhere) is not ours.
+        if exc.filename is not None and not any(
+                Path(exc.filename).is_relative_to(p) for p in (work, out_dir)):
+            raise
+        raise unwritable(option, out_dir, exc, "a writable directory") from None
+    finally:
+        shutil.rmtree(work, ignore_errors=True)  # renamed away when the block completed
+        remove_empty_folders(created)  # the one holding out_dir is not empty: kept
 
 
 @dataclass(frozen=True, slots=True)

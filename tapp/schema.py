@@ -55,7 +55,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Literal, TypeVar
 
-from pydantic import AfterValidator, PlainValidator
+from pydantic import AfterValidator, Field, PlainValidator
 
 from iter.schema import AllowInf, InfFloat, Invalid, Schema, Unique
 from iter.schema import validate as _validate
@@ -109,13 +109,23 @@ def _utc_date(value: object) -> object:
     return value
 
 
+def _tolerance_range(json_schema: dict) -> None:
+    from tapp.dynamics.propagate import TOLERANCE_RANGE
+
+    json_schema["minimum"], json_schema["maximum"] = TOLERANCE_RANGE
+
+
 #: An integrator tolerance, within the documented range (``check_tolerance``).
-Tolerance = Annotated[float, AfterValidator(_tolerance)]
+Tolerance = Annotated[float, AfterValidator(_tolerance),
+                      Field(json_schema_extra=_tolerance_range)]
 #: A UTC date: an ISO 8601 string or a TOML date-time (parsed by the file's reader).
-UtcDate = Annotated[object, PlainValidator(_utc_date)]
+UtcDate = Annotated[object, PlainValidator(_utc_date, json_schema_input_type=dt.datetime)]
 #: The Earth orientation model of a scenario file (``earth_orientation``): see
 #: :mod:`tapp.frames.orientation`. New scenarios default to "iau2006".
-EarthOrientationName = Literal["iau2006", "gmst"]
+EarthOrientationName = Annotated[Literal["iau2006", "gmst"], Field(
+    description="Earth orientation of stations and field: \"iau2006\" (IAU 2006/2000A with "
+    "the IERS EOP) or \"gmst\" (GMST + ω t, no precession, nutation or polar motion: the "
+    "approximate-STM study's).")]
 
 
 def _eop_source(value: object) -> object:
@@ -127,5 +137,8 @@ def _eop_source(value: object) -> object:
 
 #: Where the EOP come from (``eop``): "iers", "none" or a finals2000A file path (relative to
 #: the scenario file); see :func:`tapp.frames.orientation.orientation_for`.
-EopSource = Annotated[str, PlainValidator(_eop_source)]
+EopSource = Annotated[str, PlainValidator(_eop_source, json_schema_input_type=str), Field(
+    description="Earth orientation parameters of iau2006: \"iers\" (the shipped IERS table), "
+    "\"none\" (UT1 = UTC, no polar motion: a study beyond the predictions) or the path of a "
+    "finals2000A file (relative to this file).")]
 

@@ -25,7 +25,7 @@ from typing import Annotated
 from pydantic import Field, model_validator
 
 from tapp.errors import InputError
-from tapp.measurements.stations import Station
+from tapp.measurements.stations import HEIGHT_RANGE_km, Station
 from tapp.schema import Invalid, Schema, validate
 
 #: Station fields (radians, as the kernel names them) and the scenario keys they come from.
@@ -34,16 +34,20 @@ _EDGE_KEYS = {"lat_rad": "lat_deg", "lon_rad": "lon_deg", "h_km": "h_km",
 
 
 class StationTable(Schema):
-    """Schema of one ``[stations.NAME]`` table (degrees and km, geodetic WGS84).
+    """``[stations.NAME]``: a ground station, geodetic on WGS84, named by its table.
 
-    The kernel's own checks (:class:`tapp.measurements.stations.Station`: the height band)
-    run here too, so they are reported with the file and the key.
+    (The kernel's own checks, :class:`tapp.measurements.stations.Station`'s height band, run
+    here too, so they are reported with the file and the key.)
     """
 
-    lat_deg: Annotated[float, Field(ge=-90.0, le=90.0)]
-    lon_deg: float
-    h_km: float
-    elev_mask_deg: Annotated[float, Field(ge=0.0, lt=90.0)] = 0.0
+    lat_deg: Annotated[float, Field(ge=-90.0, le=90.0)] = Field(
+        description="Geodetic latitude.")
+    lon_deg: float = Field(description="East longitude.")
+    h_km: float = Field(description="Height above the WGS84 ellipsoid.",
+                        json_schema_extra={"allowed": f"{HEIGHT_RANGE_km[0]:g} to "
+                                           f"{HEIGHT_RANGE_km[1]:g}"})
+    elev_mask_deg: Annotated[float, Field(ge=0.0, lt=90.0)] = Field(
+        0.0, description="No data below this elevation.")
 
     @model_validator(mode="after")
     def _a_station(self) -> StationTable:
@@ -60,10 +64,13 @@ class StationTable(Schema):
 
 
 class StationsSection(Schema):
-    """Schema of the ``[stations.*]`` tables and ``[networks]`` of a file (other keys apart)."""
+    """Schema of the ``[stations.*]`` tables and ``[networks]`` of a file (other keys apart);
+    the files that have them (tracking scenarios, the study) derive their schema from it."""
 
-    stations: dict[str, StationTable] = {}
-    networks: dict[str, list[str]] = {}
+    stations: dict[str, StationTable] = Field({}, description="Ground stations, by name.")
+    networks: dict[str, list[str]] = Field(
+        {}, description="Named lists of stations (names of [stations.NAME] tables); the "
+        "study's runs track from \"equatorial\" or \"global\" when they name none.")
 
     @model_validator(mode="after")
     def _networks_name_stations(self) -> StationsSection:

@@ -97,19 +97,19 @@ from pydantic import AfterValidator, Field
 from search import SearchResult, solve
 from tapp.bplane import REFERENCE_POLES, BPlane, b_plane
 from tapp.constants import SECONDS_PER_DAY, GM_km3_s2, RADIUS_km
-from tapp.dynamics import BODIES, PropagationError, Propagator, earth_model
+from tapp.dynamics import PropagationError, Propagator
 from tapp.ephemeris import position_km, utc_to_tdb_jd
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.models_file import ModelTable
 from tapp.orbit import lambert
-from tapp.orbits import check_perigee, check_state_bounds
+from tapp.orbits import OrbitTable
 from tapp.schema import (
     EarthOrientationName,
     EopSource,
     Invalid,
     Schema,
-    Tolerance,
     Unique,
     UtcDate,
     validate,
@@ -724,150 +724,152 @@ def _nonzero(value: float) -> float:
     return value
 
 
-_Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 _Positive = Annotated[float, Field(gt=0)]
 _Count = Annotated[int, Field(ge=1)]
-_ThirdBodies = Annotated[list[Literal[tuple(b for b in BODIES if b != "earth")]],  # type: ignore[misc]
-                         Unique]
-
-
-class SearchInjection(Schema):
-    """``[injection]``: position and first-guess velocity, EME2000, Earth-centred."""
-
-    r_km: _Vector3
-    v_km_s: _Vector3
-    allow_subsurface: bool = False
-
-
-class SearchModel(Schema):
-    """``[model]``: state and variational models (Earth-centred), integrator tolerances."""
-
-    gravity: str
-    third_bodies: _ThirdBodies = []
-    stm_gravity: str | None = None
-    stm_third_bodies: _ThirdBodies | None = None
-    rtol: Tolerance = 1e-13
-    atol: Tolerance = 1e-13
 
 
 class ScanTable(Schema):
     """The program's closest-approach scan and periapsis iteration (:class:`BPlaneProgram`)."""
 
-    max_flight_time_s: _Positive = 8.0 * SECONDS_PER_DAY
-    scan_step_s: _Positive = 600.0
-    periapsis_time_tol_s: _Positive = 1e-3
+    max_flight_time_s: _Positive = Field(8.0 * SECONDS_PER_DAY, description="Horizon of the "
+                                         "scan for the closest approach, from the injection.")
+    scan_step_s: _Positive = Field(600.0, description="Step of that scan (shorter than the "
+                                   "horizon).")
+    periapsis_time_tol_s: _Positive = Field(1e-3, description="The periapsis time is iterated "
+                                            "until its correction is below this.")
 
 
 class SearchTarget(ScanTable):
     """``[target]``: the target body, B-plane reference and the closest-approach scan."""
 
-    body: str = "moon"
-    reference: Literal[tuple(REFERENCE_POLES)] = "earth_equator"  # type: ignore[valid-type]
+    body: str = Field("moon", description="The target body, a third body of the state model.")
+    reference: Literal[tuple(REFERENCE_POLES)] = Field(  # type: ignore[valid-type]
+        "earth_equator", description="The B-plane's reference plane (it sets the T axis).")
+
+
+_BR, _BT, _TF = "B·R of the target-relative hyperbola", "B·T of the target-relative " \
+    "hyperbola", "Flight time from the injection to periapsis at the target"
 
 
 class YValues(Schema):
     """Values of the dependent variables (B·R km, B·T km, flight time s)."""
 
-    b_dot_r_km: float
-    b_dot_t_km: float
-    flight_time_s: float
+    b_dot_r_km: float = Field(description=f"{_BR}.")
+    b_dot_t_km: float = Field(description=f"{_BT}.")
+    flight_time_s: float = Field(description=f"{_TF}.")
 
 
 class YIncrements(Schema):
     """theta: target increments of the dependent variables (each default 0)."""
 
-    b_dot_r_km: float = 0.0
-    b_dot_t_km: float = 0.0
-    flight_time_s: float = 0.0
+    b_dot_r_km: float = Field(0.0, description=f"Added to the first nominal case's {_BR}.")
+    b_dot_t_km: float = Field(0.0, description=f"Added to the first nominal case's {_BT}.")
+    flight_time_s: float = Field(0.0, description="Added to the first nominal case's flight "
+                                 "time.")
 
 
 class YTolerances(Schema):
     """Convergence tolerances of the dependent variables, > 0."""
 
-    b_dot_r_km: _Positive
-    b_dot_t_km: _Positive
-    flight_time_s: _Positive
+    b_dot_r_km: _Positive = Field(description="Converged when |B·R - target| is below this.")
+    b_dot_t_km: _Positive = Field(description="Converged when |B·T - target| is below this.")
+    flight_time_s: _Positive = Field(description="Converged when the flight time is this "
+                                     "close to its target.")
 
 
-_Increment = Annotated[float, AfterValidator(_nonzero)]
+_Increment = Annotated[float, AfterValidator(_nonzero), Field(json_schema_extra={
+    "allowed": "!= 0"})]
+_DELTA = "Increment of the injection velocity's {} component for differenced partials."
 
 
 class XIncrements(Schema):
     """Difference increments of the injection velocity, km/s, != 0."""
 
-    vx_km_s: _Increment
-    vy_km_s: _Increment
-    vz_km_s: _Increment
+    vx_km_s: _Increment = Field(description=_DELTA.format("x"))
+    vy_km_s: _Increment = Field(description=_DELTA.format("y"))
+    vz_km_s: _Increment = Field(description=_DELTA.format("z"))
 
 
 class SearchControls(Schema):
     """SEARCH's iteration control (seed Table 1: ITER, NPR, AP) and the opt-in improvements."""
 
-    iterations_per_partials: _Count = 3
-    partial_sets: _Count = 3
-    analytic_partials: bool = False
-    broyden: bool = False
-    step_halving: bool = False
+    iterations_per_partials: _Count = Field(3, description="Newton iterations on one set of "
+                                            "partials (the seed's ITER).")
+    partial_sets: _Count = Field(3, description="Sets of partials computed before SEARCH "
+                                 "stops as diverged (the seed's NPR).")
+    analytic_partials: bool = Field(False, description="Partials from the variational "
+                                    "equations instead of differences.")
+    broyden: bool = Field(False, description="Broyden updates of the partials between sets.")
+    step_halving: bool = Field(False, description="Halve a step that increases the miss.")
 
 
 class SearchTable(SearchControls):
     """``[search]``: targets, tolerances, increments and SEARCH's iteration control."""
 
-    targets: YValues
-    target_increments: YIncrements = YIncrements()
-    tolerances: YTolerances
-    increments: XIncrements
+    targets: YValues = Field(description="The aim (y_T; replaced by y_0 + θ where "
+                             "target_increments are given).")
+    target_increments: YIncrements = Field(
+        YIncrements(), description="θ: target modifications relative to the first case.")
+    tolerances: YTolerances = Field(description="Convergence tolerances (the seed's EPSD).")
+    increments: XIncrements = Field(description="Difference increments (the seed's DELI).")
 
 
 class AimPoint(Schema):
     """``[targeting.targets]``: the B-plane aim point (km) and, optionally, the flight time (s,
     from the injection to periapsis)."""
 
-    b_dot_r_km: float
-    b_dot_t_km: float
-    flight_time_s: _Positive | None = None
+    b_dot_r_km: float = Field(description=f"The aim point's {_BR}.")
+    b_dot_t_km: float = Field(description=f"The aim point's {_BT}.")
+    flight_time_s: _Positive | None = Field(None, description=f"{_TF} (optional).")
 
 
 class AimTolerances(YTolerances):
     """``[targeting.tolerances]``: SEARCH's EPSD, by default those of the shipped SEARCH
     scenario (1 km, 1 km, 1 s)."""
 
-    b_dot_r_km: _Positive = 1.0
-    b_dot_t_km: _Positive = 1.0
-    flight_time_s: _Positive = 1.0
+    b_dot_r_km: _Positive = Field(1.0, description="Converged when |B·R - aim| is below this.")
+    b_dot_t_km: _Positive = Field(1.0, description="Converged when |B·T - aim| is below this.")
+    flight_time_s: _Positive = Field(1.0, description="Converged when the flight time is this "
+                                     "close to its aim.")
 
 
 class AimIncrements(XIncrements):
     """``[targeting.increments]``: SEARCH's DELI, by default those of the shipped SEARCH
     scenario (1 cm/s)."""
 
-    vx_km_s: _Increment = 1e-5
-    vy_km_s: _Increment = 1e-5
-    vz_km_s: _Increment = 1e-5
+    vx_km_s: _Increment = Field(1e-5, description=_DELTA.format("x"))
+    vy_km_s: _Increment = Field(1e-5, description=_DELTA.format("y"))
+    vz_km_s: _Increment = Field(1e-5, description=_DELTA.format("z"))
 
 
 class TargetingTable(SearchControls, ScanTable):
     """``[targeting]`` of a tracking scenario (:func:`scenario_targeting` for the keys)."""
 
-    first_guess: Literal[FIRST_GUESSES] = "conic"  # type: ignore[valid-type]
+    first_guess: Literal[FIRST_GUESSES] = Field(  # type: ignore[valid-type]
+        "conic", description="\"conic\": a two-body Lambert transfer through the aim point; "
+        "\"injection\": the scenario's own injection velocity.")
     vary: Annotated[list[Literal[X_NAMES]],  # type: ignore[valid-type]
-                    Field(min_length=2, max_length=3), Unique] | None = None
-    targets: AimPoint
-    tolerances: AimTolerances = AimTolerances()
-    increments: AimIncrements = AimIncrements()
+                    Field(min_length=2, max_length=3), Unique] | None = Field(
+        None, description="The velocity components SEARCH moves, one per target; default: all "
+        "three (two must be named without a flight time).")
+    targets: AimPoint = Field(description="The aim point.")
+    tolerances: AimTolerances = Field(AimTolerances(), description="Convergence tolerances.")
+    increments: AimIncrements = Field(AimIncrements(), description="Difference increments.")
 
 
 class SearchFile(Schema):
     """Schema of a SEARCH scenario (:func:`scenario_search` for the tables)."""
 
-    title: str = ""
-    epoch: UtcDate
+    title: str = Field("", description="Free text, printed in the report.")
+    epoch: UtcDate = Field(description="UTC of the injection, t = 0.")
     earth_orientation: EarthOrientationName = "iau2006"
     eop: EopSource = "iers"
-    injection: SearchInjection
-    model: SearchModel
-    target: SearchTarget = SearchTarget()
-    search: SearchTable
+    injection: OrbitTable = Field(description="The injection: its position is kept, its "
+                                  "velocity is SEARCH's first guess.")
+    model: ModelTable = Field(description="The state and variational force models.")
+    target: SearchTarget = Field(SearchTarget(), description="The target body and its "
+                                 "B-plane.")
+    search: SearchTable = Field(description="SEARCH's targets and controls.")
 
 
 def _values(table: Schema, names: tuple[str, ...]) -> np.ndarray:
@@ -877,17 +879,20 @@ def _values(table: Schema, names: tuple[str, ...]) -> np.ndarray:
 def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     """Build a :class:`BPlaneSearch` from a parsed scenario table (TOML), validating it all.
 
-    Tables and keys (units in the names; the file ``scenarios/search_bplane.toml`` is the
+    Tables and keys (units in the names; the example ``search_bplane.toml`` is the
     commented example; the schema is :class:`SearchFile`):
 
     - ``epoch``: UTC date of the injection (t = 0); ``title``: free text (optional);
       ``earth_orientation`` ("iau2006", the default, or "gmst") and ``eop`` ("iers", "none" or
       a finals2000A path): :func:`tapp.frames.orientation.orientation_for`.
-    - ``[injection]``: ``r_km`` (3), ``v_km_s`` (3, the first guess x0), EME2000, Earth-centred;
-      a first guess whose perigee is below the Earth's surface is refused unless
-      ``allow_subsurface = true`` (:func:`tapp.orbits.check_perigee`).
-    - ``[model]``: ``gravity`` (J0, Jn, NxM), ``third_bodies`` (list), optional
-      ``stm_gravity``/``stm_third_bodies`` (variational model, default the state model),
+    - ``[injection]``: the injection state, the tracking scenario's table
+      (:class:`tapp.orbits.OrbitTable`): ``r_km`` (3) and ``v_km_s`` (3, the first guess x0),
+      or classical elements; EME2000, Earth-centred; a first guess whose perigee is below the
+      Earth's surface is refused unless ``allow_subsurface = true``
+      (:func:`tapp.orbits.check_perigee`).
+    - ``[model]``: the tracking scenario's table (:class:`tapp.models_file.ModelTable`):
+      ``gravity`` (J0, Jn, NxM), ``third_bodies`` (list), optional
+      ``var_gravity``/``var_third_bodies`` (variational model, default the state model),
       ``rtol``/``atol`` (default 1e-13, within ``tapp.dynamics.propagate.TOLERANCE_RANGE``).
     - ``[target]``: ``body`` (default moon), ``reference`` (earth_equator | ecliptic),
       ``max_flight_time_s``, ``scan_step_s``, ``periapsis_time_tol_s`` (optional).
@@ -911,26 +916,18 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     except InputError as exc:
         raise InputError(source, "epoch", exc.expected, epoch_text) from None
 
-    r0 = np.array(doc.injection.r_km, dtype=np.float64)
-    v0 = np.array(doc.injection.v_km_s, dtype=np.float64)
-    check_state_bounds(np.concatenate([r0, v0]), source, "injection")
+    x0 = doc.injection.state(source, "injection",
+                             how_to_allow="injection.allow_subsurface = true")
+    r0, v0 = x0[:3], x0[3:]
     if np.linalg.norm(r0) <= RADIUS_km["earth"]:
-        raise InputError(source, "injection.r_km", "a position above the Earth's surface",
+        raise InputError(source, "injection", "a position above the Earth's surface",
                          r0.tolist())
-    check_perigee(np.concatenate([r0, v0]), source, "injection",
-                  allow_subsurface=doc.injection.allow_subsurface,
-                  how_to_allow="injection.allow_subsurface = true")
 
     mod = doc.model
     bodies = tuple(mod.third_bodies)
-    stm_gravity = mod.gravity if mod.stm_gravity is None else mod.stm_gravity
-    stm_bodies = bodies if mod.stm_third_bodies is None else tuple(mod.stm_third_bodies)
     orientation = orientation_for(doc.earth_orientation, epoch, doc.eop,
                                   Path(source).parent, source)
-    state_model = earth_model(mod.gravity, bodies, source=source, field="model.gravity",
-                              earth_orientation=orientation.model)
-    var_model = earth_model(stm_gravity, stm_bodies, source=source, field="model.stm_gravity",
-                            earth_orientation=orientation.model)
+    state_model, var_model = mod.force_models(source, orientation.model)
     propagator = Propagator(state_model, var_model, rtol=mod.rtol, atol=mod.atol)
 
     tgt = doc.target

@@ -16,6 +16,7 @@ import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
+from iter import inputfile
 from tapp.errors import InputError
 
 
@@ -25,19 +26,11 @@ def read_toml(path: Path | str) -> dict:
     Raises
     ------
     InputError
-        The file is missing, unreadable, not text, or not valid TOML (naming the file).
+        The file is missing, not a regular file (a FIFO, a device), larger than
+        :data:`iter.inputfile.MAX_TOML_BYTES`, unreadable, not UTF-8 text, or not valid TOML,
+        naming the file (:func:`iter.inputfile.read_toml`).
     """
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise InputError(str(path), "file", "an existing scenario file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(str(path), "file", f"a readable text file ({exc})") from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), "TOML", f"valid TOML ({exc})") from None
+    return inputfile.read_toml(path, "TOML file", error=InputError)
 
 
 #: A table header line ``[name]`` or ``[[name]]`` (bare keys and dots), with a comment.

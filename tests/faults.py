@@ -17,8 +17,9 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-SCENARIOS = ROOT / "scenarios"
+from tapp.examples import FOLDER as EXAMPLES
+
+SCENARIOS = EXAMPLES
 #: Size of the tmpfs that the disk-full tests fill.
 TMPFS_SIZE = "2m"
 

@@ -150,7 +150,7 @@ def test_a_full_standard_output_is_one_line_exit_1(temporary: Path, leo_tape: Pa
 def test_a_closed_standard_output_is_one_line_exit_1(temporary: Path, tmp_path: Path) -> None:
     tape = tmp_path / "leo.t13.h5"
     res = subprocess.run(["sh", "-c", 'exec "$@" >&-', "sh",
-                          *tapp_command("simulate", LEO, "-o", tape, "--json")],
+                          *tapp_command("simulate", LEO, "-o", tape, "--json", "-")],
                          capture_output=True, text=True, env=tapp_env(temporary),
                          timeout=300, check=False)
     assert res.returncode == 1  # was an AttributeError traceback

@@ -1,8 +1,8 @@
 """Property-based fuzzing of every command with bad input (issue 10, "tests that must be able
 to fail").
 
-Every shipped TOML file under scenarios/ is mutated (a key dropped or misspelt, a value of the
-wrong type, NaN, infinities, huge or negative numbers, an emptied table) and every numeric CLI
+Every shipped example (tapp/examples/*.toml) is mutated (a key dropped or misspelt, a value of
+the wrong type, NaN, infinities, huge or negative numbers, an emptied table) and every numeric CLI
 option is given extreme values; each command runs in-process (typer's CliRunner). For every
 case: the exit code is 0, 2 or a documented numerical code; a refusal is at most one line on
 stderr, with no traceback; the input files are byte-identical afterwards; and the output
@@ -35,9 +35,10 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from tapp.cli import app
+from tapp.examples import FOLDER as EXAMPLES
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENARIOS = ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 runner = CliRunner()
 
 #: Tables whose keys are names chosen by the user (stations, orbits, constants, a sweep
@@ -46,7 +47,10 @@ FREE_FORM_TABLES = frozenset({"constants", "files", "stations", "orbits", "netwo
                               "apriori", "station"})
 #: Values passed through unchecked to a sweep body (a callable decides what it accepts).
 PASS_THROUGH_TABLES = frozenset({"constants"})
-EXTREME_NUMBERS = (math.nan, math.inf, -math.inf, 1e308, -1e308, 0.0, -1.0)
+#: 1e149 and 1e200 were inside documented ranges, or had none, and gave NaN with exit 0
+#: (issue "Hardening, second round").
+EXTREME_NUMBERS = (math.nan, math.inf, -math.inf, 1e308, -1e308, 1e200, 1e149, 1e-149, 0.0,
+                   -1.0)
 
 
 def _fuzz_settings(n: int) -> settings:
@@ -239,21 +243,21 @@ class FileCase:
 
 def _simulate(path: Path, out: Path) -> list[str]:
     return ["simulate", str(path), "-o", str(out / "run.t13.h5"), "--oem", str(out / "run.oem"),
-            "--json"]
+            "--json", "-"]
 
 
 def _dc(path: Path, out: Path) -> list[str]:
     return ["dc", "--orbit", "SATORB1", "--arc", "2h", "--scenario", str(path), "--save-obs",
-            str(out / "obs.h5"), "--json"]
+            str(out / "obs.h5"), "--json", "-"]
 
 
 def _search(path: Path, out: Path) -> list[str]:
-    return ["search", str(path), "--json"]
+    return ["search", str(path), "--json", "-"]
 
 
 def _iter(path: Path, out: Path) -> list[str]:
     return ["iter", str(path), "-o", str(out / "r.h5"), "--csv", str(out / "r.csv"),
-            "--serial", "--json"]
+            "--serial", "--json", "-"]
 
 
 def _deck_scenario(deck: str) -> Path:
@@ -295,7 +299,7 @@ def _guide(path: Path, out: Path) -> list[str]:
 
 
 def _pipeline(path: Path, out: Path) -> list[str]:
-    return ["pipeline", str(path), "-o", str(out / "run"), "--serial", "--json"]
+    return ["pipeline", str(path), "-o", str(out / "run"), "--serial", "--json", "-"]
 
 
 def _pipeline_parts_absolute(document: dict) -> dict:
@@ -431,13 +435,78 @@ def test_numeric_options_keep_the_contract(base: list[str], options: tuple[str, 
     def run(option: str, value: str) -> None:
         with tempfile.TemporaryDirectory() as folder:
             out = Path(folder)
-            args = [*base, option, value, "--json"]
+            args = [*base, option, value, "--json", "-"]
             outputs: tuple[str, ...] = ()
             if base[0] == "iter":
                 args += ["-o", str(out / "r.h5")]
                 outputs = ("r.h5",)
             check_contract(args, inputs=[], out_dir=out, outputs=outputs, codes=codes,
                            what=f"{option} {value!r}")
+
+    run()
+
+
+# --- a user's EOP table ----------------------------------------------------------------------
+
+#: Text put into a field of the table: non-numbers, non-finite, out of every bound.
+EOP_FIELD_VALUES = ("nan", "inf", "-inf", "1e300", "-1e300", "", "abc", "0.95", "-5000",
+                    "\x00\x01\x02", "99999.0")
+#: Whole-line edits: swap a line with the next, drop ten lines, reverse the table.
+EOP_LINE_EDITS = ("swap", "drop", "reverse")
+
+
+@st.composite
+def eop_edits(draw: st.DrawFn) -> tuple[str, Callable[[list[str]], list[str]]]:
+    """Draw one edit of the synthetic EOP table's lines, and what it does."""
+    from tests.tapp.frames.conftest import FINALS_COLUMNS, USER_MJD, put_field
+
+    line = draw(st.integers(0, USER_MJD.size - 2))
+    if draw(st.booleans()):
+        column = draw(st.sampled_from(sorted(FINALS_COLUMNS)))
+        text = draw(st.sampled_from(EOP_FIELD_VALUES))
+        width = FINALS_COLUMNS[column][1] - FINALS_COLUMNS[column][0] + 1
+
+        def field(lines: list[str]) -> list[str]:
+            lines[line] = put_field(lines[line], column, text[:width])
+            return lines
+
+        return f"line {line + 1} {column} = {text!r}", field
+    kind = draw(st.sampled_from(EOP_LINE_EDITS))
+
+    def whole(lines: list[str]) -> list[str]:
+        if kind == "swap":
+            lines[line], lines[line + 1] = lines[line + 1], lines[line]
+        elif kind == "drop":
+            del lines[line:line + 10]
+        else:
+            lines.reverse()
+        return lines
+
+    return f"{kind} at line {line + 1}", whole
+
+
+def test_mutated_eop_tables_keep_the_contract() -> None:
+    from tests.tapp.frames.conftest import user_eop_table
+
+    text = (SCENARIOS / "leo_equatorial.toml").read_text()
+    assert "\nepoch = " in text
+
+    @_fuzz_settings(8)
+    @given(edit=eop_edits())
+    def run(edit: tuple[str, Callable[[list[str]], list[str]]]) -> None:
+        what, change = edit
+        with tempfile.TemporaryDirectory() as folder:
+            folder_path = Path(folder)
+            table = user_eop_table(folder_path / "finals2000A.user", change)
+            scenario = folder_path / "leo.toml"
+            scenario.write_text(text.replace("\nepoch = ", '\neop = "finals2000A.user"\n'
+                                             "epoch = ", 1))
+            out = folder_path / "out"
+            out.mkdir()
+            # every table read is cached by path: a new folder gives a new path
+            check_contract(["simulate", str(scenario), "-o", str(out / "run.t13.h5")],
+                           inputs=[scenario, table], out_dir=out, outputs=("run.t13.h5",),
+                           codes=frozenset(), what=what)
 
     run()
 

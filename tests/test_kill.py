@@ -32,13 +32,14 @@ from typer.testing import CliRunner
 
 from iter import read_hdf5
 from tapp.cli import app
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.tape.t13_hdf5 import read_t13
 from tests.faults import names, one_line, processes_in, tapp_command, tapp_env
 
 ROOT = Path(__file__).resolve().parents[1]
-LEO = ROOT / "scenarios" / "leo_equatorial.toml"
+LEO = EXAMPLES / "leo_equatorial.toml"
 #: A longer run (about 3 s of simulation after the imports, where LEO's is under one).
-DEEP_SPACE = ROOT / "scenarios" / "deep_space.toml"
+DEEP_SPACE = EXAMPLES / "deep_space.toml"
 IDENS = {LEO: "LEO-EQ-SATORB1", DEEP_SPACE: "DSN-LUNAR-2026-03-10"}
 SEEDS = (1, 2, 3)
 #: State lines of the OEM of leo_equatorial.toml.
@@ -55,7 +56,7 @@ def _scenario(folder: Path, iden: str, source: Path = LEO) -> Path:
 
 def _command(scenario: Path, out: Path) -> list[str]:
     return [sys.executable, "-m", "tapp.cli", "simulate", str(scenario), "-o",
-            str(out / "out.t13.h5"), "--oem", str(out / "out.oem"), "--raw", "--json"]
+            str(out / "out.t13.h5"), "--oem", str(out / "out.oem"), "--raw", "--json", "-"]
 
 
 def _run(scenario: Path, out: Path) -> float:
@@ -227,11 +228,11 @@ def test_a_simulate_signalled_while_writing_leaves_old_or_new_outputs_and_no_tem
 def deep_space_t32(tmp_path_factory) -> Path:
     """The T32 tape of deep_space.toml cut to 3 days (as in the pipeline tests)."""
     folder = tmp_path_factory.mktemp("t32")
-    scenario = tomllib.loads((ROOT / "scenarios" / "deep_space.toml").read_text())
+    scenario = tomllib.loads((EXAMPLES / "deep_space.toml").read_text())
     scenario["tracking"]["end"] = scenario["times"]["end"] = 3 * 86400.0
     scenario["times"]["epochs"] = []
     (folder / "scenario.toml").write_text(tomli_w.dumps(scenario))
-    deck = tomllib.loads((ROOT / "scenarios" / "tapp3_deep_space.toml").read_text())
+    deck = tomllib.loads((EXAMPLES / "tapp3_deep_space.toml").read_text())
     deck["times"]["print"] = [1, 2, 3]
     (folder / "deck.toml").write_text(tomli_w.dumps(deck))
     for args in (["simulate", folder / "scenario.toml", "-o", folder / "run.t13.h5"],
@@ -253,7 +254,7 @@ def test_ctrl_c_at_a_terminal_stops_guide_and_its_dask_workers_with_one_line(
     guide_json, temporary = tmp_path / "guide.json", tmp_path / "tmp"
     guide_json.write_text("{}")  # an earlier run's
     proc = _start(tapp_command("guide", deep_space_t32,
-                               ROOT / "scenarios" / "tapp2_deep_space.toml", "--samples",
+                               EXAMPLES / "tapp2_deep_space.toml", "--samples",
                                "2000000", "--seed", "1", "--workers", "2", "--json",
                                guide_json), temporary)
     _wait_for(_workers_up(temporary), proc, "Dask worker")
@@ -271,7 +272,7 @@ def pipeline_file(tmp_path: Path, deep_space_t32: Path) -> Path:
     path = tmp_path / "pipe.toml"
     path.write_text(tomli_w.dumps({
         "scenario": str(folder / "scenario.toml"), "deck": str(folder / "deck.toml"),
-        "guidance": str(ROOT / "scenarios" / "tapp2_deep_space.toml"),
+        "guidance": str(EXAMPLES / "tapp2_deep_space.toml"),
         "guide": {"samples": 2_000_000, "seed": 1}}))
     return path
 
@@ -294,7 +295,7 @@ def test_ctrl_c_at_a_terminal_stops_a_pipeline_on_dask_and_leaves_its_directory_
 def test_ctrl_c_at_a_terminal_stops_a_sweep_on_dask_and_keeps_a_resumable_checkpoint(
         tmp_path: Path) -> None:
     results, temporary = tmp_path / "r.h5", tmp_path / "tmp"
-    proc = _start(tapp_command("iter", ROOT / "scenarios" / "iter_pipeline_tracking.toml",
+    proc = _start(tapp_command("iter", EXAMPLES / "iter_pipeline_tracking.toml",
                                "-o", results, "--workers", "2"), temporary)
     _wait_for(_workers_up(temporary), proc, "Dask worker")
     time.sleep(5.0)  # cases running on the workers

@@ -19,7 +19,14 @@ Exit codes (every command keeps this contract)
     take or one it needs and is not given. The message is one line on stderr,
     ``error: SOURCE: FIELD: expected WHAT (got VALUE)``, where SOURCE is the option as typed
     (``--process-noise``, ``-o/--output``) when an option is at fault, and the file when a
-    file is, with the field (``noise.fit.sigma_range_m``, ``records/info``).
+    file is, with the field (``noise.fit.sigma_range_m``, ``records/info``). Input files
+    are regular files: a FIFO, a device (a symbolic link to ``/dev/zero``), a socket or a
+    directory is refused before it is read (:mod:`iter.inputfile`); a user's EOP table is
+    checked field by field (:mod:`tapp.frames.eop`, naming the line); matrices of decks and
+    tapes are checked symmetric and positive semi-definite on each entry's own scale, and
+    numbers that would overflow downstream are refused where they are read (deck σ's within
+    1e-30..1e30, tape numbers within 1e60); ``tapp guide`` refuses a tape whose linear
+    covariance overflows or has a Δv σ at the speed of light.
 3, 4, 5, 6, 7
     A numerical outcome, with its output still printed and written: ``tapp dc`` diverged
     (3), found the normal matrix too ill-conditioned to iterate (4; the condition number and
@@ -45,13 +52,33 @@ Exit codes (every command keeps this contract)
     Interrupted (Ctrl-C).
 
 Limits checked before allocating: output grids of at most :data:`MAX_GRID_SAMPLES` samples
-(``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases (the product
-of the loops' ``sets``), SEARCH scans of at most ``tapp.targeting.MAX_SCAN_STEPS`` steps,
-local Dask clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (no
-limit with ``--scheduler``); each message gives the size that would be needed and the option
-or field to change. Epochs are checked against DE421's coverage (1899-07-29 .. 2053-10-09)
-before any propagation. An ITER case that runs longer than its body's ``timeout_s`` (program
-bodies: 3600 s unless the sweep file says otherwise) is stopped and recorded as failed.
+(``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases (the product of
+the loops' ``sets``), TAPP II Monte Carlos of ``tapp.guidance.study.MIN_SAMPLES`` to
+``MAX_SAMPLES`` samples, SEARCH scans of at most ``tapp.targeting.MAX_SCAN_STEPS`` steps, local
+Dask clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (no limit with
+``--scheduler``), TOML files of at most ``iter.inputfile.MAX_TOML_BYTES`` (4 MiB), TDM and CSV
+observation files of ``tapp.od.obsfile.MAX_TEXT_BYTES`` (64 MiB), EOP tables of
+``tapp.frames.eop.MAX_EOP_BYTES`` (16 MiB), TAPP III decks of at most
+``tapp.processor.deck.MAX_COMMANDS`` commands a list and runs of at most ``MAX_ENTITIES``
+output entities and ``MAX_ENTITY_NUMBERS`` numbers in them; each message gives the size that
+would be needed and the option or field to change.
+
+Conventions of every command: ``--json PATH`` writes the command's results as one JSON
+object to PATH, with the other outputs (all or none), and ``--json -`` prints it on
+standard output in place of the report (the old flag form, ``--json`` with no value or
+followed by another option, is refused naming ``--json -``); a duration is a number and its
+unit, ``24h``, ``90m``, ``3600s``, ``2d`` (a bare number is refused); help text is plain text
+(square brackets are not rich markup). Where the work runs (``iter``, ``guide``,
+``pipeline``): ``--serial`` in this process, ``--workers N`` on a local Dask cluster of N
+processes, ``--scheduler ADDRESS`` on a running cluster; with none of them, in this process
+unless the work repays a local cluster's start (``guide``: from
+``tapp.guidance.shards.DASK_MIN_SAMPLES`` samples; ``iter``: from
+``iter.execute.DASK_MIN_WORK_S`` of serial work projected from its first cases). Commands
+run on one BLAS thread, and so do a local cluster's workers (:func:`one_blas_thread`).
+
+Epochs are checked against DE421's coverage (1899-07-29 .. 2053-10-09) before any
+propagation. An ITER case that runs longer than its body's ``timeout_s`` (program bodies:
+3600 s unless the sweep file says otherwise) is stopped and recorded as failed.
 
 What is left on disk: nothing new when a command fails. Outputs are written to hidden
 temporaries beside their targets and renamed over them only once all are complete
@@ -61,6 +88,15 @@ A killed run leaves the old outputs or the new ones, each complete, and possibly
 checkpoints its results file (each time atomically) as cases complete, so that a killed or
 interrupted sweep can be resumed; a sweep whose every case failed (exit 1) keeps its results
 file and CSV, which record the failures.
+
+Faults from outside the input: a full disk while writing an output is one line naming the
+option and the path asked for, exit 1 (a path at fault, a read-only folder, is exit 2);
+standard output full, closed or a broken pipe is ``error: standard output: not written
+(REASON)``, exit 1; SIGINT and SIGTERM stop the run cleanly, ``error: interrupted (SIGINT)``
+or ``error: terminated (SIGTERM)``, exit 130 or 143. No folder made for outputs that were not
+written is left. Each run keeps its temporaries, and the Dask cluster's scratch space, in a
+private folder ``tapp-run-*`` of the system's temporary folder, removed at its end; the next
+run removes those of runs killed outright (SIGKILL).
 """
 
 from __future__ import annotations
@@ -70,6 +106,7 @@ import io
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import sys
@@ -77,27 +114,66 @@ import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
-import numpy as np
 import typer
-from rich.console import Console
-from rich.progress import Progress, ProgressColumn
 from typer.core import TyperGroup
 
 from iter.errors import ClusterError
-from tapp import __version__
+from iter.execute import MAX_WORKERS_PER_CORE
 from tapp.errors import InputError, TapeError, TappError
+from tapp.outputs import OutputSet
+
+if TYPE_CHECKING:
+    from rich.progress import Progress, ProgressColumn
 
 # click's base exception, whether typer vendors click (typer >= 0.23) or uses the package.
 _ClickException = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
 
 
-class _OneLineErrors(TyperGroup):
+#: What rich takes for a markup tag (as :func:`rich.markup.escape` finds them): ``[body]``,
+#: ``[[loop]]``, ``[default: auto]``. Help text here is plain text, so each is escaped.
+_RICH_TAG = re.compile(r"(\\*)(\[[a-z#/@][^[]*?])")
+
+
+def _plain(text: str | None) -> str | None:
+    """``text`` with every bracket rich would take for markup escaped (None stays None)."""
+    return None if text is None else _RICH_TAG.sub(r"\1\1\\\2", text)
+
+
+def _escape_help(command: Any) -> None:
+    """Escape the help of ``command``, of its parameters and of its subcommands."""
+    command.help = _plain(command.help)
+    command.short_help = _plain(command.short_help)
+    for param in command.params:
+        if getattr(param, "help", None):
+            param.help = _plain(param.help)
+    for sub in getattr(command, "commands", {}).values():
+        _escape_help(sub)
+
+
+class Group(TyperGroup):
+    """A group of commands whose ``--help``, when not given, is False: typer coerces an
+    option's missing value (None) through pydantic, whose import (~50 ms) ``tapp CMD
+    --help`` would otherwise wait for while the groups above CMD parse their options."""
+
+    def get_help_option(self, ctx: Any) -> Any:
+        option = super().get_help_option(ctx)
+        if option is not None and option.default is None:
+            option.default = False
+        return option
+
+
+class _OneLineErrors(Group):
     """The root group, the CLI's edge: a usage error (a bad or missing option) is one line,
-    exit 2; SIGINT and SIGTERM stop the run with one line (exit 130 and 143,
-    :class:`Interrupted`); standard output that cannot be written is one line, exit 1; the
-    run's temporaries live in a private folder removed at the end (:func:`run_folder`)."""
+    exit 2; help text is shown as written (no square bracket taken for rich markup); SIGINT
+    and SIGTERM stop the run with one line (exit 130 and 143, :class:`Interrupted`); standard
+    output that cannot be written is one line, exit 1; the run's temporaries live in a
+    private folder removed at the end (:func:`run_folder`)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        _escape_help(self)
 
     def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,
              complete_var: str | None = None, standalone_mode: bool = True,
@@ -109,6 +185,9 @@ class _OneLineErrors(TyperGroup):
             with stopping_on_signals(), run_folder():
                 code = super().main(args, prog_name, complete_var, False, **extra)
                 sys.stdout.flush()  # here, where a failure is one line, not at exit
+        except InputError as exc:  # from an option's own check while the line is parsed
+            echo_error(exc)
+            code = EXIT_INPUT
         except _ClickException as exc:
             if type(exc).__name__ == "NoArgsIsHelpError":  # `tapp` alone: the help
                 exc.show()
@@ -270,6 +349,8 @@ def _remove_unlocked(folders: Iterator[Path]) -> None:
 
 def _usage_message(exc: Exception) -> str:
     """One line: the option as typed and what is wrong with it."""
+    if getattr(exc, "option_name", None) == "--json":  # last on the line, as the old flag
+        return str(_json_form_error("no value"))
     message = " ".join(exc.format_message().split())
     opts = getattr(getattr(exc, "param", None), "opts", None) or ()
     if opts and not any(opt in message for opt in opts):
@@ -300,6 +381,8 @@ MAX_GRID_SAMPLES = 1_000_000
 
 def _version_callback(value: bool) -> None:
     if value:
+        from tapp import __version__
+
         typer.echo(f"tapp {__version__}")
         raise typer.Exit()
 
@@ -352,14 +435,19 @@ def earth_orientation_option(value: str | None) -> str | None:
     return check_model(value, "--earth-orientation", "value")
 
 
-#: The Dask options of every command that runs on a cluster (iter, guide, pipeline).
+#: The Dask options of every command that runs on a cluster (iter, guide, pipeline). With
+#: none of them the work runs in this process unless it repays starting a local cluster
+#: (:attr:`iter.execute.Execution.automatic`).
 SchedulerOpt = Annotated[str | None, typer.Option(
-    "--scheduler", help="Address tcp://HOST:PORT of a running Dask scheduler [default: start a "
-                        "local cluster].")]
+    "--scheduler", help="Address tcp://HOST:PORT of a running Dask scheduler [default: none: "
+                        "this process, or a local cluster when the work repays its start].")]
 WorkersOpt = Annotated[int | None, typer.Option(
-    "--workers", help="Local-cluster worker processes [default: one per core].")]
+    "--workers", help="Start a local cluster of this many worker processes, at most "
+                      f"{MAX_WORKERS_PER_CORE} per core [default: one per core, when the work "
+                      "repays it].")]
 SerialOpt = Annotated[bool, typer.Option(
-    "--serial", help="Run in this process, no Dask (the results are the same).")]
+    "--serial", help="Run in this process whatever the size of the work, no Dask (the "
+                     "results are the same).")]
 ConnectTimeoutOpt = Annotated[float, typer.Option(
     "--connect-timeout-s", help="Wait for the scheduler, s.")]
 
@@ -414,15 +502,31 @@ def grid_samples(span_s: float, step_s: float) -> float:
     return float(math.floor(ratio)) + 2.0 if math.isfinite(ratio) else math.inf
 
 
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """Within: one BLAS thread in this process (``threadpoolctl``), as in a local cluster's
+    workers (:data:`iter.execute.WORKER_ENVIRON`). A command's matrices are small (n_o up
+    to about 100, blocks of 1,000 samples): more threads cost more than they save, and on a
+    loaded machine they made small solves up to 10x slower (``make bench``, section ``cli``).
+    """
+    import numpy  # noqa: F401  (loads BLAS: the limit applies to the libraries loaded)
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        yield
+
+
 def run_guarded(fn: Callable[[], T]) -> T:
-    """Run ``fn`` under the exit-code contract of the module docstring.
+    """Run ``fn`` under the exit-code contract of the module docstring, on one BLAS thread
+    (:func:`one_blas_thread`).
 
     Bad input (:class:`~tapp.errors.InputError`, :class:`~tapp.errors.TapeError`, a file
     that cannot be read) is one line on stderr and exit 2; any other
     :class:`~tapp.errors.TappError`, and running out of memory, one line and exit 1.
     """
     try:
-        return fn()
+        with one_blas_thread():
+            return fn()
     except (InputError, TapeError) as exc:
         echo_error(exc)
         raise typer.Exit(EXIT_INPUT) from None
@@ -444,6 +548,9 @@ def run_guarded(fn: Callable[[], T]) -> T:
 def progress_bar(*columns: ProgressColumn | str, quiet: bool) -> Progress:
     """A transient rich progress bar on stderr, shown on a terminal only: elsewhere rich
     draws nothing but leaves an empty line, which would sit above a failure's one line."""
+    from rich.console import Console
+    from rich.progress import Progress
+
     console = Console(stderr=True)
     return Progress(*columns, console=console, disable=quiet or not console.is_terminal,
                     transient=True)
@@ -456,14 +563,64 @@ def echo_error(exc: BaseException) -> None:
 
 
 def _to_jsonable(obj: object) -> object:
-    if isinstance(obj, np.ndarray):
+    if hasattr(obj, "tolist"):  # a NumPy array (nested lists) or scalar (a Python number)
         return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def _dumps(obj: object) -> str:
+    return json.dumps(obj, default=_to_jsonable)
 
 
 def print_json(obj: object) -> None:
     """Write one JSON object on stdout (NumPy arrays and scalars converted)."""
-    sys.stdout.write(json.dumps(obj, default=_to_jsonable))
+    sys.stdout.write(_dumps(obj))
     sys.stdout.write("\n")
+
+
+#: ``--json -``: the JSON on standard output, in place of the command's report.
+STDOUT = "-"
+
+
+def _json_form_error(got: str) -> InputError:
+    return InputError("--json", "value", "a file path, or - for standard output (the flag "
+                      "--json is now written --json -)", got)
+
+
+def _json_value(value: str | None) -> str | None:
+    """The ``--json`` value; an option in its place is the old flag form followed by the
+    next option (``--json --orbit X``), refused before the option is taken for a path."""
+    if value is not None and value != STDOUT and value.startswith("-"):
+        raise _json_form_error(value)
+    return value
+
+
+#: The ``--json`` option of every command (one convention): a file, or ``-`` for stdout.
+JsonOpt = Annotated[str | None, typer.Option(
+    "--json", metavar="PATH", callback=_json_value,
+    help="Also write the results as one JSON object to PATH ('-': on standard output, in "
+         "place of the report).")]
+
+
+def json_file(value: str | None) -> Path | None:
+    """The file ``--json`` names (None: not given, or ``-``), for :func:`check_paths`."""
+    return None if value is None or value == STDOUT else Path(value)
+
+
+def add_json(outputs: OutputSet, value: str | None, content: object) -> None:
+    """Add the file of ``--json``, if it names one, to a command's ``outputs``."""
+    path = json_file(value)
+    if path is not None:
+        outputs.add("--json", path, lambda tmp: tmp.write_text(_dumps(content) + "\n",
+                                                                "utf-8"))
+
+
+def write_json(value: str | None, content: object) -> None:
+    """Deliver ``content`` where ``--json`` asks: on standard output (``-``), into its file
+    (atomically), or nowhere (not given)."""
+    if value == STDOUT:
+        print_json(content)
+    elif value is not None:
+        outputs = OutputSet()
+        add_json(outputs, value, content)
+        outputs.commit()

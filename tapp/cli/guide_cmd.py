@@ -1,60 +1,56 @@
 """``tapp guide``: TAPP II on a T32 tape and a guidance file -> ΔV and miss statistics.
 
-The Monte Carlo runs in shards on Dask (a local cluster by default, ``--scheduler`` for a
-running one) and prints Markdown tables, Monte Carlo beside linear covariance, with the
-linear values the Monte Carlo contradicts marked (:mod:`tapp.guidance.agreement`);
-``--json`` writes every statistic and check, ``--plots`` the B-plane scatter and the ΔV
-histograms. Bad input (the tape, the guidance file or its fields, a corridor on a component
-not targeted, an option, an output path that is an input, a scheduler that does not answer)
-is one line on stderr naming the file or option and the field, exit 2; all outputs are
-written together or none (:class:`tapp.outputs.OutputSet`).
+The Monte Carlo runs in shards: in this process below
+:data:`tapp.guidance.shards.DASK_MIN_SAMPLES` samples and on a local Dask cluster from there
+(by default; ``--serial``, ``--workers`` and ``--scheduler`` choose), and prints Markdown
+tables, Monte Carlo beside linear covariance, with the linear values the Monte Carlo
+contradicts marked (:mod:`tapp.guidance.agreement`); ``--json`` writes every statistic and
+check, ``--plots`` the B-plane scatter and the ΔV histograms. Bad input (the tape, the
+guidance file or its fields, a corridor on a component not targeted, an option, an output
+path that is an input, a scheduler that does not answer) is one line on stderr naming the
+file or option and the field, exit 2; all outputs are written together or none
+(:class:`tapp.outputs.OutputSet`).
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
-from iter import SchedulerError
-from iter.execute import CONNECT_TIMEOUT_S, Execution
+from iter.execute import CONNECT_TIMEOUT_S
 from tapp.cli.common import (
+    STDOUT,
     ConnectTimeoutOpt,
+    JsonOpt,
     SchedulerOpt,
     SerialOpt,
     WorkersOpt,
+    add_json,
     app,
     execution_options,
+    json_file,
     print_json,
     progress_bar,
     run_guarded,
     scheduler_error,
 )
-from tapp.guidance.guidefile import read_guide
-from tapp.guidance.statistics import bplane_rows
-from tapp.guidance.study import (
-    GuidanceResult,
-    check_samples,
-    check_seed,
-    check_shard_samples,
-    guidance_study,
-)
-from tapp.outputs import OutputSet, check_paths
-from tapp.report import HISTOGRAM_PNG, SCATTER_PNG
-from tapp.report.tapp2 import (
-    guidance_dict,
-    guidance_markdown,
-    plot_bplane_scatter,
-    plot_dv_histograms,
-)
-from tapp.tape.t32_hdf5 import read_t32
+
+if TYPE_CHECKING:
+    from iter.execute import Execution
+    from tapp.guidance.study import GuidanceResult
 
 
 def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Execution,
            shard_size: int | None, quiet: bool) -> GuidanceResult:
+    from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
+
+    from iter import SchedulerError
+    from tapp.guidance.guidefile import read_guide
+    from tapp.guidance.study import guidance_study
+    from tapp.tape.t32_hdf5 import read_t32
+
     guide_file = read_guide(guide)
     t32 = read_t32(tape)
     columns = (TextColumn("{task.description:<8}"), BarColumn(), MofNCompleteColumn(),
@@ -89,29 +85,41 @@ def guide_cmd(
     shard_size: Annotated[int | None, typer.Option(
         "--shard-size", help="Samples per Dask task, a multiple of 1,000 [default: auto]; "
                              "the results do not depend on it.")] = None,
-    json_path: Annotated[Path | None, typer.Option(
-        "--json", help="Write every statistic as JSON here ('-' for standard output).")] = None,
+    json_out: JsonOpt = None,
     plots: Annotated[Path | None, typer.Option(
         "--plots", help="Write the PNG plots into this folder.")] = None,
 ) -> None:
-    """TAPP II: Monte Carlo midcourse guidance from a T32 tape, beside linear covariance."""
+    """TAPP II: Monte Carlo midcourse guidance from a T32 tape, beside linear covariance.
+
+    Samples: 2 to 5,000,000. In this process below 4,000,000 samples, on a local Dask
+    cluster from there, unless --serial, --workers or --scheduler says otherwise; the
+    numbers are the same wherever they run.
+    """
 
     def body() -> None:
-        json_file = None if json_path is None or str(json_path) == "-" else json_path
+        from tapp.guidance.statistics import bplane_rows
+        from tapp.guidance.study import check_samples, check_seed, check_shard_samples
+        from tapp.outputs import OutputSet, check_paths
+        from tapp.report import HISTOGRAM_PNG, SCATTER_PNG
+        from tapp.report.tapp2 import (
+            guidance_dict,
+            guidance_markdown,
+            plot_bplane_scatter,
+            plot_dv_histograms,
+        )
+
         pngs = {} if plots is None else {f"--plots ({name})": plots / name
                                          for name in (SCATTER_PNG, HISTOGRAM_PNG)}
-        check_paths({"TAPE": tape, "GUIDE": guide}, {"--json": json_file, **pngs})
+        check_paths({"TAPE": tape, "GUIDE": guide}, {"--json": json_file(json_out), **pngs})
         check_samples(samples, "--samples")
         check_seed(seed, "--seed")
         check_shard_samples(shard_size, "--shard-size")
         execution = execution_options(scheduler, workers, connect_timeout_s, serial)
-        quiet = json_path is not None and json_file is None
-        result = _study(tape, guide, samples, seed, execution, shard_size, quiet)
+        result = _study(tape, guide, samples, seed, execution, shard_size,
+                        quiet=json_out == STDOUT)
         content = guidance_dict(result)
         outputs = OutputSet()
-        if json_file is not None:
-            outputs.add("--json", json_file,
-                        lambda tmp: tmp.write_text(json.dumps(content), "utf-8"))
+        add_json(outputs, json_out, content)
         if plots is not None:
             title = f"{result.tape_iden}: {result.title}" if result.title else result.tape_iden
             if bplane_rows(result.miss_name) is not None:
@@ -120,10 +128,9 @@ def guide_cmd(
             outputs.add("--plots", plots / HISTOGRAM_PNG, lambda tmp: plot_dv_histograms(
                 result, tmp, f"{title}: ΔV per manoeuvre"))
         outputs.commit()
-        if json_path is not None and json_file is None:
+        if json_out == STDOUT:
             print_json(content)
         else:
             typer.echo(guidance_markdown(result), nl=False)
 
     run_guarded(body)
-

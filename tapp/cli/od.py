@@ -35,10 +35,12 @@ states nothing (one written by another tool) is taken as made under the run's mo
 note on stderr. JSON: ``observations_made_under`` (null when the file states nothing).
 ``tapp rsig`` reads no observations.
 
-Bad input (2) includes an arc longer than the data span (``--arc`` and the span named), an
-unknown ``--earth-orientation`` and an epoch or span outside the EOP table; no
-measurement in the arc fails like any computation that cannot start (1, "too few
-measurements"), for ``tapp ekf`` too. Observation files (``--obs``, ``--save-obs``): HDF5,
+Bad input (2) includes an ``--arc`` without its unit (a duration is a number and one of
+s, m, h, d: ``24h``, ``90m``, ``3600s``, ``2d``; a bare ``24`` is refused, naming those
+forms), an arc longer than the data span (``--arc`` and the span named), an unknown
+``--earth-orientation`` and an epoch or span outside the EOP table; no measurement in the
+arc fails like any computation that cannot start (1, "too few measurements"), for ``tapp
+ekf`` too. Observation files (``--obs``, ``--save-obs``): HDF5,
 CSV, or a CCSDS TDM in KVN (``.tdm``; :mod:`tapp.od.obsfile`, :mod:`tapp.ccsds.tdm`).
 """
 
@@ -47,54 +49,41 @@ from __future__ import annotations
 import math
 import re
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from tapp.cli.common import (
+    STDOUT,
     EarthOrientationOpt,
+    JsonOpt,
     app,
     check_grid_size,
     earth_orientation_option,
     grid_samples,
+    json_file,
     nonnegative_option,
     positive_option,
-    print_json,
     run_guarded,
     seed_option,
+    write_json,
 )
-from tapp.constants import GM_EARTH_km3_s2
-from tapp.dynamics import Propagator
 from tapp.errors import InputError
-from tapp.frames.elements import cartesian_to_elements
-from tapp.frames.orientation import EarthOrientation
-from tapp.od import setup
-from tapp.od.batch import (
-    MAX_ITERATIONS,
-    N_STATE,
-    NOISE_MODEL_PROBABILITY,
-    STATE_NAMES,
-    DCOutcome,
-    DCResult,
-    DCSettings,
-    IllConditionedError,
-    describe_direction,
-    differential_correction,
-)
-from tapp.od.ekf import extended_kalman_filter
-from tapp.od.observations import Observations
-from tapp.od.obsfile import observations_file_writer, read_observations
-from tapp.od.rate import PredictedRate, predicted_rate
-from tapp.od.rsig import r_signature
-from tapp.orbits import DEFAULT_SCENARIO
-from tapp.outputs import OutputSet, check_paths
-from tapp.stations_file import load_stations
 
-_ARC = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([smhd]?)\s*$")
-_UNIT_S = {"s": 1.0, "m": 60.0, "h": 3600.0, "d": 86400.0, "": 3600.0}
+if TYPE_CHECKING:
+    import numpy as np
+
+    from tapp.dynamics import Propagator
+    from tapp.frames.orientation import EarthOrientation
+    from tapp.od.batch import DCResult, DCSettings, IllConditionedError
+    from tapp.od.observations import Observations
+    from tapp.od.rate import PredictedRate
+
+#: A duration: a positive number and its unit (s, m, h or d), as ``--arc`` takes it.
+_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([smhd])\s*$")
+_UNIT_S = {"s": 1.0, "m": 60.0, "h": 3600.0, "d": 86400.0}
+#: The forms a duration is written in, as the error message shows them.
+DURATION_FORMS = "24h, 90m, 3600s, 2d"
 _APRIORI_KEYS = ("sx", "sy", "sz", "svx", "svy", "svz")
 #: Exit codes of ``tapp dc`` per outcome (module docstring); its output is still printed.
 EXIT_DIVERGED = 3
@@ -102,36 +91,58 @@ EXIT_ILL_CONDITIONED = 4
 EXIT_STALLED = 5
 EXIT_CONVERGING = 6
 EXIT_INCONSISTENT = 7
-EXIT_CODE = {DCOutcome.CONVERGED: 0, DCOutcome.DIVERGED: EXIT_DIVERGED,
-             DCOutcome.STALLED: EXIT_STALLED, DCOutcome.CONVERGING: EXIT_CONVERGING,
-             DCOutcome.INCONSISTENT: EXIT_INCONSISTENT}
 
 OrbitOpt = Annotated[str, typer.Option(help="Orbit name (SATORB1..8) or a=..,e=..,i=..,"
                                        "raan=..,argp=..,M=.. (km, deg)")]
 TruthOpt = Annotated[str, typer.Option(help="State model of the data and the estimator.")]
 StmOpt = Annotated[str, typer.Option(help="Variational model of the estimator.")]
-ScenarioOpt = Annotated[Path, typer.Option(help="Study scenario file.")]
-JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
+ScenarioOpt = Annotated[Path | None, typer.Option(
+    help="Study scenario file [default: the shipped approx_stm.toml].")]
 SubsurfaceOpt = Annotated[bool, typer.Option(
     "--allow-subsurface", help="Accept an orbit whose perigee is below the Earth's surface.")]
 
 
-def parse_arc_s(text: str, option: str = "--arc") -> float:
-    """Return an arc length in seconds from '24h', '90m', '3600s', '1.5d' (bare = hours)."""
-    m = _ARC.match(text)
-    if m is None or float(m.group(1)) <= 0:
-        raise InputError(option, "arc", "a positive duration such as 24h, 90m, 3600s, 2d",
-                         text)
+def parse_duration_s(text: str, option: str = "--arc") -> float:
+    """Return a duration in seconds from a number and its unit: '24h', '90m', '3600s', '2d'.
+
+    A number without a unit is refused: hours, minutes and seconds are all in use, and
+    the unit a reader assumes is not always the one meant.
+
+    >>> parse_duration_s("1.5d")
+    129600.0
+    >>> parse_duration_s("24")
+    Traceback (most recent call last):
+    ...
+    tapp.errors.InputError: --arc: value: expected a duration with a unit: 24h, 90m, 3600s, \
+2d (got '24')
+    """
+    m = _DURATION.match(text)
+    if m is None:
+        raise InputError(option, "value", f"a duration with a unit: {DURATION_FORMS}", text)
+    if not float(m.group(1)) > 0:
+        raise InputError(option, "value", f"a duration > 0 with a unit: {DURATION_FORMS}", text)
     return float(m.group(1)) * _UNIT_S[m.group(2)]
+
+
+def _scenario(scenario: Path | None) -> Path:
+    """The ``--scenario`` file, or the shipped approximate-STM study's."""
+    from tapp.examples import STUDY_FILE
+
+    return STUDY_FILE if scenario is None else scenario
 
 
 def _orientation(scenario: Path, earth_orientation: str | None) -> EarthOrientation:
     """The run's Earth orientation: the study file's, or ``--earth-orientation``'s model."""
+    from tapp.od import setup
+
     return setup.orientation(scenario, earth_orientation_option(earth_orientation))
 
 
 def _model_pair(truth: str, stm: str, orient: EarthOrientation) -> Propagator:
     """The estimator's (state model, variational model) pair from the CLI options."""
+    from tapp.dynamics import Propagator
+    from tapp.od import setup
+
     return Propagator(setup.force_model(truth, orient, "--truth", "model"),
                       setup.force_model(stm, orient, "--stm", "model"))
 
@@ -142,6 +153,10 @@ def _observations(x_true: np.ndarray, truth: str, stations: str | None, obs_file
     """The observations of ``--obs``, checked against the run's Earth orientation (``chosen``:
     by ``--earth-orientation``; :func:`tapp.od.setup.check_made_under`, whose note goes to
     stderr), or simulated under it."""
+    from tapp.od import setup
+    from tapp.od.obsfile import read_observations
+    from tapp.stations_file import load_stations
+
     if obs_file is not None:
         data = setup.load_study(scenario)
         obs = read_observations(obs_file, load_stations(data, str(scenario)),
@@ -167,6 +182,9 @@ def _spacecraft(orbit: str) -> str:
 
 def _settings(scenario: Path, max_iter: int | None) -> DCSettings:
     """The scenario's [dc_settings], with ``--max-iter`` in place of its iteration limit."""
+    from tapp.od import setup
+    from tapp.od.batch import MAX_ITERATIONS, DCSettings
+
     table = setup.study_file(scenario).dc_settings.model_dump()
     if max_iter is not None:
         if not 2 <= max_iter <= MAX_ITERATIONS:
@@ -179,6 +197,10 @@ def _settings(scenario: Path, max_iter: int | None) -> DCSettings:
 
 def _rate(data: Observations, prop: Propagator, x_true: np.ndarray, orient: EarthOrientation
           ) -> PredictedRate | None:
+    import numpy as np
+
+    from tapp.od.rate import predicted_rate
+
     try:
         return predicted_rate(data, prop.state_model, prop.var_model, x_true, orient)
     except np.linalg.LinAlgError:
@@ -195,6 +217,8 @@ def _eigen_json(rate: PredictedRate | None) -> list[dict[str, float]] | None:
 def _network(x_true: np.ndarray, stations: str | None, scenario: Path) -> tuple:
     """The stations named by ``--stations`` (or the scenario's default for the orbit); an
     unknown name is the option's fault and names ``--stations``."""
+    from tapp.od import setup
+
     default = setup.network_for(x_true, None, scenario)  # a bad file names the file
     if stations is None:
         return default
@@ -207,29 +231,47 @@ def _network(x_true: np.ndarray, stations: str | None, scenario: Path) -> tuple:
 
 
 def _elements_dict(x: np.ndarray) -> dict[str, float]:
+    import numpy as np
+
+    from tapp.constants import GM_EARTH_km3_s2
+    from tapp.frames.elements import cartesian_to_elements
+
     a, e, i, raan, argp, mean = np.asarray(cartesian_to_elements(x, GM_EARTH_km3_s2), float)
     return {"a_km": a, "e": e, "i_deg": math.degrees(i), "raan_deg": math.degrees(raan),
             "argp_deg": math.degrees(argp), "M_deg": math.degrees(mean)}
 
 
+def _exit_code(status: str) -> int:
+    """The exit code of a DC outcome (module docstring)."""
+    from tapp.od.batch import DCOutcome
+
+    return {DCOutcome.CONVERGED: 0, DCOutcome.DIVERGED: EXIT_DIVERGED,
+            DCOutcome.STALLED: EXIT_STALLED, DCOutcome.CONVERGING: EXIT_CONVERGING,
+            DCOutcome.INCONSISTENT: EXIT_INCONSISTENT}[DCOutcome(status)]
+
+
 @app.command()
 def dc(
     orbit: OrbitOpt,
-    arc: Annotated[str, typer.Option(help="Arc length: 24h, 12h, 90m, ...")] = "24h",
+    arc: Annotated[str, typer.Option(help=f"Arc length with its unit: {DURATION_FORMS}.")]
+    = "24h",
     truth: TruthOpt = "J2",
     stm: StmOpt = "J2",
-    stations: Annotated[str | None, typer.Option(help="Network or station name.")] = None,
-    max_iter: Annotated[int | None, typer.Option(help="Iteration limit (2..10000; default: "
-                                                 "the scenario's \\[dc_settings]).")] = None,
-    seed: Annotated[int | None, typer.Option(help="Noise seed (default: scenario's).")] = None,
+    stations: Annotated[str | None, typer.Option(
+        help="Network or station name [default: the scenario's network for the orbit].")]
+    = None,
+    max_iter: Annotated[int | None, typer.Option(help="Iteration limit, 2..10000 [default: "
+                                                 "the scenario's [dc_settings]].")] = None,
+    seed: Annotated[int | None, typer.Option(help="Noise seed [default: the scenario's].")]
+    = None,
     obs: Annotated[Path | None, typer.Option(help="Observation file (.h5, .csv or a CCSDS "
                                              "TDM .tdm) instead of simulated data.")] = None,
     save_obs: Annotated[Path | None, typer.Option(help="Write the observations used (.h5, "
                                                   ".csv or .tdm).")] = None,
-    scenario: ScenarioOpt = DEFAULT_SCENARIO,
+    scenario: ScenarioOpt = None,
     allow_subsurface: SubsurfaceOpt = False,
     earth_orientation: EarthOrientationOpt = None,
-    json_out: JsonOpt = False,
+    json_out: JsonOpt = None,
 ) -> None:
     """Batch differential correction from the brief's offset initial estimate.
 
@@ -240,52 +282,63 @@ def dc(
     """
 
     def body() -> int:
-        check_paths({"--obs": obs, "--scenario": scenario}, {"--save-obs": save_obs})
-        arc_s = parse_arc_s(arc)
-        settings = _settings(scenario, max_iter)
-        orient = _orientation(scenario, earth_orientation)
-        x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
+        import numpy as np
+
+        from tapp.od import setup
+        from tapp.od.batch import (
+            NOISE_MODEL_PROBABILITY,
+            IllConditionedError,
+            differential_correction,
+        )
+        from tapp.od.obsfile import observations_file_writer
+        from tapp.outputs import OutputSet, check_paths
+
+        study = _scenario(scenario)
+        check_paths({"--obs": obs, "--scenario": study},
+                    {"--save-obs": save_obs, "--json": json_file(json_out)})
+        arc_s = parse_duration_s(arc)
+        settings = _settings(study, max_iter)
+        orient = _orientation(study, earth_orientation)
+        x_true = setup.true_orbit(orbit, study, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm, orient)
-        data = _observations(x_true, truth, stations, obs, scenario,
+        data = _observations(x_true, truth, stations, obs, study,
                              seed_option("--seed", seed), orient, earth_orientation is not None)
         window = data.arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, window.t_s)
         if save_obs is not None:
-            notes = (f"observations of {orbit} for tapp dc (scenario {scenario.name})",
+            notes = (f"observations of {orbit} for tapp dc (scenario {study.name})",
                      f"read from {obs.name}" if obs is not None else "simulated with Earth "
                      f"orientation {setup.describe_orientation(used)}")
             outputs = OutputSet()
             outputs.add("--save-obs", save_obs, observations_file_writer(
-                save_obs, data, epoch=setup.epoch(scenario), spacecraft=_spacecraft(orbit),
+                save_obs, data, epoch=setup.epoch(study), spacecraft=_spacecraft(orbit),
                 comments=notes))
             outputs.commit()
-        x_start = setup.initial_estimate(x_true, setup.offset(scenario))
+        x_start = setup.initial_estimate(x_true, setup.offset(study))
         try:
             result = differential_correction(window, prop, x_start, orientation=orient,
                                              settings=settings)
         except IllConditionedError as exc:
-            _print_ill_conditioned(exc, json_out, used)
+            write_json(json_out, _ill_conditioned_dict(exc, used))
+            if json_out != STDOUT:
+                _print_ill_conditioned(exc, used)
             return EXIT_ILL_CONDITIONED
         rate = _rate(window, prop, x_true, orient)
         err_km = float(np.linalg.norm(result.x0[:3] - x_true[:3]))
-        code = EXIT_CODE[DCOutcome(result.status)]
-        if json_out:
-            q = result.contraction_factor
-            print_json({"converged": result.converged, "status": result.status,
-                        "exit_code": code, "reason": result.reason,
-                        "iterations": len(result.iterations),
-                        "converged_at": result.converged_at, "rms": result.rms,
-                        "rms_bound": result.rms_bound,
-                        "noise_model_probability": NOISE_MODEL_PROBABILITY,
-                        "contraction_factor": q if np.isfinite(q) else None,
-                        "projected_iterations": result.projected_iterations,
-                        "predicted_rate": None if rate is None else rate.rho,
-                        "eigenvalues": _eigen_json(rate),
-                        "final_elements": _elements_dict(result.x0),
-                        "position_error_km": err_km, "measurements": result.n_measurements,
-                        "earth_orientation": used,
-                        "observations_made_under": _made_under_json(window)})
-        else:
+        code = _exit_code(result.status)
+        q = result.contraction_factor
+        write_json(json_out, {
+            "converged": result.converged, "status": result.status, "exit_code": code,
+            "reason": result.reason, "iterations": len(result.iterations),
+            "converged_at": result.converged_at, "rms": result.rms,
+            "rms_bound": result.rms_bound, "noise_model_probability": NOISE_MODEL_PROBABILITY,
+            "contraction_factor": q if np.isfinite(q) else None,
+            "projected_iterations": result.projected_iterations,
+            "predicted_rate": None if rate is None else rate.rho,
+            "eigenvalues": _eigen_json(rate), "final_elements": _elements_dict(result.x0),
+            "position_error_km": err_km, "measurements": result.n_measurements,
+            "earth_orientation": used, "observations_made_under": _made_under_json(window)})
+        if json_out != STDOUT:
             _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}), {orient.model}: "
                       f"{result.status}", err_km, used)
         return code
@@ -297,6 +350,12 @@ def dc(
 
 def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float, used: dict
               ) -> None:
+    import numpy as np
+    from rich.console import Console
+    from rich.table import Table
+
+    from tapp.od import setup
+
     table = Table(title=title)
     table.add_column("iteration", justify="right")
     table.add_column("RMS", justify="right")
@@ -324,32 +383,41 @@ def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float, use
     console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
 
-_VERDICT = {DCOutcome.CONVERGED: "consistent with the noise model",
-            DCOutcome.INCONSISTENT: "inconsistent with the noise model"}
-
-
 def _noise_model_line(result: DCResult) -> str:
     """The last RMS against the noise model's bound, and the verdict where there is an
     estimate to judge (the RMS settled: :mod:`tapp.od.batch`)."""
-    verdict = _VERDICT.get(DCOutcome(result.status),
-                           f"not judged ({result.status}: no settled estimate)")
+    from tapp.od.batch import N_STATE, NOISE_MODEL_PROBABILITY, DCOutcome
+
+    verdict = {DCOutcome.CONVERGED: "consistent with the noise model",
+               DCOutcome.INCONSISTENT: "inconsistent with the noise model"}.get(
+        DCOutcome(result.status), f"not judged ({result.status}: no settled estimate)")
     return (f"residuals: RMS {result.rms[-1]:.5g} against {result.rms_bound:.5g}, the "
             f"{100 * NOISE_MODEL_PROBABILITY:g} % χ² bound of {result.n_measurements} "
             f"residuals and {N_STATE} estimated parameters: {verdict}")
 
 
-def _print_ill_conditioned(exc: IllConditionedError, json_out: bool, used: dict) -> None:
-    if json_out:
-        print_json({"converged": False, "status": "ill-conditioned",
-                    "exit_code": EXIT_ILL_CONDITIONED, "reason": str(exc),
-                    "condition_number": exc.condition if np.isfinite(exc.condition) else None,
-                    "max_condition": exc.limit, "measurements": exc.n_measurements,
-                    "undetermined_directions": [
-                        {"relative_eigenvalue": float(lam),
-                         **{n: float(c) for n, c in zip(STATE_NAMES, d, strict=True)}}
-                        for d, lam in zip(exc.directions, exc.eigenvalues, strict=True)],
-                    "earth_orientation": used})
-        return
+def _ill_conditioned_dict(exc: IllConditionedError, used: dict) -> dict:
+    import numpy as np
+
+    from tapp.od.batch import STATE_NAMES
+
+    return {"converged": False, "status": "ill-conditioned",
+            "exit_code": EXIT_ILL_CONDITIONED, "reason": str(exc),
+            "condition_number": exc.condition if np.isfinite(exc.condition) else None,
+            "max_condition": exc.limit, "measurements": exc.n_measurements,
+            "undetermined_directions": [
+                {"relative_eigenvalue": float(lam),
+                 **{n: float(c) for n, c in zip(STATE_NAMES, d, strict=True)}}
+                for d, lam in zip(exc.directions, exc.eigenvalues, strict=True)],
+            "earth_orientation": used}
+
+
+def _print_ill_conditioned(exc: IllConditionedError, used: dict) -> None:
+    from rich.console import Console
+
+    from tapp.od import setup
+    from tapp.od.batch import describe_direction
+
     console = Console(width=100)
     console.print(f"ill-conditioned: the normal matrix of the first iteration has condition "
                   f"number {exc.condition:.3g} (scaled to a unit diagonal; limit "
@@ -362,6 +430,10 @@ def _print_ill_conditioned(exc: IllConditionedError, json_out: bool, used: dict)
 
 
 def _apriori(text: str, scenario: Path) -> np.ndarray:
+    import numpy as np
+
+    from tapp.od import setup
+
     table = setup.load_study(scenario).get("ekf", {}).get("apriori", {})
     if text in table:  # the scenario's a priori: a bad one is the file's fault, not --apriori
         try:
@@ -388,45 +460,58 @@ def _apriori(text: str, scenario: Path) -> np.ndarray:
 @app.command()
 def ekf(
     orbit: OrbitOpt,
-    arc: Annotated[str, typer.Option(help="Arc length: 18h, ...")] = "18h",
+    arc: Annotated[str, typer.Option(help=f"Arc length with its unit: {DURATION_FORMS}.")]
+    = "18h",
     truth: TruthOpt = "J2",
     stm: StmOpt = "J2",
     apriori: Annotated[str, typer.Option(help="1|2|3|4 (the brief's) or sx=..,sy=..,sz=..,"
                                          "svx=..,svy=..,svz=.. (km, km/s)")] = "1",
-    stations: Annotated[str | None, typer.Option(help="Network or station name.")] = None,
+    stations: Annotated[str | None, typer.Option(
+        help="Network or station name [default: the scenario's network for the orbit].")]
+    = None,
     process_noise: Annotated[float, typer.Option(help="White-noise acceleration spectral "
                                                  "density q (km^2/s^3).")] = 0.0,
-    seed: Annotated[int | None, typer.Option(help="Noise seed.")] = None,
+    seed: Annotated[int | None, typer.Option(help="Noise seed [default: the scenario's].")]
+    = None,
     obs: Annotated[Path | None, typer.Option(help="Observation file (.h5, .csv or a CCSDS "
                                              "TDM .tdm).")] = None,
-    scenario: ScenarioOpt = DEFAULT_SCENARIO,
+    scenario: ScenarioOpt = None,
     allow_subsurface: SubsurfaceOpt = False,
     earth_orientation: EarthOrientationOpt = None,
-    json_out: JsonOpt = False,
+    json_out: JsonOpt = None,
 ) -> None:
     """Extended Kalman filter from the brief's offset state; largest |O-C| per pass."""
 
     def body() -> None:
-        arc_s = parse_arc_s(arc)
-        orient = _orientation(scenario, earth_orientation)
-        x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
+        from rich.console import Console
+        from rich.table import Table
+
+        from tapp.od import setup
+        from tapp.od.ekf import extended_kalman_filter
+        from tapp.outputs import check_paths
+
+        study = _scenario(scenario)
+        check_paths({"--obs": obs, "--scenario": study}, {"--json": json_file(json_out)})
+        arc_s = parse_duration_s(arc)
+        orient = _orientation(study, earth_orientation)
+        x_true = setup.true_orbit(orbit, study, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm, orient)
-        p0 = _apriori(apriori, scenario)
+        p0 = _apriori(apriori, study)
         q_km2_s3 = nonnegative_option("--process-noise", process_noise)
-        data = _observations(x_true, truth, stations, obs, scenario,
+        data = _observations(x_true, truth, stations, obs, study,
                              seed_option("--seed", seed), orient,
                              earth_orientation is not None).arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, data.t_s)
-        x_start = setup.initial_estimate(x_true, setup.offset(scenario))
+        x_start = setup.initial_estimate(x_true, setup.offset(study))
         result = extended_kalman_filter(data, prop, x_start, p0, orientation=orient,
                                         q_km2_s3=q_km2_s3)
         per_pass = [{"range_m": p.max_abs[0] * 1e3, "range_rate_mm_s": p.max_abs[1] * 1e6}
                     for p in result.passes]
-        if json_out:
-            print_json({"passes": [{"station": p.station, "t_start_s": p.t_start_s,
-                                    "t_end_s": p.t_end_s} for p in result.passes],
-                        "max_abs_residual_per_pass": per_pass, "earth_orientation": used,
-                        "observations_made_under": _made_under_json(data)})
+        write_json(json_out, {"passes": [{"station": p.station, "t_start_s": p.t_start_s,
+                                          "t_end_s": p.t_end_s} for p in result.passes],
+                              "max_abs_residual_per_pass": per_pass, "earth_orientation": used,
+                              "observations_made_under": _made_under_json(data)})
+        if json_out == STDOUT:
             return
         table = Table(title=f"EKF {orbit}, {arc}, ({truth},{stm}), a priori {apriori}, "
                       f"{orient.model}")
@@ -450,26 +535,36 @@ def rsig(
     stm: StmOpt = "J2",
     hours: Annotated[float, typer.Option(help="Span, hours (> 0).")] = 48.0,
     step: Annotated[float, typer.Option(help="Output step, s (> 0).")] = 300.0,
-    scenario: ScenarioOpt = DEFAULT_SCENARIO,
+    scenario: ScenarioOpt = None,
     allow_subsurface: SubsurfaceOpt = False,
     earth_orientation: EarthOrientationOpt = None,
-    json_out: JsonOpt = False,
+    json_out: JsonOpt = None,
 ) -> None:
     """The error-growth signature R(t) = sqrt(Σ_{i<=3, j<=6} φ_ij²)."""
 
     def body() -> None:
+        import numpy as np
+        from rich.console import Console
+        from rich.table import Table
+
+        from tapp.od import setup
+        from tapp.od.rsig import r_signature
+        from tapp.outputs import check_paths
+
+        study = _scenario(scenario)
+        check_paths({"--scenario": study}, {"--json": json_file(json_out)})
         span_s = positive_option("--hours", hours) * 3600.0
         dt = positive_option("--step", step)
         check_grid_size("--hours/--step", grid_samples(span_s, dt))
-        orient = _orientation(scenario, earth_orientation)
-        x_true = setup.true_orbit(orbit, scenario, allow_subsurface=allow_subsurface)
+        orient = _orientation(study, earth_orientation)
+        x_true = setup.true_orbit(orbit, study, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm, orient)
         t = np.arange(0.0, span_s + 0.5 * dt, dt)
         orient.check_covers(t[[0, -1]], "--hours")
         sig = r_signature(prop, x_true, t, orient)
         used = setup.orientation_record(orient, t)
-        if json_out:
-            print_json({"t_s": sig.t_s, "R": sig.r, "earth_orientation": used})
+        write_json(json_out, {"t_s": sig.t_s, "R": sig.r, "earth_orientation": used})
+        if json_out == STDOUT:
             return
         table = Table(title=f"R(t) {orbit} ({truth},{stm}), {orient.model}")
         table.add_column("t (h)", justify="right")

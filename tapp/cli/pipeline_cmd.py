@@ -13,28 +13,25 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
-from iter import SchedulerError
 from iter.execute import CONNECT_TIMEOUT_S
 from tapp.cli.common import (
+    STDOUT,
     ConnectTimeoutOpt,
     EarthOrientationOpt,
+    JsonOpt,
     SchedulerOpt,
     SerialOpt,
     WorkersOpt,
     app,
     earth_orientation_option,
     execution_options,
-    print_json,
+    json_file,
     progress_bar,
     run_guarded,
     scheduler_error,
+    write_json,
 )
-from tapp.outputs import check_paths
-from tapp.pipeline.run import OUTPUTS, check_out_dir, run_pipeline, trade_outputs
-from tapp.pipeline.spec import read_pipeline
 
 
 @app.command("pipeline")
@@ -48,24 +45,34 @@ def pipeline_cmd(
     serial: SerialOpt = False,
     connect_timeout_s: ConnectTimeoutOpt = CONNECT_TIMEOUT_S,
     earth_orientation: EarthOrientationOpt = None,
-    json_out: Annotated[bool, typer.Option("--json", help="Print the trade-study numbers as "
-                                           "one JSON object.")] = False,
+    json_out: JsonOpt = None,
 ) -> None:
-    """TAPP I -> TAPP III -> TAPP II in one run, with DIR/report.md."""
+    """TAPP I -> TAPP III -> TAPP II in one run, with DIR/report.md.
+
+    --json: the trade-study numbers and the wall time of each stage.
+    """
 
     def body() -> None:
-        check_paths({"PIPELINE": pipeline}, {})
+        from dataclasses import replace
+
+        from rich.console import Console
+        from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
+
+        from iter import SchedulerError
+        from tapp.outputs import check_paths
+        from tapp.pipeline.run import OUTPUTS, check_out_dir, run_pipeline, trade_outputs
+        from tapp.pipeline.spec import read_pipeline
+
+        check_paths({"PIPELINE": pipeline}, {"--json": json_file(json_out)})
         check_out_dir(output)
         pipe = read_pipeline(pipeline)
         override = earth_orientation_option(earth_orientation)
         if override is not None:
-            from dataclasses import replace
-
             pipe = replace(pipe, earth_orientation=override)
         execution = execution_options(scheduler, workers, connect_timeout_s, serial)
         columns = (TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(),
                    TimeElapsedColumn())
-        with progress_bar(*columns, quiet=json_out) as bar:
+        with progress_bar(*columns, quiet=json_out == STDOUT) as bar:
             task = bar.add_task("pipeline", total=None)
 
             def progress(stage: str, done: int, total: int) -> None:
@@ -76,8 +83,8 @@ def pipeline_cmd(
             except SchedulerError as exc:
                 raise scheduler_error(exc) from None
         numbers = trade_outputs(result)
-        if json_out:
-            print_json({"directory": str(output), **numbers, "wall_s": result.wall_s})
+        write_json(json_out, {"directory": str(output), **numbers, "wall_s": result.wall_s})
+        if json_out == STDOUT:
             return
         console = Console(width=100)
         console.print(f"pipeline {pipeline} -> {output}/{OUTPUTS['report']} ("

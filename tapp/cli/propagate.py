@@ -6,33 +6,28 @@ import time
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from tapp.cli.common import (
+    STDOUT,
     EarthOrientationOpt,
+    JsonOpt,
     app,
     check_grid_size,
     earth_orientation_option,
     grid_samples,
+    json_file,
     positive_option,
-    print_json,
     run_guarded,
+    write_json,
 )
-from tapp.constants import SECONDS_PER_DAY
-from tapp.dynamics import Propagator, earth_model
-from tapp.dynamics.propagate import check_tolerance
-from tapp.ephemeris import BODIES, check_coverage, utc_to_tdb_jd
 from tapp.errors import InputError
-from tapp.frames.orientation import orientation_for
-from tapp.frames.time import parse_epoch
-from tapp.orbits import parse_orbit
 
 
 def _third_bodies(names: list[str]) -> tuple[str, ...]:
     """The ``--third-body`` values, each a DE421 body other than the Earth, each once."""
+    from tapp.ephemeris import BODIES
+
     allowed = [b for b in BODIES if b != "earth"]
     for name in names:
         if name not in allowed:
@@ -57,9 +52,10 @@ def propagate(
     = "2026-01-01T00:00:00",
     tol: Annotated[float, typer.Option(help="Relative and absolute tolerance, in [1e-15, "
                                        "1e-6].")] = 1e-13,
-    scenario: Annotated[Path | None, typer.Option(help="Scenario file with named orbits.")]
+    scenario: Annotated[Path | None, typer.Option(
+        help="Scenario file with named orbits [default: the shipped approx_stm.toml].")]
     = None,
-    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    json_out: JsonOpt = None,
     allow_subsurface: Annotated[bool, typer.Option(
         "--allow-subsurface", help="Accept an orbit whose perigee is below the Earth's "
         "surface.")] = False,
@@ -68,6 +64,20 @@ def propagate(
     """Propagate an Earth orbit with its state transition matrix (GCRS, km, km/s)."""
 
     def body() -> None:
+        import numpy as np
+        from rich.console import Console
+        from rich.table import Table
+
+        from tapp.constants import SECONDS_PER_DAY
+        from tapp.dynamics import Propagator, earth_model
+        from tapp.dynamics.propagate import check_tolerance
+        from tapp.ephemeris import check_coverage, utc_to_tdb_jd
+        from tapp.frames.orientation import orientation_for
+        from tapp.frames.time import parse_epoch
+        from tapp.orbits import parse_orbit
+        from tapp.outputs import check_paths
+
+        check_paths({"--scenario": scenario}, {"--json": json_file(json_out)})
         x0 = parse_orbit(orbit, scenario=scenario, allow_subsurface=allow_subsurface)
         arc_s = positive_option("--hours", hours) * 3600.0
         dt = positive_option("--step", step)
@@ -90,8 +100,8 @@ def propagate(
         orientation.check_covers(np.array([0.0, arc_s]), "--epoch/--hours")
         traj = prop.propagate(x0, t, epoch_jd_utc=ep.jd, orientation=orientation)
         elapsed = time.perf_counter() - start
-        if json_out:
-            print_json({"t_s": traj.t_s, "state": traj.states, "stm": traj.stm})
+        write_json(json_out, {"t_s": traj.t_s, "state": traj.states, "stm": traj.stm})
+        if json_out == STDOUT:
             return
         table = Table(title=f"{orbit}: truth {truth}, STM {stm}, {hours:g} h, Earth "
                       f"orientation {model}")

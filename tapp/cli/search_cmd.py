@@ -1,6 +1,6 @@
 """``tapp search``: SEARCH's Newton-Raphson targeting of a B-plane scenario.
 
-The scenario is a SEARCH file (``scenarios/search_bplane.toml``: a ``[search]`` table) or a
+The scenario is a SEARCH file (the example ``search_bplane.toml``: a ``[search]`` table) or a
 tracking scenario with a ``[targeting]`` table (:func:`tapp.targeting.scenario_targeting`: the
 aim point of its B-plane miss, SEARCH on its own models). Prints SEARCH's report in the
 spirit of the seed's Figs. 4 and 5 (inputs, each case's dependent variables, the partials,
@@ -21,44 +21,38 @@ input, and only when SEARCH converged.
 
 from __future__ import annotations
 
-import datetime as dt
-import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
 
-from search import EXIT_FLAG, format_report
-from tapp.atomic import atomic_write
 from tapp.cli.common import (
+    STDOUT,
     EarthOrientationOpt,
+    JsonOpt,
     app,
     earth_orientation_option,
-    print_json,
+    json_file,
     run_guarded,
+    write_json,
 )
-from tapp.constants import SECONDS_PER_DAY, RADIUS_km
 from tapp.errors import InputError
-from tapp.frames.time import Epoch
-from tapp.outputs import check_paths
-from tapp.targeting import (
-    Y_NAMES,
-    BPlaneSearch,
-    TargetingRun,
-    run_search,
-    scenario_search,
-)
-from tapp.tomlfile import read_toml, replace_tables
-from tapp.tracking.scenario import parse_scenario
 
-#: Exit code of each SEARCH exit: 0 converged, the seed's FLAG + 1 otherwise.
-EXIT_CODE = {status: 0 if status == "converged" else flag + 1
-             for status, flag in EXIT_FLAG.items()}
+if TYPE_CHECKING:
+    from tapp.targeting import BPlaneSearch, TargetingRun
 
 # Column names in the report (the seed's IV1N.., DV1N..), at most 17 characters.
 _X_LABELS = ("VX (KM/S)", "VY (KM/S)", "VZ (KM/S)")
 _Y_LABELS = ("B.R (KM)", "B.T (KM)", "TF (S)")
+
+
+def exit_code(status: str) -> int | None:
+    """The exit code of a SEARCH exit: 0 converged, the seed's FLAG + 1 otherwise (3
+    diverged, 4 singular); None for a status that is not one of SEARCH's exits."""
+    from search import EXIT_FLAG
+
+    flag = EXIT_FLAG.get(status)
+    return None if flag is None else 0 if status == "converged" else flag + 1
 
 
 def is_tracking_scenario(data: dict) -> bool:
@@ -66,17 +60,12 @@ def is_tracking_scenario(data: dict) -> bool:
     return "tracking" in data or "targeting" in data
 
 
-def read_scenario(path: Path, earth_orientation: str | None = None) -> BPlaneSearch:
-    """Read and validate a B-plane search scenario (TOML): a SEARCH file, or a tracking
-    scenario with a ``[targeting]`` table; errors name the file and field.
-
-    ``earth_orientation`` overrides the file's model (``--earth-orientation``).
-    """
-    return problem_of(read_toml(path), path, earth_orientation)
-
-
 def problem_of(data: dict, path: Path, earth_orientation: str | None) -> BPlaneSearch:
-    """The search problem of a parsed scenario file (:func:`read_scenario`)."""
+    """The search problem of a parsed scenario file (a SEARCH file, or a tracking scenario
+    with a ``[targeting]`` table); ``earth_orientation`` overrides the file's model."""
+    from tapp.targeting import scenario_search
+    from tapp.tracking.scenario import parse_scenario
+
     if is_tracking_scenario(data):
         problem = parse_scenario(data, str(path), earth_orientation).targeting
         if problem is None:
@@ -92,6 +81,11 @@ def _written_scenario(path: Path, data: dict, problem: BPlaneSearch, run: Target
                       ) -> str:
     """The text of ``path`` (``data`` as read) with the targeted injection (and without
     ``[targeting]``)."""
+    import datetime as dt
+
+    from tapp.targeting import Y_NAMES
+    from tapp.tomlfile import replace_tables
+
     text = path.read_text()
     injection = {"r_km": problem.program.r0_km.tolist(),
                  "v_km_s": run.encounter.v0_km_s.tolist()}
@@ -115,11 +109,16 @@ def _written_scenario(path: Path, data: dict, problem: BPlaneSearch, run: Target
 
 
 def _periapsis_utc(problem: BPlaneSearch, t_s: float) -> str:
+    from tapp.constants import SECONDS_PER_DAY
+    from tapp.frames.time import Epoch
+
     epoch = problem.program.epoch
     return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(3)
 
 
 def _encounter_dict(problem: BPlaneSearch, run: TargetingRun) -> dict:
+    from tapp.constants import RADIUS_km
+
     enc = run.encounter
     body = problem.program.target
     r_p = float(enc.b_plane.periapsis_radius_km)
@@ -154,7 +153,7 @@ def _json(path: Path, problem: BPlaneSearch, run: TargetingRun, analytic: bool,
         "scenario": str(path),
         "status": result.status,
         "flag": result.flag,
-        "exit_code": EXIT_CODE[result.status],
+        "exit_code": exit_code(result.status),
         "x_names": list(problem.x_names),
         "y_names": list(problem.y_names),
         "x": result.x,
@@ -180,6 +179,8 @@ def _json(path: Path, problem: BPlaneSearch, run: TargetingRun, analytic: bool,
 
 def _summary(problem: BPlaneSearch, run: TargetingRun, analytic: bool,
              elapsed_s: float) -> str:
+    import numpy as np
+
     enc = _encounter_dict(problem, run)
     dv_m_s = 1e3 * float(np.linalg.norm(run.encounter.v0_km_s - problem.v0_km_s))
     partials = "ANALYTIC (VARIATIONAL EQUATIONS)" if analytic else "DIFFERENCED"
@@ -195,7 +196,7 @@ def _summary(problem: BPlaneSearch, run: TargetingRun, analytic: bool,
 @app.command("search")
 def search_command(
     scenario: Annotated[Path, typer.Argument(help="B-plane search scenario (TOML).")],
-    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    json_out: JsonOpt = None,
     analytic_partials: Annotated[bool, typer.Option(
         "--analytic-partials",
         help="Partials from the variational equations (overrides the scenario).")] = False,
@@ -214,7 +215,16 @@ def search_command(
     """
 
     def body() -> int:
-        check_paths({"SCENARIO": scenario}, {"--write-scenario": write_scenario})
+        import time
+
+        from search import format_report
+        from tapp.atomic import atomic_write
+        from tapp.outputs import check_paths
+        from tapp.targeting import run_search
+        from tapp.tomlfile import read_toml
+
+        check_paths({"SCENARIO": scenario}, {"--write-scenario": write_scenario,
+                                             "--json": json_file(json_out)})
         orientation = earth_orientation_option(earth_orientation)
         data = read_toml(scenario)
         problem = problem_of(dict(data), scenario, orientation)
@@ -227,9 +237,8 @@ def search_command(
         start = time.perf_counter()
         run = run_search(problem, analytic_partials=analytic)
         elapsed = time.perf_counter() - start
-        if json_out:
-            print_json(_json(scenario, problem, run, analytic, elapsed))
-        else:
+        write_json(json_out, _json(scenario, problem, run, analytic, elapsed))
+        if json_out != STDOUT:
             labels = (tuple(_X_LABELS[i] for i in problem.vary),
                       tuple(_Y_LABELS[i] for i in problem.targeted))
             typer.echo(format_report(run.result, *labels), nl=False)
@@ -242,7 +251,7 @@ def search_command(
             else:
                 typer.echo(f"note: --write-scenario {write_scenario} not written: SEARCH "
                            f"{run.result.status}", err=True)
-        return EXIT_CODE[run.result.status]
+        return exit_code(run.result.status)
 
     code = run_guarded(body)
     if code:

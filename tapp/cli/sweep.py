@@ -1,4 +1,5 @@
-"""``tapp iter``: run an ITER sweep file, locally on Dask, on a cluster, or serially.
+"""``tapp iter``: run an ITER sweep file, in this process, on a local Dask cluster or on a
+running one.
 
 The engine is the ``iter`` package; this module only turns options into an
 :class:`iter.Execution`, maps ``iter``'s errors onto tapp's (so bad input, including a results
@@ -16,37 +17,28 @@ failure).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
-from iter import (
-    Execution,
-    IterError,
-    ResultFileError,
-    ResultWriteError,
-    SchedulerError,
-    SweepInputError,
-    SweepResult,
-    load_sweep,
-    run_sweep,
-)
 from iter.execute import CONNECT_TIMEOUT_S
-from iter.table import CaseStatus
 from tapp.cli.common import (
+    STDOUT,
     ConnectTimeoutOpt,
+    JsonOpt,
     SchedulerOpt,
     SerialOpt,
     WorkersOpt,
     app,
-    print_json,
+    json_file,
     run_guarded,
     scheduler_error,
+    write_json,
 )
 from tapp.errors import InputError, TappError
-from tapp.outputs import check_paths, make_folders, remove_empty_folders, unwritable
+
+if TYPE_CHECKING:
+    from iter import SweepResult
 
 #: Failed cases listed under the summary table (the rest are in the results file).
 MAX_FAILURES_SHOWN = 10
@@ -70,22 +62,35 @@ def iter_command(
         int | None, typer.Option("--chunk-size", help="Cases per Dask task [default: auto].")
     ] = None,
     connect_timeout_s: ConnectTimeoutOpt = CONNECT_TIMEOUT_S,
-    json_output: Annotated[
-        bool, typer.Option("--json", help="Print the summary as one JSON object.")
-    ] = False,
+    json_out: JsonOpt = None,
 ) -> None:
     """Run every case of SWEEP_FILE (seed section VI, ITER) and write the results table.
 
     Paths in the sweep file are taken from its folder. Failing cases are recorded with their
     message and do not stop the sweep; if every case fails, the command exits 1 with the
     first case's error. Running again with the same results file resumes: cases already OK
-    are skipped.
+    are skipped. --json: the summary. At most 1,000,000 cases. By default the first two
+    cases run in this process, and the rest too unless their serial work, projected from
+    those, reaches 10 s: then on a local Dask cluster (--serial, --workers and --scheduler
+    choose).
     """
     h5_path = output if output is not None else Path(sweep_file.stem + ".h5")
     options = {"-o/--output": h5_path, "--csv": csv}
 
     def run() -> None:
-        check_paths({"SWEEP_FILE": sweep_file}, options)
+        from iter import (
+            Execution,
+            IterError,
+            ResultFileError,
+            ResultWriteError,
+            SchedulerError,
+            SweepInputError,
+            load_sweep,
+            run_sweep,
+        )
+        from tapp.outputs import check_paths, make_folders, remove_empty_folders, unwritable
+
+        check_paths({"SWEEP_FILE": sweep_file}, {**options, "--json": json_file(json_out)})
         created = []
         try:
             execution = Execution(serial=serial, scheduler=scheduler, workers=workers,
@@ -94,10 +99,9 @@ def iter_command(
             created = [*make_folders(h5_path.parent),
                        *(make_folders(csv.parent) if csv is not None else ())]
             result = run_sweep(sweep, output_h5=h5_path, output_csv=csv, execution=execution,
-                               progress=not json_output)
-            if json_output:
-                print_json(_summary_dict(result))
-            else:
+                               progress=json_out != STDOUT)
+            write_json(json_out, _summary_dict(result))
+            if json_out != STDOUT:
                 _print_summary(result)
             result.raise_if_all_failed()
         except SweepInputError as exc:
@@ -120,6 +124,8 @@ def iter_command(
 
 
 def _summary_dict(result: SweepResult) -> dict[str, object]:
+    from iter import CaseStatus
+
     summary = result.summary
     return {
         "n_cases": summary.n_cases, "n_succeeded": summary.n_succeeded,
@@ -132,6 +138,11 @@ def _summary_dict(result: SweepResult) -> dict[str, object]:
 
 
 def _print_summary(result: SweepResult) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    from iter import CaseStatus
+
     summary = result.summary
     table = Table(title="ITER sweep", show_header=False)
     table.add_column("item", style="bold")

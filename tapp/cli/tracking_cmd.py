@@ -12,47 +12,49 @@ import dataclasses
 import json
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
-from tapp.ccsds.tdm import format_tdm, tdm_from_tracks, tracks_from_rows
 from tapp.cli.common import (
     EXIT_FAILURE,
+    STDOUT,
     EarthOrientationOpt,
+    Group,
+    JsonOpt,
+    add_json,
     app,
     earth_orientation_option,
     echo_error,
+    json_file,
     print_json,
     progress_bar,
     run_guarded,
+    write_json,
 )
-from tapp.cli.search_cmd import EXIT_CODE as SEARCH_EXIT_CODE
-from tapp.od.observations import MadeUnder
-from tapp.od.obsfile import TDM_PREFIX, made_under_statements
-from tapp.outputs import OutputSet, check_paths
-from tapp.tape.files import describe
-from tapp.tape.t13 import T13, summary, utc_at
-from tapp.tape.t13_hdf5 import t13_file_writer
-from tapp.tape.t32 import format_t32_summary
-from tapp.tracking.encounter import TargetingError
-from tapp.tracking.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem, oem_trajectory
-from tapp.tracking.scenario import Scenario, read_scenario
-from tapp.tracking.simulate import Simulation
-from tapp.tracking.simulate import simulate as run_simulation
+from tapp.cli.search_cmd import exit_code as search_exit_code
 
-tape_app = typer.Typer(name="tape", help="Inspect tapes (T13, T32).", no_args_is_help=True,
-                       add_completion=False)
+if TYPE_CHECKING:
+    from rich.console import Console
+    from rich.table import Table
+
+    from tapp.outputs import OutputSet
+    from tapp.tape.t13 import T13
+    from tapp.tracking.scenario import Scenario
+    from tapp.tracking.simulate import Simulation
+
+tape_app = typer.Typer(name="tape", cls=Group, help="Inspect tapes (T13, T32).",
+                       no_args_is_help=True, add_completion=False)
 app.add_typer(tape_app, name="tape")
-
-JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
 
 
 def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: str | None = None
                        ) -> tuple[Simulation, float, Scenario]:
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
+
+    from tapp.tracking.scenario import read_scenario
+    from tapp.tracking.simulate import simulate as run_simulation
+
     scenario = read_scenario(path, earth_orientation)
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
@@ -69,10 +71,21 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: st
 
 def _outputs(output: Path, sim: Simulation, oem: Path | None,
              oem_text: str | None, tdm: Path | None = None,
-             tdm_text: str | None = None) -> OutputSet:
-    """The tape, the OEM and the TDM, to be written together or not at all."""
+             tdm_text: str | None = None, sizes: dict | None = None) -> OutputSet:
+    """The tape, the OEM and the TDM, to be written together or not at all; the tape's size
+    goes into ``sizes["bytes"]`` as soon as it is written (before the outputs added later)."""
+    from tapp.outputs import OutputSet
+    from tapp.tape.t13_hdf5 import t13_file_writer
+
+    write_t13 = t13_file_writer(sim.tape, source=str(output))
+
+    def write_tape(tmp: Path) -> None:
+        write_t13(tmp)
+        if sizes is not None:
+            sizes["bytes"] = tmp.stat().st_size
+
     outputs = OutputSet()
-    outputs.add("-o/--output", output, t13_file_writer(sim.tape, source=str(output)))
+    outputs.add("-o/--output", output, write_tape)
     if oem is not None:
         outputs.add("--oem", oem, lambda tmp: tmp.write_text(oem_text, encoding="utf-8"))
     if tdm is not None:
@@ -83,6 +96,10 @@ def _outputs(output: Path, sim: Simulation, oem: Path | None,
 def _tdm_text(sim: Simulation, scenario: Path, parsed: Scenario) -> str:
     """The observations of the tape's raw rows as a CCSDS TDM (one segment per station),
     stating the Earth orientation they were made under (:mod:`tapp.od.obsfile`)."""
+    from tapp.ccsds.tdm import format_tdm, tdm_from_tracks, tracks_from_rows
+    from tapp.od.observations import MadeUnder
+    from tapp.od.obsfile import TDM_PREFIX, made_under_statements
+
     tape, raw = sim.tape, sim.tape.raw
     st = tape.stations
     schedule = parsed.schedule
@@ -101,6 +118,8 @@ def _tdm_text(sim: Simulation, scenario: Path, parsed: Scenario) -> str:
 
 def _encounter_dict(tape: T13) -> tuple[dict, dict | None]:
     """The tape's miss (kind, time, names, nominal values) and its retargeting record."""
+    from tapp.tape.t13 import utc_at
+
     miss = tape.miss
     record = tape.provenance.get("targeting")
     return ({"kind": miss.kind, "t_s": miss.t_s, "utc": utc_at(tape.epoch, miss.t_s),
@@ -139,7 +158,7 @@ def simulate(
     tdm: Annotated[Path | None, typer.Option("--tdm", help="Also write the observations as a "
                                              "CCSDS TDM 2.0 (KVN) file.")] = None,
     earth_orientation: EarthOrientationOpt = None,
-    json_out: JsonOpt = False,
+    json_out: JsonOpt = None,
 ) -> None:
     """TAPP I: simulate the tracking of a scenario and write its T13 tape.
 
@@ -149,16 +168,29 @@ def simulate(
     """
 
     def body() -> int:
+        from rich.console import Console
+
+        from tapp.outputs import check_paths
+        from tapp.tape.t13 import summary
+        from tapp.tracking.encounter import TargetingError
+        from tapp.tracking.oem import (
+            INTERPOLATION,
+            INTERPOLATION_DEGREE,
+            format_oem,
+            oem_trajectory,
+        )
+
         check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
-                                             "--tdm": tdm})
+                                             "--tdm": tdm, "--json": json_file(json_out)})
         try:
             sim, wall_s, parsed = _simulate_with_bar(scenario, raw or tdm is not None,
-                                                     quiet=json_out,
+                                                     quiet=json_out == STDOUT,
                                                      earth_orientation=earth_orientation_option(
                                                          earth_orientation))
         except TargetingError as exc:
             echo_error(exc)
-            return SEARCH_EXIT_CODE.get(exc.status, EXIT_FAILURE)
+            code = search_exit_code(exc.status)
+            return EXIT_FAILURE if code is None else code
         tdm_text = None
         if tdm is not None:
             tdm_text = _tdm_text(sim, scenario, parsed)
@@ -175,8 +207,7 @@ def simulate(
                                   interpolation_degree=INTERPOLATION_DEGREE,
                                   comments=(f"TAPP I trajectory of {scenario.name}",),
                                   meta_comments=traj.comments)
-        _outputs(output, sim, oem, oem_text, tdm, tdm_text).commit()
-        out = {"tape": str(output), "bytes": output.stat().st_size, "iden": tape.iden,
+        out = {"tape": str(output), "bytes": None, "iden": tape.iden,
                "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
                "passes": int(tape.passes.station.size),
@@ -185,7 +216,11 @@ def simulate(
                "oem": None if oem is None else str(oem),
                "tdm": None if tdm is None else str(tdm), "wall_s": wall_s}
         out["miss"], out["targeting"] = _encounter_dict(tape)
-        if json_out:
+        # the JSON is written after the tape's temporary, whose size it then holds
+        outputs = _outputs(output, sim, oem, oem_text, tdm, tdm_text, sizes=out)
+        add_json(outputs, json_out, out)
+        outputs.commit()
+        if json_out == STDOUT:
             print_json(out)
             return 0
         console = Console(width=100)
@@ -209,6 +244,8 @@ def simulate(
 def _editing_table(stations: list[dict]) -> Table:
     """Per station: observations scheduled, kept, removed by each rule (passes removed whole
     in parentheses), passes and those added by splitting at max_pass_s (T13 ``editing/``)."""
+    from rich.table import Table
+
     rules = list(stations[0]["removed"])
     table = Table(title="Observations: scheduled = kept + removed by each rule (passes removed "
                         "whole)")
@@ -225,6 +262,9 @@ def _editing_table(stations: list[dict]) -> Table:
 
 
 def _print_t13(info: dict) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
     console = Console(width=110)
     dims = info["dimensions"]
     console.print(f"[bold]T13[/bold] v{info['version']}  iden {info['iden']}  epoch "
@@ -271,15 +311,23 @@ def _print_t13(info: dict) -> None:
 @tape_app.command("info")
 def tape_info(
     path: Annotated[Path, typer.Argument(help="Tape file (HDF5).")],
-    json_out: JsonOpt = False,
+    json_out: JsonOpt = None,
 ) -> None:
     """Summarise a tape: dimensions, parameters, stations, passes, observations, epochs."""
 
     def body() -> None:
+        from rich.console import Console
+
+        from tapp.outputs import check_paths
+        from tapp.tape.files import describe
+        from tapp.tape.t32 import format_t32_summary
+
+        check_paths({"PATH": path}, {"--json": json_file(json_out)})
         info = describe(path)
-        if json_out:
-            print_json(info)
-        elif info["format"] == "T13":
+        write_json(json_out, info)
+        if json_out == STDOUT:
+            return
+        if info["format"] == "T13":
             _print_t13(info)
         elif info["format"] == "T32":
             typer.echo(format_t32_summary(info))

@@ -27,7 +27,7 @@ import numpy as np
 from scipy import linalg
 
 __all__ = ["accurate_map", "accurate_matmul", "ar1_whitened", "digits_held", "gram",
-           "psd_factor", "triangularize", "upper_from_packed"]
+           "psd_factor", "scaled_min_eigenvalue", "triangularize", "upper_from_packed"]
 
 
 def triangularize(*blocks: np.ndarray, n: int | None = None) -> np.ndarray:
@@ -108,6 +108,34 @@ def psd_factor(m: np.ndarray) -> np.ndarray:
     full = np.zeros((idx.size, n))
     full[:, idx] = k * d[idx][None, :]
     return triangularize(full)
+
+
+def scaled_min_eigenvalue(m: np.ndarray) -> float:
+    """Return the smallest eigenvalue of a symmetric M scaled to a unit diagonal.
+
+    .. math:: \\lambda_{min}(D^{-1/2} M D^{-1/2}), \\qquad D = \\operatorname{diag}(M)
+
+    over the rows with M_ii > 0: the measure of semi-definiteness that does not depend on the
+    units of the rows (a covariance's correlation matrix), each entry on its own scale
+    √(M_ii M_jj). A PSD M gives >= 0 to rounding (a few ε n). −inf for a negative diagonal
+    entry, or a non-zero entry in a row whose diagonal is zero (no PSD matrix has either);
+    0 for an M with no positive diagonal entry.
+
+    >>> scaled_min_eigenvalue(np.array([[4.0, 1.0], [1.0, 1.0]]))  # ρ = 0.5
+    0.5
+    >>> round(scaled_min_eigenvalue(np.array([[4.0, 2.0], [2.0, 1e-6]])), 6)  # ρ = 1000
+    -999.0
+    """
+    m = np.asarray(m, dtype=float)
+    d = np.diagonal(m)
+    live = d > 0
+    if np.any(d < 0) or np.any(m[~live] != 0) or np.any(m[:, ~live] != 0):
+        return -math.inf
+    if not np.any(live):
+        return 0.0
+    root = np.sqrt(d[live])
+    scaled = m[np.ix_(live, live)] / np.outer(root, root)
+    return float(np.linalg.eigvalsh(0.5 * (scaled + scaled.T))[0])
 
 
 def upper_from_packed(packed: np.ndarray, rows: np.ndarray, cols: np.ndarray, n: int

@@ -17,7 +17,7 @@ Layout (units at the edge: mrad, mm/s, deg; the code works in rad, km/s)::
     [execution]                     # 1σ, Gates-type (tapp.guidance.execution)
     sigma_proportional = 0.02       # magnitude error, fraction of |Δv|, < 1
     sigma_pointing_mrad = 10.0      # per axis perpendicular to Δv, <= 200 (small angles)
-    sigma_fixed_mm_s = 1.0          # per axis, isotropic
+    sigma_fixed_mm_s = 1.0          # per axis, isotropic, <= 1e6 (1 km/s)
     [corridor]                      # optional: about the aim point
     radius_km = 100.0               # a circle in the B-plane, or
     # semi_axes_km = [150.0, 80.0]  # an ellipse, the first axis at angle_deg
@@ -48,37 +48,67 @@ from tapp.tape.t32 import T32
 
 #: Largest pointing σ, mrad: the model adds pointing errors as small angles.
 MAX_POINTING_MRAD = 200.0
+#: Largest fixed σ per axis, mm/s: 1 km/s, more than the whole budget of a spacecraft's
+#: propulsion (shut-off transients and attitude coupling are mm/s to cm/s). Without a bound,
+#: 1e150 mm/s failed in the linear algebra and 1e300 overflowed its square.
+MAX_FIXED_MM_S = 1e6
 
 Positive = Annotated[float, Field(gt=0)]
 
 
 class TapeExpect(Schema):
-    iden: str | None = None
+    """``[tape]``: what the guidance file expects of the tape, checked when it is bound."""
+
+    iden: str | None = Field(None, description="The tape's identification (the scenario's "
+                             "iden).")
 
 
 class Targets(Schema):
-    miss: Annotated[list[str], Field(min_length=2, max_length=3), Unique]
+    """``[targets]``: the miss components each manoeuvre nulls (its estimate of them)."""
+
+    miss: Annotated[list[str], Field(min_length=2, max_length=3), Unique] = Field(
+        description="Miss components of the tape (b_dot_r_km, b_dot_t_km, flight_time_s, ...).")
 
 
 class Manoeuvres(Schema):
-    recycles: Annotated[list[int], Field(min_length=1), Unique] | None = None
+    """``[manoeuvres]``: when the midcourse manoeuvres are made."""
+
+    recycles: Annotated[list[int], Field(min_length=1), Unique] | None = Field(
+        None, description="Recycle numbers of the tape (1-based); default: every recycle.")
 
 
 class Navigation(Schema):
-    after_manoeuvre: Literal["tape", "inflate"] = "tape"
+    """``[navigation]``: how the orbit determination treats a manoeuvre."""
+
+    after_manoeuvre: Literal["tape", "inflate"] = Field(
+        "tape", description="\"tape\": the tape's estimator, which never hears of the "
+        "manoeuvres; \"inflate\": its information after a manoeuvre holds the "
+        "execution-error covariance.")
 
 
 class ExecutionTable(Schema):
-    sigma_proportional: Annotated[float, Field(ge=0, lt=1)] = 0.0
-    sigma_pointing_mrad: Annotated[float, Field(ge=0, le=MAX_POINTING_MRAD)] = 0.0
-    sigma_fixed_mm_s: Annotated[float, Field(ge=0)] = 0.0
+    """``[execution]``: Gates-type execution errors of each manoeuvre, 1σ."""
+
+    sigma_proportional: Annotated[float, Field(ge=0, lt=1)] = Field(
+        0.0, description="Magnitude error along Δv, a fraction of |Δv|.",
+        json_schema_extra={"unit": "1"})
+    sigma_pointing_mrad: Annotated[float, Field(ge=0, le=MAX_POINTING_MRAD)] = Field(
+        0.0, description="Pointing error per axis perpendicular to Δv (small angles).")
+    sigma_fixed_mm_s: Annotated[float, Field(ge=0, le=MAX_FIXED_MM_S)] = Field(
+        0.0, description="Error per axis independent of Δv.")
 
 
 class CorridorTable(Schema):
-    radius_km: Positive | None = None
-    semi_axes_km: Annotated[list[Positive], Field(min_length=2, max_length=2)] | None = None
-    angle_deg: float = 0.0
-    flight_time_s: Positive | None = None
+    """``[corridor]``: the accepted arrival about the aim point, on targeted components."""
+
+    radius_km: Positive | None = Field(None, description="A circle in the B-plane (or "
+                                       "semi_axes_km).")
+    semi_axes_km: Annotated[list[Positive], Field(min_length=2, max_length=2)] | None = Field(
+        None, description="An ellipse in the B-plane, the first axis at angle_deg.")
+    angle_deg: float = Field(0.0, description="Angle of the ellipse's first axis from T "
+                             "toward R.")
+    flight_time_s: Positive | None = Field(None, description="Largest |Δ flight time| "
+                                           "accepted; default: no limit.")
 
     @model_validator(mode="after")
     def _one_shape(self) -> CorridorTable:
@@ -91,13 +121,14 @@ class CorridorTable(Schema):
 class GuideFile(Schema):
     """The guidance file (module docstring); validated strictly, unknown keys are errors."""
 
-    title: str = ""
-    tape: TapeExpect = TapeExpect()
-    targets: Targets
-    manoeuvres: Manoeuvres = Manoeuvres()
-    navigation: Navigation = Navigation()
-    execution: ExecutionTable = ExecutionTable()
-    corridor: CorridorTable | None = None
+    title: str = Field("", description="Free text, printed in the report.")
+    tape: TapeExpect = Field(TapeExpect(), description="Expectations checked against the tape.")
+    targets: Targets = Field(description="What the manoeuvres null.")
+    manoeuvres: Manoeuvres = Field(Manoeuvres(), description="When they are made.")
+    navigation: Navigation = Field(Navigation(), description="How the navigation treats them.")
+    execution: ExecutionTable = Field(ExecutionTable(), description="Their execution errors.")
+    corridor: CorridorTable | None = Field(None, description="The accepted arrival; default: "
+                                           "none.")
 
 
 def read_guide(path: Path | str) -> GuideFile:
@@ -182,4 +213,4 @@ def bind(guide: GuideFile, t32: T32, source: str, tape_source: str = "T32") -> S
                  navigation, guide.title)
 
 
-__all__ = ["GuideFile", "MAX_POINTING_MRAD", "Study", "bind", "read_guide"]
+__all__ = ["GuideFile", "MAX_FIXED_MM_S", "MAX_POINTING_MRAD", "Study", "bind", "read_guide"]

@@ -2,11 +2,12 @@
 
 A shard is a run of whole RNG blocks (:data:`tapp.guidance.montecarlo.BLOCK_SAMPLES`
 samples each) simulated by :func:`tapp.guidance.montecarlo.simulate_blocks`; shards run on
-the executor of :func:`iter.execute.open_executor` (a local Dask cluster by default, a running
-cluster given its scheduler address, or serially), complete in any order, and are gathered
-in sample order. Since every sample depends on its own block's generator and row only, the
-gathered samples, and every statistic of them, are bitwise the same whatever the shard size
-and the number of workers.
+the executor of :func:`iter.execute.open_executor` (serially, on a local Dask cluster, or on
+a running cluster given its scheduler address; by default in this process below
+:data:`DASK_MIN_SAMPLES` samples and on a local cluster from there), complete in any order,
+and are gathered in sample order. Since every sample depends on its own block's generator
+and row only, the gathered samples, and every statistic of them, are bitwise the same
+whatever the shard size and the number of workers.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from iter.execute import DaskExecutor, Execution, open_executor
+from iter.execute import DaskExecutor, Execution, open_executor, too_small
 from tapp.guidance.model import Problem
 from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples, simulate_blocks
 
@@ -25,6 +26,13 @@ from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples, simulate_blocks
 SHARDS_PER_SLOT = 4
 #: Largest automatic shard, blocks (keeps the progress bar moving and worker memory small).
 MAX_AUTO_SHARD_BLOCKS = 50
+#: Fewest samples an automatic execution runs on a local Dask cluster: below, this process
+#: is faster. On the shipped deep-space study (3 manoeuvres, n_o = 23), on 2 cores, a local
+#: cluster of 2 workers costs 6 to 14 s more (starting it, tapp imported in the workers,
+#: stopping it) and saves at most half of the 3.5 to 12 µs a sample takes in this process:
+#: it paid from 3.3 and 5.5 million samples in two runs of ``make bench`` (section ``cli``,
+#: the machine's load average 3 and 5-7), and not below 3 million in a third (load 3-4).
+DASK_MIN_SAMPLES = 4_000_000
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,7 +79,8 @@ def run_shards(problem: Problem, seed: int, n_samples: int, execution: Execution
     problem : the guidance problem.
     seed : root seed of the RNG blocks.
     n_samples : number of samples, >= 1.
-    execution : where to run (``iter.Execution``).
+    execution : where to run (``iter.Execution``); an automatic one (none of serial,
+        scheduler and workers) runs in this process below :data:`DASK_MIN_SAMPLES`.
     shard_samples : samples per shard, a multiple of BLOCK_SAMPLES; None chooses.
     progress : called with (samples done, n_samples) as shards complete.
 
@@ -80,7 +89,8 @@ def run_shards(problem: Problem, seed: int, n_samples: int, execution: Execution
     iter.SchedulerError
         The scheduler address does not answer, or its cluster has no worker.
     """
-    with open_executor(execution) as executor:
+    small = too_small("samples", n_samples, DASK_MIN_SAMPLES)
+    with open_executor(execution, small=small) as executor:
         size = shard_samples or default_shard_samples(n_samples, executor.slots)
         shards = plan_shards(n_samples, size)
         parts: list[Samples | None] = [None] * len(shards)
@@ -123,5 +133,5 @@ def _on_dask(executor: DaskExecutor, problem: Problem, seed: int, n_samples: int
             client.cancel(list(pending))
 
 
-__all__ = ["MAX_AUTO_SHARD_BLOCKS", "SHARDS_PER_SLOT", "Shard", "ShardRun",
+__all__ = ["DASK_MIN_SAMPLES", "MAX_AUTO_SHARD_BLOCKS", "SHARDS_PER_SLOT", "Shard", "ShardRun",
            "default_shard_samples", "plan_shards", "run_shards"]

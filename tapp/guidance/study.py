@@ -14,12 +14,16 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from iter.execute import Execution
+from tapp.constants import C_LIGHT_km_s
 from tapp.errors import InputError
 from tapp.guidance.agreement import Agreement, compare
 from tapp.guidance.execution import ExecutionErrors
 from tapp.guidance.guidefile import GuideFile, bind
-from tapp.guidance.linear import linear_covariance
+from tapp.guidance.linear import LinearCovariance, linear_covariance
+from tapp.guidance.model import Problem
 from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples
 from tapp.guidance.shards import run_shards
 from tapp.guidance.statistics import Corridor, Outcome, linear_outcome, sample_outcome
@@ -30,6 +34,10 @@ MIN_SAMPLES = 2
 #: Most samples: the gathered outcomes are ~100 bytes a sample (3 manoeuvres, 3 miss
 #: components), 0.5 GB at this bound.
 MAX_SAMPLES = 5_000_000
+#: Largest σ of a final miss component, in its unit (km, s, rad): as the a priori σ's of TAPP
+#: III (:data:`tapp.processor.deck.SIGMA_RANGE`); the Monte Carlo's 4th moments of samples a
+#: few σ wide then stay below 1e130.
+MAX_MISS_SIGMA = 1e30
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -103,6 +111,41 @@ def check_seed(seed: int, option: str = "seed") -> int:
     return seed
 
 
+def physical_linear_covariance(problem: Problem, tape_source: str = "T32"
+                               ) -> LinearCovariance:
+    """Return the linear covariance of ``problem``, checked physically possible, before any
+    sample is drawn (the samples follow the same maps, a few σ wide).
+
+    Every manoeuvre's Δv σ (√tr Cov(Δv)) must be below the speed of light, every final miss
+    σ within :data:`MAX_MISS_SIGMA`, and no product on the way may overflow: the tape's
+    covariances and partials, each within the tapes' bound, can still be too large together.
+
+    Raises
+    ------
+    InputError
+        Naming the tape: the first manoeuvre or miss component at fault, or the overflow.
+    """
+    try:
+        with np.errstate(over="raise", invalid="raise"):
+            linear = linear_covariance(problem)
+    except FloatingPointError as exc:
+        raise InputError(tape_source, "recycles", "covariances and partials whose products "
+                         "are finite (the linear covariance of the guidance)", str(exc)) from None
+    dv_sigma = np.sqrt(np.trace(linear.dv_cov, axis1=1, axis2=2))
+    for step, sigma in zip(problem.manoeuvres, dv_sigma, strict=True):
+        if not sigma < C_LIGHT_km_s:
+            raise InputError(tape_source, f"recycles/{step.number}", "a manoeuvre whose Δv σ "
+                             f"is below the speed of light ({C_LIGHT_km_s:,} km/s)",
+                             f"{sigma:.3g} km/s")
+    miss_sigma = np.sqrt(np.diagonal(linear.miss_cov))
+    for name, unit, sigma in zip(problem.miss_name, problem.miss_unit, miss_sigma,
+                                 strict=True):
+        if not sigma <= MAX_MISS_SIGMA:
+            raise InputError(tape_source, f"miss/{name}", f"a final miss σ within "
+                             f"{MAX_MISS_SIGMA:g} {unit}", f"{sigma:.3g} {unit}")
+    return linear
+
+
 def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
                    execution: Execution | None = None, shard_samples: int | None = None,
                    progress: Callable[[int, int], None] | None = None,
@@ -116,8 +159,10 @@ def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
     guide : the validated guidance file.
     samples : Monte Carlo samples, MIN_SAMPLES..MAX_SAMPLES.
     seed : root seed, >= 0.
-    execution : where the shards run (``iter.Execution``); None: a local Dask cluster, one
-        worker per core; ``Execution(serial=True)`` runs in this process.
+    execution : where the shards run (``iter.Execution``); None: automatic, in this process
+        below :data:`tapp.guidance.shards.DASK_MIN_SAMPLES` samples and on a local Dask
+        cluster of one worker per core from there; ``Execution(serial=True)`` runs in this
+        process.
     shard_samples : samples per shard, a multiple of BLOCK_SAMPLES; None chooses.
     progress : called with (samples done, samples) as shards complete.
     guide_source, tape_source : named in errors and in the result.
@@ -125,7 +170,8 @@ def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
     Raises
     ------
     InputError
-        Bad sizes or seed, or a guidance file that does not fit the tape.
+        Bad sizes or seed, a guidance file that does not fit the tape, or a tape whose
+        guidance is physically impossible (:func:`physical_linear_covariance`).
     iter.SchedulerError
         The scheduler does not answer.
     """
@@ -134,12 +180,13 @@ def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
     check_shard_samples(shard_samples)
     study = bind(guide, t32, guide_source, tape_source)
     problem = study.problem
+    linear = physical_linear_covariance(problem, tape_source)
     start = time.perf_counter()
     run = run_shards(problem, seed, samples, Execution() if execution is None else execution,
                      shard_samples, progress)
     wall_s = time.perf_counter() - start
     mc = sample_outcome(problem, run.samples, study.corridor)
-    lin = linear_outcome(problem, linear_covariance(problem), study.corridor)
+    lin = linear_outcome(problem, linear, study.corridor)
     agreement = compare(problem.miss_name, run.samples, study.corridor, mc, lin)
     return GuidanceResult(
         study.title, t32.iden, tape_source, guide_source,
@@ -149,5 +196,5 @@ def guidance_study(t32: T32, guide: GuideFile, *, samples: int, seed: int,
         run.where, wall_s, mc, lin, agreement, run.samples)
 
 
-__all__ = ["MAX_SAMPLES", "MIN_SAMPLES", "GuidanceResult", "check_samples",
-           "check_shard_samples", "check_seed", "guidance_study"]
+__all__ = ["MAX_MISS_SIGMA", "MAX_SAMPLES", "MIN_SAMPLES", "GuidanceResult", "check_samples",
+           "check_shard_samples", "check_seed", "guidance_study", "physical_linear_covariance"]

@@ -286,6 +286,30 @@ class DCResult:
         return np.array([it.step for it in self.iterations])
 
 
+def rms_tail_probability(rms: float, n_residuals: int, n_parameters: int = N_STATE) -> float:
+    """Return the probability that a fit of a correct model to ``n_residuals`` scalar
+    measurements, estimating ``n_parameters``, ends with a weighted residual RMS above
+    ``rms``: the χ²_ν survival function at m·RMS², ν = m − n (module docstring). The inverse
+    of :func:`rms_bound`: a fit fails the noise-model test when this falls below
+    1 − :data:`NOISE_MODEL_PROBABILITY`.
+
+    >>> round(rms_tail_probability(rms_bound(1180), 1180), 9)
+    0.001
+    >>> round(rms_tail_probability(1.0, 1180), 2)   # the RMS a correct model expects
+    0.45
+
+    Raises
+    ------
+    InputError
+        As :func:`rms_bound`, or with ν = 0 (the fit interpolates: no test).
+    """
+    dof = n_residuals - n_parameters
+    if dof <= 0:
+        raise InputError("dc", "residuals", f"more than {n_parameters} (one per estimated "
+                         "parameter)", n_residuals)
+    return float(chi2.sf(n_residuals * rms**2, dof))
+
+
 def _linearise(obs: Observations, prop: Propagator, x0: np.ndarray,
                orientation: EarthOrientation) -> tuple[np.ndarray, np.ndarray]:
     """Return prefit residuals y (M k,) and epoch-mapped partials H (M k, 6)."""

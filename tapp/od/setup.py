@@ -5,13 +5,18 @@ networks, the tracking (data rate, span, noise, seed) and the brief's initial of
 commands and the study runner share these functions so a single run and the full study use
 the same data.
 
-The study file (``scenarios/approx_stm.toml``) is validated as a whole against one schema,
-:class:`StudyFile` (``tapp.schema``: unknown keys and sections are errors, booleans are not
-numbers, ...): ``epoch``, ``[orbits.NAME]`` (:class:`tapp.orbits.OrbitTable`),
-``[stations.NAME]`` and ``[networks]`` (:mod:`tapp.stations_file`), ``[tracking]``,
-``[initial_offset]``, ``[dc_settings]``, ``[[dc]]``, ``[ekf]`` with ``[ekf.apriori]`` and
-``[rsig]``. Gravity specs are checked by :func:`tapp.dynamics.parse_gravity`, orbit and
-station names against their tables.
+The study file (the shipped ``approx_stm.toml``, :data:`tapp.examples.STUDY_FILE`) is
+validated as a whole against one schema, :class:`StudyFile` (``tapp.schema``: unknown keys
+and sections are errors, booleans are not numbers, ...): ``epoch``, ``[orbits.NAME]``
+(:class:`tapp.orbits.OrbitTable`), ``[stations.NAME]`` and ``[networks]``
+(:mod:`tapp.stations_file`), ``[tracking]``, ``[noise.fit]`` (:mod:`tapp.noise_file`),
+``[initial_offset]``, ``[dc_settings]``, ``[[dc]]``, ``[ekf]`` with ``[ekf.apriori]``,
+``[rsig]``, ``[rate_vs_arc]`` and ``[rate_vs_inclination]`` (reference:
+``docs/reference/study.md``). The runs name their models as every file does: ``gravity`` (the
+state model, which simulates the data) and ``var_gravity`` (the variational models, one run
+each); ``truth``, ``stm`` and ``[tracking]``'s σ keys are refused, naming the new key. Gravity
+specs are checked by :func:`tapp.dynamics.parse_gravity`, orbit and station names against
+their tables.
 
 Earth orientation: top-level ``earth_orientation`` ("iau2006", the default, or "gmst"; see
 :mod:`tapp.frames.orientation`) and ``eop`` ("iers", the default, "none" or a finals2000A file
@@ -32,20 +37,23 @@ from pathlib import Path
 from typing import Annotated
 
 import numpy as np
-from pydantic import AfterValidator, Field, model_validator
+from pydantic import Field, model_validator
 
 from tapp.constants import GM_EARTH_km3_s2
-from tapp.dynamics import ForceModel, Propagator, earth_model, parse_gravity
+from tapp.dynamics import ForceModel, Propagator, earth_model
 from tapp.errors import InputError
+from tapp.examples import STUDY_FILE
 from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.frames.orientation import EarthOrientation, check_model, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements.stations import Station
+from tapp.models_file import GravityName
+from tapp.noise_file import FitTable
 from tapp.od.batch import MAX_ITERATIONS
 from tapp.od.observations import MadeUnder, Observations, simulate
-from tapp.orbits import DEFAULT_SCENARIO, OrbitTable, parse_orbit
-from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, validate
-from tapp.stations_file import StationTable, load_network
+from tapp.orbits import OrbitTable, parse_orbit
+from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, UtcDate, validate
+from tapp.stations_file import StationsSection, load_network
 from tapp.tomlfile import read_toml
 
 Positive = Annotated[float, Field(gt=0)]
@@ -53,27 +61,39 @@ Positive = Annotated[float, Field(gt=0)]
 KINDS = ("range", "range_rate")
 
 
-def _gravity(spec: str) -> str:
-    try:
-        parse_gravity(spec)
-    except InputError as exc:
-        raise Invalid(exc.expected) from None
-    return spec
-
-
-#: A gravity spec: J0, Jn or NxM (checked by ``tapp.dynamics.parse_gravity``).
-GravityName = Annotated[str, AfterValidator(_gravity)]
-
-
 class StudyTracking(Schema):
-    """``[tracking]``: simulated tracking of the study (units in the names)."""
+    """``[tracking]``: the study's simulated tracking (its DATASIM): a file per orbit and
+    gravity model, sampled while a station sees the spacecraft above its mask."""
 
-    data_interval_s: Positive
-    span_days: Positive
-    sigma_range_m: Positive
-    sigma_range_rate_mm_s: Positive
-    seed: Annotated[int, Field(ge=0)] = 0
-    equatorial_below_deg: Annotated[float, Field(gt=0, le=180)]
+    renamed_keys = {key: f"[noise.fit] {key}" for key in ("sigma_range_m",
+                                                            "sigma_range_rate_mm_s")}
+
+    data_interval_s: Positive = Field(description="Time between samples of each station.")
+    span_days: Positive = Field(description="Span of each simulated observation file, from "
+                                "the epoch; a run's arc is cut from it.")
+    seed: Annotated[int, Field(ge=0)] = Field(0, description="Seed of the simulated noise "
+                                              "(numpy SeedSequence).")
+    equatorial_below_deg: Annotated[float, Field(gt=0, le=180)] = Field(
+        description="Orbits inclined below this track from the network 'equatorial', the "
+        "others from 'global', when a run names no network.")
+
+
+class StudyNoise(Schema):
+    """``[noise]``: the white noise of the simulated data, which every fit also assumes."""
+
+    fit: FitTable = Field(description="σ of range and range rate (the study tracks no angles).")
+
+    @model_validator(mode="after")
+    def _range_and_range_rate(self) -> StudyNoise:
+        for key in ("sigma_azimuth_deg", "sigma_elevation_deg"):
+            if getattr(self.fit, key) is not None:
+                raise Invalid("no angle σ (the study tracks range and range rate)",
+                              getattr(self.fit, key), f"fit.{key}")
+        for key in ("sigma_range_m", "sigma_range_rate_mm_s"):
+            if getattr(self.fit, key) is None:
+                raise Invalid("a value (the study tracks range and range rate)", None,
+                              f"fit.{key}")
+        return self
 
 
 class InitialOffset(Schema):
@@ -85,10 +105,13 @@ class InitialOffset(Schema):
     brief, kept so that study files written for it still read; give one of the two.
     """
 
-    da_m: float
-    de: float | None = None
-    e: Annotated[float, Field(ge=0, lt=1)] | None = None
-    di_deg: float
+    da_m: float = Field(description="Error added to the semi-major axis.")
+    de: float | None = Field(None, description="Error added to the eccentricity (or e).",
+                             json_schema_extra={"unit": "1"})
+    e: Annotated[float, Field(ge=0, lt=1)] | None = Field(
+        None, description="The eccentricity every initial estimate starts from, in place of "
+        "de (an earlier reading of the brief).", json_schema_extra={"unit": "1"})
+    di_deg: float = Field(description="Error added to the inclination.")
 
     @model_validator(mode="after")
     def _one_e(self) -> InitialOffset:
@@ -99,55 +122,84 @@ class InitialOffset(Schema):
 
 
 class DCSettingsTable(Schema):
-    """``[dc_settings]``: fields of :class:`tapp.od.batch.DCSettings`."""
+    """``[dc_settings]``: the iteration control of every DC run
+    (:class:`tapp.od.batch.DCSettings`)."""
 
-    max_iterations: Annotated[int, Field(ge=2, le=MAX_ITERATIONS)] = 15
-    rms_rel_tol: Positive = 1e-3
-    divergence_ratio: Annotated[float, Field(gt=1)] = 10.0
-    rms_floor: Positive = 1e-6
-    rms_fit_limit: Positive = 3.0
-    trend_window: Annotated[int, Field(ge=2)] = 10
-    max_condition: Annotated[float, Field(gt=1)] = 1e10
+    max_iterations: Annotated[int, Field(ge=2, le=MAX_ITERATIONS)] = Field(
+        15, description="Iterations at most; a DC still converging then ends as such.")
+    rms_rel_tol: Positive = Field(1e-3, description="The weighted RMS has settled when it "
+                                  "changes by less than this, relative.",
+                                  json_schema_extra={"unit": "1"})
+    divergence_ratio: Annotated[float, Field(gt=1)] = Field(
+        10.0, description="Diverged when the RMS exceeds this times its smallest value so far.",
+        json_schema_extra={"unit": "1"})
+    rms_floor: Positive = Field(1e-6, description="Converged when the RMS falls below this "
+                                "(a noise-free fit).", json_schema_extra={"unit": "1"})
+    rms_fit_limit: Positive = Field(3.0, description="A settled RMS above this is a stall: "
+                                    "the data are not fitted.", json_schema_extra={"unit": "1"})
+    trend_window: Annotated[int, Field(ge=2)] = Field(
+        10, description="Iterations over which the contraction factor is measured (at least).")
+    max_condition: Annotated[float, Field(gt=1)] = Field(
+        1e10, description="A normal matrix (scaled to a unit diagonal) of a larger condition "
+        "number at the first iteration is diagnosed, not iterated on.",
+        json_schema_extra={"unit": "1"})
 
 
-class DCBlock(Schema):
-    """One ``[[dc]]`` block: orbits x STM models x arcs, one truth model."""
+class StudyModels(Schema):
+    """The two models of a study run, named as in every other file (the study's own
+    ``truth`` and ``stm`` are refused, naming the new key)."""
 
-    title: str | None = None
-    orbits: Annotated[list[str], Field(min_length=1)]
-    truth: GravityName
-    stm: Annotated[list[GravityName], Field(min_length=1)]
-    arcs_h: Annotated[list[Positive], Field(min_length=1)]
+    renamed_keys = {"truth": "gravity", "stm": "var_gravity"}
+
+    gravity: GravityName = Field(
+        description="The Earth's gravity field of the state model: the data are simulated "
+        "with it and every fit's trajectory moves under it.")
+    var_gravity: Annotated[list[GravityName], Field(min_length=1)] = Field(
+        description="The variational models, one run (or curve) each: the Earth field whose "
+        "Jacobian drives the fit's STM (the truncated variational equations).")
 
 
-class EKFBlock(Schema):
-    """``[ekf]``: one orbit and truth, STM models x a priori σ (x, y, z km; vx, vy, vz km/s)."""
+class DCBlock(StudyModels):
+    """One ``[[dc]]`` block: a batch DC for every orbit x variational model x arc."""
 
-    title: str = "EKF"
-    orbit: str
-    truth: GravityName
-    stm: Annotated[list[GravityName], Field(min_length=1)]
-    arc_h: Positive
-    last_passes: Annotated[int, Field(ge=1)] = 6
-    apriori: dict[str, Annotated[list[Positive], Field(min_length=6, max_length=6)]] = {}
+    title: str | None = Field(None, description="Heading of the block's table in the report.")
+    orbits: Annotated[list[str], Field(min_length=1)] = Field(
+        description="Names of [orbits.NAME] tables.")
+    arcs_h: Annotated[list[Positive], Field(min_length=1)] = Field(
+        description="Arc lengths, from the epoch.")
+
+
+class EKFBlock(StudyModels):
+    """``[ekf]``: an extended Kalman filter for one orbit, every variational model x a priori."""
+
+    title: str = Field("EKF", description="Heading of the EKF table in the report.")
+    orbit: str = Field(description="Name of an [orbits.NAME] table.")
+    arc_h: Positive = Field(description="Arc length, from the epoch.")
+    last_passes: Annotated[int, Field(ge=1)] = Field(
+        6, description="Passes at the end of the arc whose largest |O-C| the report shows.")
+    apriori: dict[str, Annotated[list[Positive], Field(min_length=6, max_length=6)]] = Field(
+        {}, description="A priori σ by label: x, y, z (km), vx, vy, vz (km/s).",
+        json_schema_extra={"unit": "km, km/s"})
 
 
 class RSigBlock(Schema):
-    """``[rsig]``: R(t) curves of (truth, STM) pairs over ``hours`` sampled every ``step_s``."""
+    """``[rsig]``: the error-growth signature R(t) of (state, variational) model pairs."""
 
-    orbit: str
-    hours: Positive
-    step_s: Positive
-    cases: list[Annotated[list[GravityName], Field(min_length=2, max_length=2)]]
+    orbit: str = Field(description="Name of an [orbits.NAME] table.")
+    hours: Positive = Field(description="Span of the curves, from the epoch.",
+                            json_schema_extra={"unit": "h"})
+    step_s: Positive = Field(description="Sampling of the curves.")
+    cases: list[Annotated[list[GravityName], Field(min_length=2, max_length=2)]] = Field(
+        description="[gravity, var_gravity] pairs, one curve each.")
 
 
 class Grid(Schema):
     """A grid ``first``, ``first + step``, ... up to ``last`` (inclusive), in the field's
     units."""
 
-    first: Annotated[float, Field(ge=0)]
-    last: Annotated[float, Field(ge=0)]
-    step: Positive
+    first: Annotated[float, Field(ge=0)] = Field(description="The first point.")
+    last: Annotated[float, Field(ge=0)] = Field(description="The last point (inclusive).")
+    step: Positive = Field(description="The spacing (at most 1000 points).")
 
     @model_validator(mode="after")
     def _ordered(self) -> Grid:
@@ -164,25 +216,22 @@ class Grid(Schema):
         return self.first + self.step * np.arange(n + 1)
 
 
-class RateVsArcBlock(Schema):
-    """``[rate_vs_arc]``: ρ against arc length (h) for one orbit, truth and STM models."""
+class RateVsArcBlock(StudyModels):
+    """``[rate_vs_arc]``: the predicted DC rate ρ against arc length, for one orbit."""
 
-    orbit: str
-    truth: GravityName
-    stm: Annotated[list[GravityName], Field(min_length=1)]
-    arcs_h: Grid
+    orbit: str = Field(description="Name of an [orbits.NAME] table.")
+    arcs_h: Grid = Field(description="The arc lengths, as a grid {first, last, step} (h).")
 
 
-class RateVsInclinationBlock(Schema):
+class RateVsInclinationBlock(StudyModels):
     """``[rate_vs_inclination]``: ρ against inclination (deg) of ``orbit``'s elements over one
     arc, seen from one ``network`` (the same stations at every inclination)."""
 
-    orbit: str
-    truth: GravityName
-    stm: Annotated[list[GravityName], Field(min_length=1)]
-    arc_h: Positive
-    network: str
-    inclinations_deg: Grid
+    orbit: str = Field(description="Name of an [orbits.NAME] table given by elements.")
+    arc_h: Positive = Field(description="Arc length, from the epoch.")
+    network: str = Field(description="A network of [networks], or a station name.")
+    inclinations_deg: Grid = Field(description="The inclinations, as a grid {first, last, "
+                                   "step} within 0..180 (deg).")
 
     @model_validator(mode="after")
     def _range(self) -> RateVsInclinationBlock:
@@ -192,23 +241,26 @@ class RateVsInclinationBlock(Schema):
         return self
 
 
-class StudyFile(Schema):
-    """Schema of the study file (module docstring)."""
+class StudyFile(StationsSection):
+    """Schema of the study file."""
 
-    epoch: str | dt.datetime
+    epoch: UtcDate = Field(description="UTC at t = 0: the orbits' epoch and the "
+                                     "start of the simulated tracking.")
     earth_orientation: EarthOrientationName = "iau2006"
     eop: EopSource = "iers"
-    orbits: dict[str, OrbitTable] = {}
-    stations: dict[str, StationTable] = {}
-    networks: dict[str, list[str]] = {}
-    tracking: StudyTracking
-    initial_offset: InitialOffset
-    dc_settings: DCSettingsTable = DCSettingsTable()
-    dc: list[DCBlock] = []
-    ekf: EKFBlock | None = None
-    rsig: RSigBlock | None = None
-    rate_vs_arc: RateVsArcBlock | None = None
-    rate_vs_inclination: RateVsInclinationBlock | None = None
+    orbits: dict[str, OrbitTable] = Field({}, description="The true orbits, by name (--orbit "
+                                          "NAME).")
+    tracking: StudyTracking = Field(description="The simulated tracking.")
+    noise: StudyNoise = Field(description="The noise of the simulated data.")
+    initial_offset: InitialOffset = Field(description="The error of every initial estimate.")
+    dc_settings: DCSettingsTable = Field(DCSettingsTable(), description="Iteration control "
+                                         "of every DC.")
+    dc: list[DCBlock] = Field([], description="Batch DC runs.")
+    ekf: EKFBlock | None = Field(None, description="EKF runs.")
+    rsig: RSigBlock | None = Field(None, description="R(t) curves.")
+    rate_vs_arc: RateVsArcBlock | None = Field(None, description="ρ against arc length.")
+    rate_vs_inclination: RateVsInclinationBlock | None = Field(
+        None, description="ρ against inclination.")
 
     @model_validator(mode="after")
     def _names_exist(self) -> StudyFile:
@@ -228,11 +280,6 @@ class StudyFile(Schema):
                 self.stations:
             raise Invalid(f"a network of [networks] ({', '.join(self.networks)}) or a station",
                           inc.network, "rate_vs_inclination.network")
-        for network, names in self.networks.items():
-            for i, name in enumerate(names):
-                if name not in self.stations:
-                    raise Invalid(f"names of [stations.*] tables ({', '.join(self.stations)})",
-                                  name, f"networks.{network}[{i}]")
         return self
 
 
@@ -265,17 +312,17 @@ def _study(path: Path) -> tuple[dict, StudyFile]:
     return data, validate(StudyFile, data, str(path))
 
 
-def study_file(path: Path = DEFAULT_SCENARIO) -> StudyFile:
+def study_file(path: Path = STUDY_FILE) -> StudyFile:
     """Return the validated study file (cached); errors name the file and the field."""
     return _study(Path(path))[1]
 
 
-def load_study(path: Path = DEFAULT_SCENARIO) -> dict:
+def load_study(path: Path = STUDY_FILE) -> dict:
     """Return the parsed study TOML (cached), validated against :class:`StudyFile` first."""
     return _study(Path(path))[0]
 
 
-def epoch(path: Path = DEFAULT_SCENARIO) -> Epoch:
+def epoch(path: Path = STUDY_FILE) -> Epoch:
     """Return the study's epoch (UTC), the t = 0 of its observations."""
     text = study_file(path).epoch
     if isinstance(text, dt.datetime):
@@ -283,15 +330,16 @@ def epoch(path: Path = DEFAULT_SCENARIO) -> Epoch:
     return parse_epoch(text, source=str(path))
 
 
-def tracking(path: Path = DEFAULT_SCENARIO) -> Tracking:
+def tracking(path: Path = STUDY_FILE) -> Tracking:
     """Return the ``[tracking]`` settings."""
-    table = study_file(path).tracking
-    sigma = np.array([table.sigma_range_m * 1e-3, table.sigma_range_rate_mm_s * 1e-6])
+    study = study_file(path)
+    table, fit = study.tracking, study.noise.fit
+    sigma = np.array([fit.sigma_range_m * 1e-3, fit.sigma_range_rate_mm_s * 1e-6])
     return Tracking(table.data_interval_s, table.span_days * 86400.0, sigma, table.seed,
                     math.radians(table.equatorial_below_deg))
 
 
-def earth_orientation_name(path: Path = DEFAULT_SCENARIO, model: str | None = None) -> str:
+def earth_orientation_name(path: Path = STUDY_FILE, model: str | None = None) -> str:
     """Return the Earth orientation model of a run: ``model`` (a CLI override) or the file's."""
     if model is not None:
         return check_model(model, "--earth-orientation", "value")
@@ -307,7 +355,7 @@ def _orientation(path: Path, model: str) -> EarthOrientation:
     return orient
 
 
-def orientation(path: Path = DEFAULT_SCENARIO, model: str | None = None) -> EarthOrientation:
+def orientation(path: Path = STUDY_FILE, model: str | None = None) -> EarthOrientation:
     """Return the study's Earth orientation (cached per file and model; module docstring).
 
     ``model`` overrides the file's ``earth_orientation`` (the CLI's ``--earth-orientation``).
@@ -341,14 +389,14 @@ def _describe_made_under(made: MadeUnder) -> str:
 
 
 def check_made_under(obs: Observations, orient: EarthOrientation, source: str,
-                     path: Path = DEFAULT_SCENARIO, chosen: bool = False) -> str | None:
+                     path: Path = STUDY_FILE, chosen: bool = False) -> str | None:
     """Check observations read from ``source`` against the run's Earth orientation
     ``orient``; return a note for the user (one line) or None, or raise InputError.
 
     Where data meet a model: observations made under one Earth orientation and fitted under
     another are off by the difference of the station places (31.5 km at Goldstone between
     iau2006 and gmst on 2026-01-01), and a DC on them settles tens of km from the orbit
-    (41.5 km for ``tapp simulate``'s TDM of ``scenarios/leo_equatorial.toml`` fitted under
+    (41.5 km for ``tapp simulate``'s TDM of ``leo_equatorial.toml`` fitted under
     the study's gmst). The file's record (``obs.made_under``, :mod:`tapp.od.obsfile`):
 
     - states the run's model, EOP source and frame: None;
@@ -402,12 +450,12 @@ def force_model(spec: str, orient: EarthOrientation, source: str, field: str) ->
     return earth_model(spec, source=source, field=field, earth_orientation=orient.model)
 
 
-def sigma_by_kind(path: Path = DEFAULT_SCENARIO) -> dict[str, float]:
+def sigma_by_kind(path: Path = STUDY_FILE) -> dict[str, float]:
     """Return the study's measurement standard deviations by observable kind (km, km/s)."""
     return dict(zip(KINDS, tracking(path).sigma.tolist(), strict=True))
 
 
-def offset(path: Path = DEFAULT_SCENARIO) -> Offset:
+def offset(path: Path = STUDY_FILE) -> Offset:
     """Return the ``[initial_offset]`` of the brief."""
     table = study_file(path).initial_offset
     return Offset(table.da_m * 1e-3, table.de or 0.0, math.radians(table.di_deg), table.e)
@@ -431,7 +479,7 @@ def initial_estimate(x_true: np.ndarray, off: Offset) -> np.ndarray:
     return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
-def true_orbit(spec: str, path: Path = DEFAULT_SCENARIO, *, allow_subsurface: bool = False
+def true_orbit(spec: str, path: Path = STUDY_FILE, *, allow_subsurface: bool = False
                ) -> np.ndarray:
     """Return the true initial state of an orbit name or spec (see :mod:`tapp.orbits`).
 
@@ -441,7 +489,7 @@ def true_orbit(spec: str, path: Path = DEFAULT_SCENARIO, *, allow_subsurface: bo
     return parse_orbit(spec, scenario=path, allow_subsurface=allow_subsurface)
 
 
-def network_for(x_true: np.ndarray, name: str | None, path: Path = DEFAULT_SCENARIO
+def network_for(x_true: np.ndarray, name: str | None, path: Path = STUDY_FILE
                 ) -> tuple[Station, ...]:
     """Return the named network/station, or the default for the orbit's inclination."""
     if name is None:
@@ -452,7 +500,7 @@ def network_for(x_true: np.ndarray, name: str | None, path: Path = DEFAULT_SCENA
 
 
 def simulated_observations(x_true: np.ndarray, truth_spec: str, stations: tuple[Station, ...],
-                           path: Path = DEFAULT_SCENARIO, seed: int | None = None,
+                           path: Path = STUDY_FILE, seed: int | None = None,
                            span_s: float | None = None, noise: bool = True,
                            orient: EarthOrientation | None = None) -> Observations:
     """Simulate the study's 5-day observation file for one orbit and truth model.
@@ -472,6 +520,6 @@ def simulated_observations(x_true: np.ndarray, truth_spec: str, stations: tuple[
     return simulate(truth, x_true, stations, t, trk.sigma, rng, orient)
 
 
-def named_orbit_names(path: Path = DEFAULT_SCENARIO) -> list[str]:
+def named_orbit_names(path: Path = STUDY_FILE) -> list[str]:
     """Names of the orbits of the scenario file."""
     return list(study_file(path).orbits)

@@ -1,7 +1,7 @@
 """The approximate-STM study end to end: every run of the brief, as data.
 
 The runs are read from the study's scenario file (``[[dc]]``, ``[ekf]``, ``[rsig]``,
-``[rate_vs_arc]``, ``[rate_vs_inclination]``; see ``scenarios/approx_stm.toml``, validated by
+``[rate_vs_arc]``, ``[rate_vs_inclination]``; see ``approx_stm.toml``, validated by
 :class:`tapp.od.setup.StudyFile`); each DC run uses the brief's offset initial estimate and the
 5-day simulated observation file of its orbit and truth model, cut to the run's arc. Beside
 each DC run go the predicted convergence rate ρ of its (J_N, J_M) pair on the same
@@ -25,13 +25,13 @@ import numpy as np
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator
 from tapp.errors import TooFewMeasurementsError
+from tapp.examples import STUDY_FILE
 from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.od import setup
 from tapp.od.batch import DCResult, DCSettings, differential_correction
 from tapp.od.ekf import EKFResult, extended_kalman_filter
 from tapp.od.rate import PredictedRate, predicted_rate
 from tapp.od.rsig import RSignature, r_signature
-from tapp.orbits import DEFAULT_SCENARIO
 from tapp.stations_file import load_network
 
 
@@ -115,16 +115,16 @@ class StudyResults:
     earth_orientation: dict = field(default_factory=dict)
 
 
-def planned_cases(path: Path = DEFAULT_SCENARIO) -> int:
+def planned_cases(path: Path = STUDY_FILE) -> int:
     """Number of runs the study will make (for a progress bar)."""
     study = setup.study_file(path)
-    n = sum(len(b.orbits) * len(b.stm) * len(b.arcs_h) for b in study.dc)
+    n = sum(len(b.orbits) * len(b.var_gravity) * len(b.arcs_h) for b in study.dc)
     if study.ekf:
-        n += len(study.ekf.stm) * len(study.ekf.apriori)
+        n += len(study.ekf.var_gravity) * len(study.ekf.apriori)
     if study.rate_vs_arc:
-        n += len(study.rate_vs_arc.stm)
+        n += len(study.rate_vs_arc.var_gravity)
     if study.rate_vs_inclination:
-        n += len(study.rate_vs_inclination.stm)
+        n += len(study.rate_vs_inclination.var_gravity)
     return n + (len(study.rsig.cases) if study.rsig else 0)
 
 
@@ -149,7 +149,7 @@ def with_inclination(x: np.ndarray, inclination_rad: float) -> np.ndarray:
     return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
-def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = lambda _: None,
+def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _: None,
               earth_orientation: str | None = None) -> StudyResults:
     """Run every case of the study; ``advance(label)`` is called after each case.
 
@@ -185,7 +185,7 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
 
     def r_at_end(orbit: str, truth: str, stm: str, arc_h: float) -> float:
         if (orbit, truth, stm, arc_h) not in r_end:
-            prop = Propagator(model(truth, "dc.truth"), model(stm, "dc.stm"))
+            prop = Propagator(model(truth, "dc.gravity"), model(stm, "dc.var_gravity"))
             sig = r_signature(prop, setup.true_orbit(orbit, path),
                               np.array([0.0, arc_h * 3600.0]), orient)
             r_end[orbit, truth, stm, arc_h] = float(sig.r[-1])
@@ -197,11 +197,11 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
         for orbit in block.orbits:
             x_true = setup.true_orbit(orbit, path)
             x_start = setup.initial_estimate(x_true, off)
-            truth = block.truth
+            truth = block.gravity
             obs = observations(orbit, truth)
-            for stm in block.stm:
-                state_model = model(truth, "dc.truth")
-                var_model = model(stm, "dc.stm")
+            for stm in block.var_gravity:
+                state_model = model(truth, "dc.gravity")
+                var_model = model(stm, "dc.var_gravity")
                 prop = Propagator(state_model, var_model)
                 for arc_h in block.arcs_h:
                     data = obs.arc(arc_h * 3600.0, str(path), f"dc[{index}].arcs_h", arc_h)
@@ -218,13 +218,13 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
     ekf_runs = []
     ekf = study.ekf
     if ekf:
-        orbit, truth = ekf.orbit, ekf.truth
+        orbit, truth = ekf.orbit, ekf.gravity
         x_true = setup.true_orbit(orbit, path)
         x_start = setup.initial_estimate(x_true, off)
         obs = observations(orbit, truth).arc(ekf.arc_h * 3600.0, str(path), "ekf.arc_h",
                                              ekf.arc_h)
-        for stm in ekf.stm:
-            prop = Propagator(model(truth, "ekf.truth"), model(stm, "ekf.stm"))
+        for stm in ekf.var_gravity:
+            prop = Propagator(model(truth, "ekf.gravity"), model(stm, "ekf.var_gravity"))
             for label, sig in ekf.apriori.items():
                 p0 = np.diag(np.square(np.asarray(sig, dtype=float)))
                 res = extended_kalman_filter(obs, prop, x_start, p0, orientation=orient)
@@ -246,17 +246,17 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
     if ra:
         x_true = setup.true_orbit(ra.orbit, path)
         arcs_h = ra.arcs_h.values()
-        state_model = model(ra.truth, "rate_vs_arc.truth")
-        obs = setup.simulated_observations(x_true, ra.truth, setup.network_for(x_true, None,
+        state_model = model(ra.gravity, "rate_vs_arc.gravity")
+        obs = setup.simulated_observations(x_true, ra.gravity, setup.network_for(x_true, None,
                                                                                path),
                                            path, span_s=float(arcs_h[-1]) * 3600.0,
                                            noise=False, orient=orient)
-        for stm in ra.stm:
-            var_model = model(stm, "rate_vs_arc.stm")
+        for stm in ra.var_gravity:
+            var_model = model(stm, "rate_vs_arc.var_gravity")
             rates = [_rate_or_none(obs.window(a * 3600.0), state_model, var_model, x_true,
                                    orient) for a in arcs_h]
-            arc_curves.append(_curve(ra.orbit, ra.truth, stm, arcs_h, rates))
-            advance(f"rho vs arc ({ra.truth},{stm})")
+            arc_curves.append(_curve(ra.orbit, ra.gravity, stm, arcs_h, rates))
+            advance(f"rho vs arc ({ra.gravity},{stm})")
 
     inc_curves = []
     ri = study.rate_vs_inclination
@@ -264,23 +264,23 @@ def run_study(path: Path = DEFAULT_SCENARIO, advance: Callable[[str], None] = la
         x_orbit = setup.true_orbit(ri.orbit, path)
         stations = load_network(setup.load_study(path), str(path), ri.network)
         incs = ri.inclinations_deg.values()
-        state_model = model(ri.truth, "rate_vs_inclination.truth")
+        state_model = model(ri.gravity, "rate_vs_inclination.gravity")
         data = []
         for inc in incs:
             x_i = with_inclination(x_orbit, np.radians(inc))
             try:
-                o = setup.simulated_observations(x_i, ri.truth, stations, path,
+                o = setup.simulated_observations(x_i, ri.gravity, stations, path,
                                                  span_s=ri.arc_h * 3600.0, noise=False,
                                                  orient=orient)
             except TooFewMeasurementsError:
                 o = None
             data.append((x_i, o))
-        for stm in ri.stm:
-            var_model = model(stm, "rate_vs_inclination.stm")
+        for stm in ri.var_gravity:
+            var_model = model(stm, "rate_vs_inclination.var_gravity")
             rates = [None if o is None else _rate_or_none(o, state_model, var_model, x_i,
                                                           orient) for x_i, o in data]
-            inc_curves.append(_curve(ri.orbit, ri.truth, stm, incs, rates))
-            advance(f"rho vs inclination ({ri.truth},{stm})")
+            inc_curves.append(_curve(ri.orbit, ri.gravity, stm, incs, rates))
+            advance(f"rho vs inclination ({ri.gravity},{stm})")
 
     trk = setup.tracking(path)
     return StudyResults(tuple(dc_runs), tuple(blocks), tuple(ekf_runs),

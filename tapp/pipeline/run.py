@@ -15,7 +15,6 @@ that was killed (SIGKILL) is removed by the next run to the same ``out_dir``.
 from __future__ import annotations
 
 import json
-import shutil
 import tempfile
 import time
 from collections.abc import Callable
@@ -29,14 +28,7 @@ from iter.execute import Execution
 from tapp.errors import InputError
 from tapp.guidance.guidefile import GuideFile
 from tapp.guidance.study import GuidanceResult, check_samples, check_seed, guidance_study
-from tapp.outputs import (
-    check_folder,
-    make_folders,
-    remove_empty_folders,
-    remove_stale_temporaries,
-    temporary_name,
-    unwritable,
-)
+from tapp.outputs import check_new_directory, new_directory
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
 from tapp.pipeline.steps import process_tape
 from tapp.processor.deck import Deck
@@ -60,6 +52,8 @@ OUTPUTS = {
     "plots": "plots",
 }
 
+_NEVER_OVERWRITES = "a pipeline never overwrites an earlier run"
+
 #: Progress callback: (stage, done, total).
 Progress = Callable[[str, int, int], None]
 
@@ -79,10 +73,6 @@ def _nothing(stage: str, done: int, total: int) -> None:
     """The default progress callback."""
 
 
-#: The option that names a pipeline's directory, in messages.
-OUTPUT_OPTION = "-o/--output"
-
-
 def check_out_dir(out_dir: Path) -> Path:
     """Return ``out_dir`` if it does not exist or is an empty directory in a folder that can
     be written, else raise.
@@ -94,15 +84,7 @@ def check_out_dir(out_dir: Path) -> Path:
         symbolic link (the run's directory is renamed into place: it would replace the
         link), or a path in a folder that is a file or cannot be written.
     """
-    out_dir = Path(out_dir)
-    if out_dir.is_symlink():
-        raise InputError(OUTPUT_OPTION, "directory", "a new or empty directory, not a symbolic "
-                         "link (the finished run is renamed into place)", str(out_dir))
-    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
-        raise InputError(OUTPUT_OPTION, "directory", "a new or empty directory (a pipeline "
-                         "never overwrites an earlier run)", str(out_dir))
-    check_folder(OUTPUT_OPTION, out_dir)
-    return out_dir
+    return check_new_directory(out_dir, "-o/--output", _NEVER_OVERWRITES)
 
 
 def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | None = None,
@@ -117,25 +99,8 @@ def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | No
     WriteError
         ``out_dir`` could not be written for want of room, or a device error.
     """
-    out_dir = check_out_dir(out_dir)
-    work = temporary_name(out_dir)
-    created: list[Path] = []
-    try:
-        created += make_folders(out_dir.parent)
-        remove_stale_temporaries(out_dir)
-        work.mkdir()
+    with new_directory(out_dir, "-o/--output", _NEVER_OVERWRITES) as work:
         result = _run(pipeline, work, execution, plots, progress)
-        if out_dir.exists():
-            out_dir.rmdir()
-        work.rename(out_dir)
-    except OSError as exc:
-        # A failed write() names no file: the run writes only into its directory.
-        if exc.filename is not None and not Path(exc.filename).is_relative_to(out_dir.parent):
-            raise  # not the output's (a file read on the way)
-        raise unwritable(OUTPUT_OPTION, out_dir, exc, "a writable directory") from None
-    finally:
-        shutil.rmtree(work, ignore_errors=True)  # renamed away when the run succeeded
-        remove_empty_folders(created)  # the one holding out_dir is not empty: kept
     return replace(result, directory=out_dir)
 
 

@@ -36,7 +36,13 @@ from typing import Any
 from pydantic import Field
 
 from tapp.errors import InputError
-from tapp.guidance.study import check_samples, check_seed, check_shard_samples
+from tapp.guidance.study import (
+    MAX_SAMPLES,
+    MIN_SAMPLES,
+    check_samples,
+    check_seed,
+    check_shard_samples,
+)
 from tapp.schema import EarthOrientationName, Schema, validate
 from tapp.tomlfile import read_toml
 
@@ -53,20 +59,26 @@ class SimulateTable(Schema):
 class GuideTable(Schema):
     """``[guide]``: options of the TAPP II step."""
 
-    samples: int = 20000
-    seed: int = 0
-    shard_size: int | None = Field(None, gt=0)
+    samples: int = Field(20000, description="Monte Carlo samples.", json_schema_extra={
+        "minimum": MIN_SAMPLES, "maximum": MAX_SAMPLES})
+    seed: int = Field(0, description="Root seed of the samples' random streams (the same "
+                      "numbers on any number of workers).", json_schema_extra={"minimum": 0})
+    shard_size: int | None = Field(None, gt=0, description="Samples per shard, a multiple of "
+                                   "1,000; default: chosen from the workers.")
+
+
+_PART = "The {}: a path (relative to this file) or an inline table of its keys."
 
 
 class PipelineFile(Schema):
     """Schema of a pipeline file (module docstring)."""
 
-    title: str = ""
-    scenario: str | dict[str, Any]
-    deck: str | dict[str, Any]
-    guidance: str | dict[str, Any]
-    simulate: SimulateTable = SimulateTable()
-    guide: GuideTable = GuideTable()
+    title: str = Field("", description="Free text, in the report's heading.")
+    scenario: str | dict[str, Any] = Field(description=_PART.format("tracking scenario"))
+    deck: str | dict[str, Any] = Field(description=_PART.format("TAPP III deck"))
+    guidance: str | dict[str, Any] = Field(description=_PART.format("TAPP II guidance file"))
+    simulate: SimulateTable = Field(SimulateTable(), description="Options of TAPP I.")
+    guide: GuideTable = Field(GuideTable(), description="Options of TAPP II.")
 
 
 @dataclass(frozen=True, slots=True)

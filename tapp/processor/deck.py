@@ -6,9 +6,10 @@ position as in the seed; times are T13 time indices (TOML integers, as the seed'
 seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 times. Layout::
 
     title = "..."
-    [tape]                      # optional expectations checked against the tape
-    iden = "DSN-LUNAR-2026-03-10"
-    n_o = 23
+    [tape]                      # optional expectations checked against the tape; a deck
+    iden = "DSN-LUNAR-2026-03-10"   # that gives parameters by position (numbers, σ lists,
+    n_o = 23                    # matrices, permutations) must say which tape they refer to:
+    # parameters = ["x_km", ...]  # its iden, or its parameter names in order
     [times]
     print = [1, 86400.0, "2026-03-14T02:05:58.384"]   # print output times (k = 0 always)
     recycle = [2, 3]            # recycle (midcourse) times
@@ -51,124 +52,228 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
 In the sigma-table form every parameter of the tape needs a σ in the fit world (a parameter
 with σ = 0 is fixed, i.e. constrained) and in the real world (σ = 0: certain); the fit and
 real permutations that put the fitted/uncertain parameters first are then built by keeping the
-tape's order (stable). Fit normal matrices and real covariances given as matrices are checked
-symmetric; a real-world covariance must be positive semi-definite.
+tape's order (stable). A priori σ's lie in :data:`SIGMA_RANGE` (the reason is given there);
+fit normal matrices and real covariances given as matrices must have their diagonal in the
+matching range, be symmetric and positive semi-definite, each entry on its own scale
+√(a_ii a_jj); constraint coefficients are bounded by :data:`MAX_CONSTRAINT`.
 """
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
+from pydantic import Field
 
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
+from tapp.estimation.factors import scaled_min_eigenvalue
 from tapp.frames.time import parse_epoch
 from tapp.processor.commands import ROC, Command, Side, parse_command
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.plan import Plan, StationOff
 from tapp.processor.representations import ISOLATED_SETS, Systems
 from tapp.schema import InfFloat, Schema, load
+from tapp.tape.packing import symmetry_defect
 
 Ref = int | str
 TimeRef = int | float | str
 #: Time coincidence with a T13 time, s (tape times are stored to the microsecond).
 TIME_MATCH_S = 1e-3
-#: Largest negative eigenvalue of a real-world correlation matrix taken as rounding.
+#: Largest negative eigenvalue of an a priori matrix scaled to a unit diagonal (a correlation
+#: matrix) taken as rounding (:func:`tapp.estimation.factors.scaled_min_eigenvalue`).
 PSD_TOL = 1e-10
-#: Finite a priori σ's must lie in this range (any unit): σ² and 1/σ² stay finite doubles.
-SIGMA_RANGE = (1e-150, 1e150)
+#: Largest relative asymmetry |a_ij − a_ji| / √(a_ii a_jj) of an a priori matrix taken as
+#: rounding (:func:`tapp.tape.packing.symmetry_defect`).
+SYMMETRY_TOL = 1e-12
+#: Finite a priori σ's must lie in this range (any unit). Not for lack of doubles (σ² and
+#: 1/σ² are finite up to 1e154), but for what the programs do with them: a covariance is
+#: mapped by partials and transitions, squared into Gram matrices, and TAPP II raises its
+#: Δv's to the 4th power for the sampling error of a variance. With σ = 1e149 the LEO deck's
+#: Gram matrices overflowed (NaN in the JSON, variances printed as 0). At σ = 1e30 on every
+#: parameter, on the shipped tapes, every output stays finite with orders of magnitude to
+#: spare (tests/tapp/processor/test_deck_limits.py); and no quantity of these programs has a
+#: σ beyond 1e30 or below 1e-30 in any unit they use (km, km/s, s, rad, km³/s²).
+SIGMA_RANGE = (1e-30, 1e30)
+#: Diagonal entries of a priori matrices given whole: a covariance σ² and a normal matrix
+#: 1/σ², for σ in :data:`SIGMA_RANGE` (0: certain, or no information).
+COVARIANCE_RANGE = (SIGMA_RANGE[0] ** 2, SIGMA_RANGE[1] ** 2)
+NORMAL_RANGE = (SIGMA_RANGE[1] ** -2, SIGMA_RANGE[0] ** -2)
+#: Largest |e| of a constraint x(a) <- x(a) − e x(b), (unit of a)/(unit of b). e σ_b is a σ of
+#: the constrained system, and the links of two systems compose (the common world's, then the
+#: fit or real world's): e² σ_b stays within 1e50 for σ_b in SIGMA_RANGE, leaving the 1e10
+#: that transitions may add below the tapes' bound (:data:`tapp.tape.checks.MAX_MAGNITUDE`;
+#: the Table D-1 deck at σ = 1e30 and e = 1e20 wrote a factor of 1e70). The seed's
+#: coefficients are ratios of σ's (Table D-1: up to 3e5 km per unit of J2).
+MAX_CONSTRAINT = 1e10
+#: Most commands in a list (``commands.print``, ``commands.recycle``): the seed's Table B-5
+#: has 16 recycle commands; 10,000 print commands took 71 s, 3.3 GB and a 507 MB JSON.
+MAX_COMMANDS = 500
+#: Most times in ``times.print`` or ``times.recycle``, and windows in ``stations_off``:
+#: each is matched against the tape's times (a tape has 10 to 1,000 of them).
+MAX_TIMES = 10_000
+#: Most output entities of a run (each print time by the print commands, each recycle by the
+#: recycle commands), and most numbers in their matrices. Measured on the LEO tape (n_o =
+#: 38, 2 shared cores): 2,000 real-world orbit covariances (6 x 6, with error budgets) ran in
+#: 8 s with 330 MB and wrote a 24 MB JSON and an 18 MB O3; 1,000,000 numbers (692 covariances
+#: of the 38 parameters) 16 s, 730 MB, 58 MB and 109 MB, hence half of that.
+MAX_ENTITIES = 2_000
+MAX_ENTITY_NUMBERS = 500_000
 #: The seed's nominal optional miss partitions (Appendix A.1), (tail, head).
 NOMINAL_MISS = {"m1": (0, 6), "m2": (0, 3), "m3": (3, 6), "m4": (6, 12), "m5": (12, 18)}
 
 
 class TapeExpect(Schema):
-    iden: str | None = None
-    n_o: int | None = None
+    """``[tape]``: what the deck expects of the tape, checked when it is bound. A deck that
+    gives parameters by position must say which tape they refer to: ``iden`` or
+    ``parameters``."""
+
+    iden: str | None = Field(None, description="The tape's identification (the scenario's "
+                             "iden).")
+    n_o: int | None = Field(None, description="The tape's number of parameters.")
+    parameters: list[str] | None = Field(None, description="The tape's parameter names in "
+                                         "order, which the deck's positions refer to.")
+
+
+_TIMES = ("T13 times: indices (integers), seconds from the tape epoch (numbers) or UTC dates "
+          "(text)")
+_PERMUTATION = ("The seed's coding of the permutation: pairs [a, b], position a (1-based) "
+                "takes parameter b (name or position).")
+_CONSTRAINTS = "Triples [a, b, e]: x(a) <- x(a) - e x(b) (parameters by name or position)."
 
 
 class Times(Schema):
-    print: list[TimeRef] = []
-    recycle: list[TimeRef] = []
-    print_output: bool = True
-    recycle_print: bool = True
-    recycle_tape: bool = True
+    """``[times]``: when to print and when to recycle (midcourse times), and the flags."""
+
+    print: Annotated[list[TimeRef], Field(max_length=MAX_TIMES)] = Field(
+        [], description=f"Print output times, {_TIMES}; the epoch (k = 0) is always printed.")
+    recycle: Annotated[list[TimeRef], Field(max_length=MAX_TIMES)] = Field(
+        [], description=f"Recycle (midcourse) times, {_TIMES}.")
+    print_output: bool = Field(True, description="Print at the print times (the seed's δ_PM).")
+    recycle_print: bool = Field(True, description="Print at the recycle times (δ_P).")
+    recycle_tape: bool = Field(True, description="Write the recycle outputs to the T32 tape "
+                               "(δ_T).")
 
 
 class Commands(Schema):
-    print: list[str] = []
-    recycle: list[str] | Literal["standard"] = "standard"
+    """``[commands]``: the entities printed and the recycle commands."""
+
+    print: Annotated[list[str], Field(max_length=MAX_COMMANDS)] = Field(
+        [], description="Print commands, in the seed's notation (\"I; 0,-,pk; 1,2,fp\") or as "
+        "aliases (\"cov real orbit@current\").")
+    recycle: Annotated[list[str], Field(max_length=MAX_COMMANDS)] | Literal["standard"] = Field(
+        "standard", description="Recycle commands, or \"standard\": the seed's Table B-5 list.")
 
 
 class StationsOff(Schema):
-    station: Ref
-    start: TimeRef | None = None
-    end: TimeRef | None = None
+    """``[[stations_off]]``: a time-station flag: no data from a station in a window."""
+
+    station: Ref = Field(description="The station, by name or number.")
+    start: TimeRef | None = Field(None, description=f"Start of the window ({_TIMES}); default: "
+                                  "the first T13 time.")
+    end: TimeRef | None = Field(None, description="End of the window; default: the last T13 "
+                                "time.")
 
 
 class Common(Schema):
-    n_c1: int | None = None
-    permutation: list[list[Ref]] = []
-    eliminated: list[Ref] = []
-    constraints: list[list[Ref | float]] = []
+    """``[common]``: the common system: a permutation P_c with n_c1, and constraints K_c."""
+
+    n_c1: int | None = Field(None, description="Parameters kept (the rest are eliminated); "
+                             "with permutation.")
+    permutation: list[list[Ref]] = Field([], description=_PERMUTATION)
+    eliminated: list[Ref] = Field([], description="Parameters moved last and fixed in both "
+                                  "worlds (the readable form of permutation and n_c1).")
+    constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
 
 
 class FitApriori(Schema):
-    sigma: dict[str, InfFloat] | list[InfFloat] | None = None
-    normal: list[list[float]] | None = None
+    """``[fit.apriori]``: the fit world's a priori information: σ's or a normal matrix."""
+
+    sigma: dict[str, InfFloat] | list[InfFloat] | None = Field(
+        None, description="σ by parameter name (every parameter), or a list over f1 (the seed's "
+        "coding); 0: held fixed, inf: no information.", json_schema_extra={"unit": "the "
+                                                                            "parameter's"})
+    normal: list[list[float]] | None = Field(None, description="The n_f1 x n_f1 a priori "
+                                             "normal matrix S₀ (symmetric).")
 
 
 class Fit(Schema):
-    n_f1: int | None = None
-    permutation: list[list[Ref]] = []
-    fixed: list[Ref] = []
-    constraints: list[list[Ref | float]] = []
-    apriori: FitApriori = FitApriori()
+    """``[fit]``: the fit system: permutation P_f with n_f1, constraints K_f, a priori."""
+
+    n_f1: int | None = Field(None, description="Parameters the fit estimates; with "
+                             "permutation.")
+    permutation: list[list[Ref]] = Field([], description=_PERMUTATION)
+    fixed: list[Ref] = Field([], description="Parameters the fit holds fixed (the readable "
+                             "form of permutation and n_f1).")
+    constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
+    apriori: FitApriori = Field(FitApriori(), description="The fit world's a priori.")
 
 
 class RealApriori(Schema):
-    sigma: dict[str, float] | list[float] | None = None
-    correlation: list[list[Ref | float]] = []
-    covariance: list[list[float]] | None = None
+    """``[real.apriori]``: the real world's a priori covariance: σ's with correlations, or a
+    matrix."""
+
+    sigma: dict[str, float] | list[float] | None = Field(
+        None, description="σ by parameter name (every parameter), or a list over r1; 0: "
+        "certain.", json_schema_extra={"unit": "the parameter's"})
+    correlation: list[list[Ref | float]] = Field(
+        [], description="Triples [a, b, ρ]: the correlation of parameters a and b.")
+    covariance: list[list[float]] | None = Field(
+        None, description="The n_r1 x n_r1 a priori covariance Λ₀ (positive semi-definite).")
 
 
 class Real(Schema):
-    n_r1: int | None = None
-    permutation: list[list[Ref]] = []
-    certain: list[Ref] = []
-    constraints: list[list[Ref | float]] = []
-    apriori: RealApriori = RealApriori()
+    """``[real]``: the real system: permutation P_r with n_r1, constraints K_r, a priori."""
+
+    n_r1: int | None = Field(None, description="Uncertain parameters; with permutation.")
+    permutation: list[list[Ref]] = Field([], description=_PERMUTATION)
+    certain: list[Ref] = Field([], description="Parameters known exactly in the real world "
+                               "(the readable form of permutation and n_r1).")
+    constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
+    apriori: RealApriori = Field(RealApriori(), description="The real world's a priori.")
 
 
 class Miss(Schema):
-    partitions: dict[str, list[Ref]] = {}
+    """``[miss]``: optional partitions of the miss parameters."""
+
+    partitions: dict[str, list[Ref]] = Field(
+        {}, description="By name (m1 ... m5 as the seed's): [tail, head] positions, or the "
+        "names of miss quantities.")
 
 
 class BudgetTable(Schema):
-    enabled: bool = True
-    groups: dict[str, list[Ref]] = {}
+    """``[budget]``: the error budget of every printed real-world covariance."""
+
+    enabled: bool = Field(True, description="Print error budgets.")
+    groups: dict[str, list[Ref]] = Field(
+        {}, description="Named groups of parameters whose a priori errors count as one "
+        "source.")
 
 
 class Plots(Schema):
-    partition: str = "p@current"
+    """``[plots]``: what ``--plots`` draws."""
+
+    partition: str = Field("p@current", description="The set whose σ are plotted against "
+                           "time.")
 
 
 class Deck(Schema):
     """The deck file (module docstring); validated strictly, unknown keys are errors."""
 
-    title: str = ""
-    tape: TapeExpect = TapeExpect()
-    times: Times = Times()
-    commands: Commands = Commands()
-    stations_off: list[StationsOff] = []
-    common: Common = Common()
-    fit: Fit
-    real: Real
-    miss: Miss = Miss()
-    budget: BudgetTable = BudgetTable()
-    plots: Plots = Plots()
+    title: str = Field("", description="Free text, printed in the O3 heading.")
+    tape: TapeExpect = Field(TapeExpect(), description="Expectations checked against the tape.")
+    times: Times = Field(Times(), description="Print and recycle times.")
+    commands: Commands = Field(Commands(), description="Print and recycle commands.")
+    stations_off: Annotated[list[StationsOff], Field(max_length=MAX_TIMES)] = Field(
+        [], description="Time-station flags.")
+    common: Common = Field(Common(), description="The common system.")
+    fit: Fit = Field(description="The fit world: what the orbit determination assumes.")
+    real: Real = Field(description="The real world: what is true.")
+    miss: Miss = Field(Miss(), description="Miss partitions.")
+    budget: BudgetTable = Field(BudgetTable(), description="Error budgets.")
+    plots: Plots = Field(Plots(), description="Plots.")
 
 
 def read_deck(path: Path | str) -> Deck:
@@ -189,6 +294,8 @@ class _Binder:
         self.names = tuple(header.parameters.name)
         self.n_o, self.n_p = len(self.names), int(header.n_p)
         self.times = np.asarray(header.records.times_s, dtype=float)
+        #: Fields that refer to parameters by position (checked in :meth:`_check_positions`).
+        self.positional: list[str] = []
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -204,6 +311,7 @@ class _Binder:
         if isinstance(ref, int):
             if not 1 <= ref <= self.n_o:
                 raise self.fail(field, f"a position 1..{self.n_o}", ref)
+            self.positional.append(field)
             return ref - 1
         bare = [n.rstrip("'") for n in order]
         if ref not in bare:
@@ -248,6 +356,7 @@ class _Binder:
                      ) -> Permutation | None:
         if not pairs:
             return None
+        self.positional.append(field)
         out = []
         for i, pair in enumerate(pairs):
             if len(pair) != 2 or not isinstance(pair[0], int) or isinstance(pair[0], bool):
@@ -284,6 +393,9 @@ class _Binder:
             where = f"{field}[{i}]"
             if len(tr) != 3 or isinstance(tr[2], bool) or not isinstance(tr[2], int | float):
                 raise self.fail(where, "a triple [a, b, e]: x(a) <- x(a) - e x(b)", tr)
+            if not abs(tr[2]) <= MAX_CONSTRAINT:
+                raise self.fail(where, f"a coefficient |e| <= {MAX_CONSTRAINT:g} (e σ_b is a σ "
+                                "of the constrained system)", tr[2])
             out.append((self.position(tr[0], order, where), self.position(tr[1], order, where),
                         float(tr[2])))
         return Constraint.from_triples(out, self.n_o, self.n_p, f"{self.source}: {field}")
@@ -343,9 +455,12 @@ class _Binder:
 
     # --- a priori -----------------------------------------------------------------------------
 
-    def _key(self, key: str) -> str:
+    def _key(self, key: str, field: str) -> str:
         """A σ-table key: a name, or a 1-based position on the tape (the standard order)."""
-        return self.names[int(key) - 1] if key.isdigit() and 1 <= int(key) <= self.n_o else key
+        if key.isdigit() and 1 <= int(key) <= self.n_o:
+            self.positional.append(f"{field}.sigma.{key}")
+            return self.names[int(key) - 1]
+        return key
 
     def _sigma_zero(self, sigma, order: list[str], n_c1: int, field: str) -> list[str]:
         """Names with σ = 0 in a σ table that covers the common parameters (readable form)."""
@@ -353,7 +468,7 @@ class _Binder:
             return []
         zero = []
         for key, value in sigma.items():
-            pos = self.position(self._key(key), order, f"{field}.sigma.{key}")
+            pos = self.position(self._key(key, field), order, f"{field}.sigma.{key}")
             if value == 0 and pos < n_c1:
                 zero.append(order[pos].rstrip("'"))
         return zero
@@ -361,6 +476,7 @@ class _Binder:
     def _sigmas(self, sigma, order: list[str], n1: int, field: str) -> np.ndarray:
         """σ of the first n1 parameters of ``order`` from a list or a table."""
         if isinstance(sigma, list):
+            self.positional.append(f"{field}.sigma")
             if len(sigma) != n1:
                 raise self.fail(f"{field}.sigma", f"{n1} values (one per parameter of the set, "
                                 "in system order)", len(sigma))
@@ -368,7 +484,7 @@ class _Binder:
         else:
             out = np.full(n1, np.nan)
             for key, value in sigma.items():
-                pos = self.position(self._key(key), order, f"{field}.sigma.{key}")
+                pos = self.position(self._key(key, field), order, f"{field}.sigma.{key}")
                 if pos < n1:
                     out[pos] = value
                 elif value != 0:
@@ -390,24 +506,44 @@ class _Binder:
                             {order[i]: float(out[i]) for i in bad})
         return out
 
-    def _matrix(self, rows: list[list[float]], n: int, field: str) -> np.ndarray:
+    def _matrix(self, rows: list[list[float]], n: int, field: str, order: list[str],
+                kind: str) -> np.ndarray:
+        """An a priori matrix given whole (kind "normal" or "covariance"), n x n over the
+        first n parameters of ``order``: a diagonal in :data:`NORMAL_RANGE` or
+        :data:`COVARIANCE_RANGE` (or 0), symmetric and positive semi-definite, each entry
+        on its own scale √(a_ii a_jj) (:data:`SYMMETRY_TOL`, :data:`PSD_TOL`)."""
         m = np.array(rows, dtype=float) if rows and all(len(r) == len(rows) for r in rows) \
             else None
         if m is None or m.shape != (n, n):
             raise self.fail(field, f"a {n} x {n} matrix", None if m is None else m.shape)
-        if not np.allclose(m, m.T, rtol=0, atol=1e-12 * np.max(np.abs(m))):
-            raise self.fail(field, "a symmetric matrix")
-        return 0.5 * (m + m.T)
+        self.positional.append(field)  # in the system's order
+        names = [name.rstrip("'") for name in order[:n]]
+        diag = np.diagonal(m)
+        lo, hi = NORMAL_RANGE if kind == "normal" else COVARIANCE_RANGE
+        what = "1/σ²" if kind == "normal" else "σ²"
+        wild = np.flatnonzero((diag != 0) & ~((diag >= lo) & (diag <= hi)))
+        if wild.size:
+            raise self.fail(field, f"a diagonal of 0 or {what} between {lo:g} and {hi:g} (σ "
+                            f"within {SIGMA_RANGE[0]:g} .. {SIGMA_RANGE[1]:g})",
+                            {names[i]: float(diag[i]) for i in wild})
+        defect = float(symmetry_defect(m))
+        if defect > SYMMETRY_TOL:
+            raise self.fail(field, f"a symmetric matrix (|a_ij − a_ji| <= {SYMMETRY_TOL:g} "
+                            "√(a_ii a_jj))", f"{defect:.3g} √(a_ii a_jj)")
+        m = 0.5 * (m + m.T)
+        smallest = scaled_min_eigenvalue(m)
+        if smallest < -PSD_TOL:
+            raise self.fail(field, f"a positive semi-definite {kind} matrix (eigenvalues of "
+                            f"the matrix scaled to a unit diagonal >= {-PSD_TOL:g})",
+                            f"smallest {smallest:.3g}")
+        return m
 
     def fit_normal(self, order: list[str], n_f1: int) -> np.ndarray:
         ap = self.deck.fit.apriori
         if (ap.sigma is None) == (ap.normal is None):
             raise self.fail("fit.apriori", "exactly one of sigma or normal")
         if ap.normal is not None:
-            s0 = self._matrix(ap.normal, n_f1, "fit.apriori.normal")
-            if np.min(np.linalg.eigvalsh(s0)) < -PSD_TOL * max(1.0, np.max(np.diag(s0))):
-                raise self.fail("fit.apriori.normal", "a positive semi-definite normal matrix")
-            return s0
+            return self._matrix(ap.normal, n_f1, "fit.apriori.normal", order, "normal")
         sigma = self._sigmas(ap.sigma, order, n_f1, "fit.apriori")
         return np.diag(1.0 / sigma**2)
 
@@ -418,31 +554,27 @@ class _Binder:
         if ap.covariance is not None:
             if ap.correlation:
                 raise self.fail("real.apriori.correlation", "no correlations with a covariance")
-            lam = self._matrix(ap.covariance, n_r1, "real.apriori.covariance")
-            d = np.sqrt(np.abs(np.diag(lam)))
-            corr = lam / np.where(np.outer(d, d) > 0, np.outer(d, d), 1.0)
-        else:
-            sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori")
-            if np.any(~np.isfinite(sigma)):
-                raise self.fail("real.apriori.sigma", "finite σ's")
-            corr = np.eye(n_r1)
-            for i, tr in enumerate(ap.correlation):
-                where = f"real.apriori.correlation[{i}]"
-                if len(tr) != 3 or isinstance(tr[2], bool) or not isinstance(tr[2], int | float):
-                    raise self.fail(where, "a triple [a, b, ρ]", tr)
-                a, b = (self.position(r, order, where) for r in tr[:2])
-                if a >= n_r1 or b >= n_r1 or a == b or not -1 <= tr[2] <= 1:
-                    raise self.fail(where, "two different uncertain parameters and -1 <= ρ <= 1",
-                                    tr)
-                corr[a, b] = corr[b, a] = float(tr[2])
-            lam = corr * np.outer(sigma, sigma)
-        w = np.linalg.eigvalsh(corr)
-        if w[0] < -PSD_TOL:
-            field = "covariance" if ap.covariance is not None else "correlation"
-            raise self.fail(f"real.apriori.{field}", "a positive semi-definite real-world "
-                            "covariance", f"smallest eigenvalue {w[0]:.3g} of its correlation "
-                            "matrix")
-        return lam
+            return self._matrix(ap.covariance, n_r1, "real.apriori.covariance", order,
+                                "covariance")
+        sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori")
+        if np.any(~np.isfinite(sigma)):
+            raise self.fail("real.apriori.sigma", "finite σ's")
+        corr = np.eye(n_r1)
+        for i, tr in enumerate(ap.correlation):
+            where = f"real.apriori.correlation[{i}]"
+            if len(tr) != 3 or isinstance(tr[2], bool) or not isinstance(tr[2], int | float):
+                raise self.fail(where, "a triple [a, b, ρ]", tr)
+            a, b = (self.position(r, order, where) for r in tr[:2])
+            if a >= n_r1 or b >= n_r1 or a == b or not -1 <= tr[2] <= 1:
+                raise self.fail(where, "two different uncertain parameters and -1 <= ρ <= 1",
+                                tr)
+            corr[a, b] = corr[b, a] = float(tr[2])
+        smallest = scaled_min_eigenvalue(corr)
+        if smallest < -PSD_TOL:
+            raise self.fail("real.apriori.correlation", "a positive semi-definite real-world "
+                            "covariance", f"smallest eigenvalue {smallest:.3g} of its "
+                            "correlation matrix")
+        return corr * np.outer(sigma, sigma)
 
     # --- the rest -----------------------------------------------------------------------------
 
@@ -533,13 +665,52 @@ class _Binder:
             raise self.fail("plots.partition", exc.expected, text) from None
         return cmd.rows
 
+    def _check_positions(self) -> None:
+        """Refuse parameters given by position in a deck that does not say which tape they
+        refer to: positions fit any tape with enough parameters (the Table D-1 deck ran on
+        the LEO tape and exited 0), names only the right one."""
+        tape = self.deck.tape
+        if self.positional and tape.iden is None and tape.parameters is None:
+            raise self.fail(self.positional[0], "parameter names, or positions with a [tape] "
+                            "table that names the tape they refer to (parameters = its "
+                            "parameter names in order, or iden)", "positions, and no "
+                            "[tape] parameters or iden")
+
+    def _check_output_size(self, systems: Systems, n_print: int, poc: tuple[Command, ...],
+                           n_recycle: int, roc: tuple[Command, ...]) -> None:
+        """Refuse a run of more than :data:`MAX_ENTITIES` entities or
+        :data:`MAX_ENTITY_NUMBERS` numbers in their matrices, before any is computed."""
+
+        def numbers(cmd: Command) -> int:
+            rows, cols = (systems.bounds(side.rho) for side in (cmd.rows, cmd.cols))
+            return (rows[2] - rows[1]) * (cols[2] - cols[1])
+
+        entities = n_print * len(poc) + n_recycle * len(roc)
+        size = n_print * sum(map(numbers, poc)) + n_recycle * sum(map(numbers, roc))
+        field = "commands.print" if n_print * len(poc) >= n_recycle * len(roc) \
+            else "commands.recycle"
+        if entities > MAX_ENTITIES or size > MAX_ENTITY_NUMBERS:
+            raise self.fail(field, f"at most {MAX_ENTITIES:,} output entities with at most "
+                            f"{MAX_ENTITY_NUMBERS:,} numbers in all (print times x print "
+                            "commands + recycles x recycle commands)",
+                            f"{entities:,} entities, {size:,} numbers")
+
     def plan(self) -> Plan:
         d = self.deck
         if d.tape.iden is not None and d.tape.iden != self.h.iden:
             raise self.fail("tape.iden", f"the tape's iden {self.h.iden!r}", d.tape.iden)
         if d.tape.n_o is not None and d.tape.n_o != self.n_o:
             raise self.fail("tape.n_o", f"the tape's n_o = {self.n_o}", d.tape.n_o)
+        if d.tape.parameters is not None and tuple(d.tape.parameters) != self.names:
+            given = tuple(d.tape.parameters)
+            i = next((i for i, (a, b) in enumerate(zip(given, self.names, strict=False))
+                      if a != b), min(len(given), self.n_o))
+            tape_has = self.names[i] if i < self.n_o else "none (the tape ends)"
+            raise self.fail("tape.parameters", f"the tape's {self.n_o} parameter names in "
+                            f"order (position {i + 1}: {tape_has})",
+                            given[i] if i < len(given) else "none (the list ends)")
         systems, s0, lam0 = self.systems()
+        self._check_positions()
         prints = (0, *self.time_list(d.times.print, "times.print", first=0))
         recycles = self.time_list(d.times.recycle, "times.recycle", first=1)
         poc = tuple(self.command(c, f"commands.print[{i}]", systems)
@@ -553,6 +724,9 @@ class _Binder:
                     systems.bounds(side.rho)
         hist = self.history()
         systems.bounds(hist.rho)
+        self._check_output_size(systems, len(prints) if d.times.print_output else 0, poc,
+                                len(recycles) if d.times.recycle_print or d.times.recycle_tape
+                                else 0, roc)
         return Plan(systems, s0, lam0, tuple(sorted(set(prints))), recycles,
                     d.times.print_output, d.times.recycle_print, d.times.recycle_tape, poc, roc,
                     self.stations_off(), d.budget.enabled, self.budget_groups(systems), hist)

@@ -14,6 +14,9 @@ as −√|v|), whose variances add up to the printed total.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
+
 import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
@@ -161,3 +164,35 @@ def run_dict(run: Run, header, deck_source: str, tape_source: str) -> dict:
                                      if h.kind == "recycle" and h.k == r.k)}
                      for r in run.recycles],
     }
+
+
+@dataclass(frozen=True, slots=True)
+class SigmaRatio:
+    """A real-world σ over the fit world's claim for it: the ratio, the quantity (a history
+    label or a miss component), the kind of statistics time and the time, s."""
+
+    ratio: float
+    name: str
+    kind: str
+    t_s: float
+
+
+def largest_sigma_ratio(run: Run, miss_names: Sequence[str]) -> SigmaRatio | None:
+    """The σ whose real-world value most exceeds the fit world's claim, over the run's
+    history (the history partition and the miss set, at every print and recycle time).
+
+    A σ the fit world holds at 0 (a parameter it holds fixed) makes no claim to compare and
+    is passed over; None when the fit world has no σ > 0 anywhere (no covariance yet).
+    """
+    best = None
+    names = (*run.history_labels, *miss_names)
+    for h in run.history:
+        if h.sigma_fit is None:
+            continue
+        real = np.concatenate([h.sigma_real, sigmas(h.miss_real)])
+        fit = np.concatenate([h.sigma_fit, sigmas(h.miss_fit)])
+        ratio = np.divide(real, fit, out=np.full_like(real, -np.inf), where=fit > 0)
+        i = int(np.argmax(ratio))
+        if np.isfinite(ratio[i]) and (best is None or ratio[i] > best.ratio):
+            best = SigmaRatio(float(ratio[i]), names[i], h.kind, h.t_s)
+    return best

@@ -14,6 +14,7 @@ import numpy as np  # noqa: E402
 
 from tapp.constants import GM_EARTH_km3_s2  # noqa: E402
 from tapp.frames.elements import cartesian_to_elements  # noqa: E402
+from tapp.od.batch import rms_tail_probability  # noqa: E402
 from tapp.od.setup import describe_orientation  # noqa: E402
 from tapp.od.study import DCRun, StudyResults  # noqa: E402
 from tapp.report.markdown import table  # noqa: E402
@@ -114,9 +115,10 @@ def rate_section(results: StudyResults) -> str:
                 rows))
 
 
-def _ranges(runs: list[DCRun]) -> str:
-    vals = [r.r_ratio for r in runs if np.isfinite(r.r_ratio)]
-    return f"{min(vals):.2g} .. {max(vals):.2g}" if vals else "—"
+def _extent(values: list[float]) -> list[float] | None:
+    """[smallest, largest] of the finite ``values``, or None."""
+    vals = [v for v in values if np.isfinite(v)]
+    return [min(vals), max(vals)] if vals else None
 
 
 def _intervals(x: np.ndarray, mask: np.ndarray, after: int = 0) -> list[tuple[float, float]]:
@@ -136,95 +138,158 @@ def _label(r: DCRun) -> str:
     return f"{r.orbit} ({r.truth},{r.stm}) {r.arc_h:g} h"
 
 
-def rate_discussion(results: StudyResults) -> str:
-    """Where ρ and R(t) agree and where they do not, every number from the runs."""
+def _run_finding(r: DCRun) -> dict:
+    """One truncated-STM run as the findings quote it."""
+    return {"label": _label(r), "orbit": r.orbit, "truth": r.truth, "stm": r.stm,
+            "arc_h": r.arc_h, "r_ratio": r.r_ratio, "rho": r.rate.rho,
+            "status": r.result.status, "iterations": len(r.result.iterations)}
+
+
+def rate_findings(results: StudyResults) -> dict | None:
+    """Where ρ and R(t) agree and where they do not, as numbers (JSON-ready; ``results.json``
+    ``"rate_findings"``; :func:`rate_discussion` words them), or None without a truncated-STM
+    run that has both.
+
+    ``predicted`` of ``runs`` truncated-STM outcomes foretold by ρ (ρ < 1: the iteration
+    converges); ``linear_worst_relative`` the largest |q − ρ|/ρ over the ``linear_runs`` runs
+    with 0.1 < ρ < 1 that converge in 8 iterations or more; ``series`` the longest series of
+    arcs of one orbit and model pair (R_M/R_N and ρ along it); ``r_ratio_converging`` and
+    ``r_ratio_failing`` the [smallest, largest] R_M/R_N of the runs that converge (or are
+    converging) and of those that do not; ``large_r_converging`` the converging runs whose
+    R_M/R_N exceeds 1; ``same_r_pair`` the two runs within 15 % in R_M/R_N that differ most
+    in ρ; ``inclination`` the inclinations (deg) of ρ < 1 on the first truncated curve;
+    ``arc`` where ρ first exceeds 1 along the arc curve, the arcs (h) of ρ < 1 after it and
+    the DC runs past that point.
+    """
     runs = [r for r in results.dc if r.stm != r.truth and r.rate is not None and
             np.isfinite(r.r_ratio)]
     if not runs:
-        return ""
-    agree = sum((r.rate.rho < 1) == r.result.iteration_converges for r in runs)
+        return None
     linear = [r for r in runs if 0.1 < r.rate.rho < 1 and r.result.iteration_converges and
               len(r.result.iterations) >= 8]
     worst = max((abs(r.result.contraction_factor - r.rate.rho) / r.rate.rho for r in linear),
                 default=float("nan"))
-    out = ["### Where ρ and R(t) agree, and where they do not",
-           f"ρ predicts the outcome of {agree} of the {len(runs)} truncated-STM runs before "
-           "any iteration (ρ < 1: the iteration converged, its residuals consistent with the "
-           "noise model or not, or is converging; ρ > 1: diverged or stalled). In "
-           f"the {len(linear)} runs that spend 8 iterations or more in the linear regime "
-           f"with 0.1 < ρ < 1, the observed factor q matches ρ within {100 * worst:.1f} %: "
-           "near the solution the DC is the fixed-point iteration e_(k+1) = M e_k."]
+    out: dict = {"runs": len(runs),
+                 "predicted": sum((r.rate.rho < 1) == r.result.iteration_converges
+                                  for r in runs),
+                 "linear_runs": len(linear), "linear_worst_relative": _finite(worst)}
     # agreement: one orbit and model pair over several arcs
     by_pair: dict[tuple[str, str, str, str], list[DCRun]] = {}
     for r in runs:  # one block's arcs of one orbit and model pair
         by_pair.setdefault((r.block, r.orbit, r.truth, r.stm), []).append(r)
     series = max(by_pair.values(), key=lambda rs: len({r.arc_h for r in rs}))
     series = sorted({r.arc_h: r for r in series}.values(), key=lambda r: r.arc_h)
-    if len(series) >= 2:
-        steps = "; ".join(f"{r.arc_h:g} h: R_M/R_N {r.r_ratio:.2g}, ρ {r.rate.rho:.2g}"
-                          for r in series)
-        out.append(
-            "They agree on the trend the study read R(t) for: along one orbit, the longer "
-            "the arc, the further the truncated STM departs from the true one, and both "
-            f"signal it ({series[0].orbit} ({series[0].truth},{series[0].stm}), {steps}).")
+    out["series"] = [_run_finding(r) for r in series] if len(series) >= 2 else None
     # disagreement: R cannot separate the outcomes
     conv = [r for r in runs if r.result.iteration_converges]
-    fail = [r for r in runs if not r.result.iteration_converges]
-    out.append(
-        "They part company across orbits, because R(t) knows nothing of the data. R is the "
-        "size of the STM's position rows; ρ weighs the STM error in the directions the "
-        "tracking determines, with the weights the normal equations give them "
-        "(M = (H̃ᵀWH̃)⁻¹H̃ᵀW(H̃ − H)). Among the runs that converge or are converging "
-        f"R_M/R_N spans {_ranges(conv)}, among those that do not {_ranges(fail)}: no "
-        "threshold on R separates them.")
-    big = [r for r in conv if r.r_ratio > 1]
-    if big:
-        out.append(
-            f"In {len(big)} converging runs ({', '.join(_label(r) for r in big)}) the "
-            f"truncated model's R is {min(r.r_ratio for r in big):.2g} to "
-            f"{max(r.r_ratio for r in big):.2g} times the true one, which R reads as a badly "
-            f"wrong STM, yet ρ is {min(r.rate.rho for r in big):.2g} to "
-            f"{max(r.rate.rho for r in big):.2g} and they converge, in "
-            f"{min(len(r.result.iterations) for r in big)} to "
-            f"{max(len(r.result.iterations) for r in big)} iterations.")
+    out["r_ratio_converging"] = _extent([r.r_ratio for r in conv])
+    out["r_ratio_failing"] = _extent([r.r_ratio for r in runs
+                                      if not r.result.iteration_converges])
+    out["large_r_converging"] = [_run_finding(r) for r in conv if r.r_ratio > 1]
     pairs = [(a, b) for i, a in enumerate(runs) for b in runs[i + 1:]
              if abs(np.log(a.r_ratio / b.r_ratio)) < np.log(1.15)]
-    if pairs:
-        a, b = max(pairs, key=lambda p: abs(np.log(p[0].rate.rho / p[1].rate.rho)))
-        out.append(
-            f"{_label(a)} and {_label(b)} have nearly the same R_M/R_N ({a.r_ratio:.3g} and "
-            f"{b.r_ratio:.3g}) but ρ = {a.rate.rho:.3g} and {b.rate.rho:.3g} ({a.result.status} "
-            f"in {len(a.result.iterations)}, {b.result.status} in "
-            f"{len(b.result.iterations)} iterations).")
+    out["same_r_pair"] = [_run_finding(r) for r in max(
+        pairs, key=lambda p: abs(np.log(p[0].rate.rho / p[1].rate.rho)))] if pairs else None
+    out["inclination"] = None
     if results.rate_vs_inclination:
         c = next((c for c in results.rate_vs_inclination if c.truth != c.stm),
                  results.rate_vs_inclination[0])
         below = _intervals(c.x, c.rho < 1)
         if below:
-            spans = ", ".join(f"{a:g}-{b:g}°" for a, b in below)
-            out.append(
-                f"The inclination curve makes the same point: with the same stations and a "
-                f"{results.inclination_arc_h:g} h arc, ρ of ({c.truth},{c.stm}) is below 1 "
-                f"only over {spans} and above 1 at the low and the near-retrograde-equatorial "
-                "inclinations, a dependence on the geometry of the orbit and the network "
-                "that R(t) does not have.")
+            out["inclination"] = {"truth": c.truth, "stm": c.stm,
+                                  "arc_h": results.inclination_arc_h,
+                                  "below_one_deg": below}
+    out["arc"] = None
     arc_curve = next((c for c in results.rate_vs_arc if c.truth != c.stm), None)
     if arc_curve is not None:
         above = np.flatnonzero(arc_curve.rho > 1)
         later = _intervals(arc_curve.x, arc_curve.rho < 1, after=above[0]) if above.size \
             else []
         if later:
-            spans = ", ".join(f"{a:g}-{b:g} h" if b > a else f"{a:g} h" for a, b in later)
+            first_h = float(arc_curve.x[above[0]])
             checks = [r for r in runs if (r.orbit, r.truth, r.stm) ==
-                      (arc_curve.orbit, arc_curve.truth, arc_curve.stm) and
-                      r.arc_h > arc_curve.x[above[0]]]
-            told = "; ".join(f"{r.arc_h:g} h: ρ {r.rate.rho:.3g}, {r.result.status}"
-                             for r in sorted(checks, key=lambda r: r.arc_h))
-            out.append(
-                "Nor does ρ grow steadily with the arc length, as R(t) does: for "
-                f"{arc_curve.orbit} ({arc_curve.truth},{arc_curve.stm}) it first exceeds 1 at "
-                f"{arc_curve.x[above[0]]:g} h, yet falls below 1 again over {spans}; the DC "
-                f"runs past that point do what ρ says ({told}).")
+                      (arc_curve.orbit, arc_curve.truth, arc_curve.stm) and r.arc_h > first_h]
+            out["arc"] = {"orbit": arc_curve.orbit, "truth": arc_curve.truth,
+                          "stm": arc_curve.stm, "first_above_one_h": first_h,
+                          "below_one_again_h": later,
+                          "checks": [_run_finding(r) for r in
+                                     sorted(checks, key=lambda r: r.arc_h)]}
+    return out
+
+
+def _ranges(extent: list[float] | None) -> str:
+    return f"{extent[0]:.2g} .. {extent[1]:.2g}" if extent else "—"
+
+
+def _span_text(intervals: list[tuple[float, float]], unit: str) -> str:
+    return ", ".join(f"{a:g}-{b:g}{unit}" if b > a else f"{a:g}{unit}" for a, b in intervals)
+
+
+def rate_discussion(results: StudyResults) -> str:
+    """Where ρ and R(t) agree and where they do not, every number from the runs
+    (:func:`rate_findings`)."""
+    f = rate_findings(results)
+    if f is None:
+        return ""
+    worst = f["linear_worst_relative"]
+    out = ["### Where ρ and R(t) agree, and where they do not",
+           f"ρ predicts the outcome of {f['predicted']} of the {f['runs']} truncated-STM runs "
+           "before any iteration (ρ < 1: the iteration converged, its residuals consistent "
+           "with the noise model or not, or is converging; ρ > 1: diverged or stalled). In "
+           f"the {f['linear_runs']} runs that spend 8 iterations or more in the linear regime "
+           "with 0.1 < ρ < 1, the observed factor q matches ρ within "
+           f"{100 * (float('nan') if worst is None else worst):.1f} %: "
+           "near the solution the DC is the fixed-point iteration e_(k+1) = M e_k."]
+    if f["series"]:
+        s0 = f["series"][0]
+        steps = "; ".join(f"{r['arc_h']:g} h: R_M/R_N {r['r_ratio']:.2g}, ρ {r['rho']:.2g}"
+                          for r in f["series"])
+        out.append(
+            "They agree on the trend the study read R(t) for: along one orbit, the longer "
+            "the arc, the further the truncated STM departs from the true one, and both "
+            f"signal it ({s0['orbit']} ({s0['truth']},{s0['stm']}), {steps}).")
+    out.append(
+        "They part company across orbits, because R(t) knows nothing of the data. R is the "
+        "size of the STM's position rows; ρ weighs the STM error in the directions the "
+        "tracking determines, with the weights the normal equations give them "
+        "(M = (H̃ᵀWH̃)⁻¹H̃ᵀW(H̃ − H)). Among the runs that converge or are converging "
+        f"R_M/R_N spans {_ranges(f['r_ratio_converging'])}, among those that do not "
+        f"{_ranges(f['r_ratio_failing'])}: no threshold on R separates them.")
+    big = f["large_r_converging"]
+    if big:
+        out.append(
+            f"In {len(big)} converging runs ({', '.join(r['label'] for r in big)}) the "
+            f"truncated model's R is {min(r['r_ratio'] for r in big):.2g} to "
+            f"{max(r['r_ratio'] for r in big):.2g} times the true one, which R reads as a "
+            f"badly wrong STM, yet ρ is {min(r['rho'] for r in big):.2g} to "
+            f"{max(r['rho'] for r in big):.2g} and they converge, in "
+            f"{min(r['iterations'] for r in big)} to "
+            f"{max(r['iterations'] for r in big)} iterations.")
+    if f["same_r_pair"]:
+        a, b = f["same_r_pair"]
+        out.append(
+            f"{a['label']} and {b['label']} have nearly the same R_M/R_N ({a['r_ratio']:.3g} "
+            f"and {b['r_ratio']:.3g}) but ρ = {a['rho']:.3g} and {b['rho']:.3g} "
+            f"({a['status']} in {a['iterations']}, {b['status']} in {b['iterations']} "
+            "iterations).")
+    inc = f["inclination"]
+    if inc:
+        out.append(
+            f"The inclination curve makes the same point: with the same stations and a "
+            f"{inc['arc_h']:g} h arc, ρ of ({inc['truth']},{inc['stm']}) is below 1 "
+            f"only over {_span_text(inc['below_one_deg'], '°')} and above 1 at the low and "
+            "the near-retrograde-equatorial inclinations, a dependence on the geometry of the "
+            "orbit and the network that R(t) does not have.")
+    arc = f["arc"]
+    if arc:
+        told = "; ".join(f"{r['arc_h']:g} h: ρ {r['rho']:.3g}, {r['status']}"
+                         for r in arc["checks"])
+        out.append(
+            "Nor does ρ grow steadily with the arc length, as R(t) does: for "
+            f"{arc['orbit']} ({arc['truth']},{arc['stm']}) it first exceeds 1 at "
+            f"{arc['first_above_one_h']:g} h, yet falls below 1 again over "
+            f"{_span_text(arc['below_one_again_h'], ' h')}; the DC runs past that point do "
+            f"what ρ says ({told}).")
     return out[0] + "\n\n" + out[1] + "\n\n" + " ".join(out[2:]) + "\n"
 
 
@@ -412,7 +477,8 @@ def write_report(results: StudyResults, out_dir: Path, elapsed_s: float) -> Path
     text = [
         "# Orbit estimation with an approximate STM: the study reproduced\n",
         f"Generated by `make scenario` in {elapsed_s:.1f} s. Scenario: "
-        "`scenarios/approx_stm.toml`; brief: `shared/seeds/approx-stm-study-brief.md`.\n",
+        "`approx_stm.toml` (the shipped study file, `tapp examples`); brief: "
+        "`shared/seeds/approx-stm-study-brief.md`.\n",
         f"Observations: range σ = {results.sigma[0] * 1e3:g} m, range-rate σ = "
         f"{results.sigma[1] * 1e6:g} mm/s, 5-day files, 30 s sampling above a 5° mask. "
         "Weighted RMS = sqrt(Σ (O-C)² w / m) with w = 1/σ² (≈ 1 at the noise level). "
@@ -446,15 +512,24 @@ def write_report(results: StudyResults, out_dir: Path, elapsed_s: float) -> Path
     report = out_dir / "report.md"
     report.write_text("\n".join(text))
     raw = {
+        "elapsed_s": elapsed_s,
         "earth_orientation": results.earth_orientation,
+        "sigma_range_km": float(results.sigma[0]),
+        "sigma_range_rate_km_s": float(results.sigma[1]),
+        "last_passes": results.last_passes,
+        "rate_findings": rate_findings(results),
         "dc": [{"block": r.block, "orbit": r.orbit, "truth": r.truth, "stm": r.stm,
                 "arc_h": r.arc_h, "status": r.result.status, "reason": r.result.reason,
                 "converged_at": r.result.converged_at, "rms": r.result.rms.tolist(),
                 "rms_bound": r.result.rms_bound,
+                # the study's DC has no a priori: 6 estimated parameters
+                "rms_tail_probability": rms_tail_probability(r.result.rms[-1],
+                                                             r.result.n_measurements),
                 "steps": r.result.steps.tolist(),
                 "contraction_factor": _finite(r.result.contraction_factor),
                 "projected_iterations": r.result.projected_iterations,
                 "predicted_rate": None if r.rate is None else r.rate.rho,
+                "oscillating": None if r.rate is None else bool(r.rate.oscillating),
                 "eigenvalues": None if r.rate is None else
                 [[v.real, v.imag] for v in r.rate.eigenvalues],
                 "r_ratio": _finite(r.r_ratio), "x0": r.result.x0.tolist(),

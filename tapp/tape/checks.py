@@ -19,6 +19,13 @@ PACKINGS = ("TR", "full")
 #: Relative asymmetry max |M_ij - M_ji| / sqrt(M_ii M_jj) above which a symmetric matrix is
 #: rejected (:func:`tapp.tape.packing.symmetry_defect`).
 SYMMETRY_TOL = 1e-12
+#: Largest magnitude of a number on a tape (partials, factors, states, times; a matrix that
+#: is a product of two, such as a covariance, its square). The programs square these and
+#: multiply them with one another: a factor times a partial, squared, stays within 1e240,
+#: below the 1.8e308 of a double. What the shipped tapes hold is far smaller (3e5 for the
+#: deep-space transitions, 1e11 for its information factors), and a TAPP III deck at the top
+#: of its σ range writes ~1e31 (tapp.processor.deck.SIGMA_RANGE).
+MAX_MAGNITUDE = 1e60
 
 
 def frozen(a, dtype=float) -> np.ndarray:
@@ -45,10 +52,13 @@ class Checker:
         if a.shape != shape:
             self.fail(dataset, f"shape {shape}", a.shape)
 
-    def finite(self, dataset: str, a: np.ndarray) -> None:
-        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
-            bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
-            self.fail(dataset, "finite values", f"{a[bad]} at index {bad}")
+    def finite(self, dataset: str, a: np.ndarray, limit: float = MAX_MAGNITUDE) -> None:
+        """Check that every value is finite and at most ``limit`` in magnitude
+        (:data:`MAX_MAGNITUDE`)."""
+        if a.dtype.kind in "fc" and not np.all(np.abs(a) <= limit):
+            bad = tuple(int(i) for i in np.argwhere(~(np.abs(a) <= limit))[0])
+            self.fail(dataset, f"finite values of magnitude <= {limit:g}",
+                      f"{a[bad]} at index {bad}")
 
     def symmetric(self, dataset: str, m: np.ndarray, *, what: str = "normal matrices",
                   label: str | None = "pair", offset: int = 0, tol: float = SYMMETRY_TOL,

@@ -34,6 +34,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from iter.inputfile import regular_file
 from tapp import __version__
 from tapp.errors import InputError, TapeError
 from tapp.tape.checks import PACKINGS, Checker, frozen
@@ -203,13 +204,12 @@ def open_tape(path: Path | str, what: str = "tape") -> h5py.File:
     Raises
     ------
     InputError
-        If the file does not exist ("expected an existing {what} file").
+        If the file does not exist ("expected an existing {what} file") or is not a regular
+        file (a FIFO, a device: :func:`iter.inputfile.regular_file`).
     TapeError
         If it is not a readable HDF5 file (truncated, corrupt).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(str(path), "file", f"an existing {what} file")
+    path = regular_file(path, f"{what} file", error=InputError)
     try:
         return h5py.File(path, "r")
     except OSError as exc:

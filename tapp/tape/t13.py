@@ -330,7 +330,8 @@ class PairBlock:
 def validate(tape: T13, source: str = "T13") -> None:
     """Check the dimensions and invariants of a tape; raise TapeError naming the dataset.
 
-    Checks: shapes against n_o, n_p, n_m, n_ts, n_it; finiteness; T13 times strictly
+    Checks: shapes against n_o, n_p, n_m, n_ts, n_it; finite numbers within
+    :data:`tapp.tape.checks.MAX_MAGNITUDE`; T13 times strictly
     ascending from t_0 = 0, each an epoch or an input time; k = 1..n_it; j_1 = 0 and j_k
     either j_{k-1} or k-1, k-1 exactly when t_{k-1} is an epoch time; pairs each once and
     sorted by (k, station), with known records and stations and at least one observation;

@@ -82,10 +82,11 @@ and variable-length text.
 
 The writer writes to a temporary file beside the target and renames it: no half-written tape.
 The readers reject a wrong format or version, a missing dataset, a wrong shape, a non-finite
-value, a factor with a negative diagonal (or, "full", non-zero below it; a normal matrix of
-version 1 or 2 that is not symmetric or has a negative diagonal), parts whose Gram matrices do
-not sum to R̃ᵀR̃, an inconsistent epoch index and a checksum mismatch, with a
-:class:`~tapp.errors.TapeError` naming the file and the dataset. :func:`read_t13` loads the
+value or one beyond :data:`tapp.tape.checks.MAX_MAGNITUDE`, a factor with a negative diagonal
+(or, "full", non-zero below it; a normal matrix of version 1 or 2 that is not symmetric or
+has a negative diagonal), parts whose Gram matrices do not sum to R̃ᵀR̃, an inconsistent epoch
+index and a checksum mismatch, with a :class:`~tapp.errors.TapeError` naming the file and the
+dataset. :func:`read_t13` loads the
 whole tape; :func:`open_t13` loads everything but the pair factors and reads those record
 range by record range (:meth:`T13File.pair_block`), for tapes too large to unpack at once;
 :func:`tapp.tape.t13.memory_pairs` offers the same interface over a tape in memory.

@@ -41,7 +41,7 @@ import numpy as np
 
 from tapp.estimation.factors import gram
 from tapp.frames.time import Epoch
-from tapp.tape.checks import Checker
+from tapp.tape.checks import MAX_MAGNITUDE, Checker
 from tapp.tape.t13 import TapeParameters, check_parameters, utc_at
 
 FORMAT = "T32"
@@ -299,11 +299,12 @@ class T32:
 # ---------------------------------------------------------------------------------------------
 
 
-def _matrix(c: Checker, name: str, m: np.ndarray, shape: tuple[int, ...]) -> None:
+def _matrix(c: Checker, name: str, m: np.ndarray, shape: tuple[int, ...],
+            limit: float = MAX_MAGNITUDE) -> None:
     if not isinstance(m, np.ndarray):
         c.fail(name, f"an array of shape {shape}", type(m).__name__)
     c.shape(name, m, shape)
-    c.finite(name, m)
+    c.finite(name, m, limit)
 
 
 def _factor(c: Checker, name: str, m: np.ndarray, n: int) -> None:
@@ -320,10 +321,11 @@ def _factor(c: Checker, name: str, m: np.ndarray, n: int) -> None:
 def validate(t32: T32, source: str = "T32") -> None:
     """Check the dimensions and invariants of a T32 tape; raise TapeError naming the dataset.
 
-    Checks: n_p in 1..n_o, parameter and miss lists of matching lengths; the three system
-    chains (n_o, n_o) finite with n_o row names; partitions uniquely named, in a known
-    system, 0 <= tail <= head <= the system's length, their names those of the system's
-    rows; the factors of the a priori and of every recycle's symmetric matrices (n_o, n_o),
+    Checks (every number finite and within :data:`tapp.tape.checks.MAX_MAGNITUDE`, an entity
+    matrix within its square): n_p in 1..n_o, parameter and miss lists of matching lengths;
+    the three system chains (n_o, n_o) finite with n_o row names; partitions uniquely named,
+    in a known system, 0 <= tail <= head <= the system's length, their names those of the
+    system's rows; the factors of the a priori and of every recycle's symmetric matrices (n_o, n_o),
     finite, upper triangular with a non-negative diagonal; each transition's adjoint its
     inverse transpose (:data:`ADJOINT_TOL`); recycle numbers 1..n_r, k
     strictly ascending, 0 <= l < k with l_i = k_{i-1}, 0 <= j < k, 0 <= t_l < t_k with
@@ -412,7 +414,9 @@ def validate(t32: T32, source: str = "T32") -> None:
             omega = e.omega
             if not e.command.strip():
                 c.fail(f"{where}.attrs/command", "the command in seed notation", repr(e.command))
-            _matrix(c, f"{where}/matrix", e.matrix, (len(e.rows), len(e.cols)))
+            # an output entity may be a covariance: a product of two tape values
+            _matrix(c, f"{where}/matrix", e.matrix, (len(e.rows), len(e.cols)),
+                    MAX_MAGNITUDE**2)
         prev = rc
 
     for key, value in t32.provenance.items():

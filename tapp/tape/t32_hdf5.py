@@ -81,8 +81,10 @@ rounding set to zero) and inverts the transitions.
 
 The writer validates, then writes to a temporary file beside the target and renames it: no
 half-written tape. The reader rejects a wrong format or version, a missing dataset or
-attribute, a wrong shape, a non-finite value, a factor that is not upper triangular or has a
-negative diagonal (version 1: a non-symmetric or negative-diagonal matrix), a
+attribute, a wrong shape, a non-finite value or one beyond
+:data:`tapp.tape.checks.MAX_MAGNITUDE` (a version-1 matrix: its square), a factor that is
+not upper triangular or has a negative diagonal (version 1: a non-symmetric or
+negative-diagonal matrix), a
 partition outside its system (or whose names are not the system's), recycle numbers other
 than 1..n_r, indices k not ascending, an entity matrix whose shape is not (rows, cols), a
 dataset without a checksum and a checksum mismatch, with a :class:`~tapp.errors.TapeError`
@@ -102,6 +104,7 @@ from tapp.atomic import atomic_write
 from tapp.estimation.factors import psd_factor
 from tapp.frames.time import Epoch
 from tapp.tape import hdf5io
+from tapp.tape.checks import MAX_MAGNITUDE
 from tapp.tape.hdf5io import Reader
 from tapp.tape.t13 import TapeParameters
 from tapp.tape.t32 import (
@@ -270,7 +273,7 @@ def _v1_factor(r: Reader, name: str, n: int, floor: np.ndarray | None = None,
     of its scale, √(s_i s_j) with s its diagonal or the given ``scale``: indefinite beyond
     the rounding of its products)."""
     m = r.symmetric(name, (), n)
-    r.check.finite(name, m)
+    r.check.finite(name, m, MAX_MAGNITUDE**2)  # a covariance: its factor within the bound
     r.check.symmetric(name, m, what="matrix", label=None, floor=floor)
     k = psd_factor(m)
     d = np.sqrt(np.abs(np.diagonal(m)) if scale is None else scale)

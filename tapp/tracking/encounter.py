@@ -23,7 +23,7 @@ sphere-of-action literature, beside Laplace's :math:`D(\mu_b/\mu_P)^{2/5}` and H
 
 Why not Laplace's sphere of influence, which SEARCH's scan uses to look for a closest approach
 (:meth:`tapp.targeting.BPlaneProgram.soi_radius_km`, 66,000 km for the Moon)? It admits passes
-the B-plane does not describe. ``scenarios/deep_space.toml`` with its epoch one day later and
+the B-plane does not describe. ``deep_space.toml`` with its epoch one day later and
 its injection unchanged passes the Moon at 46,450 km, inside it, on a Moon-relative hyperbola
 of e = 11 (bent by 10 deg), where the Earth's tidal acceleration is a quarter of the Moon's
 attraction: its osculating B moves by 11,000 km over the day and a half before the closest

@@ -3,7 +3,7 @@
 A scenario gives the trajectory (epoch, injection state, state and variational force models),
 the parameter vector x = [p; q], the tracking stations and schedule, the fit-world and
 real-world noise, the T13 times (input times and epoch times) and the miss parameters.
-``scenarios/leo_equatorial.toml`` and ``scenarios/deep_space.toml`` are commented examples.
+The examples ``leo_equatorial.toml`` and ``deep_space.toml`` (``tapp examples``) are commented.
 The file is validated against one declared schema, :class:`ScenarioFile` (``tapp.schema``):
 unknown tables and keys are errors naming the allowed keys, booleans are not numbers, numbers
 are not strings; the rules between tables and the physics are checked while it is built.
@@ -71,11 +71,11 @@ from pathlib import Path
 from typing import Annotated, Literal, NoReturn
 
 import numpy as np
-from pydantic import AfterValidator, Field, PlainValidator, model_validator
+from pydantic import Field, PlainValidator
 
 from tapp.bplane import REFERENCE_POLES
 from tapp.constants import SECONDS_PER_DAY
-from tapp.dynamics import BODIES, ForceModel, Propagator, earth_model, parse_gravity
+from tapp.dynamics import ForceModel, Propagator
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.ephemeris import tai_minus_utc_s
 from tapp.errors import InputError
@@ -83,18 +83,19 @@ from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.stations import Station
-from tapp.orbits import check_perigee, state_from_elements
+from tapp.models_file import ModelTable
+from tapp.noise_file import FitTable, NoiseTable, NonNegative, Positive, RealTable
+from tapp.orbits import OrbitTable
 from tapp.schema import (
     EarthOrientationName,
     EopSource,
     Invalid,
     Schema,
-    Tolerance,
     Unique,
     UtcDate,
     validate,
 )
-from tapp.stations_file import StationTable
+from tapp.stations_file import StationsSection
 from tapp.targeting import BPlaneSearch, TargetingTable, scenario_targeting
 from tapp.tomlfile import read_toml
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
@@ -119,8 +120,6 @@ MISS_QUANTITIES = {
     "classical": (("a_km", "km"), ("e", "1"), ("i_rad", "rad"), ("raan_rad", "rad"),
                   ("argp_rad", "rad"), ("M_rad", "rad")),
 }
-
-_ELEMENTS = ("a_km", "e", "i_deg", "raan_deg", "argp_deg")
 
 
 @dataclass(frozen=True, slots=True)
@@ -343,176 +342,130 @@ def _time_value(value: object) -> object:
     return value
 
 
-def _gravity(spec: str) -> str:
-    try:
-        parse_gravity(spec)
-    except InputError as exc:
-        raise Invalid(exc.expected, spec) from None
-    return spec
-
-
 #: A time: seconds from the epoch, or a UTC date (ISO string or TOML date).
-Time = Annotated[object, PlainValidator(_time_value)]
+Time = Annotated[object, PlainValidator(_time_value,
+                                        json_schema_input_type=float | dt.datetime),
+                 Field(json_schema_extra={"unit": "s or UTC"})]
 Window = Annotated[list[Time], Field(min_length=2, max_length=2)]
-Positive = Annotated[float, Field(gt=0)]
-NonNegative = Annotated[float, Field(ge=0)]
-GravityName = Annotated[str, AfterValidator(_gravity)]
-ThirdBody = Literal[tuple(b for b in BODIES if b != "earth")]  # type: ignore[valid-type]
 Kind = Literal[KINDS]  # type: ignore[valid-type]
 BiasKind = Literal[BIAS_KINDS]  # type: ignore[valid-type]
 LocationMode = Literal[LOCATION_MODES]  # type: ignore[valid-type]
 
-
-class InjectionTable(Schema):
-    """``[injection]``: r_km and v_km_s, or classical elements with M_deg or nu_deg."""
-
-    r_km: Annotated[list[float], Field(min_length=3, max_length=3)] | None = None
-    v_km_s: Annotated[list[float], Field(min_length=3, max_length=3)] | None = None
-    a_km: float | None = None
-    e: float | None = None
-    i_deg: float | None = None
-    raan_deg: float | None = None
-    argp_deg: float | None = None
-    M_deg: float | None = None
-    nu_deg: float | None = None
-    allow_subsurface: bool = False
-
-    @model_validator(mode="after")
-    def _one_form(self) -> InjectionTable:
-        given = {k for k in type(self).model_fields
-                 if k != "allow_subsurface" and getattr(self, k) is not None}
-        if given & {"r_km", "v_km_s"}:
-            if given != {"r_km", "v_km_s"}:
-                raise Invalid("either r_km and v_km_s or classical elements", sorted(given))
-        elif not (given - {"M_deg", "nu_deg"} == set(_ELEMENTS)
-                  and len(given & {"M_deg", "nu_deg"}) == 1):
-            raise Invalid("elements a_km, e, i_deg, raan_deg, argp_deg with exactly one of "
-                          "M_deg, nu_deg (or r_km and v_km_s)", sorted(given))
-        return self
-
-
-class ModelTable(Schema):
-    """``[model]``: state and variational force models, integrator tolerances."""
-
-    gravity: GravityName
-    third_bodies: Annotated[list[ThirdBody], Unique] = []
-    var_gravity: GravityName | None = None
-    var_third_bodies: Annotated[list[ThirdBody], Unique] | None = None
-    rtol: Tolerance = 1e-13
-    atol: Tolerance = 1e-13
+_LOCATION = ("How station locations enter q: \"cylindrical\" (distance from the spin axis, "
+             "longitude, height along the axis), \"ecef\" (x, y, z) or \"none\".")
+_BIASES = "Observable kinds whose per-station bias is a parameter in q."
+_BLACKOUTS = "Windows [start, end] without data"
 
 
 class ParametersTable(Schema):
-    """``[parameters]``: dynamic parameters in q, station location and bias modes."""
+    """``[parameters]``: the parameters q of x = [p; q] beside the epoch state p."""
 
-    dynamic: Annotated[list[str], Unique] = []
-    station_location: LocationMode = "none"
-    station_biases: Annotated[list[BiasKind], Unique] = []
-    values: dict[str, float] = {}
-
-
-class FitTable(Schema):
-    """``[noise.fit]``: white-noise σ of each kind (edge units: m, mm/s, deg)."""
-
-    sigma_range_m: Positive | None = None
-    sigma_range_rate_mm_s: Positive | None = None
-    sigma_azimuth_deg: Positive | None = None
-    sigma_elevation_deg: Positive | None = None
-
-
-class RealTable(Schema):
-    """``[noise.real]``: white σ, per-pass bias σ, correlated σ with its τ, for each kind."""
-
-    sigma_range_m: NonNegative | None = None
-    sigma_range_rate_mm_s: NonNegative | None = None
-    sigma_azimuth_deg: NonNegative | None = None
-    sigma_elevation_deg: NonNegative | None = None
-    bias_range_m: NonNegative | None = None
-    bias_range_rate_mm_s: NonNegative | None = None
-    bias_azimuth_deg: NonNegative | None = None
-    bias_elevation_deg: NonNegative | None = None
-    correlated_range_m: NonNegative | None = None
-    correlated_range_rate_mm_s: NonNegative | None = None
-    correlated_azimuth_deg: NonNegative | None = None
-    correlated_elevation_deg: NonNegative | None = None
-    tau_range_s: Positive | None = None
-    tau_range_rate_s: Positive | None = None
-    tau_azimuth_s: Positive | None = None
-    tau_elevation_s: Positive | None = None
-
-
-class NoiseTable(Schema):
-    """``[noise]``: the fit world (required) and the real world."""
-
-    fit: FitTable
-    real: RealTable = RealTable()
+    dynamic: Annotated[list[str], Unique] = Field(
+        [], description="Model parameters in q: \"GM\", \"GM_moon\" (a third body's), "
+        "\"J2\", \"C22\", \"S22\", ... of the state model.")
+    station_location: LocationMode = Field("none", description=_LOCATION)
+    station_biases: Annotated[list[BiasKind], Unique] = Field([], description=_BIASES)
+    values: dict[str, float] = Field(
+        {}, description="Values other than nominal of dynamic parameters, by name (GM in "
+        "km³/s²).")
 
 
 class StationTracking(Schema):
-    """``[tracking.station.NAME]``: what one station measures and how, overriding defaults."""
+    """``[tracking.station.NAME]``: what one station measures and how, overriding the
+    scenario's defaults."""
 
-    observables: Annotated[list[Kind], Field(min_length=1), Unique] | None = None
-    location: LocationMode | None = None
-    biases: Annotated[list[BiasKind], Unique] | None = None
-    range_bias_m: float = 0.0
-    range_rate_bias_mm_s: float = 0.0
-    blackouts: list[Window] = []
-    fit: FitTable = FitTable()
-    real: RealTable = RealTable()
+    observables: Annotated[list[Kind], Field(min_length=1), Unique] | None = Field(
+        None, description="What the station measures; default: tracking.observables.")
+    location: LocationMode | None = Field(
+        None, description="Its location parameters; default: parameters.station_location.")
+    biases: Annotated[list[BiasKind], Unique] | None = Field(
+        None, description="Its bias parameters; default: parameters.station_biases.")
+    range_bias_m: float = Field(0.0, description="Nominal range bias added to its range.")
+    range_rate_bias_mm_s: float = Field(0.0, description="Nominal range-rate bias added to "
+                                        "its range rate.")
+    blackouts: list[Window] = Field([], description=_BLACKOUTS + " at this station (beside "
+                                    "tracking.blackouts).")
+    fit: FitTable = Field(FitTable(), description="Its fit-world σ, overriding [noise.fit].")
+    real: RealTable = Field(RealTable(), description="Its real-world noise, overriding "
+                            "[noise.real].")
 
 
 class TrackingTable(Schema):
-    """``[tracking]``: stations, observables, light time and the sampling schedule."""
+    """``[tracking]``: the stations, what they measure and when. Samples fall every
+    ``data_interval_s`` from ``start`` to ``end`` while a station sees the spacecraft above
+    its mask and outside blackouts; a pass is a run of such samples."""
 
-    stations: Annotated[list[str], Field(min_length=1), Unique]
-    observables: Annotated[list[Kind], Unique] = ["range", "range_rate"]
-    light_time: Literal[LIGHT_TIME_MODES] = "none"  # type: ignore[valid-type]
-    data_interval_s: Positive
-    start: Time = 0.0
-    end: Time | None = None
-    min_pass_s: NonNegative = 0.0
-    max_pass_s: Positive | None = None
-    blackouts: list[Window] = []
-    station: dict[str, StationTracking] = {}
+    stations: Annotated[list[str], Field(min_length=1), Unique] = Field(
+        description="Names of [stations.NAME] tables, numbered 1, 2, ... on the tape.")
+    observables: Annotated[list[Kind], Unique] = Field(
+        ["range", "range_rate"], description="What every station measures.")
+    light_time: Literal[LIGHT_TIME_MODES] = Field(  # type: ignore[valid-type]
+        "none", description="Light-time correction of the observables.")
+    data_interval_s: Positive = Field(description="Time between samples of each station.")
+    start: Time = Field(0.0, description="First sample time.")
+    end: Time | None = Field(None, description="Last sample time; default: the last T13 time.")
+    min_pass_s: NonNegative = Field(0.0, description="Passes shorter than this are dropped.")
+    max_pass_s: Positive | None = Field(
+        None, description="Passes longer than this are split (each piece its own per-pass "
+        "bias); default: no limit.")
+    blackouts: list[Window] = Field([], description=_BLACKOUTS + " at every station.")
+    station: dict[str, StationTracking] = Field(
+        {}, description="Per-station overrides, by station name.")
 
 
 class TimesTable(Schema):
-    """``[times]``: input times (a list, or input_step_s with end) and epoch times."""
+    """``[times]``: the T13 times: input times (tape records) and epoch times (the state the
+    information is referred to is re-epoched there; t = 0 is always one)."""
 
-    input: list[Time] | None = None
-    input_step_s: Positive | None = None
-    end: Time | None = None
-    epochs: list[Time] = []
+    input: list[Time] | None = Field(None, description="Input times, ascending, after 0 (or "
+                                     "input_step_s with end).")
+    input_step_s: Positive | None = Field(None, description="Input times every this many "
+                                          "seconds up to end.")
+    end: Time | None = Field(None, description="The last input time, with input_step_s.")
+    epochs: list[Time] = Field([], description="Epoch times after t = 0, ascending, up to the "
+                               "last input time.")
 
 
 class MissTable(Schema):
-    """``[miss]``: the miss parameters' kind, time, quantities (and B-plane body, plane)."""
+    """``[miss]``: the miss parameters whose partials the tape carries. A B-plane miss must be
+    an encounter: the spacecraft inside the body's sphere of attraction, on a hyperbola."""
 
-    kind: Literal[tuple(MISS_QUANTITIES)]  # type: ignore[valid-type]
-    time: Time | None = None
-    quantities: Annotated[list[str], Field(min_length=1), Unique] | None = None
-    body: str | None = None
-    reference: Literal[tuple(REFERENCE_POLES)] | None = None  # type: ignore[valid-type]
+    kind: Literal[tuple(MISS_QUANTITIES)] = Field(  # type: ignore[valid-type]
+        description="\"bplane\" (b_dot_r_km, b_dot_t_km, ltof_s, flight_time_s), "
+        "\"equinoctial\" (a_km, ex, ey, hx, hy, lambda_m_rad) or \"classical\" (a_km, e, "
+        "i_rad, raan_rad, argp_rad, M_rad).")
+    time: Time | None = Field(
+        None, description="When the miss is evaluated; a B-plane's may be \"periapsis\" (the "
+        "trajectory's first periapsis at the body); default: the last T13 time.")
+    quantities: Annotated[list[str], Field(min_length=1), Unique] | None = Field(
+        None, description="Which quantities of the kind; default: all but flight_time_s.")
+    body: str | None = Field(None, description="The B-plane's body, a third body of the state "
+                             "model.")
+    reference: Literal[tuple(REFERENCE_POLES)] | None = Field(  # type: ignore[valid-type]
+        None, description="The B-plane's reference plane (T axis); default: "
+        "\"earth_equator\".")
 
 
-class ScenarioFile(Schema):
+class ScenarioFile(StationsSection):
     """Schema of a TAPP I tracking scenario (module docstring for the tables)."""
 
-    title: str = ""
-    iden: str | None = None
-    epoch: UtcDate
+    title: str = Field("", description="Free text, kept on the tape.")
+    iden: str | None = Field(None, description="Tape identification; default: the file name "
+                             "up to its first dot.")
+    epoch: UtcDate = Field(description="UTC of the injection, t = 0; scenario time is SI "
+                           "seconds from it.")
     earth_orientation: EarthOrientationName = "iau2006"
     eop: EopSource = "iers"
-    injection: InjectionTable
-    model: ModelTable
-    parameters: ParametersTable = ParametersTable()
-    stations: dict[str, StationTable] = {}
-    networks: dict[str, list[str]] = {}
-    tracking: TrackingTable
-    noise: NoiseTable
-    times: TimesTable
-    miss: MissTable
-    targeting: TargetingTable | None = None
+    injection: OrbitTable = Field(description="The state at the epoch (GCRS; EME2000 with gmst).")
+    model: ModelTable = Field(description="The state and variational force models.")
+    parameters: ParametersTable = Field(ParametersTable(),
+                                        description="The parameters q beside the state.")
+    tracking: TrackingTable = Field(description="Who tracks, what and when.")
+    noise: NoiseTable = Field(description="Fit-world and real-world measurement noise.")
+    times: TimesTable = Field(description="The T13 times.")
+    miss: MissTable = Field(description="The miss parameters.")
+    targeting: TargetingTable | None = Field(
+        None, description="Retarget the injection velocity by SEARCH before simulating.")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -571,29 +524,6 @@ def _epoch(p: _Parser, value: object) -> Epoch:
         return parse_epoch(str(value), p.source)
     except InputError as exc:
         raise InputError(p.source, "epoch", exc.expected, value) from None
-
-
-def _injection(p: _Parser, inj: InjectionTable) -> np.ndarray:
-    if inj.r_km is not None:
-        x0 = np.array([*inj.r_km, *inj.v_km_s], dtype=float)
-    else:
-        anomaly = "M_deg" if inj.M_deg is not None else "nu_deg"
-        values = [getattr(inj, k) for k in (*_ELEMENTS, anomaly)]
-        x0 = state_from_elements(*values, true_anomaly=anomaly == "nu_deg", source=p.source,
-                                 field="injection")
-    return check_perigee(x0, p.source, "injection", allow_subsurface=inj.allow_subsurface,
-                         how_to_allow="injection.allow_subsurface = true")
-
-
-def _models(p: _Parser, mod: ModelTable, orientation: str
-            ) -> tuple[ForceModel, ForceModel, float, float]:
-    var_gravity = mod.gravity if mod.var_gravity is None else mod.var_gravity
-    var_bodies = mod.third_bodies if mod.var_third_bodies is None else mod.var_third_bodies
-    state = earth_model(mod.gravity, tuple(mod.third_bodies), source=p.source,
-                        field="model.gravity", earth_orientation=orientation)
-    var = earth_model(var_gravity, tuple(var_bodies), source=p.source,
-                      field="model.var_gravity", earth_orientation=orientation)
-    return state, var, mod.rtol, mod.atol
 
 
 def _dynamic(p: _Parser, par: ParametersTable, state_model: ForceModel
@@ -806,8 +736,10 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     model = doc.earth_orientation if earth_orientation is None else earth_orientation
     orientation = orientation_for(model, epoch, doc.eop, Path(source).parent, source)
     iden = Path(source).name.split(".")[0] if doc.iden is None else doc.iden
-    x0 = _injection(p, doc.injection)
-    state_model, var_model, rtol, atol = _models(p, doc.model, model)
+    x0 = doc.injection.state(source, "injection",
+                             how_to_allow="injection.allow_subsurface = true")
+    state_model, var_model = doc.model.force_models(p.source, model)
+    rtol, atol = doc.model.rtol, doc.model.atol
     dynamic, values = _dynamic(p, doc.parameters, state_model)
     stations = _stations(p, doc, doc.parameters)
     times = _times(p, doc.times)

@@ -1,19 +1,19 @@
 """Benchmark of TAPP II: the deep-space guidance study, 10⁶ samples, serially and on Dask.
 
-Set-up (timed apart, in a temporary folder): TAPP I on ``scenarios/deep_space.toml`` -> T13
-tape, TAPP III with ``scenarios/tapp3_deep_space.toml`` -> T32 tape, through the library calls
+Set-up (timed apart, in a temporary folder): TAPP I on the example ``deep_space.toml`` -> T13
+tape, TAPP III with the example ``tapp3_deep_space.toml`` -> T32 tape, through the library calls
 ``tapp simulate``, ``tapp process --tape`` and the pipeline make. Measured, with the guidance
-file ``scenarios/tapp2_deep_space.toml`` (three manoeuvres, B·R, B·T and the flight time
+file the example ``tapp2_deep_space.toml`` (three manoeuvres, B·R, B·T and the flight time
 targeted, "inflate" navigation) and :data:`N_SAMPLES` samples:
 
 (a) the study serially in this process (``Execution(serial=True)``);
-(b) the study on a local Dask cluster of :data:`WORKERS` worker processes, started before the
-    timing (its start-up and the first study on the fresh workers, which import tapp, are
-    reported apart);
-(b') the same with Dask's ``MALLOC_TRIM_THRESHOLD_`` unset in the workers, a diagnostic: Dask
-    sets it to 64 kB in every worker it spawns (``distributed.nanny.pre-spawn-environ``), which
-    also fixes glibc's mmap threshold at 128 kB, so every temporary array of a block (0.2 to
-    0.9 MB) is a fresh mmap whose pages fault in again;
+(b) the study on a local Dask cluster of :data:`WORKERS` worker processes as tapp starts it
+    (:func:`iter.execute.local_cluster`), started before the timing (its start-up and the
+    first study on the fresh workers, which import tapp, are reported apart);
+(b') the same with Dask's ``MALLOC_TRIM_THRESHOLD_`` of 64 kB back in the workers, as they
+    were started before tapp left it out (``iter.execute.WORKER_ENVIRON``): it also fixes
+    glibc's mmap threshold at 128 kB, so every temporary array of a block (0.2 to 0.9 MB) is
+    a fresh mmap whose pages fault in again;
 (c) the linear covariance alone, with its Imhof ΔV percentiles and corridor fractions
     (:func:`tapp.guidance.statistics.linear_outcome`), and the propagation of the covariance
     without them.
@@ -35,10 +35,10 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-import dask
 import numpy as np
 
 from iter.execute import Execution, local_cluster
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.guidance.guidefile import GuideFile, bind, read_guide
 from tapp.guidance.linear import linear_covariance
 from tapp.guidance.statistics import linear_outcome
@@ -53,7 +53,6 @@ from tapp.tape.t32_hdf5 import read_t32, write_t32
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 from tests.bench.common import (
-    REPO_ROOT,
     Section,
     logger,
     markdown_table,
@@ -63,7 +62,7 @@ from tests.bench.common import (
 )
 
 NAME = "guidance"
-SCENARIOS = REPO_ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 SCENARIO = SCENARIOS / "deep_space.toml"
 DECK = SCENARIOS / "tapp3_deep_space.toml"
 GUIDE = SCENARIOS / "tapp2_deep_space.toml"
@@ -76,8 +75,10 @@ REPEATS_SERIAL = 3
 REPEATS_DASK = 3
 REPEATS_LINEAR = 5
 TARGET_S = 10.0
-#: Dask's setting of glibc's trim threshold in the workers it spawns (see (b') above).
+#: Dask's setting of glibc's trim threshold in the workers it spawns (see (b') above), and
+#: its value there.
 MALLOC_TRIM = "MALLOC_TRIM_THRESHOLD_"
+DASK_MALLOC_TRIM = "65536"
 _M_PER_KM = 1e3
 
 log = logger(NAME)
@@ -121,20 +122,19 @@ def timed_studies(t32: T32, guide: GuideFile, execution: Execution, repeats: int
 
 
 @contextlib.contextmanager
-def worker_malloc_trim(keep: bool) -> Iterator[None]:
-    """Within: local clusters spawn workers with Dask's trim threshold (``keep``) or without.
+def worker_malloc_trim(dask_s: bool) -> Iterator[None]:
+    """Within: local clusters spawn workers with Dask's trim threshold (``dask_s``) or
+    without it, as tapp starts them.
 
-    A nanny also writes its pre-spawn environment into this process's ``os.environ`` when a
-    cluster starts, so a worker of a later cluster would inherit the variable from here: it
-    is removed for the time of the context and put back after.
+    The workers inherit this process's environment (tapp's clusters leave the variable out
+    of Dask's pre-spawn environment, not out of the environment it is given), so the
+    variable is set, or removed, here for the time of the context and put back after.
     """
-    if keep:
-        yield
-        return
     saved = os.environ.pop(MALLOC_TRIM, None)
+    if dask_s:
+        os.environ[MALLOC_TRIM] = DASK_MALLOC_TRIM
     try:
-        with dask.config.set({f"distributed.nanny.pre-spawn-environ.{MALLOC_TRIM}": None}):
-            yield
+        yield
     finally:
         os.environ.pop(MALLOC_TRIM, None)
         if saved is not None:
@@ -196,7 +196,7 @@ def run() -> Section:
 
     runs = {}
     identical = {}
-    for key, trim in (("dask", True), ("dask_no_malloc_trim", False)):
+    for key, trim in (("dask", False), ("dask_malloc_trim", True)):
         runs[key], res = dask_studies(t32, guide, malloc_trim=trim)
         identical[key] = bitwise_identical(res_a, res)
         del res
@@ -221,7 +221,7 @@ def run() -> Section:
 
     dask_run = runs["dask"]
     ratio = dask_run["samples_per_s"] / serial["samples_per_s"]
-    ratio_no_trim = runs["dask_no_malloc_trim"]["samples_per_s"] / serial["samples_per_s"]
+    ratio_trim = runs["dask_malloc_trim"]["samples_per_s"] / serial["samples_per_s"]
     cold_s = (dask_run["cluster_start_s"] + dask_run["first_study_s"]
               + dask_run["monte_carlo_best_s"])
     stats = guidance_dict(res_a)
@@ -248,23 +248,24 @@ def run() -> Section:
              "samples a shard", f"< {TARGET_S:.0f} s"],
             [_mc_row("(a) serial, this process", serial, REPEATS_SERIAL),
              _mc_row(f"(b) Dask, local cluster of {WORKERS} workers", dask_run, REPEATS_DASK),
-             _mc_row(f"(b') as (b), {MALLOC_TRIM} unset in the workers (diagnostic)",
-                     runs["dask_no_malloc_trim"], REPEATS_DASK),
+             _mc_row(f"(b') as (b), with Dask's {MALLOC_TRIM} in the workers (as before)",
+                     runs["dask_malloc_trim"], REPEATS_DASK),
              ["(c) linear covariance + Imhof statistics", str(REPEATS_LINEAR), "—", "—",
               f"{lin_timing.best_s:.3f}", "—", "—"]]),
         "",
-        f"**(b)/(a) samples per second: {ratio:.2f}x** ({WORKERS} workers; {ratio_no_trim:.2f}x "
-        f"with {MALLOC_TRIM} unset). Cluster start-up {dask_run['cluster_start_s']:.2f} s, "
-        f"first study on the fresh workers ({WARM_SAMPLES:,} samples, tapp imported) "
-        f"{dask_run['first_study_s']:.2f} s, stop {dask_run['cluster_stop_s']:.2f} s; with "
+        f"**(b)/(a) samples per second: {ratio:.2f}x** ({WORKERS} workers; {ratio_trim:.2f}x "
+        f"with Dask's {MALLOC_TRIM}, as before). Cluster start-up "
+        f"{dask_run['cluster_start_s']:.2f} s, first study on the fresh workers "
+        f"({WARM_SAMPLES:,} samples, tapp imported) {dask_run['first_study_s']:.2f} s, stop "
+        f"{dask_run['cluster_stop_s']:.2f} s; with "
         f"the start-up and the first study, (b) takes {cold_s:.2f} s (< {TARGET_S:.0f} s: "
         f"{_ok(cold_s)}). (c): the covariance propagation alone "
         f"{1e3 * cov_timing.best_s:.2f} ms; the rest is the Imhof integrals (mean, 50/90/99 % "
         "of each |Δv|, the corridor fraction).",
         "",
         "**Bitwise identity of (b) and (a): yes**, every per-sample Δv and miss (as bit "
-        "patterns) and every Monte Carlo statistic (as `tapp guide --json` writes it); (b') "
-        "too (checked: the section raises otherwise). Memory of one serial study: "
+        "patterns) and every Monte Carlo statistic (as `tapp guide --json PATH` writes it); "
+        "(b') too (checked: the section raises otherwise). Memory of one serial study: "
         f"tracemalloc peak {peak_mb:.0f} MB, of which the gathered outcomes "
         f"{outcomes_mb:.0f} MB ({outcomes_mb * 1e6 / N_SAMPLES:.0f} bytes a sample, held once "
         f"per shard and once concatenated; MAX_SAMPLES = {MAX_SAMPLES:,}). Mean |Δv|, Monte "
@@ -275,7 +276,7 @@ def run() -> Section:
     ])
     data = {"target_s": TARGET_S, "n_samples": N_SAMPLES, "seed": SEED, "workers": WORKERS,
             "setup": setup, "serial": serial, **runs, "ratio_dask_to_serial": ratio,
-            "ratio_dask_no_malloc_trim_to_serial": ratio_no_trim, "dask_cold_s": cold_s,
+            "ratio_dask_malloc_trim_to_serial": ratio_trim, "dask_cold_s": cold_s,
             "linear_covariance": cov_timing, "linear_with_imhof": lin_timing,
             "bitwise_identical": identical, "tracemalloc_peak_mb": peak_mb,
             "outcomes_mb": outcomes_mb, "max_samples": MAX_SAMPLES,

@@ -3,8 +3,8 @@
 The results must not depend on the machine. Each supported kernel (``OPENBLAS_CORETYPE``:
 SkylakeX needs avx512f, Haswell and Zen avx2, Sandybridge avx; a kernel the processor lacks
 crashes, so the section reads the CPU flags first) runs, in its own child process,
-``tapp simulate scenarios/deep_space.toml`` → ``tapp process`` with
-``scenarios/tapp3_deep_space.toml`` → ``tapp guide`` with ``scenarios/tapp2_deep_space.toml``
+``tapp simulate deep_space.toml`` → ``tapp process`` with
+the example ``tapp3_deep_space.toml`` → ``tapp guide`` with the example ``tapp2_deep_space.toml``
 (20,000 samples, serial). Two comparisons, as the largest difference over every pair of
 kernels:
 
@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tapp.examples import FOLDER as EXAMPLES
 from tests.bench.common import REPO_ROOT, Section, logger, markdown_table
 
 NAME = "kernels"
@@ -40,7 +41,7 @@ KERNELS = {"SkylakeX": "avx512f", "Haswell": "avx2", "Zen": "avx2", "Sandybridge
 SAMPLES = 20_000
 TARGET_COVARIANCE = 1e-9
 TARGET_GUIDANCE = 1e-8
-SCENARIOS = REPO_ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 log = logger(NAME)
 
 

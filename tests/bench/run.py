@@ -3,8 +3,8 @@
 Prints the environment once, then each section's Markdown report to stdout, and writes
 ``results/bench/<section>.md`` and ``.json``. A section is a module under ``tests/bench``
 with ``NAME`` and ``run()`` returning a ``common.Section`` (or just its Markdown). Add new
-ones (tracking simulation, DC iteration, targeting, sweeps) to ``SECTIONS``. Progress goes
-to stderr.
+ones (tracking simulation, DC iteration, targeting, sweeps, the command itself) to
+``SECTIONS``. Progress goes to stderr.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from tests.bench import (  # noqa: E402
+    cli,
     common,
     guidance,
     kernels,
@@ -30,7 +31,7 @@ from tests.bench import (  # noqa: E402
 
 SECTIONS = {module.NAME: module
             for module in (propagation, tracking, od, targeting, sweeps, processor,
-                           guidance, kernels)}
+                           guidance, kernels, cli)}
 
 
 def main(argv: list[str] | None = None) -> int:

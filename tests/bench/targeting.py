@@ -1,4 +1,4 @@
-"""Benchmark of the B-plane targeting case (scenarios/search_bplane.toml).
+"""Benchmark of the B-plane targeting case (the example search_bplane.toml).
 
 ``run()`` returns a Markdown section: wall time and trajectories flown by SEARCH with
 differenced partials (the seed's perturbed cases) and with analytic partials from the
@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import time
 import tomllib
-from pathlib import Path
 
 import numpy as np
 
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.targeting import BPlaneSearch, run_search, scenario_search
 
-SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "search_bplane.toml"
+SCENARIO = EXAMPLES / "search_bplane.toml"
 REPEATS = 5
 
 

@@ -1,4 +1,4 @@
-"""Benchmark of TAPP I on scenarios/deep_space.toml (30 days, DSN, one sample per minute).
+"""Benchmark of TAPP I on the example deep_space.toml (30 days, DSN, one sample per minute).
 
 ``run()`` returns a section (Markdown and raw numbers): wall time of reading the scenario,
 simulating and writing the T13 tape (without and with the raw rows), the tape sizes and what
@@ -19,6 +19,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.tape import T13
 from tapp.tape.t13 import VERSION as T13_VERSION
 from tapp.tape.t13_hdf5 import write_t13
@@ -28,7 +29,7 @@ from tests.bench import legacy
 from tests.bench.common import Section, logger
 
 NAME = "tracking"
-SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "deep_space.toml"
+SCENARIO = EXAMPLES / "deep_space.toml"
 REPEATS = 3
 TARGET_S = 30.0
 TARGET_MB = 50.0

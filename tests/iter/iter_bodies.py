@@ -93,3 +93,17 @@ def scaled_body(azimuth_deg: float, scale_file: str, calls_dir: str) -> dict[str
 def keywords_body(**values: float) -> dict[str, float]:
     """Return the sum of whatever keyword arguments it is given."""
     return {"total": sum(values.values())}
+
+
+def process_facts(azimuth_deg: float) -> dict[str, object]:
+    """The process a case ran in: its id, its BLAS threads (NumPy's libraries loaded) and
+    its ``MALLOC_TRIM_THRESHOLD_`` ("" when unset)."""
+    import os
+
+    import numpy  # noqa: F401  (threadpoolctl sees only the BLAS libraries loaded)
+    from threadpoolctl import threadpool_info
+
+    return {"pid": os.getpid(),
+            "blas_threads": max(lib["num_threads"] for lib in threadpool_info()
+                                if lib["user_api"] == "blas"),
+            "malloc_trim": os.environ.get("MALLOC_TRIM_THRESHOLD_", "")}

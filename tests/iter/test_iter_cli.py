@@ -13,8 +13,9 @@ from typer.testing import CliRunner
 import tapp.cli.sweep  # noqa: F401  (registers the iter command on the app)
 from iter import CaseStatus, read_hdf5
 from tapp.cli.common import EXIT_FAILURE, EXIT_INPUT, app
+from tapp.examples import FOLDER as EXAMPLES
 
-SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+SCENARIOS = EXAMPLES
 runner = CliRunner()
 
 
@@ -37,7 +38,7 @@ def test_serial_run_writes_h5_and_csv_and_prints_the_summary(tmp_path):
 
 def test_json_summary_and_resume(tmp_path):
     args = ["iter", str(SCENARIOS / "iter_azimuth_type2.toml"), "-o", str(tmp_path / "a.h5"),
-            "--serial", "--json"]
+            "--serial", "--json", "-"]
     first = json.loads(runner.invoke(app, args).stdout)
     second = json.loads(runner.invoke(app, args).stdout)
     assert (first["n_cases"], first["n_succeeded"], first["n_failed"]) == (5, 5, 0)
@@ -121,7 +122,7 @@ def test_a_sweep_whose_every_case_fails_exits_1_with_the_first_error(tmp_path):
     path = _altitude_sweep(tmp_path, [-7000.0, -8000.0])
     h5, table = tmp_path / "r.h5", tmp_path / "r.csv"
     result = runner.invoke(app, ["iter", str(path), "-o", str(h5), "--csv", str(table),
-                                 "--serial", "--json"])
+                                 "--serial", "--json", "-"])
     assert result.exit_code == EXIT_FAILURE
     assert result.stderr == (f"error: {path}: every case failed (2 of 2); case 0: "
                              f"ValueError: math domain error (every failure is recorded in "
@@ -159,7 +160,7 @@ def test_a_sweep_reads_its_files_from_its_folder_in_any_directory(tmp_path, monk
     (tmp_path / "elsewhere").mkdir()
     monkeypatch.chdir(tmp_path / "elsewhere")
     result = runner.invoke(app, ["iter", "../study/scaled.toml", "-o", "r.h5", "--serial",
-                                 "--json"])
+                                 "--json", "-"])
     assert result.exit_code == 0, result.output
     rows = read_hdf5(tmp_path / "elsewhere" / "r.h5").table.rows
     assert [row.outputs["scaled_deg"] for row in rows] == [192.0, 198.0, 204.0]

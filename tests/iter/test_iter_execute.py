@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import socket
 import sys
 import tempfile
@@ -29,10 +30,12 @@ from iter import (
     read_hdf5,
     run_sweep,
 )
-from iter.execute import local_cluster
+from iter.execute import available_cores, local_cluster
+from iter.run import PROBE_CASES
+from tapp.examples import FOLDER as EXAMPLES
 
 HERE = Path(__file__).resolve().parent
-SCENARIOS = HERE.parents[1] / "scenarios"
+SCENARIOS = EXAMPLES
 SERIAL = Execution(serial=True, checkpoint_interval_s=0.0)
 AZIMUTHS = Loop(type=2, names=("azimuth_deg",), sets=5, vary=(96.0,), delta=(3.0,))
 
@@ -157,12 +160,12 @@ import argparse, json
 parser = argparse.ArgumentParser()
 parser.add_argument("--azimuth_deg", type=float, required=True)
 parser.add_argument("--scale", type=float, required=True)
-parser.add_argument("--json", action="store_true")
+parser.add_argument("--json")
 args = parser.parse_args()
 if args.azimuth_deg == 102.0:
     raise SystemExit("refusing 102 deg")
 print(json.dumps({"scaled_deg": args.scale * args.azimuth_deg, "r_km": [1, 2],
-                  "meta": {"json_flag": args.json, "label": "ok", "none": None}}))
+                  "meta": {"json_to": args.json, "label": "ok", "none": None}}))
 """
 
 
@@ -178,7 +181,7 @@ def test_program_body_outputs_and_failures():
     outputs = dict(rows[0].outputs)
     assert math.isnan(outputs.pop("meta.none"))
     assert outputs == {"scaled_deg": 192.0, "r_km[0]": 1.0, "r_km[1]": 2.0,
-                       "meta.json_flag": 1.0, "meta.label": "ok"}
+                       "meta.json_to": "-", "meta.label": "ok"}
     assert rows[2].error == (f"CaseFailure: {sys.executable} exited with status 1: "
                              "refusing 102 deg")
 
@@ -221,6 +224,31 @@ def test_a_server_that_never_answers_is_not_a_hang():
             run_sweep(load_sweep(SCENARIOS / "iter_azimuth_type1.toml"),
                       execution=Execution(scheduler=address, connect_timeout_s=1.0))
         assert time.perf_counter() - start_s < 10.0
+
+
+def test_an_automatic_sweep_too_small_for_a_cluster_runs_in_this_process(bodies):
+    sweep = Sweep(loops=(AZIMUTHS,), body=CallableBody("iter_bodies:process_facts"))
+    result = run_sweep(sweep, execution=Execution())
+    assert Execution().automatic and not Execution(workers=1).automatic
+    assert result.summary.mode.startswith("this process (")  # no cluster for 5 tiny cases
+    assert {row.outputs["pid"] for row in result.table.rows} == {os.getpid()}
+
+
+@pytest.mark.skipif(available_cores() < 2, reason="one core: a local cluster never pays")
+def test_an_automatic_sweep_worth_a_cluster_probes_here_then_runs_on_one_blas_thread(
+        bodies, monkeypatch):
+    monkeypatch.setattr("iter.run.DASK_MIN_WORK_S", 0.0)  # any work repays a cluster
+    for name in ("MALLOC_TRIM_THRESHOLD_", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                 "MKL_NUM_THREADS"):  # unset here, and put back after (a nanny sets them)
+        monkeypatch.delenv(name, raising=False)
+    sweep = Sweep(loops=(AZIMUTHS,), body=CallableBody("iter_bodies:process_facts"))
+    result = run_sweep(sweep, execution=Execution())
+    assert result.summary.mode.startswith("local cluster (")
+    assert result.summary.mode.endswith(f", after {PROBE_CASES} cases in this process")
+    rows = [row.outputs for row in result.table.rows]
+    assert [row["pid"] == os.getpid() for row in rows] == [True] * PROBE_CASES + [False] * 3
+    assert {(row["blas_threads"], row["malloc_trim"]) for row in rows[PROBE_CASES:]} == {
+        (1, "")}  # one BLAS thread, and no trim threshold, in every worker
 
 
 @pytest.mark.parametrize(("kwargs", "field"), [

@@ -7,8 +7,9 @@ from pathlib import Path
 import pytest
 
 from iter import CallableBody, ProgramBody, SweepInputError, load_sweep, parse_sweep
+from tapp.examples import FOLDER as EXAMPLES
 
-SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+SCENARIOS = EXAMPLES
 
 
 def test_five_azimuth_scenarios_type_1_and_type_2_give_the_same_cases():
@@ -133,11 +134,11 @@ def test_program_body_is_read_with_its_options():
 
 def test_file_errors_name_the_file(tmp_path):
     missing = tmp_path / "missing.toml"
-    with pytest.raises(SweepInputError, match="missing.toml: file: expected a readable"):
+    with pytest.raises(SweepInputError, match="missing.toml: file: expected an existing sweep"):
         load_sweep(missing)
     broken = tmp_path / "broken.toml"
     broken.write_text("[body\n")
-    with pytest.raises(SweepInputError, match="broken.toml: file: expected valid TOML"):
+    with pytest.raises(SweepInputError, match="broken.toml: TOML: expected valid TOML"):
         load_sweep(broken)
 
 

@@ -64,11 +64,12 @@ def test_named_orbits_honour_their_table_and_the_flag(tmp_path: Path) -> None:
     ("a_km = true\ne = 0.0\ni_deg = 0.0\nraan_deg = 0.0\nargp_deg = 0.0\nM_deg = 0.0\n",
      "orbits.X.a_km", "a number"),
     ("a_km = 7000.0\ne = 0.0\ni_deg = 0.0\nraan_deg = 0.0\nargp_deg = 0.0\nM = 0.0\n",
-     "orbits.X.M", "no such key (allowed: a_km, e, i_deg, "),
+     "orbits.X.M", "no such key (allowed: r_km, v_km_s, a_km, e, i_deg, "),
     ("a_km = 7000.0\ne = 0.0\ni_deg = 0.0\nraan_deg = 0.0\nargp_deg = 0.0\n",
-     "orbits.X", "a_km, e, i_deg, raan_deg, argp_deg and M_deg (or nu_deg)"),
-    ('x_km = "7000"\ny_km = 0.0\nz_km = 0.0\nvx_km_s = 0.0\nvy_km_s = 7.5\nvz_km_s = 0.0\n',
-     "orbits.X.x_km", "a number"),
+     "orbits.X", "r_km and v_km_s, or a_km, e, i_deg, raan_deg, argp_deg and M_deg (or "
+     "nu_deg)"),
+    ('r_km = ["7000", 0.0, 0.0]\nv_km_s = [0.0, 7.5, 0.0]\n', "orbits.X.r_km[0]", "a number"),
+    ("r_km = [7000.0, 0.0, 0.0]\n", "orbits.X", "r_km and v_km_s, or a_km"),
 ])
 def test_orbit_tables_follow_their_schema(tmp_path: Path, table: str, field: str,
                                           expected: str) -> None:
@@ -90,7 +91,7 @@ def test_the_commands_refuse_a_subsurface_orbit_in_one_line(command: str) -> Non
 
 def test_propagate_accepts_a_subsurface_orbit_when_told() -> None:
     result = runner.invoke(app, ["propagate", "--orbit", BELOW, "--allow-subsurface",
-                                 "--hours", "0.1", "--json"])
+                                 "--hours", "0.1", "--json", "-"])
     assert result.exit_code == 0, result.output
 
 

@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 
 import tapp.cli  # noqa: F401  (registers every command)
 from tapp.cli.common import app
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.tape.t13_hdf5 import write_t13
 from tapp.tape.t32_hdf5 import write_t32
 from tests.tapp.guidance.helpers import deep_space_t13, deep_space_t32
@@ -203,7 +204,7 @@ def test_an_output_that_is_an_input_is_refused_before_any_work(files):
 
 def test_the_shipped_guidance_file_runs(files, scheduler):
     tape, _ = files
-    shipped = Path(__file__).resolve().parents[3] / "scenarios" / "tapp2_deep_space.toml"
+    shipped = EXAMPLES / "tapp2_deep_space.toml"
     res = runner.invoke(app, ["guide", str(tape), str(shipped), "--samples", "2000", "--seed",
                               "1", "--scheduler", scheduler, "--json", "-"])
     assert res.exit_code == 0, res.stderr

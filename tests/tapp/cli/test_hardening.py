@@ -20,10 +20,11 @@ from typer.testing import CliRunner
 from iter.results import values_digest
 from tapp.cli import app
 from tapp.cli.common import EXIT_FAILURE, EXIT_INPUT, run_folder
+from tapp.examples import FOLDER as EXAMPLES
 from tests.faults import read_only_folder
 
 ROOT = Path(__file__).resolve().parents[3]
-SCENARIOS = ROOT / "scenarios"
+SCENARIOS = EXAMPLES
 LEO = SCENARIOS / "leo_equatorial.toml"
 SWEEP = SCENARIOS / "iter_azimuth_type1.toml"
 PIPELINE = SCENARIOS / "pipeline_deep_space.toml"
@@ -119,7 +120,7 @@ def test_a_failed_tape_write_leaves_the_old_oem_and_tape_and_no_temporary(
         Path(path).write_bytes(b"half a tape")
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr("tapp.cli.tracking_cmd.t13_file_writer", lambda tape, source: no_space)
+    monkeypatch.setattr("tapp.tape.t13_hdf5.t13_file_writer", lambda tape, source: no_space)
     line = _refused(["simulate", str(LEO), "-o", str(tape), "--oem", str(oem)],
                     code=EXIT_FAILURE)  # the disk's failure, not the input's
     assert line == f"error: -o/--output: {tape}: not written (No space left on device)"
@@ -320,5 +321,5 @@ def test_usage_errors_are_one_line_exit_2() -> None:
 
 def test_numerical_outcomes_keep_their_codes() -> None:
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "24h", "--stm", "J0",
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 3

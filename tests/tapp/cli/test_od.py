@@ -17,6 +17,8 @@ from scipy.stats import chi2
 from typer.testing import CliRunner
 
 from tapp.cli import app
+from tapp.cli.od import parse_duration_s
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.od import setup
 from tapp.od.observations import MadeUnder
 from tapp.od.obsfile import read_observations, write_observations
@@ -27,7 +29,7 @@ runner = CliRunner()
 
 def test_dc_json_reports_the_converged_fit() -> None:
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "12h", "--truth", "J2",
-                              "--stm", "J2", "--json"])
+                              "--stm", "J2", "--json", "-"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert out["converged"] is True and out["iterations"] <= 6
@@ -38,7 +40,7 @@ def test_dc_json_reports_the_converged_fit() -> None:
 
 def test_dc_that_diverges_exits_3_with_its_json() -> None:
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "24h", "--stm", "J0",
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 3
     out = json.loads(res.stdout)
     assert out["converged"] is False and out["status"] == "diverged" and out["exit_code"] == 3
@@ -49,7 +51,7 @@ def test_dc_that_diverges_exits_3_with_its_json() -> None:
 def test_dc_stopped_while_converging_exits_6_with_factor_and_projection() -> None:
     """The issue's example: --max-iter 3 with the RMS falling from 3295 is not "diverged"."""
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "24h", "--max-iter", "3",
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 6, res.output
     out = json.loads(res.stdout)
     assert out["status"] == "converging" and out["iterations"] == 3
@@ -70,7 +72,7 @@ def test_dc_text_output_shows_outcome_and_rates() -> None:
 
 
 def test_dc_ill_conditioned_normal_matrix_exits_4_with_the_diagnosis() -> None:
-    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "10m", "--json"])
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "10m", "--json", "-"])
     assert res.exit_code == 4, res.output
     out = json.loads(res.stdout)
     assert out["status"] == "ill-conditioned" and out["condition_number"] > 1e10
@@ -100,13 +102,13 @@ def test_no_measurement_in_the_arc_fails_alike_for_dc_and_ekf() -> None:
 
 def test_ekf_and_rsig_json_shapes() -> None:
     res = runner.invoke(app, ["ekf", "--orbit", "SATORB1", "--arc", "3h", "--apriori", "2",
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert len(out["passes"]) == len(out["max_abs_residual_per_pass"]) > 0
     assert set(out["max_abs_residual_per_pass"][0]) == {"range_m", "range_rate_mm_s"}
     res = runner.invoke(app, ["rsig", "--orbit", "SATORB1", "--truth", "J0", "--stm", "J0",
-                              "--hours", "2", "--step", "600", "--json"])
+                              "--hours", "2", "--step", "600", "--json", "-"])
     out = json.loads(res.stdout)
     assert len(out["t_s"]) == len(out["R"]) == 13
     assert out["R"][0] == pytest.approx(np.sqrt(3.0))  # Φ(t0) = I: three unit entries
@@ -128,6 +130,23 @@ def test_bad_input_one_line_nonzero_exit(args: list[str], option: str) -> None:
     assert res.exit_code == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"error: {option}")
+
+
+@pytest.mark.parametrize("command", ["dc", "ekf"])
+@pytest.mark.parametrize("arc", ["24", "1.5", "24 hours", "h"])
+def test_an_arc_without_its_unit_is_refused_with_the_forms_taken(command: str, arc: str):
+    res = runner.invoke(app, [command, "--orbit", "SATORB1", "--arc", arc])
+    assert res.exit_code == 2
+    assert res.stderr.splitlines() == [
+        f"error: --arc: value: expected a duration with a unit: 24h, 90m, 3600s, 2d (got "
+        f"{arc!r})"]
+
+
+@pytest.mark.parametrize(("text", "seconds"), [("24h", 86400.0), ("90m", 5400.0),
+                                                ("3600s", 3600.0), ("2d", 172800.0),
+                                                (" 1.5 h ", 5400.0), ("1e3s", 1000.0)])
+def test_a_duration_is_a_number_and_its_unit(text: str, seconds: float):
+    assert parse_duration_s(text) == seconds
 
 
 @pytest.fixture(scope="module")
@@ -157,19 +176,19 @@ def test_observation_file_round_trip(tmp_path: Path, small_obs, suffix: str) -> 
 def test_dc_saves_and_reads_a_tdm(tmp_path: Path) -> None:
     path = tmp_path / "obs.tdm"
     first = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--save-obs",
-                                str(path), "--json"])
+                                str(path), "--json", "-"])
     assert first.exit_code == 0, first.output
     text = path.read_text()
     assert text.startswith("CCSDS_TDM_VERS = 2.0") and "PARTICIPANT_2 = SATORB1" in text
     assert "RANGE_UNITS = km" in text and "DOPPLER_INSTANTANEOUS = 2026-01-01T" in text
     again = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--obs", str(path),
-                                "--json"])
+                                "--json", "-"])
     assert again.exit_code == 0, again.output
     a, b = json.loads(first.stdout), json.loads(again.stdout)
     assert a["measurements"] == b["measurements"]
     np.testing.assert_array_equal(a["rms"], b["rms"])
     ekf = runner.invoke(app, ["ekf", "--orbit", "SATORB1", "--arc", "3h", "--obs", str(path),
-                              "--json"])
+                              "--json", "-"])
     assert ekf.exit_code == 0, ekf.output
 
 
@@ -186,17 +205,17 @@ def test_simulate_writes_a_tdm_that_dc_fits_exactly(tmp_path: Path) -> None:
     """TAPP I's noise-free observations of SATORB1 in a 5x5 field, through a TDM, fitted by the
     DC with the same models and the same Earth orientation (iau2006): the epoch state comes
     back to within a millimetre."""
-    scenario = Path(__file__).resolve().parents[3] / "scenarios" / "leo_equatorial.toml"
+    scenario = EXAMPLES / "leo_equatorial.toml"
     tape, tdm = tmp_path / "run.t13.h5", tmp_path / "run.tdm"
     sim = runner.invoke(app, ["simulate", str(scenario), "-o", str(tape), "--tdm", str(tdm),
-                              "--earth-orientation", "iau2006", "--json"])
+                              "--earth-orientation", "iau2006", "--json", "-"])
     assert sim.exit_code == 0, sim.output
     assert json.loads(sim.stdout)["tdm"] == str(tdm)
     with h5py.File(tape) as f:
         assert "raw" not in f  # the raw rows fed the TDM; the tape is as without --raw
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--obs", str(tdm), "--arc", "24h",
                               "--truth", "5x5", "--stm", "5x5", "--earth-orientation", "iau2006",
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert out["measurements"] == json.loads(sim.stdout)["observations"]
@@ -210,7 +229,7 @@ def test_dc_reads_an_observation_file(tmp_path: Path, small_obs) -> None:
     # a CSV declares no data span: it ends with its last observation (at 5.58 h here)
     last = f"{small_obs.t_s[-1]:.0f}s"
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", last, "--obs", str(path),
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["measurements"] == small_obs.count
 
@@ -234,7 +253,7 @@ def test_bad_observation_file_names_file_and_field(tmp_path: Path, text: str,
 
 # --- the Earth orientation switch ---------------------------------------------------------
 
-STUDY = Path(__file__).resolve().parents[3] / "scenarios" / "approx_stm.toml"
+STUDY = EXAMPLES / "approx_stm.toml"
 
 
 def _study(tmp_path: Path, old: str, new: str) -> Path:
@@ -259,7 +278,7 @@ def _refused(args: list[str], starts: str, tmp_path: Path) -> str:
 def test_the_study_file_runs_gmst_and_the_outputs_say_so() -> None:
     """The shipped study file asks for gmst (the paper's model): the DC's JSON records the
     model, no EOP and no predictions; the text output names it."""
-    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--json"])
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--json", "-"])
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["earth_orientation"] == {"model": "gmst", "eop": "",
                                                           "predicted_eop": False}
@@ -276,7 +295,7 @@ def test_earth_orientation_option_overrides_the_file(command: list[str]) -> None
     fitted under iau2006 and the JSON records the model and the EOP source; the DC still
     converges to the truth."""
     res = runner.invoke(app, [*command, "--orbit", "SATORB1", "--earth-orientation", "iau2006",
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert out["earth_orientation"]["model"] == "iau2006"
@@ -295,7 +314,7 @@ def test_predicted_eop_are_reported(tmp_path: Path) -> None:
                   f'epoch = "{when:%Y-%m-%dT00:00:00}"')
     args = ["dc", "--orbit", "SATORB1", "--arc", "6h", "--scenario", str(path),
             "--earth-orientation", "iau2006"]
-    res = runner.invoke(app, [*args, "--json"])
+    res = runner.invoke(app, [*args, "--json", "-"])
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["earth_orientation"]["predicted_eop"] is True
     text = runner.invoke(app, args)
@@ -343,7 +362,7 @@ def test_an_epoch_outside_the_eop_table_is_refused(tmp_path: Path) -> None:
     no_eop = tmp_path / "in_file" / "no_eop.toml"
     no_eop.write_text(in_file.read_text().replace('eop = "iers"', 'eop = "none"'))
     res = runner.invoke(app, ["rsig", "--orbit", "SATORB1", "--scenario", str(no_eop),
-                              "--hours", "1", "--json"])
+                              "--hours", "1", "--json", "-"])
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["earth_orientation"]["eop"].startswith("none")
 
@@ -351,7 +370,7 @@ def test_an_epoch_outside_the_eop_table_is_refused(tmp_path: Path) -> None:
 def test_saved_observations_record_the_earth_orientation(tmp_path: Path) -> None:
     path = tmp_path / "obs.h5"
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--save-obs",
-                              str(path), "--earth-orientation", "iau2006", "--json"])
+                              str(path), "--earth-orientation", "iau2006", "--json", "-"])
     assert res.exit_code == 0, res.output
     with h5py.File(path) as f:
         comments = [str(c) for c in f.attrs["comments"]]
@@ -360,7 +379,7 @@ def test_saved_observations_record_the_earth_orientation(tmp_path: Path) -> None
 
 # --- where observations meet a model: what the files state they were made under -----------
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 #: The README's example: TAPP I's noise-free TDM of SATORB1 (5x5 field, one day, equatorial
 #: network) made under the scenario's iau2006, 590 range and range-rate pairs.
 README_MEASUREMENTS = 1180
@@ -378,11 +397,12 @@ def _chi2_rms_bound(m: int) -> float:
 
 @pytest.fixture(scope="module")
 def readme_tdm(tmp_path_factory) -> Path:
-    """``tapp simulate scenarios/leo_equatorial.toml -o leo.t13.h5 --tdm leo.tdm`` (the
+    """``tapp simulate leo_equatorial.toml -o leo.t13.h5 --tdm leo.tdm`` (the
     scenario's iau2006)."""
     out = tmp_path_factory.mktemp("readme")
     res = runner.invoke(app, ["simulate", str(SCENARIOS / "leo_equatorial.toml"), "-o",
-                              str(out / "leo.t13.h5"), "--tdm", str(out / "leo.tdm"), "--json"])
+                              str(out / "leo.t13.h5"), "--tdm", str(out / "leo.tdm"), "--json",
+                              "-"])
     assert res.exit_code == 0, res.output
     return out / "leo.tdm"
 
@@ -419,7 +439,7 @@ def test_the_readme_fit_forced_under_gmst_exits_7_with_rms_and_bound(readme_tdm:
             "5x5", "--earth-orientation", "gmst"]
     bound = _chi2_rms_bound(README_MEASUREMENTS)
     assert f"{bound:.4f}" == "1.0614"
-    res = runner.invoke(app, [*args, "--json"])
+    res = runner.invoke(app, [*args, "--json", "-"])
     assert res.exit_code == 7, res.output
     out = json.loads(res.stdout)
     assert out["status"] == "converged, residuals inconsistent with the noise model"
@@ -450,7 +470,7 @@ def test_the_readme_tdm_under_a_study_file_of_its_model_converges(readme_tdm: Pa
     epoch state recovered to a millimetre and the RMS within the bound."""
     study = _study(tmp_path, 'earth_orientation = "gmst"', 'earth_orientation = "iau2006"')
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--obs", str(readme_tdm), "--truth",
-                              "5x5", "--stm", "5x5", "--scenario", str(study), "--json"])
+                              "5x5", "--stm", "5x5", "--scenario", str(study), "--json", "-"])
     assert res.exit_code == 0, res.output
     assert res.stderr == ""
     out = json.loads(res.stdout)
@@ -475,7 +495,7 @@ def test_saved_observations_state_and_check_their_model(tmp_path: Path, suffix: 
                  f"error: {saved}: earth_orientation: expected observations made under the "
                  "fit's Earth orientation model gmst", tmp_path)
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "5h", "--obs", str(saved),
-                              "--earth-orientation", "iau2006", "--json"])
+                              "--earth-orientation", "iau2006", "--json", "-"])
     assert res.exit_code == 0, res.output
     assert res.stderr == "" and json.loads(res.stdout)["status"] == "converged"
 
@@ -525,7 +545,7 @@ def test_a_file_that_states_no_model_is_fitted_under_the_runs_with_a_note(
                        epoch=setup.epoch(), spacecraft="SATORB1")
     assert "tapp:" not in path.read_text()
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--obs", str(path),
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert out["status"] == "converged" and out["observations_made_under"] is None

@@ -21,11 +21,12 @@ from typer.testing import CliRunner
 
 import tapp.cli  # noqa: F401  (registers every command)
 from tapp.cli.common import app
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.pipeline.run import OUTPUTS, tracking_case
 from tests.faults import fill, mounted_tmpfs
 
 runner = CliRunner()
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 DAY_S = 86400.0
 SAMPLES, SEED = 3000, 7
 
@@ -233,7 +234,7 @@ def test_the_tracking_sweep_runs_every_case_from_another_directory(parts, tmp_pa
     (tmp_path / "elsewhere").mkdir()
     monkeypatch.chdir(tmp_path / "elsewhere")
     res = runner.invoke(app, ["iter", "../sweeps/tracking.toml", "-o", "out.h5", "--serial",
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     summary = json.loads(res.stdout)
     assert (summary["n_cases"], summary["n_succeeded"], summary["n_failed"]) == (2, 2, 0)

@@ -79,14 +79,35 @@ def test_process_writes_the_printout_json_plots_and_a_t32_tape(files, tmp_path: 
     names = {p.name: p.names for p in t.partitions}
     assert "GM_km3_s2" in names["fz"] and "GM_km3_s2" not in names["f1"]
     assert sorted(p.name for p in plots.iterdir()) == ["sigma_history.png"]
-    info = runner.invoke(app, ["tape", "info", str(t32), "--json"])
+    info = runner.invoke(app, ["tape", "info", str(t32), "--json", "-"])
     assert info.exit_code == 0 and json.loads(info.stdout)["format"] == "T32"
+    # the last line: what was written, and the largest real/fit σ ratio of the JSON history
+    ratio, name, kind, t_s = _largest_ratio(content["history"])
+    assert res.stdout.splitlines() == [
+        f"TAPP III: wrote O3 printout {o3}, JSON {js}, T32 tape {t32}, plots into {plots} "
+        f"(1 PNG); largest real/fit σ ratio {ratio:.4g} ({name}, {kind} at t = "
+        f"{t_s / 86400:.3f} d)"]
+
+
+def _largest_ratio(history: dict) -> tuple[float, str, str, float]:
+    """The largest real/fit σ of a run's JSON history (fit σ > 0), by hand."""
+    names = history["labels"] + history["miss"]
+    candidates = [(real / fit, name, row["kind"], row["t_s"]) for row in history["rows"]
+                  if row["sigma_fit"] is not None
+                  for name, real, fit in zip(names, row["sigma_real"] + row["miss_sigma_real"],
+                                             row["sigma_fit"] + row["miss_sigma_fit"],
+                                             strict=True) if fit > 0]
+    return max(candidates, key=lambda c: c[0])
 
 
 def test_the_printout_goes_to_standard_output_by_default(files):
     _, path, deck = files
     res = runner.invoke(app, ["process", str(path), str(deck)])
     assert res.exit_code == 0 and res.stdout.startswith("TAPP III O3 printout")
+    # the summary keeps out of the printout's way, on stderr
+    assert "TAPP III: wrote" not in res.stdout
+    assert res.stderr.startswith("TAPP III: wrote O3 printout on standard output; largest "
+                                 "real/fit σ ratio ")
 
 
 def _bad(tmp_path: Path, files, deck_text: str) -> tuple[int, str, list[str]]:

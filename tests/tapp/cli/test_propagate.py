@@ -17,7 +17,7 @@ runner = CliRunner()
 def test_json_output_has_grid_states_and_stm() -> None:
     result = runner.invoke(app, ["propagate", "--orbit", "a=6550.524,e=0,i=30,raan=0,argp=0,M=0",
                                  "--hours", "1", "--step", "600", "--truth", "J2", "--stm", "J0",
-                                 "--json"])
+                                 "--json", "-"])
     assert result.exit_code == 0, result.output
     out = json.loads(result.stdout)
     t = np.array(out["t_s"])
@@ -32,10 +32,11 @@ def test_json_output_has_grid_states_and_stm() -> None:
 
 
 def test_named_orbit_equals_its_elements() -> None:
-    by_name = runner.invoke(app, ["propagate", "--orbit", "SATORB7", "--hours", "0.5", "--json"])
+    by_name = runner.invoke(app, ["propagate", "--orbit", "SATORB7", "--hours", "0.5",
+                                  "--json", "-"])
     by_elems = runner.invoke(app, ["propagate", "--orbit",
                                    "a=7278.360,e=0.1,i=0,raan=0,argp=0,M=0", "--hours", "0.5",
-                                   "--json"])
+                                   "--json", "-"])
     assert by_name.exit_code == 0 and by_elems.exit_code == 0
     assert json.loads(by_name.stdout)["state"] == json.loads(by_elems.stdout)["state"]
 

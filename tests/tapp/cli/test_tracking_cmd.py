@@ -16,11 +16,13 @@ from typer.testing import CliRunner
 
 import tapp.cli.tracking_cmd  # noqa: F401  (registers the commands until tapp.cli imports it)
 from tapp.cli.common import app
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.tape.t13 import utc_at
 from tapp.tape.t13_hdf5 import read_t13
 from tapp.tracking.oem import INTERPOLATION_TOL_KM, INTERPOLATION_TOL_KM_S
 from tapp.tracking.scenario import parse_scenario, read_scenario
 from tapp.tracking.simulate import EDITING_RULES, simulate
+from tests.tapp.frames.conftest import EPOCH_LINE, put_field, user_eop_table
 from tests.tapp.tracking.encounter_reference import (
     AIM,
     TARGETING,
@@ -29,7 +31,7 @@ from tests.tapp.tracking.encounter_reference import (
 )
 from tests.tapp.tracking.helpers import geo_document, leo_document
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 LEO = SCENARIOS / "leo_equatorial.toml"
 runner = CliRunner()
 
@@ -45,7 +47,7 @@ def _edited(tmp_path: Path, old: str, new: str, source: Path = LEO) -> Path:
 def test_leo_scenario_to_tape_with_raw_rows_and_oem(tmp_path: Path) -> None:
     out, oem = tmp_path / "leo.t13.h5", tmp_path / "leo.oem"
     res = runner.invoke(app, ["simulate", str(LEO), "-o", str(out), "--raw", "--oem", str(oem),
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     info = json.loads(res.stdout)
     assert (info["n_o"], info["n_p"], info["n_m"], info["n_ts"], info["n_it"]) == (
@@ -65,7 +67,7 @@ def test_deep_space_scenario_through_the_cli(tmp_path: Path) -> None:
     res = runner.invoke(app, ["simulate", str(SCENARIOS / "deep_space.toml"), "-o", str(out)])
     assert res.exit_code == 0, res.output
     assert "n_o = 23" in res.stdout and "n_ts = 3" in res.stdout
-    info = runner.invoke(app, ["tape", "info", str(out), "--json"])
+    info = runner.invoke(app, ["tape", "info", str(out), "--json", "-"])
     summary = json.loads(info.stdout)
     assert [s["name"] for s in summary["stations"]] == ["GOLDSTONE", "CANBERRA", "MADRID"]
     assert all(s["passes"] >= 25 and s["observations"] > 20000 for s in summary["stations"])
@@ -104,6 +106,28 @@ def test_bad_input_is_one_line_naming_file_and_field_and_no_tape(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["edited.toml"]
 
 
+def test_a_user_eop_table_is_used_when_sound_and_refused_naming_its_line_when_not(
+        tmp_path: Path) -> None:
+    user_eop_table(tmp_path / "finals2000A.user")
+    path = _edited(tmp_path, '\nepoch = ', '\neop = "finals2000A.user"\nepoch = ')
+    good = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "good.t13.h5")])
+    assert good.exit_code == 0, good.output
+    assert read_t13(tmp_path / "good.t13.h5").provenance["eop"] == "finals2000A.user"
+
+    def pole(lines: list[str]) -> list[str]:  # 1e300" at the epoch: a tape was written
+        lines[EPOCH_LINE - 1] = put_field(lines[EPOCH_LINE - 1], "xp_a", "1e300")
+        return lines
+
+    user_eop_table(tmp_path / "finals2000A.bad", pole)  # another name: tables are cached
+    path.write_text(path.read_text().replace("finals2000A.user", "finals2000A.bad"))
+    out = tmp_path / "bad.t13.h5"
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(out)])
+    assert res.exit_code == 2
+    assert res.stderr.strip() == (f"error: {tmp_path / 'finals2000A.bad'}: line 16, x_p "
+                                  "(Bulletin A): expected a pole within 1 arcsec (got 1e+300)")
+    assert not out.exists()
+
+
 def test_unreadable_tapes(tmp_path: Path) -> None:
     out = tmp_path / "leo.t13.h5"
     assert runner.invoke(app, ["simulate", str(LEO), "-o", str(out)]).exit_code == 0
@@ -123,7 +147,7 @@ def test_geo_track_counts_printed_and_on_the_tape_add_up(tmp_path: Path) -> None
     what the tape says."""
     scenario, out = tmp_path / "geo.toml", tmp_path / "geo.t13.h5"
     scenario.write_text(tomli_w.dumps(geo_document()))
-    res = runner.invoke(app, ["simulate", str(scenario), "-o", str(out), "--json"])
+    res = runner.invoke(app, ["simulate", str(scenario), "-o", str(out), "--json", "-"])
     assert res.exit_code == 0, res.output
     printed = json.loads(res.stdout)["stations"]
     editing = read_t13(out).editing
@@ -238,7 +262,7 @@ def retargeted_run(tmp_path_factory) -> tuple[Path, dict, str]:
     folder = tmp_path_factory.mktemp("retarget")
     path = _moved(folder, TARGETING)
     res = runner.invoke(app, ["simulate", str(path), "-o", str(folder / "run.t13.h5"),
-                              "--json"])
+                              "--json", "-"])
     assert res.exit_code == 0, res.output
     text = runner.invoke(app, ["simulate", str(path), "-o", str(folder / "text.t13.h5")])
     assert text.exit_code == 0, text.output

@@ -74,6 +74,30 @@ def write_finals2000a(path: Path, mjd, ut1_utc_s, xp_arcsec, yp_arcsec, dx_mas, 
     return path
 
 
+#: A synthetic daily table around the LEO scenario's epoch, 2026-01-01 (MJD 61041): 31 rows
+#: 2025-12-17 .. 2026-01-16, UT1 − UTC drifting 0.6 ms a day, the row of the epoch on line 16.
+USER_MJD = np.arange(61026.0, 61057.0)
+EPOCH_LINE = 16
+
+
+def put_field(line: str, column: str, text: str) -> str:
+    """``line`` with the field ``column`` (:data:`FINALS_COLUMNS`) replaced by ``text``."""
+    first, last, _ = FINALS_COLUMNS[column]
+    line = line.ljust(185)
+    return line[:first - 1] + text.rjust(last - first + 1) + line[last:]
+
+
+def user_eop_table(path: Path, edit=lambda lines: lines) -> Path:
+    """Write the synthetic table (:data:`USER_MJD`) at ``path``, its lines passed through
+    ``edit`` (a list of text lines: line k is lines[k-1]) first."""
+    n = USER_MJD.size
+    write_finals2000a(path, USER_MJD, 0.074 - 6e-4 * np.arange(n), np.full(n, 0.11),
+                      np.full(n, 0.33), np.full(n, 0.3), np.full(n, -0.1))
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join(edit(lines)) + "\n")
+    return path
+
+
 #: Span of the synthetic future table: 2027-01-01 .. 2051-01-01 (UTC MJD), beyond the IERS
 #: predictions shipped in astropy-iers-data; rows flagged P from 2028-01-01.
 FUTURE_MJD = (61406.0, 70172.0)

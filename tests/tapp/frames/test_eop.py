@@ -17,9 +17,12 @@ from tapp.errors import InputError
 from tapp.frames.eop import MJD_OFFSET, ARCSEC_rad, EopTable, MAS_rad, finals2000a, leap_seconds
 from tapp.frames.time import Epoch
 from tests.tapp.frames.conftest import (
+    EPOCH_LINE,
     FUTURE_MJD,
     FUTURE_PREDICTED_FROM_MJD,
     astropy_iers_a,
+    put_field,
+    user_eop_table,
     write_finals2000a,
 )
 
@@ -149,7 +152,8 @@ def test_synthetic_file_read_like_astropy_with_bulletin_b_and_predictions(tmp_pa
     ut1 = 0.1 - 1e-3 * np.arange(mjd.size)
     xp, yp = rng.uniform(-0.2, 0.3, mjd.size), rng.uniform(0.2, 0.5, mjd.size)
     dx, dy = rng.uniform(-0.3, 0.3, mjd.size), rng.uniform(-0.3, 0.3, mjd.size)
-    bulletin_b = {k: (0.1 + 0.001 * k, 0.4, 0.05, 0.123, -0.456) for k in range(5)}
+    # Bulletin B 0.2 ms off A: a real revision (a jump would be refused as a length of day)
+    bulletin_b = {k: (0.1 + 0.001 * k, 0.4, ut1[k] - 2e-4, 0.123, -0.456) for k in range(5)}
     path = write_finals2000a(tmp_path / "finals2000A.test", mjd, ut1, xp, yp, dx, dy,
                              predicted_from_mjd=61420.0, bulletin_b=bulletin_b)
     ours = finals2000a(path)
@@ -158,7 +162,7 @@ def test_synthetic_file_read_like_astropy_with_bulletin_b_and_predictions(tmp_pa
     assert np.array_equal(ours.mjd, mjd) and np.array_equal(theirs["MJD"].value, mjd)
     assert ours.predicted_from_mjd == theirs.meta["predictive_mjd"] == 61420.0
     # Bulletin B replaces A in the first five rows; the rest are A, as printed (6-7 digits).
-    assert np.allclose(ours.ut1_minus_utc_s[:5], 0.05, rtol=0, atol=1e-12)
+    assert np.allclose(ours.ut1_minus_utc_s[:5], ut1[:5] - 2e-4, rtol=0, atol=0.5e-7)
     assert np.allclose(ours.ut1_minus_utc_s[5:], ut1[5:], rtol=0, atol=0.5e-7)
     assert np.allclose(ours.xp_rad[:5] / ARCSEC_rad, 0.1 + 0.001 * np.arange(5), atol=1e-12)
     assert np.allclose(ours.xp_rad[5:] / ARCSEC_rad, xp[5:], rtol=0, atol=0.5e-6)
@@ -194,6 +198,96 @@ def test_file_without_rows_is_an_input_error_naming_it(tmp_path, content):
 
 def test_missing_file_is_an_input_error_naming_it(tmp_path):
     path = tmp_path / "no_such_finals2000A.all"
-    with pytest.raises(InputError, match="readable IERS finals2000A file") as info:
+    with pytest.raises(InputError, match="an existing IERS finals2000A file") as info:
         finals2000a(path)
     assert str(path) in str(info.value)
+
+
+# --- a user's table is checked like any input (issue "Hardening, second round", item 2) ----
+
+def _user_table(tmp_path, edit=lambda lines: lines, name="finals2000A.user"):
+    return user_eop_table(tmp_path / name, edit)
+
+
+def _at_epoch(column: str, text: str):
+    def edit(lines):
+        lines[EPOCH_LINE - 1] = put_field(lines[EPOCH_LINE - 1], column, text)
+        return lines
+    return edit
+
+
+@pytest.mark.parametrize(("edit", "says"), [
+    (lambda ls: ls[:14] + [ls[15], ls[14]] + ls[16:],  # two rows swapped
+     "line 16, MJD: expected dates in increasing order (after 61041 on line 15) (got 61040.0)"),
+    (lambda ls: ls[::-1], "line 2, MJD: expected dates in increasing order (after 61056 on "
+     "line 1) (got 61055.0)"),
+    (_at_epoch("ut1_a", "5000.0"), "line 16, UT1-UTC (Bulletin A): expected |UT1 − UTC| < 0.9 s"
+     " (leap seconds keep UTC so) (got 5000.0)"),
+    (_at_epoch("xp_a", "1e300"), "line 16, x_p (Bulletin A): expected a pole within 1 arcsec "
+     "(got 1e+300)"),
+    (_at_epoch("dy_a", "120.0"), "line 16, dY (Bulletin A): expected a CIP offset within 50 "
+     "mas (got 120.0)"),
+    (_at_epoch("ut1_a", "nan"), "line 16, UT1-UTC (Bulletin A): expected a finite number "
+     "(got 'nan')"),
+    (_at_epoch("ut1_a", "0.3"), "line 16, UT1-UTC: expected a change from the row before "
+     "(line 15) of at most 10 ms a day besides a leap second (the length of day) (got "
+     "'0.2344 s in 1 days')"),
+    (_at_epoch("mjd", "1e300"), "line 16, MJD: expected a date from 1960-01-01T00:00:00 UTC "
+     "to 2100-01-01T00:00:00 UTC (got 1e+300)"),
+    (_at_epoch("mjd", "abc"), "line 16, MJD (bytes 8-15): expected a number (got 'abc')"),
+    (lambda ls: ["this is not an EOP table at all, but text"] * 3, "line 1, MJD (bytes 8-15): "
+     "expected a number (got 'not an')"),
+])
+def test_a_user_table_with_a_defect_is_refused_naming_file_line_and_field(tmp_path, edit,
+                                                                            says):
+    path = _user_table(tmp_path, edit)
+    with pytest.raises(InputError) as info:
+        finals2000a(path)
+    assert str(info.value) == f"{path}: {says}"
+
+
+def test_a_binary_file_is_one_error_naming_the_first_line(tmp_path):
+    path = tmp_path / "finals2000A.bin"
+    path.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(InputError, match=r"finals2000A.bin: line 1, MJD \(bytes 8-15\): "
+                                         r"expected a number"):
+        finals2000a(path)
+
+
+def test_a_leap_second_between_rows_is_not_a_length_of_day(tmp_path):
+    def leap(lines):  # UT1 − UTC from −0.44 s jumps by +1 s at the epoch, as on 2017-01-01
+        for k, line in enumerate(lines):
+            value = float(line[58:68]) - 0.5 + (1.0 if k >= EPOCH_LINE - 1 else 0.0)
+            lines[k] = put_field(line, "ut1_a", f"{value:10.7f}")
+        return lines
+
+    table = finals2000a(_user_table(tmp_path, leap))
+    assert np.diff(table.ut1_minus_utc_s)[EPOCH_LINE - 2] == pytest.approx(1.0 - 6e-4)
+
+
+def test_gaps_are_refused_over_the_span_an_arc_uses_only(tmp_path):
+    # 20 days of rows missing around the epoch (lines 6..25 gone): the values there would be
+    # interpolated across 21 days
+    wide = finals2000a(_user_table(tmp_path, lambda ls: ls[:5] + ls[25:], "gap.user"))
+    with pytest.raises(InputError) as info:
+        wide.check_covers([61041.0, 61042.0], "leo.toml")
+    assert str(info.value) == (
+        f"{wide.source}: line 6, MJD: expected rows at most 1 day apart over the span used "
+        "(2026-01-01T00:00:00 UTC .. 2026-01-02T00:00:00 UTC): values are interpolated between "
+        "rows (got '21 days after the row before')")
+    # a row without UT1 − UTC inside the span is such a gap; a gap away from the arc is not
+    blank = finals2000a(_user_table(tmp_path, _at_epoch("ut1_a", ""), "blank.user"))
+    with pytest.raises(InputError, match="line 17, MJD: expected rows at most 1 day apart"):
+        blank.check_covers([61040.5, 61042.0])
+    blank.check_covers([61045.0, 61050.0])
+
+
+def test_a_table_without_predictions_outside_the_epoch_names_its_span(tmp_path):
+    table = finals2000a(_user_table(tmp_path))
+    assert table.predicted_from_mjd == math.inf  # formatting it overflowed
+    with pytest.raises(InputError) as info:
+        table.check_covers([61100.0], "leo.toml")
+    assert str(info.value) == (
+        "leo.toml: epoch: expected an epoch within the IERS EOP table 2025-12-17T00:00:00 UTC "
+        "..  2026-01-16T00:00:00 UTC (finals2000A.user; no predictions), or eop = \"none\" for "
+        "a study beyond the predictions (got '2026-03-01T00:00:00 UTC')".replace("..  ", ".. "))

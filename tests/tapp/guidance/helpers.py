@@ -1,8 +1,8 @@
 """A small deep-space T32 tape for the TAPP II tests, and guidance files.
 
-The tape is ``scenarios/deep_space.toml`` cut to its first 3 days (the injection, DSN tracking,
+The tape is the example ``deep_space.toml`` cut to its first 3 days (the injection, DSN tracking,
 the lunar B-plane miss at periapsis, day 3.59) processed with
-``scenarios/tapp3_deep_space.toml`` (GM of the Moon held fixed in the fit world, white-noise
+the example ``tapp3_deep_space.toml`` (GM of the Moon held fixed in the fit world, white-noise
 weights against biased and correlated real noise; recycles at days 1, 2 and 3): the same
 physics as the shipped study, made in well under a second.
 """
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 from functools import lru_cache
-from pathlib import Path
 
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.guidance.guidefile import GuideFile
 from tapp.processor.deck import Deck, bind
 from tapp.processor.sequencing import process
@@ -24,7 +24,7 @@ from tapp.tomlfile import read_toml
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import simulate
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 DAY_S = 86400.0
 #: Execution errors of the tests (1σ): 2 %, 10 mrad, 1 mm/s.
 EXECUTION = {"sigma_proportional": 0.02, "sigma_pointing_mrad": 10.0, "sigma_fixed_mm_s": 1.0}

@@ -11,7 +11,7 @@ import pytest
 
 from iter.execute import Execution
 from tapp.guidance.montecarlo import BLOCK_SAMPLES
-from tapp.guidance.shards import plan_shards
+from tapp.guidance.shards import DASK_MIN_SAMPLES, plan_shards
 from tapp.guidance.study import guidance_study
 from tapp.report.tapp2 import guidance_dict
 from tests.tapp.guidance.helpers import deep_space_t32, guide
@@ -66,6 +66,14 @@ def test_the_default_local_cluster_of_one_worker_process_gives_the_same_numbers(
     local = _run(Execution(workers=1), BLOCK_SAMPLES)
     assert local.where == "local cluster (1 workers)"
     _same(_run(Execution(serial=True), 3 * BLOCK_SAMPLES), local)
+
+
+def test_an_automatic_run_below_the_crossover_stays_in_this_process(monkeypatch):
+    monkeypatch.setattr("iter.execute.available_cores", lambda: 2)  # a cluster could pay
+    automatic = _run(Execution())  # N samples, far below DASK_MIN_SAMPLES
+    assert automatic.where == (f"this process ({N:,} samples, below the "
+                               f"{DASK_MIN_SAMPLES:,} samples a local cluster repays)")
+    _same(_run(Execution(serial=True)), automatic)
 
 
 def test_a_smaller_run_is_the_first_samples_of_a_larger_one():

@@ -26,6 +26,7 @@ from tapp.od.batch import (
     contraction_factor,
     differential_correction,
     rms_bound,
+    rms_tail_probability,
 )
 from tapp.od.observations import simulate
 from tapp.od.rate import predicted_rate
@@ -105,6 +106,20 @@ def test_rms_bound_is_the_chi2_quantile() -> None:
     assert rms_bound(6) == 0.0
     with pytest.raises(InputError, match="residuals"):
         rms_bound(5)
+
+
+def test_rms_tail_probability_is_the_chi2_survival_function() -> None:
+    """ν = 2: P(χ²₂ > x) = exp(−x/2) in closed form, so with m = 8 residuals an RMS of 1 has
+    the tail probability exp(−4) = 0.0183; at the bound it is 1 − 0.999 for every m (the
+    inverse of :func:`rms_bound`); ν = 0 has no test and is refused."""
+    assert rms_tail_probability(1.0, 8) == pytest.approx(math.exp(-4.0),
+                                                         rel=QUANTILE_ROUNDING)
+    for m in (7, 100, 1180, 100_000):
+        assert rms_tail_probability(rms_bound(m), m) == pytest.approx(
+            1.0 - NOISE_MODEL_PROBABILITY, rel=QUANTILE_ROUNDING)
+    assert rms_tail_probability(1.2, 1180) < rms_tail_probability(1.0, 1180)
+    with pytest.raises(InputError, match="residuals"):
+        rms_tail_probability(1.0, 6)
 
 
 @pytest.mark.parametrize(("noise_scale", "status"), [

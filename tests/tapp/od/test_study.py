@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tapp.od.batch import NOISE_MODEL_PROBABILITY
 from tapp.od.study import planned_cases, run_study
 from tapp.report.approx_stm import write_report
 
@@ -56,3 +57,9 @@ def test_the_study_rho_predicts_every_outcome(tmp_path: Path) -> None:
     assert "every estimator (stations and geopotential): gmst (GMST IAU-82" in text
     raw = json.loads((tmp_path / "results.json").read_text())
     assert raw["earth_orientation"]["model"] == "gmst"
+    # the numbers the report words and the README quotes, and each settled fit's χ² tail
+    findings = raw["rate_findings"]
+    assert findings["predicted"] == findings["runs"] == len(truncated)
+    assert findings["linear_worst_relative"] < FIVE_PERCENT
+    assert min(r["rms_tail_probability"] for r in raw["dc"]
+               if r["status"] == "converged") > 1 - NOISE_MODEL_PROBABILITY

@@ -11,11 +11,11 @@ import pytest
 
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.errors import InputError
+from tapp.examples import STUDY_FILE
 from tapp.frames.elements import cartesian_to_elements
 from tapp.od import setup
-from tapp.orbits import DEFAULT_SCENARIO
 
-SHIPPED = DEFAULT_SCENARIO.read_text()
+SHIPPED = STUDY_FILE.read_text()
 
 
 def _study(tmp_path: Path, old: str, new: str) -> Path:
@@ -36,7 +36,7 @@ def _error(path: Path) -> InputError:
 def test_the_shipped_study_file_validates() -> None:
     study = setup.study_file()
     assert study.tracking.seed == 1969 and len(study.orbits) == 8
-    assert [b.truth for b in study.dc] == ["J2", "5x5", "J2", "J2", "J2"]
+    assert [b.gravity for b in study.dc] == ["J2", "5x5", "J2", "J2", "J2"]
     assert study.ekf.apriori["1"][0] == 0.68 and study.rsig.cases[0] == ["J0", "J0"]
     assert setup.tracking().seed == 1969 and setup.load_study()["tracking"]["seed"] == 1969
     assert study.dc_settings.max_iterations == 100
@@ -81,13 +81,14 @@ def test_a_misspelled_seed_is_named_with_the_allowed_keys(tmp_path: Path) -> Non
     # The example: `sed = 1969` silently used seed 0.
     err = _error(_study(tmp_path, "seed = 1969", "sed = 1969"))
     assert (err.field, err.got) == ("tracking.sed", 1969)
-    assert err.expected == ("no such key (allowed: data_interval_s, span_days, sigma_range_m, "
-                            "sigma_range_rate_mm_s, seed, equatorial_below_deg)")
+    assert err.expected == ("no such key (allowed: data_interval_s, span_days, seed, "
+                            "equatorial_below_deg)")
 
 
 def test_an_unknown_section_is_refused(tmp_path: Path) -> None:
     err = _error(_study(tmp_path, "[initial_offset]", "[extras]\nx = 1\n\n[initial_offset]"))
-    assert err.field == "extras" and err.expected.startswith("no such key (allowed: epoch, ")
+    assert err.field == "extras" and err.expected.startswith(
+        "no such key (allowed: stations, networks, epoch, ")
 
 
 @pytest.mark.parametrize(("old", "new", "field", "expected"), [
@@ -113,7 +114,13 @@ def test_an_unknown_section_is_refused(tmp_path: Path) -> None:
     ("last = 180.0", "last = 190.0", "rate_vs_inclination.inclinations_deg.last",
      "inclinations within 0..180 deg"),
     ("rms_rel_tol = 1e-3", "rms_rel_tl = 1e-3", "dc_settings.rms_rel_tl", "no such key"),
-    ('truth = "J2"', 'truth = "J42"', "dc[0].truth", "degree <= 8"),
+    ('gravity = "J2"', 'gravity = "J42"', "dc[0].gravity", "degree <= 8"),
+    ('var_gravity = ["J2", "J0"]', 'var_gravity = ["J2", "J0x"]', "dc[0].var_gravity[1]",
+     "a gravity model"),
+    ("sigma_range_m = 15.0", "sigma_range_m = 0.0", "noise.fit.sigma_range_m",
+     "a finite number > 0"),
+    ("sigma_range_m = 15.0", "sigma_azimuth_deg = 15.0", "noise.fit.sigma_azimuth_deg",
+     "no angle σ"),
     ('orbits = ["SATORB1"]', 'orbits = ["SATORB9"]', "dc[0].orbits[0]", "an orbit of"),
     ("arcs_h = [24.0, 12.0, 6.0]", 'arcs_h = [24.0, "12", 6.0]', "dc[0].arcs_h[1]",
      "a number"),
@@ -122,7 +129,7 @@ def test_an_unknown_section_is_refused(tmp_path: Path) -> None:
     ('cases = [["J0", "J0"],', 'cases = [["J0"],', "rsig.cases[0]", "at least 2 items"),
     ('equatorial = ["QUITO",', 'equatorial = ["QUITOO",', "networks.equatorial[0]",
      "names of [stations.*] tables"),
-    ('epoch = "2026-01-01T00:00:00"', "epoch = 2026", "epoch", "text (a quoted string)"),
+    ('epoch = "2026-01-01T00:00:00"', "epoch = 2026", "epoch", "a UTC date (ISO 8601 string"),
     ('earth_orientation = "gmst"', 'earth_orientation = "GMST"', "earth_orientation",
      "one of"),
     ('eop = "iers"', 'eop = ""', "eop", '"iers" (the shipped IERS table)'),

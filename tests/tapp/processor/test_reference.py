@@ -1,7 +1,7 @@
 """TAPP III on the deep-space tape against 40-digit arithmetic, and its stability.
 
-The deep-space study (``scenarios/deep_space.toml``, 30 days of DSN tracking of a lunar
-transfer, with ``scenarios/tapp3_deep_space.toml``: GM of the Moon held fixed in the fit
+The deep-space study (the example ``deep_space.toml``, 30 days of DSN tracking of a lunar
+transfer, with the example ``tapp3_deep_space.toml``: GM of the Moon held fixed in the fit
 world, white-noise weights against biased and correlated real noise, recycles at days 1-3,
 epoch changes at the periapsis and at day 15) is the ill-conditioned case of the project:
 the scaled fit normal matrices reach condition numbers of ~1e12, so the normal-matrix form

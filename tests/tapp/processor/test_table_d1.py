@@ -1,6 +1,6 @@
 """The coding example of seed TAPP III Appendix D (Table D-1, n_o = 29) on a simulated tape.
 
-``scenarios/tapp1_table_d1.toml`` gives a T13 tape with n_o = 29; ``scenarios/tapp3_table_d1.toml``
+The example ``tapp1_table_d1.toml`` gives a T13 tape with n_o = 29; ``tapp3_table_d1.toml``
 codes its systems exactly as Table D-1 does (P_c with the reconstruction (12, 27), chosen
 constraint coefficients; see the deck's comments). The expected orders, links and variances
 here are derived by hand from the table's pairs and triples, not from the code under test.
@@ -16,15 +16,19 @@ import pytest
 from typer.testing import CliRunner
 
 from tapp.cli.common import app
-from tapp.processor.deck import bind, read_deck
+from tapp.errors import InputError
+from tapp.examples import FOLDER as EXAMPLES
+from tapp.processor.deck import Deck, bind, read_deck
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.sequencing import Processor, Run
+from tapp.schema import validate
 from tapp.tape.t13 import memory_pairs
 from tapp.tape.t13_hdf5 import write_t13
+from tapp.tomlfile import read_toml
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 TAPP1 = SCENARIOS / "tapp1_table_d1.toml"
 DECK = SCENARIOS / "tapp3_table_d1.toml"
 
@@ -263,3 +267,40 @@ def test_tapp_process_runs_the_deck_end_to_end(tape, tmp_path: Path) -> None:
     content = json.loads(out.read_text())
     assert [b["k"] for b in content["blocks"] if b["kind"] == "print"] == [0, 1, 2, 3, 5, 6]
     assert "Λ̄'; 0,0,rq; 0,0,r2" in (tmp_path / "d1.o3.txt").read_text()
+
+
+# --- a deck that fits its tape only by position (issue "Hardening, second round") ---------
+
+def _without_tape_table(**tape) -> Deck:
+    doc = read_toml(DECK)
+    doc.pop("tape")
+    if tape:
+        doc["tape"] = tape
+    return validate(Deck, doc, "d1.toml")
+
+
+@pytest.fixture(scope="module")
+def leo_header():
+    return memory_pairs(simulate(read_scenario(SCENARIOS / "leo_equatorial.toml")).tape).header
+
+
+def test_positions_without_a_tape_table_are_refused_on_any_tape(tape, leo_header) -> None:
+    # without its [tape] table the deck ran on the LEO tape (n_o = 38 >= 29) and exited 0
+    assert len(leo_header.parameters.name) >= N_O
+    for header in (leo_header, memory_pairs(tape).header):
+        with pytest.raises(InputError) as info:
+            bind(_without_tape_table(), header, "d1.toml")
+        assert str(info.value) == (
+            "d1.toml: common.permutation: expected parameter names, or positions with a [tape] "
+            "table that names the tape they refer to (parameters = its parameter names in "
+            "order, or iden) (got 'positions, and no [tape] parameters or iden')")
+
+
+def test_positions_are_checked_against_the_parameter_names_given(tape, leo_header) -> None:
+    names = list(tape.parameters.name)
+    plan = bind(_without_tape_table(parameters=names), memory_pairs(tape).header, "d1.toml")
+    assert plan.systems.n_c1 == N_C1
+    with pytest.raises(InputError) as info:
+        bind(_without_tape_table(parameters=names), leo_header, "d1.toml")
+    assert str(info.value) == ("d1.toml: tape.parameters: expected the tape's 38 parameter "
+                               "names in order (position 9: QUITO.spin_radius_km) (got 'J3')")

@@ -97,7 +97,7 @@ def test_describe_checks_every_pair_factor(tmp_path: Path, t13: T13) -> None:
 def test_tape_info_of_a_t13(tmp_path: Path, t13: T13, version: int) -> None:
     path = _t13_file(tmp_path, t13, version)
     with t13_read_warnings(version):
-        res = runner.invoke(app, ["tape", "info", str(path), "--json"])
+        res = runner.invoke(app, ["tape", "info", str(path), "--json", "-"])
     assert res.exit_code == 0, res.output
     info = json.loads(res.stdout)
     assert (info["format"], info["version"], info["iden"]) == ("T13", version, "SYNTHETIC")
@@ -141,6 +141,6 @@ def test_tape_info_of_a_t32(tmp_path: Path, t32: T32) -> None:
     assert "ω  1: I; 0,-,pk; 1,2,fp  (partials pk wrt fp@recycle)  6 x 6" in res.stdout
     old = write_t32_version_1(tmp_path / "v1.t32.h5", t32)
     with pytest.warns(UserWarning, match=T32_V1_WARNING):
-        res = runner.invoke(app, ["tape", "info", str(old), "--json"])
+        res = runner.invoke(app, ["tape", "info", str(old), "--json", "-"])
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["version"] == 1

@@ -306,6 +306,11 @@ BAD_FILES = [
     (lambda f: _replace(f, "recycles/3/Lambda_real_factor",
                         np.full(f["recycles/3/Lambda_real_factor"].shape, np.inf)),
      "recycles/3/Lambda_real_factor"),
+    # a Σ scaled by 1e300 made tapp guide fail in LAPACK: numbers are bounded by 1e60
+    (lambda f: _replace(f, "recycles/1/Sigma_factor", 1e300 * f["recycles/1/Sigma_factor"][()]),
+     "recycles/1/Sigma_factor"),
+    (lambda f: _replace(f, "recycles/2/B", -1e61 * np.ones(f["recycles/2/B"].shape)),
+     "recycles/2/B"),
     (lambda f: f.__delitem__("recycles/2/Sigma_factor"), "recycles/2/Sigma_factor"),
     (lambda f: f.__delitem__("recycles/3/transition_adjoint"), "recycles/3/transition_adjoint"),
     (lambda f: _replace(f, "recycles/1/transition_adjoint", np.zeros((9, 8))),
@@ -519,7 +524,22 @@ BAD_VERSION_1 = [
     (lambda f: _replace(f, "recycles/2/transition", np.zeros((9, 9))),
      r"recycles/2/transition: expected an invertible transition"),
     (lambda f: f.__delitem__("recycles/2/J"), r"recycles/2/J: expected this dataset present"),
+    # symmetric with a non-negative diagonal, and a correlation of 1.5: guide clipped the
+    # negative eigenvalue and exited 0
+    (lambda f: _correlated(f, "apriori/Lambda0_real", 1.5),
+     r"apriori/Lambda0_real: expected a positive semi-definite matrix \(to 0.001 of its "
+     r"scale\)"),
+    (lambda f: _diagonal_entry(f, "recycles/1/Lambda_real", 0, 1e121),
+     r"recycles/1/Lambda_real: expected finite values of magnitude <= 1e\+120"),
 ]
+
+
+def _correlated(f: h5py.File, name: str, rho: float) -> None:
+    """Entry (0, 1) of a TR-packed symmetric matrix set to ``rho`` √(M_00 M_11)."""
+    n = int(f[name].attrs["order"])
+    m = symmetric_from_rows(f[name][()], n)
+    m[0, 1] = m[1, 0] = rho * np.sqrt(m[0, 0] * m[1, 1])
+    _replace(f, name, upper_by_rows(m))
 
 
 @pytest.mark.parametrize(("edit", "message"), BAD_VERSION_1)

@@ -108,7 +108,7 @@ b_dot_t_km = 0.1
 
 
 def moved_deep_space(shipped: str, *, days: int = 1, targeting: str | None = None) -> str:
-    """The text of ``scenarios/deep_space.toml`` with its epoch ``days`` later and its
+    """The text of the example ``deep_space.toml`` with its epoch ``days`` later and its
     injection unchanged, cut to 3 days of tracking (no re-epoch); with ``targeting`` (a
     [targeting] table) appended and the miss time at "periapsis"."""
     replacements = [('epoch = "2026-03-10T12:00:00"', f'epoch = "2026-03-{10 + days}T12:00:00"'),

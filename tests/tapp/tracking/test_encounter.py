@@ -7,7 +7,6 @@ import dataclasses
 import json
 import math
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +15,7 @@ from tapp.constants import GM_km3_s2
 from tapp.dynamics import Propagator, earth_model
 from tapp.ephemeris import position_km
 from tapp.errors import InputError
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.targeting import BPlaneSearch, FirstGuessError, patched_conic_guess, run_search
 from tapp.tracking.encounter import (
     NoEncounterError,
@@ -31,7 +31,7 @@ from tests.tapp.tracking.encounter_reference import (
     moved_deep_space,
 )
 
-SHIPPED = Path(__file__).resolve().parents[3] / "scenarios" / "deep_space.toml"
+SHIPPED = EXAMPLES / "deep_space.toml"
 #: Named tolerances: the brief's 1 km on the aim point; the closest approach's time is
 #: refined on a 1 s grid and its distance is flat there to ~1e-4 km.
 ONE_KM = 1.0

@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 
 from tapp.errors import InputError
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.tracking.scenario import parse_scenario, read_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import SOURCE, leo_document, leo_scenario
 
-SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
+SCENARIOS = EXAMPLES
 
 
 def test_the_base_scenario_parses_to_named_parameters_with_units() -> None:
@@ -224,8 +225,9 @@ def test_a_non_positive_gm_is_refused() -> None:
 
 
 def test_the_noise_schema_declares_every_kind_in_its_edge_unit() -> None:
+    from tapp.noise_file import FitTable, RealTable
     from tapp.tracking.noise import EDGE_UNITS
-    from tapp.tracking.scenario import KINDS, FitTable, RealTable
+    from tapp.tracking.scenario import KINDS
 
     assert set(EDGE_UNITS) == set(KINDS)
     fit = {f"sigma_{k}_{EDGE_UNITS[k][0]}" for k in KINDS}

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tapp.constants import GM_EARTH_km3_s2, OMEGA_EARTH_rad_s, WGS84_A_km
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.frames.elements import elements_to_cartesian
 from tapp.measurements import wrap_angle_rad
 from tapp.measurements.stations import Station
@@ -29,7 +29,7 @@ FD_LIGHT_TIME = 1e-4
 # Miss partials vs central differences through the propagation (row-relative): the
 # differences carry the integrator's noise and the 1e-6 steps of G.
 MISS_FD = 1e-6
-DEEP_SPACE = Path(__file__).resolve().parents[3] / "scenarios" / "deep_space.toml"
+DEEP_SPACE = EXAMPLES / "deep_space.toml"
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,35 @@
+"""``tapp examples DIR``: copy the shipped example input files into a folder to start from."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from tapp.cli.common import STDOUT, JsonOpt, app, json_file, run_guarded, write_json
+
+
+@app.command("examples")
+def examples_cmd(
+    directory: Annotated[Path, typer.Argument(help="Folder to create (new or empty).")],
+    json_out: JsonOpt = None,
+) -> None:
+    """Copy every example input file (scenarios, decks, guidance, pipeline, sweeps, SEARCH,
+    the study) into DIRECTORY, and list them with their kind (tapp schema KIND)."""
+    from tapp.examples import FILES, copy_examples
+    from tapp.outputs import check_paths
+
+    def body() -> None:
+        check_paths({}, {"--json": json_file(json_out)})
+        copied = copy_examples(directory)
+        write_json(json_out, {"directory": str(directory), "files": [
+            {"kind": FILES[path.name], "path": str(path)} for path in copied]})
+        if json_out == STDOUT:
+            return
+        width = max(len(kind) for kind in FILES.values())
+        typer.echo(f"{len(copied)} example files copied into {directory}:")
+        for path in copied:
+            typer.echo(f"  {FILES[path.name]:<{width}}  {path}")
+
+    run_guarded(body)

@@ -1,0 +1,37 @@
+"""``tapp schema KIND``: the JSON Schema, or the reference page, of a kind of input file."""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated
+
+import typer
+
+from tapp.cli.common import STDOUT, JsonOpt, app, json_file, run_guarded, write_json
+
+
+@app.command("schema")
+def schema_cmd(
+    kind: Annotated[str, typer.Argument(help="scenario, deck, guidance, pipeline, sweep, "
+                                        "search or study.")],
+    markdown: Annotated[bool, typer.Option("--markdown", help="Print the reference page "
+                                           "(docs/reference/KIND.md) instead.")] = False,
+    json_out: JsonOpt = None,
+) -> None:
+    """Print the JSON Schema of an input file kind: every key with its type, unit, default,
+    allowed values and meaning (the schema tapp validates the file against)."""
+    from tapp import reference
+    from tapp.outputs import check_paths
+
+    def body() -> None:
+        check_paths({}, {"--json": json_file(json_out)})
+        reference.check_kind(kind)
+        write_json(json_out, reference.json_schema(kind))
+        if json_out == STDOUT:
+            return
+        if markdown:
+            typer.echo(reference.markdown(kind), nl=False)
+        else:
+            typer.echo(json.dumps(reference.json_schema(kind), indent=2, ensure_ascii=False))
+
+    run_guarded(body)

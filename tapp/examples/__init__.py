@@ -1,0 +1,70 @@
+"""The example input files shipped with tapp, and copying them for a new user.
+
+The files of this folder are package data: every kind of input file, commented, as the
+reproduction runs use them (``make scenario``) and as ``tapp examples DIR`` copies them for a
+user to start from. ``approx_stm.toml`` is also the study file that ``tapp dc``, ``tapp ekf``,
+``tapp rsig`` and ``--orbit SATORB1`` read when no ``--scenario`` is given
+(:data:`STUDY_FILE`).
+
+Paths inside the files are relative to their own folder (a pipeline names its scenario,
+deck and guidance file; a sweep its pipeline), so the copied set runs from wherever it is
+copied to. The kind of each file is the schema that reads it (``tapp schema KIND``).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from importlib.resources import files
+from pathlib import Path
+
+from tapp.outputs import new_directory
+
+#: The shipped files and the kind of input each is (``tapp schema KIND``), in the order a new
+#: user meets them.
+FILES: dict[str, str] = {
+    "leo_equatorial.toml": "scenario",
+    "deep_space.toml": "scenario",
+    "tapp1_table_d1.toml": "scenario",
+    "tapp3_leo_equatorial.toml": "deck",
+    "tapp3_deep_space.toml": "deck",
+    "tapp3_table_d1.toml": "deck",
+    "tapp2_deep_space.toml": "guidance",
+    "pipeline_deep_space.toml": "pipeline",
+    "iter_pipeline_tracking.toml": "sweep",
+    "iter_azimuth_type1.toml": "sweep",
+    "iter_azimuth_type2.toml": "sweep",
+    "iter_days_azimuths.toml": "sweep",
+    "iter_lunar_departure.toml": "sweep",
+    "search_bplane.toml": "search",
+    "approx_stm.toml": "study",
+}
+
+#: The folder of the shipped files. A package installed from a wheel is a folder of files
+#: (pip unpacks wheels), so its resources are paths; ``os.fspath`` refuses any other kind.
+FOLDER = Path(os.fspath(files(__name__)))
+#: The approximate-STM study file, the default of every command that reads one.
+STUDY_FILE = FOLDER / "approx_stm.toml"
+
+
+def copy_examples(out_dir: Path, option: str = "DIR") -> tuple[Path, ...]:
+    """Copy every shipped file (:data:`FILES`) into ``out_dir``, a new or empty folder.
+
+    The files are written into a hidden folder beside ``out_dir`` and renamed to it once
+    all are there: nothing is left half-copied.
+
+    Returns
+    -------
+    tuple of Path
+        The copies, in the order of :data:`FILES`.
+
+    Raises
+    ------
+    InputError
+        Naming ``option``: ``out_dir`` is a file or a folder with something in it.
+    """
+    with new_directory(out_dir, option, "examples are copied into a folder of their own, "
+                       "never over files") as work:
+        for name in FILES:
+            shutil.copyfile(FOLDER / name, work / name)
+    return tuple(Path(out_dir) / name for name in FILES)
