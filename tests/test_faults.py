@@ -158,12 +158,14 @@ def test_a_closed_standard_output_is_one_line_exit_1(temporary: Path, tmp_path: 
     assert names(temporary) == []
 
 
-def test_a_broken_pipe_on_standard_output_is_one_line_exit_1(temporary: Path,
-                                                             leo_tape: Path) -> None:
-    with subprocess.Popen(tapp_command("tape", "info", leo_tape), stdout=subprocess.PIPE,
-                          stderr=subprocess.PIPE, text=True, env=tapp_env(temporary)) as proc:
+@pytest.mark.parametrize("args", [["tape", "info", "{tape}"], ["--help"]])
+def test_a_broken_pipe_on_standard_output_is_one_line_exit_1(temporary: Path, leo_tape: Path,
+                                                             args: list[str]) -> None:
+    command = tapp_command(*(a.format(tape=leo_tape) for a in args))
+    with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          env=tapp_env(temporary)) as proc:
         proc.stdout.close()  # like `| head -0`: nothing reads what it prints
         stderr = proc.stderr.read()
-    assert proc.returncode == 1  # was exit 1 and no word (click's own handling)
+    assert proc.returncode == 1  # was exit 1 and no word (typer's own handling)
     assert one_line(stderr) == "error: standard output: not written (Broken pipe)"
     assert os.listdir(temporary) == []

@@ -200,8 +200,11 @@ class _OneLineErrors(Group):
         except Interrupted as exc:
             typer.echo(f"error: {exc.what} ({exc})", err=True)
             code = exc.exit_code
-        except OSError as exc:
-            code = report_os_error(exc)
+        except StandardOutputError as exc:
+            code = report_standard_output(exc)
+        except OSError as exc:  # outside any command's run_guarded (an option's check)
+            echo_error(exc)
+            code = EXIT_FAILURE
         sys.exit(code if isinstance(code, int) else 0)
 
 
@@ -247,9 +250,18 @@ def stopping_on_signals() -> Iterator[None]:
             signal.signal(sig, handler)
 
 
-class StandardOutputError(OSError):
+class StandardOutputError(Exception):
     """Standard output could not be written: closed, full, or nothing reads it (a broken
-    pipe). Its own class: rich turns a BrokenPipeError into a silent exit."""
+    pipe); ``strerror`` says which.
+
+    Not an OSError: typer turns an OSError of EPIPE into a silent exit 1 (``tapp --help |
+    head -0``), rich a BrokenPipeError, and code that writes a file takes any OSError for
+    that file's.
+    """
+
+    def __init__(self, exc: OSError):
+        self.strerror = exc.strerror or type(exc).__name__
+        super().__init__(self.strerror)
 
 
 class _StandardOutput(io.FileIO):
@@ -259,7 +271,7 @@ class _StandardOutput(io.FileIO):
         try:
             return super().write(data)
         except OSError as exc:
-            raise StandardOutputError(exc.errno, exc.strerror) from None
+            raise StandardOutputError(exc) from None
 
 
 def _hold_standard_output() -> None:
@@ -286,16 +298,14 @@ def _hold_standard_output() -> None:
             getattr(current, "line_buffering", False)))
 
 
-def report_os_error(exc: OSError) -> int:
-    """Write the one line of an OSError that no command turned into a TappError (standard
-    output that cannot be written, named so); return the exit code, 1."""
-    if isinstance(exc, StandardOutputError):
-        typer.echo(f"error: standard output: not written ({exc.strerror})", err=True)
-        devnull = os.open(os.devnull, os.O_WRONLY)  # what is still buffered: dropped at exit
-        os.dup2(devnull, 1)
-        os.close(devnull)
-    else:
-        echo_error(exc)
+def report_standard_output(exc: StandardOutputError) -> int:
+    """Write the one line of standard output that cannot be written; return the exit code,
+    1. Standard output then goes to /dev/null: what is still buffered is dropped at exit,
+    where it would print "Exception ignored" lines."""
+    typer.echo(f"error: standard output: not written ({exc.strerror})", err=True)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    os.close(devnull)
     return EXIT_FAILURE
 
 
@@ -534,8 +544,9 @@ def run_guarded(fn: Callable[[], T]) -> T:
         echo_error(exc)
         raise typer.Exit(EXIT_FAILURE) from None
     except OSError as exc:
-        if exc.filename is None:  # standard output among them
-            raise typer.Exit(report_os_error(exc)) from None
+        if exc.filename is None:  # a device's or the system's, not a file's
+            echo_error(exc)
+            raise typer.Exit(EXIT_FAILURE) from None
         typer.echo(f"error: {exc.filename}: file: expected an accessible file "
                    f"(got {exc.strerror or type(exc).__name__!r})", err=True)
         raise typer.Exit(EXIT_INPUT) from None
