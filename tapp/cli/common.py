@@ -342,13 +342,15 @@ def run_folder() -> Iterator[Path]:
 
 
 def _remove_unlocked(folders: Iterator[Path]) -> None:
-    """Remove the run folders that no live run holds locked."""
+    """Remove the run folders, this user's, that no live run holds locked."""
     for folder in folders:
         try:
-            fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
-        except OSError:  # gone meanwhile, not a folder, or another user's
+            fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        except OSError:  # gone meanwhile, not a folder (a link to one), or not readable
             continue
         try:
+            if os.fstat(fd).st_uid != os.getuid():  # another user's: never ours to remove
+                continue
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             shutil.rmtree(folder, ignore_errors=True)
         except BlockingIOError:  # a live run holds it

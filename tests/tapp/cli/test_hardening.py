@@ -166,6 +166,27 @@ def test_the_run_folder_goes_with_the_run_and_a_killed_run_s_with_the_next(
     assert list(base.iterdir()) == []
 
 
+def test_a_run_removes_no_folder_that_is_not_provably_a_killed_run_s(tmp_path: Path,
+                                                                      monkeypatch) -> None:
+    """Named like a run folder, but a symbolic link (to the user's data), or another
+    user's (made so when the test runs as root): both kept, and what the link points to."""
+    base = tmp_path / "tmp"
+    data = tmp_path / "data"
+    (data / "keep").mkdir(parents=True)
+    base.mkdir()
+    monkeypatch.setenv("TMPDIR", str(base))
+    monkeypatch.setattr(tempfile, "tempdir", str(base))
+    (base / "tapp-run-link0000").symlink_to(data)
+    kept = ["tapp-run-link0000"]
+    if os.geteuid() == 0:
+        (base / "tapp-run-other000").mkdir()
+        os.chown(base / "tapp-run-other000", 65534, 65534)
+        kept.append("tapp-run-other000")
+    assert runner.invoke(app, ["--version"]).exit_code == 0
+    assert sorted(p.name for p in base.iterdir()) == kept
+    assert [p.name for p in data.iterdir()] == ["keep"]
+
+
 # --- class 6: tracebacks and exhaustion --------------------------------------------------------
 
 
