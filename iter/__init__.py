@@ -26,9 +26,11 @@ import importlib
 #: Every public name and the module it lives in, imported on first use (module docstring).
 _HOMES = {
     "AllCasesFailed": "errors", "CallableBody": "body", "Case": "loops",
-    "CaseResult": "table", "CaseStatus": "table", "Execution": "execute",
+    "CaseResult": "table", "CaseStatus": "table", "ClusterError": "errors",
+    "Execution": "execute",
     "IterError": "errors", "Loop": "loops", "ProgramBody": "body",
-    "ResultFileError": "errors", "ResultTable": "table", "SchedulerError": "errors",
+    "ResultFileError": "errors", "ResultTable": "table", "ResultWriteError": "errors",
+    "SchedulerError": "errors",
     "Sweep": "sweep", "SweepInputError": "errors", "SweepResult": "run",
     "SweepSummary": "run", "case_count": "loops", "generate_cases": "loops",
     "input_check": "body", "load_sweep": "sweepfile", "parse_sweep": "sweepfile",

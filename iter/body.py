@@ -47,6 +47,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -93,30 +94,36 @@ def run_bounded(command: Sequence[str], stdin: bytes, timeout_s: float,
     """Run ``command`` with ``stdin``; kill it and its children after ``timeout_s`` seconds.
 
     The command runs in a session of its own, so that a timeout kills whatever it started
-    too (a program that runs another one would otherwise keep the pipes open).
+    too (a program that runs another one would otherwise keep the pipes open), and with a
+    temporary folder of its own (``TMPDIR``), removed once it is done, so that a command
+    killed at its timeout leaves no temporaries either.
 
     Raises
     ------
     CaseTimeout
         The command ran longer than ``timeout_s``.
     """
-    with subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                          stderr=subprocess.PIPE, start_new_session=True) as proc:
+    with (tempfile.TemporaryDirectory(prefix="iter-case-", ignore_cleanup_errors=True) as scratch,
+          subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, start_new_session=True,
+                           env={**os.environ, "TMPDIR": scratch}) as proc):
         finished = False
         try:
             stdout, stderr = proc.communicate(stdin, timeout=timeout_s)
             finished = True
         except subprocess.TimeoutExpired:
-            _kill_session(proc)
+            kill_session(proc)
             proc.communicate()
             raise CaseTimeout(f"{what} timed out after {timeout_s:g} s") from None
         finally:
             if not finished:  # a timeout, Ctrl-C or a worker shutdown: leave nothing running
-                _kill_session(proc)
+                kill_session(proc)
     return subprocess.CompletedProcess(command, proc.returncode, stdout, stderr)
 
 
-def _kill_session(proc: subprocess.Popen[bytes]) -> None:
+def kill_session(proc: subprocess.Popen[bytes]) -> None:
+    """SIGKILL ``proc``, started with ``start_new_session``, and every process of its group
+    (what it started)."""
     if hasattr(os, "killpg"):
         try:
             os.killpg(proc.pid, signal.SIGKILL)

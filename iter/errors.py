@@ -65,6 +65,27 @@ class SchedulerError(IterError):
         )
 
 
+class ClusterError(IterError):
+    """A local Dask cluster did not start.
+
+    Parameters
+    ----------
+    workers : int
+        The workers asked for.
+    returncode : int or None
+        How its process ended.
+    reason : str
+        The last line of its log.
+    """
+
+    def __init__(self, workers: int, returncode: int | None, reason: str):
+        self.workers = workers
+        self.returncode = returncode
+        self.reason = reason
+        super().__init__(f"a local Dask cluster of {workers} workers did not start (its "
+                         f"process exited with status {returncode}): {reason}")
+
+
 class ResultFileError(IterError):
     """A results file cannot be read or written, or is not a valid results file.
 
@@ -87,6 +108,15 @@ class ResultFileError(IterError):
         self.got = got
         detail = "" if got is None else f" (got {got!r})"
         super().__init__(f"{path}: {field}: expected {expected}{detail}")
+
+
+class ResultWriteError(ResultFileError):
+    """A results file (or its CSV copy) could not be written; ``error`` is the OSError, from
+    which a caller tells a path at fault (a read-only folder) from a full disk."""
+
+    def __init__(self, path: str, error: OSError):
+        self.error = error
+        super().__init__(path, "file", "a writable file", error.strerror or type(error).__name__)
 
 
 class AllCasesFailed(IterError):

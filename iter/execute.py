@@ -17,16 +17,18 @@ Workers, local or remote, must be able to import ``iter`` and the body's module.
 
 from __future__ import annotations
 
-import logging
 import math
 import os
+import subprocess
+import sys
+import tempfile
 from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 from urllib.parse import urlsplit
 
-from .errors import SchedulerError, SweepInputError
+from .errors import ClusterError, SchedulerError, SweepInputError
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -49,6 +51,8 @@ OPTIONS_SOURCE = "options"
 #: Most local-cluster worker processes per available core (more only thrash, and starting
 #: thousands takes minutes); a running cluster (``scheduler``) has no such limit.
 MAX_WORKERS_PER_CORE = 4
+#: Time a local cluster is given to stop when its block ends, s (then it is killed).
+CLUSTER_STOP_S = 10.0
 #: Address schemes accepted for ``scheduler``.
 SCHEDULER_SCHEMES = ("tcp", "tls")
 #: Projected serial work, s, below which an automatic execution runs in this process: on 2
@@ -112,14 +116,8 @@ class Execution:
     checkpoint_interval_s: float = 1.0
 
     def __post_init__(self) -> None:
-        if self.serial and (self.scheduler is not None or self.workers is not None):
-            raise SweepInputError(OPTIONS_SOURCE, "serial",
-                                  "no scheduler or workers with a serial run",
-                                  {"scheduler": self.scheduler, "workers": self.workers})
-        if self.scheduler is not None and self.workers is not None:
-            raise SweepInputError(OPTIONS_SOURCE, "workers",
-                                  "no worker count with a scheduler address (the running "
-                                  "cluster has its own workers)", self.workers)
+        # Each value on its own first, then how they combine: `--workers 0 --serial` is a
+        # bad worker count before it is a conflict.
         for name in ("workers", "chunk_size"):
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, int)
@@ -143,6 +141,14 @@ class Execution:
         if not self.checkpoint_interval_s >= 0:
             raise SweepInputError(OPTIONS_SOURCE, "checkpoint_interval_s",
                                   "a time >= 0, s", self.checkpoint_interval_s)
+        if self.serial and (self.scheduler is not None or self.workers is not None):
+            raise SweepInputError(OPTIONS_SOURCE, "serial",
+                                  "no scheduler or workers with a serial run",
+                                  {"scheduler": self.scheduler, "workers": self.workers})
+        if self.scheduler is not None and self.workers is not None:
+            raise SweepInputError(OPTIONS_SOURCE, "workers",
+                                  "no worker count with a scheduler address (the running "
+                                  "cluster has its own workers)", self.workers)
 
 
     @property
@@ -288,21 +294,54 @@ def local_cluster(workers: int | None = None) -> Iterator[str]:
 
     One process per worker (``workers``, default one per core), one thread each, spawned
     with :data:`WORKER_ENVIRON` (a variable this process's environment sets is passed on as
-    it is); the dashboard, which Dask starts even when asked for none, on a free port
-    (``":0"``), so a second cluster on the machine does not clash with the first on 8787.
-    Scripts that call this must guard their entry point with ``if __name__ ==
-    "__main__":`` (workers are spawned).
-    """
-    import dask
-    from distributed import LocalCluster
+    it is); the dashboard on a free port. The cluster runs in a process of its own
+    (``python -m iter._cluster``), in a session of its own, so that a Ctrl-C at a terminal,
+    sent to the whole process group, reaches only this process (whose exit stops the
+    cluster), never the workers, at any moment, their start included. The cluster's scratch
+    space (the workers' ``local_directory``, and its ``TMPDIR``) is a new folder of
+    :mod:`tempfile`'s (the run's own, under ``tapp``'s CLI), removed with the cluster. On
+    leaving the block normally the cluster is asked to stop (its stdin is closed) and given
+    :data:`CLUSTER_STOP_S`; on an error or a signal, or after that time, its session is
+    killed. A parent killed outright closes the cluster's stdin too: it stops by itself.
+    The cluster and its workers import from this process's ``sys.path`` (passed on as
+    ``PYTHONPATH``), as workers spawned by this process itself would: a body's module found
+    here is found there.
 
-    environ = {f"distributed.nanny.pre-spawn-environ.{name}": value
-               for name, value in WORKER_ENVIRON.items()}
-    with (dask.config.set(environ),
-          LocalCluster(n_workers=workers or available_cores(), threads_per_worker=1,
-                       processes=True, dashboard_address=":0",
-                       silence_logs=logging.ERROR) as cluster):
-        yield cluster.scheduler_address
+    Raises
+    ------
+    ClusterError
+        The cluster did not start (the last line of its log says why).
+    """
+    from .body import kill_session
+
+    n_workers = workers or available_cores()
+    with tempfile.TemporaryDirectory(prefix="dask-cluster-") as scratch:
+        log_path = os.path.join(scratch, "cluster.log")
+        with (open(log_path, "wb") as log,
+              subprocess.Popen([sys.executable, "-m", "iter._cluster", str(n_workers), scratch],
+                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=log,
+                               start_new_session=True, env={
+                                   **os.environ, "TMPDIR": scratch,
+                                   "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)})
+              as proc):
+            try:
+                address = proc.stdout.readline().decode("utf-8", "replace").strip()
+                if not address:
+                    proc.wait()
+                    raise ClusterError(n_workers, proc.returncode, _last_line(log_path))
+                yield address
+                proc.stdin.close()
+                with suppress(subprocess.TimeoutExpired):
+                    proc.wait(timeout=CLUSTER_STOP_S)
+            finally:
+                if proc.poll() is None:
+                    kill_session(proc)
+
+
+def _last_line(path: str) -> str:
+    with open(path, "rb") as stream:
+        lines = stream.read().decode("utf-8", "replace").strip().splitlines()
+    return lines[-1] if lines else "(nothing logged)"
 
 
 def too_small(unit: str, projected: float, crossover: float) -> str | None:

@@ -51,7 +51,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .errors import ResultFileError
+from .errors import ResultFileError, ResultWriteError
 from .inputfile import regular_file
 from .table import CaseResult, CaseStatus, OutputValue, ResultTable
 
@@ -144,8 +144,7 @@ def _atomic_path(path: Path) -> Iterator[Path]:
         yield tmp
         os.replace(tmp, path)
     except OSError as exc:
-        raise ResultFileError(str(path), "file", "a writable file",
-                              exc.strerror or type(exc).__name__) from None
+        raise ResultWriteError(str(path), exc) from None
     finally:
         if tmp.exists():  # False, not an error, when the directory is unusable
             tmp.unlink()
@@ -162,7 +161,7 @@ def write_hdf5(path: str | Path, table: ResultTable, *, sweep_json: str,
         The file or its directory cannot be written.
     """
     path = Path(path)
-    with _atomic_path(path) as tmp, h5py.File(tmp, "w", track_order=True) as f:
+    with _atomic_path(path) as tmp, _in_memory(tmp) as f:
         f.attrs.update({"format": FORMAT_NAME, "format_version": FORMAT_VERSION,
                         "generator": _generator(),
                         "sweep_json": sweep_json, "definition_json": definition_json,
@@ -181,6 +180,23 @@ def write_hdf5(path: str | Path, table: ResultTable, *, sweep_json: str,
         status.attrs["codes"] = json.dumps({str(int(s)): s.name.lower() for s in CaseStatus})
         _dataset(f, "error", table.column("error").astype(_TEXT), "")
         _dataset(f, "elapsed_s", table.column("elapsed_s"), "s")
+
+
+@contextmanager
+def _in_memory(path: Path) -> Iterator[h5py.File]:
+    """Yield a new HDF5 file built in memory; write it to ``path`` in one plain write on
+    leaving the block.
+
+    The HDF5 library then never writes to the disk itself: on a full disk it can crash the
+    process (a segmentation fault) where a plain write raises an OSError (the same reason
+    as ``tapp.tape.hdf5io.create``, which ``iter`` may not import).
+    """
+    with h5py.File(path.name, "w", track_order=True, driver="core",
+                   backing_store=False) as f:
+        yield f
+        f.flush()
+        image = f.id.get_file_image()
+    path.write_bytes(image)
 
 
 def _generator() -> str:

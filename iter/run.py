@@ -182,9 +182,11 @@ def run_sweep(sweep: Sweep, *, output_h5: str | Path | None = None,
                        n_cases=sweep.n_cases, created_utc=created_utc,
                        updated_utc=_utc_now())
 
+    console = Console(stderr=True)  # the bar on a terminal only: elsewhere it adds lines
     bar = Progress(TextColumn("[bold]iter"), BarColumn(), MofNCompleteColumn(),
                    TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(),
-                   TimeRemainingColumn(), console=Console(stderr=True), disable=not progress)
+                   TimeRemainingColumn(), console=console,
+                   disable=not progress or not console.is_terminal)
     with ExitStack() as stack:
         # an executor asked for opens first: a scheduler that does not answer is said before
         # any progress is shown

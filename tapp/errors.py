@@ -24,6 +24,17 @@ class InputError(TappError, ValueError):
         super().__init__(f"{source}: {field}: expected {expected}{detail}")
 
 
+class WriteError(TappError):
+    """An output could not be written for a reason that is not the input's (a full disk, a
+    device error): names the option as typed and the requested path, never a temporary."""
+
+    def __init__(self, source: str, path: str, reason: str):
+        self.source = source
+        self.path = path
+        self.reason = reason
+        super().__init__(f"{source}: {path}: not written ({reason})")
+
+
 class DivergenceError(TappError):
     """An iterative process did not converge; carries the iteration count."""
 

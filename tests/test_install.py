@@ -58,8 +58,11 @@ class Installed:
 
 
 def _checked(argv: list, cwd: Path) -> None:
+    # Without PYTHONPATH: one pointing at a checkout (a worktree's tests) made pip take tapp
+    # for installed already, and the new environment got no console script.
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     proc = subprocess.run([str(a) for a in argv], capture_output=True, text=True, cwd=cwd,
-                          timeout=STEP_TIMEOUT_S, check=False)
+                          env=env, timeout=STEP_TIMEOUT_S, check=False)
     assert proc.returncode == 0, f"{' '.join(map(str, argv))}:\n{proc.stdout}\n{proc.stderr}"
 
 

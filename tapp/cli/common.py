@@ -88,25 +88,44 @@ A killed run leaves the old outputs or the new ones, each complete, and possibly
 checkpoints its results file (each time atomically) as cases complete, so that a killed or
 interrupted sweep can be resumed; a sweep whose every case failed (exit 1) keeps its results
 file and CSV, which record the failures.
+
+Faults from outside the input: a full disk while writing an output is one line naming the
+option and the path asked for, exit 1 (a path at fault, a read-only folder, is exit 2);
+standard output full, closed or a broken pipe is ``error: standard output: not written
+(REASON)``, exit 1; SIGINT and SIGTERM stop the run cleanly, ``error: interrupted (SIGINT)``
+or ``error: terminated (SIGTERM)``, exit 130 or 143. No folder made for outputs that were not
+written is left. Each run keeps its temporaries, and the Dask cluster's scratch space, in a
+private folder ``tapp-run-*`` of the system's temporary folder, removed at its end; the next
+run removes those of runs killed outright (SIGKILL).
 """
 
 from __future__ import annotations
 
+import fcntl
+import io
 import json
 import math
+import os
 import re
+import shutil
+import signal
 import sys
+import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 from typer.core import TyperGroup
 
+from iter.errors import ClusterError
 from iter.execute import MAX_WORKERS_PER_CORE
 from tapp.errors import InputError, TapeError, TappError
 from tapp.outputs import OutputSet
+
+if TYPE_CHECKING:
+    from rich.progress import Progress, ProgressColumn
 
 # click's base exception, whether typer vendors click (typer >= 0.23) or uses the package.
 _ClickException = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
@@ -146,8 +165,11 @@ class Group(TyperGroup):
 
 
 class _OneLineErrors(Group):
-    """The root group: a usage error (a bad or missing option) is one line, exit 2; help
-    text is shown as written (no square bracket taken for rich markup)."""
+    """The root group, the CLI's edge: a usage error (a bad or missing option) is one line,
+    exit 2; help text is shown as written (no square bracket taken for rich markup); SIGINT
+    and SIGTERM stop the run with one line (exit 130 and 143, :class:`Interrupted`); standard
+    output that cannot be written is one line, exit 1; the run's temporaries live in a
+    private folder removed at the end (:func:`run_folder`)."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
@@ -158,21 +180,183 @@ class _OneLineErrors(Group):
              **extra: Any) -> Any:
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        _hold_standard_output()
         try:
-            code = super().main(args, prog_name, complete_var, False, **extra)
+            with stopping_on_signals(), run_folder():
+                code = super().main(args, prog_name, complete_var, False, **extra)
+                sys.stdout.flush()  # here, where a failure is one line, not at exit
         except InputError as exc:  # from an option's own check while the line is parsed
             echo_error(exc)
-            sys.exit(EXIT_INPUT)
+            code = EXIT_INPUT
         except _ClickException as exc:
             if type(exc).__name__ == "NoArgsIsHelpError":  # `tapp` alone: the help
                 exc.show()
                 sys.exit(exc.exit_code)
             typer.echo(f"error: {_usage_message(exc)}", err=True)
-            sys.exit(exc.exit_code)
+            code = exc.exit_code
         except typer.Abort:
             typer.echo("error: aborted", err=True)
-            sys.exit(EXIT_FAILURE)
+            code = EXIT_FAILURE
+        except Interrupted as exc:
+            typer.echo(f"error: {exc.what} ({exc})", err=True)
+            code = exc.exit_code
+        except StandardOutputError as exc:
+            code = report_standard_output(exc)
+        except OSError as exc:  # outside any command's run_guarded (an option's check)
+            echo_error(exc)
+            code = EXIT_FAILURE
         sys.exit(code if isinstance(code, int) else 0)
+
+
+#: The signals that stop a run cleanly (:class:`Interrupted`).
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: Prefix of the private temporary folder of each command-line run (:func:`run_folder`).
+RUN_FOLDER_PREFIX = "tapp-run-"
+
+
+class Interrupted(BaseException):
+    """SIGINT (Ctrl-C) or SIGTERM asked the run to stop.
+
+    Raised by the CLI's signal handlers (:func:`stopping_on_signals`) in place of a
+    KeyboardInterrupt, which click turns into a silent exit and SIGTERM does not raise at
+    all: it unwinds the stack like any exception, so every ``finally`` and context manager
+    runs (temporaries removed, an ITER sweep checkpointed, a Dask cluster stopped), up to the
+    root command, which prints one line and exits 128 + the signal's number.
+    """
+
+    def __init__(self, signum: int):
+        self.signum = signum
+        self.exit_code = 128 + signum
+        self.what = "interrupted" if signum == signal.SIGINT else "terminated"
+        super().__init__(signal.Signals(signum).name)
+
+
+def _stop(signum: int, frame: object) -> None:
+    for sig in STOP_SIGNALS:  # a second Ctrl-C would cut the clean-up short
+        signal.signal(sig, signal.SIG_IGN)
+    raise Interrupted(signum)
+
+
+@contextmanager
+def stopping_on_signals() -> Iterator[None]:
+    """While the block runs, SIGINT and SIGTERM raise :class:`Interrupted` (once: while the
+    run cleans up, further ones are ignored; SIGKILL still stops it, and the next run
+    removes what it left)."""
+    saved = {sig: signal.signal(sig, _stop) for sig in STOP_SIGNALS}
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+
+
+class StandardOutputError(Exception):
+    """Standard output could not be written: closed, full, or nothing reads it (a broken
+    pipe); ``strerror`` says which.
+
+    Not an OSError: typer turns an OSError of EPIPE into a silent exit 1 (``tapp --help |
+    head -0``), rich a BrokenPipeError, and code that writes a file takes any OSError for
+    that file's.
+    """
+
+    def __init__(self, exc: OSError):
+        self.strerror = exc.strerror or type(exc).__name__
+        super().__init__(self.strerror)
+
+
+class _StandardOutput(io.FileIO):
+    """File descriptor 1, whose failed writes raise :class:`StandardOutputError`."""
+
+    def write(self, data: Any) -> int | None:
+        try:
+            return super().write(data)
+        except OSError as exc:
+            raise StandardOutputError(exc) from None
+
+
+def _hold_standard_output() -> None:
+    """Write standard output through :class:`_StandardOutput` (a test harness's own stream
+    is left alone).
+
+    Standard output closed at start (``>&-``) is held open on /dev/null for reading: writes
+    then fail as on a closed stream (EBADF), and no file the run opens takes descriptor 1.
+    """
+    current = sys.stdout
+    if current is not None and current is not sys.__stdout__:
+        return
+    if current is None:
+        fd = os.open(os.devnull, os.O_RDONLY)
+        if fd != 1:
+            os.dup2(fd, 1)
+            os.close(fd)
+    else:
+        current.flush()
+    sys.stdout = io.TextIOWrapper(
+        io.BufferedWriter(_StandardOutput(1, "w", closefd=False)),
+        encoding=getattr(current, "encoding", None) or "utf-8",
+        errors=getattr(current, "errors", None), line_buffering=bool(
+            getattr(current, "line_buffering", False)))
+
+
+def report_standard_output(exc: StandardOutputError) -> int:
+    """Write the one line of standard output that cannot be written; return the exit code,
+    1. Standard output then goes to /dev/null: what is still buffered is dropped at exit,
+    where it would print "Exception ignored" lines."""
+    typer.echo(f"error: standard output: not written ({exc.strerror})", err=True)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    os.close(devnull)
+    return EXIT_FAILURE
+
+
+@contextmanager
+def run_folder() -> Iterator[Path]:
+    """Give the run, and every process it starts, a private temporary folder; remove it when
+    the block ends, however it ends.
+
+    The folder ``tapp-run-<random>`` is made in the system's temporary folder and becomes
+    :mod:`tempfile`'s and, through ``TMPDIR``, that of the processes the run starts: the
+    Dask cluster's scratch space, ITER's case processes and what they make all go with it.
+    It is locked (``flock``) while the run lives, and folders of earlier runs that are no
+    longer locked (killed by SIGKILL) are removed on entering.
+    """
+    base = Path(tempfile.gettempdir())
+    _remove_unlocked(base.glob(f"{RUN_FOLDER_PREFIX}*"))
+    # Locked before it takes a name another run's clean-up looks for.
+    new = Path(tempfile.mkdtemp(prefix=f".{RUN_FOLDER_PREFIX}"))
+    lock = os.open(new, os.O_RDONLY)
+    fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    folder = new.rename(base / new.name[1:])
+    saved = tempfile.tempdir, os.environ.get("TMPDIR")
+    tempfile.tempdir = os.environ["TMPDIR"] = str(folder)
+    try:
+        yield folder
+    finally:
+        tempfile.tempdir = saved[0]
+        if saved[1] is None:
+            del os.environ["TMPDIR"]
+        else:
+            os.environ["TMPDIR"] = saved[1]
+        shutil.rmtree(folder, ignore_errors=True)
+        os.close(lock)
+
+
+def _remove_unlocked(folders: Iterator[Path]) -> None:
+    """Remove the run folders, this user's, that no live run holds locked."""
+    for folder in folders:
+        try:
+            fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        except OSError:  # gone meanwhile, not a folder (a link to one), or not readable
+            continue
+        try:
+            if os.fstat(fd).st_uid != os.getuid():  # another user's: never ours to remove
+                continue
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            shutil.rmtree(folder, ignore_errors=True)
+        except BlockingIOError:  # a live run holds it
+            pass
+        finally:
+            os.close(fd)
 
 
 def _usage_message(exc: Exception) -> str:
@@ -358,12 +542,13 @@ def run_guarded(fn: Callable[[], T]) -> T:
     except (InputError, TapeError) as exc:
         echo_error(exc)
         raise typer.Exit(EXIT_INPUT) from None
-    except TappError as exc:
+    except (TappError, ClusterError) as exc:
         echo_error(exc)
         raise typer.Exit(EXIT_FAILURE) from None
     except OSError as exc:
-        if exc.filename is None:
-            raise
+        if exc.filename is None:  # a device's or the system's, not a file's
+            echo_error(exc)
+            raise typer.Exit(EXIT_FAILURE) from None
         typer.echo(f"error: {exc.filename}: file: expected an accessible file "
                    f"(got {exc.strerror or type(exc).__name__!r})", err=True)
         raise typer.Exit(EXIT_INPUT) from None
@@ -371,6 +556,17 @@ def run_guarded(fn: Callable[[], T]) -> T:
         typer.echo("error: out of memory (an input asks for more than this machine has)",
                    err=True)
         raise typer.Exit(EXIT_FAILURE) from None
+
+
+def progress_bar(*columns: ProgressColumn | str, quiet: bool) -> Progress:
+    """A transient rich progress bar on stderr, shown on a terminal only: elsewhere rich
+    draws nothing but leaves an empty line, which would sit above a failure's one line."""
+    from rich.console import Console
+    from rich.progress import Progress
+
+    console = Console(stderr=True)
+    return Progress(*columns, console=console, disable=quiet or not console.is_terminal,
+                    transient=True)
 
 
 def echo_error(exc: BaseException) -> None:

@@ -32,6 +32,7 @@ from tapp.cli.common import (
     execution_options,
     json_file,
     print_json,
+    progress_bar,
     run_guarded,
     scheduler_error,
 )
@@ -43,14 +44,7 @@ if TYPE_CHECKING:
 
 def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Execution,
            shard_size: int | None, quiet: bool) -> GuidanceResult:
-    from rich.console import Console
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-    )
+    from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
     from iter import SchedulerError
     from tapp.guidance.guidefile import read_guide
@@ -61,8 +55,7 @@ def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Executio
     t32 = read_t32(tape)
     columns = (TextColumn("{task.description:<8}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("samples"), TimeElapsedColumn())
-    with Progress(*columns, console=Console(stderr=True), disable=quiet,
-                  transient=True) as bar:
+    with progress_bar(*columns, quiet=quiet) as bar:
         task = bar.add_task("TAPP II", total=samples)
 
         def progress(done: int, total: int) -> None:

@@ -27,6 +27,7 @@ from tapp.cli.common import (
     earth_orientation_option,
     execution_options,
     json_file,
+    progress_bar,
     run_guarded,
     scheduler_error,
     write_json,
@@ -55,13 +56,7 @@ def pipeline_cmd(
         from dataclasses import replace
 
         from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-        )
+        from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
         from iter import SchedulerError
         from tapp.outputs import check_paths
@@ -77,8 +72,7 @@ def pipeline_cmd(
         execution = execution_options(scheduler, workers, connect_timeout_s, serial)
         columns = (TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(),
                    TimeElapsedColumn())
-        with Progress(*columns, console=Console(stderr=True), disable=json_out == STDOUT,
-                      transient=True) as bar:
+        with progress_bar(*columns, quiet=json_out == STDOUT) as bar:
             task = bar.add_task("pipeline", total=None)
 
             def progress(stage: str, done: int, total: int) -> None:

@@ -22,6 +22,7 @@ from tapp.cli.common import (
     app,
     json_file,
     print_json,
+    progress_bar,
     run_guarded,
 )
 
@@ -33,8 +34,7 @@ _DAY_S = 86400.0
 
 
 def _run(tape: Path, deck_path: Path, quiet: bool) -> tuple[Run, object, object, float]:
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
     from tapp.pipeline.steps import process_tape
     from tapp.processor.deck import read_deck
@@ -43,7 +43,7 @@ def _run(tape: Path, deck_path: Path, quiet: bool) -> tuple[Run, object, object,
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<12}"), BarColumn(),
                TextColumn("record {task.completed}/{task.total}"), TimeElapsedColumn())
-    with Progress(*columns, console=Console(stderr=True), disable=quiet, transient=True) as bar:
+    with progress_bar(*columns, quiet=quiet) as bar:
         task = bar.add_task("TAPP III", total=None)
 
         def progress(k: int, n_it: int) -> None:

@@ -75,25 +75,29 @@ def iter_command(
     choose).
     """
     h5_path = output if output is not None else Path(sweep_file.stem + ".h5")
+    options = {"-o/--output": h5_path, "--csv": csv}
 
     def run() -> None:
         from iter import (
             Execution,
             IterError,
             ResultFileError,
+            ResultWriteError,
             SchedulerError,
             SweepInputError,
             load_sweep,
             run_sweep,
         )
-        from tapp.outputs import check_paths
+        from tapp.outputs import check_paths, make_folders, remove_empty_folders, unwritable
 
-        check_paths({"SWEEP_FILE": sweep_file}, {"-o/--output": h5_path, "--csv": csv,
-                                                 "--json": json_file(json_out)})
+        check_paths({"SWEEP_FILE": sweep_file}, {**options, "--json": json_file(json_out)})
+        created = []
         try:
             execution = Execution(serial=serial, scheduler=scheduler, workers=workers,
                                   chunk_size=chunk_size, connect_timeout_s=connect_timeout_s)
             sweep = load_sweep(sweep_file)
+            created = [*make_folders(h5_path.parent),
+                       *(make_folders(csv.parent) if csv is not None else ())]
             result = run_sweep(sweep, output_h5=h5_path, output_csv=csv, execution=execution,
                                progress=json_out != STDOUT)
             write_json(json_out, _summary_dict(result))
@@ -106,10 +110,15 @@ def iter_command(
             raise InputError(source, field, exc.expected, exc.got) from exc
         except SchedulerError as exc:
             raise scheduler_error(exc, "command line", "--scheduler") from exc
+        except ResultWriteError as exc:  # the option as typed; a full disk is exit 1
+            option = next((o for o, p in options.items() if str(p) == exc.path), "-o/--output")
+            raise unwritable(option, Path(exc.path), exc.error) from exc
         except ResultFileError as exc:
             raise InputError(exc.path, exc.field, exc.expected, exc.got) from exc
         except IterError as exc:  # AllCasesFailed among them: exit 1
             raise TappError(str(exc)) from exc
+        finally:
+            remove_empty_folders(created)  # made for results that were never written
 
     run_guarded(run)
 

@@ -28,6 +28,7 @@ from tapp.cli.common import (
     echo_error,
     json_file,
     print_json,
+    progress_bar,
     run_guarded,
     write_json,
 )
@@ -49,8 +50,7 @@ app.add_typer(tape_app, name="tape")
 
 def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: str | None = None
                        ) -> tuple[Simulation, float, Scenario]:
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
     from tapp.tracking.scenario import read_scenario
     from tapp.tracking.simulate import simulate as run_simulation
@@ -59,8 +59,7 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: st
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
         "{task.completed}/{task.total}"), TimeElapsedColumn())
-    with Progress(*columns, console=Console(stderr=True), disable=quiet,
-                  transient=True) as bar:
+    with progress_bar(*columns, quiet=quiet) as bar:
         task = bar.add_task("TAPP I", total=None)
 
         def progress(stage: str, done: int, total: int) -> None:
@@ -76,10 +75,12 @@ def _outputs(output: Path, sim: Simulation, oem: Path | None,
     """The tape, the OEM and the TDM, to be written together or not at all; the tape's size
     goes into ``sizes["bytes"]`` as soon as it is written (before the outputs added later)."""
     from tapp.outputs import OutputSet
-    from tapp.tape.t13_hdf5 import write_t13
+    from tapp.tape.t13_hdf5 import t13_file_writer
+
+    write_t13 = t13_file_writer(sim.tape, source=str(output))
 
     def write_tape(tmp: Path) -> None:
-        write_t13(tmp, sim.tape)
+        write_t13(tmp)
         if sizes is not None:
             sizes["bytes"] = tmp.stat().st_size
 

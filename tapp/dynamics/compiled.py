@@ -49,7 +49,8 @@ STATUS = {
 }
 
 _CFLAGS = ("-O2", "-fPIC", "-shared", "-fno-math-errno")
-_DOUBLE_P = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+#: A C ``double *``, passed as an address (an array's ``.ctypes.data``).
+_DOUBLE_P = ctypes.c_void_p
 
 
 class CompileError(TappError):
@@ -121,11 +122,17 @@ class CompiledPropagator:
         t_out_s = np.ascontiguousarray(t_out_s, dtype=float)
         y_out = np.zeros((t_out_s.size, y0.size))
         stats = np.zeros(3)
-        status = self.fn(which, y0.size, float(t0_s), y0, t_out_s.size, t_out_s, y_out,
-                         np.ascontiguousarray(q, dtype=float) if len(q) else np.zeros(1),
-                         np.ascontiguousarray(c, dtype=float), eph.coeffs, eph.n_series,
-                         eph.n_segments, eph.n_coef, eph.t0_s, eph.h_s, rtol, atol, n_err,
-                         max_steps, stats)
+        q = np.ascontiguousarray(q, dtype=float) if len(q) else np.zeros(1)
+        c = np.ascontiguousarray(c, dtype=float)
+        coeffs = np.ascontiguousarray(eph.coeffs, dtype=float)
+        # The arrays go as addresses, taken here: ctypes converts plain numbers in C, where a
+        # signal handler cannot run, whereas an ndpointer's conversion runs Python code, and
+        # ctypes turns what a handler raises there (the CLI's SIGTERM and Ctrl-C) into an
+        # ArgumentError (a traceback instead of a clean stop).
+        status = self.fn(which, y0.size, float(t0_s), y0.ctypes.data, t_out_s.size,
+                         t_out_s.ctypes.data, y_out.ctypes.data, q.ctypes.data, c.ctypes.data,
+                         coeffs.ctypes.data, eph.n_series, eph.n_segments, eph.n_coef,
+                         eph.t0_s, eph.h_s, rtol, atol, n_err, max_steps, stats.ctypes.data)
         return int(status), y_out, stats
 
 
@@ -135,10 +142,9 @@ def _load(path: Path) -> CompiledPropagator:
     fn = lib.tapp_integrate
     fn.restype = ctypes.c_int
     fn.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_double, _DOUBLE_P, ctypes.c_int,
-                   _DOUBLE_P, _DOUBLE_P, _DOUBLE_P, _DOUBLE_P,
-                   np.ctypeslib.ndpointer(dtype=np.float64), ctypes.c_int, ctypes.c_int,
-                   ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_double,
-                   ctypes.c_double, ctypes.c_int, ctypes.c_long, _DOUBLE_P]
+                   _DOUBLE_P, _DOUBLE_P, _DOUBLE_P, _DOUBLE_P, _DOUBLE_P, ctypes.c_int,
+                   ctypes.c_int, ctypes.c_int, ctypes.c_double, ctypes.c_double,
+                   ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_long, _DOUBLE_P]
     return CompiledPropagator(path, fn)
 
 

@@ -51,6 +51,7 @@ from tapp.frames.orientation import check_model
 from tapp.frames.time import Epoch
 from tapp.measurements.stations import Station
 from tapp.od.observations import MADE_UNDER_KEYS, MadeUnder, Observations
+from tapp.tape import hdf5io
 
 _COLUMNS = {"range": "range_km", "range_rate": "range_rate_km_s", "azimuth": "azimuth_rad",
             "elevation": "elevation_rad"}
@@ -162,7 +163,7 @@ def observations_file_writer(path: Path, obs: Observations, *, epoch: Epoch | No
                                   *(repr(float(v)) for v in row)])
     else:
         def write(tmp: Path) -> None:
-            with h5py.File(tmp, "w") as f:
+            with hdf5io.create(tmp) as f:
                 f.attrs.update(format=FORMAT, version=VERSION, tapp_version=__version__,
                                created_utc=datetime.now(UTC).isoformat(), span_s=obs.end_s)
                 if comments:

@@ -6,8 +6,10 @@ between the three commands (the T13 tape is written, then read lazily by the pro
 T32 tape is written, then read back by the guidance study), so the pipeline gives the same
 numbers as the three commands run one after another (tested).
 
-Outputs (:data:`OUTPUTS`) are written into a hidden directory beside ``out_dir`` and renamed
-to it at the end: a failed or interrupted run leaves no partial directory.
+Outputs (:data:`OUTPUTS`) are written into a hidden directory ``.NAME.<random>.tmp`` beside
+``out_dir`` and renamed to it at the end: a failed or interrupted run leaves no partial
+directory, and no folder it made to hold ``out_dir``; the hidden directory of an earlier run
+that was killed (SIGKILL) is removed by the next run to the same ``out_dir``.
 """
 
 from __future__ import annotations
@@ -33,8 +35,8 @@ from tapp.processor.deck import Deck
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.schema import validate
-from tapp.tape.t13_hdf5 import write_t13
-from tapp.tape.t32_hdf5 import read_t32, write_t32
+from tapp.tape.t13_hdf5 import t13_file_writer
+from tapp.tape.t32_hdf5 import read_t32, t32_file_writer
 from tapp.tracking.scenario import Scenario, parse_scenario
 from tapp.tracking.simulate import simulate
 
@@ -72,12 +74,15 @@ def _nothing(stage: str, done: int, total: int) -> None:
 
 
 def check_out_dir(out_dir: Path) -> Path:
-    """Return ``out_dir`` if it does not exist or is an empty directory, else raise.
+    """Return ``out_dir`` if it does not exist or is an empty directory in a folder that can
+    be written, else raise.
 
     Raises
     ------
     InputError
-        Naming ``-o`` : a file, or a directory with something in it (never overwritten).
+        Naming ``-o`` : a file, a directory with something in it (never overwritten), a
+        symbolic link (the run's directory is renamed into place: it would replace the
+        link), or a path in a folder that is a file or cannot be written.
     """
     return check_new_directory(out_dir, "-o/--output", _NEVER_OVERWRITES)
 
@@ -89,7 +94,10 @@ def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | No
     Raises
     ------
     InputError
-        From any part (naming its file or the pipeline file and the part), or ``out_dir``.
+        From any part (naming its file or the pipeline file and the part), or ``out_dir``
+        (naming ``-o``, also when it cannot be written).
+    WriteError
+        ``out_dir`` could not be written for want of room, or a device error.
     """
     with new_directory(out_dir, "-o/--output", _NEVER_OVERWRITES) as work:
         result = _run(pipeline, work, execution, plots, progress)
@@ -121,7 +129,7 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
     sim = simulate(scenario, progress=lambda stage, done, total: progress(
         f"TAPP I: {stage}", done, total))
     t13_path = work / OUTPUTS["t13"]
-    write_t13(t13_path, sim.tape)
+    t13_file_writer(sim.tape, source=t13_path.name)(t13_path)
     wall["simulate"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -132,8 +140,8 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
                                               str(t13_path.name)), "utf-8")
     (work / OUTPUTS["process_json"]).write_text(json.dumps(content), "utf-8")
     t32_path = work / OUTPUTS["t32"]
-    write_t32(t32_path, build_t32(run, plan, header, t32_provenance(
-        header, deck, pipeline.deck.source, t13_path.name)))
+    t32_file_writer(build_t32(run, plan, header, t32_provenance(
+        header, deck, pipeline.deck.source, t13_path.name)), source=t32_path.name)(t32_path)
     wall["process"] = time.perf_counter() - start
 
     start = time.perf_counter()

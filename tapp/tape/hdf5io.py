@@ -67,9 +67,28 @@ def provenance_attrs() -> dict[str, str]:
             "created_utc": datetime.now(UTC).isoformat(timespec="seconds")}
 
 
-def create(path: Path) -> h5py.File:
-    """Open ``path`` for writing (truncating) with the object formats of :data:`LIBVER`."""
-    return h5py.File(path, "w", libver=LIBVER)
+@contextmanager
+def create(path: Path) -> Iterator[h5py.File]:
+    """Yield a new HDF5 file (object formats of :data:`LIBVER`) built in memory; on leaving the
+    block, write it to ``path`` (truncating) in one plain write.
+
+    The HDF5 library never writes to the disk itself: when one of its writes fails (a full
+    disk) it crashes the process while closing the file (a segmentation fault after pages
+    of tracebacks, in 24 of 24 tries writing a T13 tape onto a full tmpfs), where a plain
+    write raises an OSError that the caller turns into one line (24 of 24). The whole file
+    is held in memory while it is built (no more than the tape's own arrays: large
+    datasets are compressed).
+
+    Raises
+    ------
+    OSError
+        ``path`` cannot be written (nothing is written if the block raises).
+    """
+    with h5py.File(path.name, "w", libver=LIBVER, driver="core", backing_store=False) as f:
+        yield f
+        f.flush()
+        image = f.id.get_file_image()
+    path.write_bytes(image)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -51,10 +51,13 @@ def not_a_mapping(azimuth_deg: float) -> list[float]:
 
 
 def hanging_body(azimuth_deg: float, hang_at_deg: float) -> dict[str, float]:
-    """Return twice the azimuth; never return at ``hang_at_deg`` (sleeps an hour)."""
+    """Return twice the azimuth; never return at ``hang_at_deg`` (makes a temporary folder,
+    as a real program would, then sleeps an hour)."""
     if azimuth_deg == hang_at_deg:
+        import tempfile
         import time
 
+        tempfile.mkdtemp(prefix="hanging-")
         time.sleep(3600.0)
     print("printed by the body, not an output")
     return {"double_deg": 2.0 * azimuth_deg}

@@ -6,6 +6,7 @@ import math
 import os
 import socket
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -17,6 +18,7 @@ from iter import (
     CallableBody,
     Case,
     CaseStatus,
+    ClusterError,
     Execution,
     Loop,
     ProgramBody,
@@ -253,6 +255,7 @@ def test_an_automatic_sweep_worth_a_cluster_probes_here_then_runs_on_one_blas_th
     ({"scheduler": "localhost"}, "scheduler"),
     ({"scheduler": "tcp://host:port"}, "scheduler"),
     ({"serial": True, "workers": 2}, "serial"),
+    ({"serial": True, "workers": 0}, "workers"),  # a bad count before a conflict
     ({"scheduler": "tcp://h:8786", "workers": 2}, "workers"),
     ({"workers": 0}, "workers"),
     ({"chunk_size": 0}, "chunk_size"),
@@ -289,8 +292,19 @@ def test_outputs_named_like_reserved_columns_are_prefixed() -> None:
                    "rms": 2.0}
 
 
-def test_a_callable_that_never_returns_is_stopped_at_its_timeout(bodies):
-    """Issue 10, class 7: a hanging callable fails its case (with its time); others run."""
+@pytest.fixture
+def temporary_base(tmp_path, monkeypatch) -> Path:
+    """An empty folder that is tempfile's, and TMPDIR of the processes started."""
+    base = tmp_path / "tmp"
+    base.mkdir()
+    monkeypatch.setenv("TMPDIR", str(base))
+    monkeypatch.setattr(tempfile, "tempdir", str(base))
+    return base
+
+
+def test_a_callable_that_never_returns_is_stopped_at_its_timeout(bodies, temporary_base):
+    """Issue 10, class 7: a hanging callable fails its case (with its time); others run; the
+    temporary folder it made before it was stopped is gone (issue 23)."""
     body = CallableBody("iter_bodies:hanging_body", {"hang_at_deg": 99.0}, timeout_s=3.0)
     loop = Loop(type=1, names=("azimuth_deg",), sets=2, vary=(96.0, 99.0))
     start = time.perf_counter()
@@ -300,6 +314,26 @@ def test_a_callable_that_never_returns_is_stopped_at_its_timeout(bodies):
     assert rows[1].status is CaseStatus.FAILED
     assert rows[1].error == "CaseTimeout: iter_bodies:hanging_body timed out after 3 s"
     assert 3.0 <= rows[1].elapsed_s < 15.0
+    assert list(temporary_base.iterdir()) == []
+
+
+def test_a_local_cluster_keeps_its_scratch_space_in_a_temporary_folder_it_removes(
+        temporary_base):
+    with local_cluster(1) as address:
+        assert address.startswith("tcp://")
+        workers = [p for p in temporary_base.glob("dask-cluster-*/dask-scratch-space/*")
+                   if p.is_dir() and p.name.startswith("worker-")]
+        assert len(workers) == 1, sorted(temporary_base.rglob("*"))
+    assert list(temporary_base.iterdir()) == []
+
+
+def test_a_local_cluster_that_does_not_start_is_one_error(temporary_base, monkeypatch):
+    monkeypatch.setattr(sys, "executable", "/bin/false")  # exits 1 at once, says nothing
+    with pytest.raises(ClusterError) as info, local_cluster(2):
+        pass
+    assert str(info.value) == ("a local Dask cluster of 2 workers did not start (its process "
+                               "exited with status 1): (nothing logged)")
+    assert list(temporary_base.iterdir()) == []
 
 
 def test_a_callable_with_a_timeout_fails_as_it_would_in_process(bodies):

@@ -2,14 +2,22 @@
 
 from __future__ import annotations
 
+import errno
 import os
 from pathlib import Path
 
 import pytest
 
 from tapp.atomic import atomic_write
-from tapp.errors import InputError
-from tapp.outputs import OutputSet, check_paths, stale_temporaries, temporary_name
+from tapp.errors import InputError, WriteError
+from tapp.outputs import (
+    OutputSet,
+    check_paths,
+    remove_stale_temporaries,
+    stale_temporaries,
+    temporary_name,
+    unwritable,
+)
 
 
 def test_an_output_equal_to_an_input_is_refused_naming_both_options(tmp_path: Path) -> None:
@@ -102,3 +110,47 @@ def test_stale_temporaries_of_a_killed_run_are_removed_on_the_next_write(tmp_pat
     assert stale_temporaries(target) == sorted(stale)
     atomic_write(target, lambda tmp: tmp.write_text("new"))
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([other.name, target.name])
+
+
+def test_a_killed_pipeline_s_hidden_folders_are_removed_whole_on_the_next_write(
+        tmp_path: Path) -> None:
+    target = tmp_path / "out"
+    stale = [temporary_name(target), tmp_path / ".out.tmp-k2j4_x9q"]  # now, and before
+    for folder in stale:
+        (folder / "plots").mkdir(parents=True)
+        (folder / "run.t13.h5").write_text("left by a kill")
+    other = tmp_path / ".outer.0123456789abcdef.tmp"  # another target's
+    other.mkdir()
+    assert stale_temporaries(target) == sorted(stale)
+    remove_stale_temporaries(target)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [other.name]
+
+
+def test_a_failed_write_leaves_no_folder_it_made(tmp_path: Path) -> None:
+    (tmp_path / "a").mkdir()  # there before: kept
+
+    def no_space(tmp: Path) -> None:
+        tmp.write_text("half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    outputs = OutputSet()
+    outputs.add("--oem", tmp_path / "a" / "b" / "c" / "run.oem", lambda tmp: tmp.write_text("x"))
+    outputs.add("-o/--output", tmp_path / "a" / "b" / "d" / "run.h5", no_space)
+    with pytest.raises(WriteError) as info:
+        outputs.commit()
+    assert str(info.value) == (f"-o/--output: {tmp_path / 'a' / 'b' / 'd' / 'run.h5'}: not "
+                               "written (No space left on device)")
+    assert [p.relative_to(tmp_path) for p in tmp_path.rglob("*")] == [Path("a")]
+
+
+@pytest.mark.parametrize(("code", "error"), [
+    (errno.ENOSPC, WriteError), (errno.EDQUOT, WriteError), (errno.EIO, WriteError),
+    (errno.EACCES, InputError), (errno.EROFS, InputError), (errno.EPERM, InputError),
+    (errno.ENOTDIR, InputError),
+])
+def test_a_full_disk_is_the_machine_s_failure_and_a_read_only_folder_the_input_s(
+        tmp_path: Path, code: int, error: type) -> None:
+    made = unwritable("--tape", tmp_path / "run.t32.h5", OSError(code, os.strerror(code)))
+    assert type(made) is error
+    assert str(made).startswith(f"--tape: {tmp_path / 'run.t32.h5'}: ")
+    assert os.strerror(code) in str(made)

@@ -5,8 +5,11 @@ tests/test_kill.py."""
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
+import os
 import shutil
+import tempfile
 from pathlib import Path
 
 import h5py
@@ -16,13 +19,15 @@ from typer.testing import CliRunner
 
 from iter.results import values_digest
 from tapp.cli import app
-from tapp.cli.common import EXIT_INPUT
+from tapp.cli.common import EXIT_FAILURE, EXIT_INPUT, run_folder
 from tapp.examples import FOLDER as EXAMPLES
+from tests.faults import read_only_folder
 
 ROOT = Path(__file__).resolve().parents[3]
 SCENARIOS = EXAMPLES
 LEO = SCENARIOS / "leo_equatorial.toml"
 SWEEP = SCENARIOS / "iter_azimuth_type1.toml"
+PIPELINE = SCENARIOS / "pipeline_deep_space.toml"
 runner = CliRunner()
 
 
@@ -111,14 +116,14 @@ def test_a_failed_tape_write_leaves_the_old_oem_and_tape_and_no_temporary(
     tape.write_text("old tape")
     oem.write_text("old oem")
 
-    def no_space(path, tape_obj) -> None:
+    def no_space(path: Path) -> None:
         Path(path).write_bytes(b"half a tape")
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr("tapp.tape.t13_hdf5.write_t13", no_space)
-    line = _refused(["simulate", str(LEO), "-o", str(tape), "--oem", str(oem)])
-    assert line == (f"error: -o/--output: {tape}: expected a writable file (got 'No space "
-                    "left on device')")
+    monkeypatch.setattr("tapp.tape.t13_hdf5.t13_file_writer", lambda tape, source: no_space)
+    line = _refused(["simulate", str(LEO), "-o", str(tape), "--oem", str(oem)],
+                    code=EXIT_FAILURE)  # the disk's failure, not the input's
+    assert line == f"error: -o/--output: {tape}: not written (No space left on device)"
     assert (tape.read_text(), oem.read_text()) == ("old tape", "old oem")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.oem", "run.t13.h5"]
 
@@ -131,6 +136,55 @@ def test_temporaries_left_by_a_killed_run_are_removed_by_the_next(tmp_path: Path
     res = runner.invoke(app, ["simulate", str(LEO), "-o", str(tape), "--oem", str(oem)])
     assert res.exit_code == 0, res.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.oem", "run.t13.h5"]
+
+
+def test_the_run_folder_goes_with_the_run_and_a_killed_run_s_with_the_next(
+        tmp_path: Path, monkeypatch) -> None:
+    base = tmp_path / "tmp"
+    base.mkdir()
+    monkeypatch.setenv("TMPDIR", str(base))
+    monkeypatch.setattr(tempfile, "tempdir", str(base))
+    killed = base / "tapp-run-killed00"  # its run was killed: nothing holds its lock
+    (killed / "dask-cluster-x" / "dask-scratch-space").mkdir(parents=True)
+    live = base / "tapp-run-livelive"  # a run still going holds its lock
+    live.mkdir()
+    lock = os.open(live, os.O_RDONLY)
+    fcntl.flock(lock, fcntl.LOCK_EX)
+    try:
+        with run_folder() as folder:
+            assert folder.parent == base and folder.name.startswith("tapp-run-")
+            assert tempfile.gettempdir() == os.environ["TMPDIR"] == str(folder)
+            (folder / "scratch").mkdir()  # what the run makes there
+            assert sorted(p.name for p in base.iterdir()) == sorted([folder.name, live.name])
+        assert (os.environ["TMPDIR"], tempfile.gettempdir()) == (str(base), str(base))
+        assert [p.name for p in base.iterdir()] == [live.name]
+        assert runner.invoke(app, ["--version"]).exit_code == 0
+        assert [p.name for p in base.iterdir()] == [live.name]
+    finally:
+        os.close(lock)
+    assert runner.invoke(app, ["--version"]).exit_code == 0
+    assert list(base.iterdir()) == []
+
+
+def test_a_run_removes_no_folder_that_is_not_provably_a_killed_run_s(tmp_path: Path,
+                                                                      monkeypatch) -> None:
+    """Named like a run folder, but a symbolic link (to the user's data), or another
+    user's (made so when the test runs as root): both kept, and what the link points to."""
+    base = tmp_path / "tmp"
+    data = tmp_path / "data"
+    (data / "keep").mkdir(parents=True)
+    base.mkdir()
+    monkeypatch.setenv("TMPDIR", str(base))
+    monkeypatch.setattr(tempfile, "tempdir", str(base))
+    (base / "tapp-run-link0000").symlink_to(data)
+    kept = ["tapp-run-link0000"]
+    if os.geteuid() == 0:
+        (base / "tapp-run-other000").mkdir()
+        os.chown(base / "tapp-run-other000", 65534, 65534)
+        kept.append("tapp-run-other000")
+    assert runner.invoke(app, ["--version"]).exit_code == 0
+    assert sorted(p.name for p in base.iterdir()) == kept
+    assert [p.name for p in data.iterdir()] == ["keep"]
 
 
 # --- class 6: tracebacks and exhaustion --------------------------------------------------------
@@ -164,6 +218,54 @@ def test_temporaries_left_by_a_killed_run_are_removed_by_the_next(tmp_path: Path
 def test_huge_sizes_and_bad_options_are_one_line_before_any_work(args: list[str],
                                                                  says: str) -> None:
     _refused(args, says=says)
+
+
+@pytest.mark.parametrize("args", [
+    ["pipeline", str(PIPELINE), "-o", "{d}/out"],
+    ["guide", "{d}/run.t32.h5", str(SCENARIOS / "tapp2_deep_space.toml"), "--samples", "10",
+     "--seed", "1"],
+    ["iter", str(SWEEP), "-o", "{d}/r.h5"],
+])
+def test_workers_0_is_a_bad_worker_count_before_a_conflict_with_serial(
+        tmp_path: Path, args: list[str]) -> None:
+    line = _refused([a.format(d=tmp_path) for a in args] + ["--workers", "0", "--serial"])
+    assert "--workers" in line and "expected a whole number >= 1 (got 0)" in line, line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_pipeline_directory_inside_a_file_names_the_option_and_the_file(
+        tmp_path: Path) -> None:
+    scenario = tmp_path / "deep_space.toml"
+    shutil.copy(SCENARIOS / "deep_space.toml", scenario)
+    line = _refused(["pipeline", str(PIPELINE), "-o", str(scenario / "out")])
+    assert line == (f"error: -o/--output: {scenario / 'out'}: expected a path inside a folder "
+                    f"({scenario} is a file)")  # was "(got 'File exists')", naming the file
+
+
+def test_a_pipeline_directory_that_is_a_symbolic_link_is_refused_before_any_work(
+        tmp_path: Path) -> None:
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "empty")
+    line = _refused(["pipeline", str(PIPELINE), "-o", str(tmp_path / "link")])
+    assert line == ("error: -o/--output: directory: expected a new or empty directory, not a "
+                    "symbolic link (the finished run is renamed into place) "
+                    f"(got '{tmp_path / 'link'}')")  # was 'Not a directory', after the run
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["empty", "link"]
+
+
+@pytest.mark.parametrize("args", [
+    ["pipeline", str(PIPELINE), "-o", "{ro}/out"],
+    ["simulate", str(LEO), "-o", "{ro}/run.t13.h5"],
+    ["iter", str(SWEEP), "--serial", "-o", "{ro}/r.h5"],
+])
+def test_a_read_only_output_folder_is_named_by_its_option_never_by_a_temporary(
+        tmp_path: Path, args: list[str]) -> None:
+    with read_only_folder(tmp_path / "ro") as ro:
+        line = _refused([a.format(ro=ro) for a in args])
+        assert line.startswith(f"error: -o/--output: {ro}/"), line
+        assert f"expected a path in a writable folder ({ro} is not writable)" in line
+        assert ".tmp" not in line
+        assert list(ro.iterdir()) == []
 
 
 def test_a_search_horizon_of_1e308_s_is_refused_before_allocating_its_scan(

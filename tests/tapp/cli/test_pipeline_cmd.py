@@ -7,6 +7,7 @@ tapp2_deep_space.toml: the shipped study, made small.
 
 from __future__ import annotations
 
+import errno
 import json
 import logging
 import os
@@ -22,6 +23,7 @@ import tapp.cli  # noqa: F401  (registers every command)
 from tapp.cli.common import app
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.pipeline.run import OUTPUTS, tracking_case
+from tests.faults import fill, mounted_tmpfs
 
 runner = CliRunner()
 SCENARIOS = EXAMPLES
@@ -66,9 +68,18 @@ def _ok(args: list[str]) -> str:
     return res.stdout
 
 
+#: Hidden directories of earlier runs to the same -o that were killed (SIGKILL): this
+#: version's, and those of versions that named them with tempfile.mkdtemp.
+KILLED_RUNS = (".run.0123456789abcdef.tmp", ".run.tmp-k2j4_x9q")
+
+
 @pytest.fixture(scope="module")
 def piped(parts, scheduler, tmp_path_factory) -> Path:
+    """A run of the pipeline, into a folder where killed runs left their directories."""
     out = tmp_path_factory.mktemp("piped") / "run"
+    for name in KILLED_RUNS:
+        (out.parent / name / "plots").mkdir(parents=True)
+        (out.parent / name / OUTPUTS["t13"]).write_text("half a tape")
     _ok(["pipeline", str(parts["pipeline"]), "-o", str(out), "--scheduler", scheduler])
     return out
 
@@ -148,6 +159,37 @@ def test_bad_input_is_one_line_exit_2_and_no_directory(parts, tmp_path: Path, ed
     assert res.exit_code == 2, (res.output, res.exception)
     assert len(lines) == 1 and fragment in lines[0], lines
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.toml"]
+
+
+def test_the_directories_that_killed_runs_left_are_removed_by_the_next(piped) -> None:
+    assert sorted(os.listdir(piped.parent)) == ["run"]
+
+
+def test_a_failed_run_leaves_no_directory_and_no_folder_it_made(parts, tmp_path: Path,
+                                                                monkeypatch) -> None:
+    def no_space(pipeline, work: Path, *args) -> None:
+        (work / OUTPUTS["t13"]).write_bytes(b"half a tape")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr("tapp.pipeline.run._run", no_space)
+    out = tmp_path / "a" / "b" / "run"
+    res = runner.invoke(app, ["pipeline", str(parts["pipeline"]), "-o", str(out), "--serial"])
+    assert res.exit_code == 1, (res.output, res.exception)
+    assert res.stderr.splitlines() == [f"error: -o/--output: {out}: not written (No space "
+                                       "left on device)"]
+    assert list(tmp_path.iterdir()) == []  # was a/ and a/b/
+
+
+def test_a_run_onto_a_full_disk_is_one_line_and_leaves_nothing(parts, tmp_path: Path) -> None:
+    with mounted_tmpfs(tmp_path / "full") as full:
+        fill(full, 20_000)
+        out = full / "a" / "run"
+        res = runner.invoke(app, ["pipeline", str(parts["pipeline"]), "-o", str(out),
+                                  "--serial"])
+        assert res.exit_code == 1, (res.output, res.exception)
+        assert res.stderr.splitlines() == [f"error: -o/--output: {out}: not written (No "
+                                           "space left on device)"]  # was a traceback
+        assert sorted(os.listdir(full)) == ["fill"]
 
 
 def test_an_earlier_run_is_never_overwritten(parts, piped) -> None:
