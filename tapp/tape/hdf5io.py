@@ -289,6 +289,17 @@ class Reader:
 
     # -- datasets ------------------------------------------------------------------------
 
+    def format_version(self, fmt: str, supported: tuple[int, ...]) -> int:
+        """Check ``attrs/format`` is ``fmt`` and ``attrs/version`` one of ``supported``;
+        return the version."""
+        found = self.attr("format", str)
+        if found != fmt:
+            self.check.fail("attrs/format", f"format = {fmt!r}", repr(found))
+        version = self.attr("version", int)
+        if version not in supported:
+            self.check.fail("attrs/version", f"a supported version {supported}", version)
+        return version
+
     def dataset_or_group(self, name: str) -> h5py.Dataset | h5py.Group:
         if not self.has(name):
             self.check.fail(name, "this dataset present")

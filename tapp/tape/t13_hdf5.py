@@ -336,12 +336,7 @@ def gram_stack(factors: np.ndarray) -> np.ndarray:
 def _reader(f: h5py.File, source: str) -> tuple[Reader, int]:
     """Check format and version; return the reader (checksums required from version 2)."""
     r = Reader(f, source, checksums=False)
-    fmt = r.attr("format", str)
-    if fmt != FORMAT:
-        r.check.fail("attrs/format", f"format = {FORMAT!r}", repr(fmt))
-    version = r.attr("version", int)
-    if version not in SUPPORTED_VERSIONS:
-        r.check.fail("attrs/version", f"a supported version {SUPPORTED_VERSIONS}", version)
+    version = r.format_version(FORMAT, SUPPORTED_VERSIONS)
     if version == 1:
         warnings.warn(f"{source}: T13 version 1 carries no checksums: corruption cannot be "
                       "detected", UserWarning, stacklevel=3)

@@ -308,12 +308,7 @@ def _v1_adjoint(r: Reader, name: str, transition: np.ndarray) -> np.ndarray:
 
 
 def _read(r: Reader) -> T32:
-    fmt = r.attr("format", str)
-    if fmt != FORMAT:
-        r.check.fail("attrs/format", f"format = {FORMAT!r}", repr(fmt))
-    version = r.attr("version", int)
-    if version not in SUPPORTED_VERSIONS:
-        r.check.fail("attrs/version", f"a supported version {SUPPORTED_VERSIONS}", version)
+    version = r.format_version(FORMAT, SUPPORTED_VERSIONS)
     if version == 1:
         warnings.warn(f"{r.check.source}: T32 version 1 carries the covariances, not their "
                       "factors: they hold only the digits their products kept (the real-world "
