@@ -18,7 +18,7 @@ def examples_cmd(
     """Copy every example input file (scenarios, decks, guidance, pipeline, sweeps, SEARCH,
     the study) into DIRECTORY, and list them with their kind (tapp schema KIND)."""
     from tapp.examples import FILES, copy_examples
-    from tapp.outputs import check_paths
+    from tapp.io.outputs import check_paths
 
     def body() -> None:
         check_paths({}, {"--json": json_file(json_out)})

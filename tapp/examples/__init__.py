@@ -18,7 +18,7 @@ import shutil
 from importlib.resources import files
 from pathlib import Path
 
-from tapp.outputs import new_directory
+from tapp.io.outputs import new_directory
 
 #: The shipped files and the kind of input each is (``tapp schema KIND``), in the order a new
 #: user meets them.

@@ -6,10 +6,10 @@ commands and the study runner share these functions so a single run and the full
 the same data.
 
 The study file (the shipped ``approx_stm.toml``, :data:`tapp.examples.STUDY_FILE`) is
-validated as a whole against one schema, :class:`StudyFile` (``tapp.schema``: unknown keys
+validated as a whole against one schema, :class:`StudyFile` (``tapp.io.schema``: unknown keys
 and sections are errors, booleans are not numbers, ...): ``epoch``, ``[orbits.NAME]``
-(:class:`tapp.orbits.OrbitTable`), ``[stations.NAME]`` and ``[networks]``
-(:mod:`tapp.stations_file`), ``[tracking]``, ``[noise.fit]`` (:mod:`tapp.noise_file`),
+(:class:`tapp.io.orbits.OrbitTable`), ``[stations.NAME]`` and ``[networks]``
+(:mod:`tapp.io.stations_file`), ``[tracking]``, ``[noise.fit]`` (:mod:`tapp.io.noise_file`),
 ``[initial_offset]``, ``[dc_settings]``, ``[[dc]]``, ``[ekf]`` with ``[ekf.apriori]``,
 ``[rsig]``, ``[rate_vs_arc]`` and ``[rate_vs_inclination]`` (reference:
 ``docs/reference/study.md``). The runs name their models as every file does: ``gravity`` (the
@@ -43,18 +43,18 @@ from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import ForceModel, Propagator, earth_model
 from tapp.errors import InputError
 from tapp.examples import STUDY_FILE
-from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.frames.orientation import EarthOrientation, check_model, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.io.models_file import GravityName
+from tapp.io.noise_file import FitTable
+from tapp.io.orbits import OrbitTable, parse_orbit
+from tapp.io.schema import EarthOrientationName, EopSource, Invalid, Schema, UtcDate, validate
+from tapp.io.stations_file import StationsSection, load_network
+from tapp.io.tomlfile import read_toml
+from tapp.measurements.observations import MadeUnder, Observations, simulate
 from tapp.measurements.stations import Station
-from tapp.models_file import GravityName
-from tapp.noise_file import FitTable
 from tapp.od.batch import MAX_ITERATIONS
-from tapp.od.observations import MadeUnder, Observations, simulate
-from tapp.orbits import OrbitTable, parse_orbit
-from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, UtcDate, validate
-from tapp.stations_file import StationsSection, load_network
-from tapp.tomlfile import read_toml
+from tapp.orbit.elements import cartesian_to_elements, elements_to_cartesian
 
 Positive = Annotated[float, Field(gt=0)]
 #: The observable kinds of the study's tracking, in the order of ``Tracking.sigma``.
@@ -397,7 +397,7 @@ def check_made_under(obs: Observations, orient: EarthOrientation, source: str,
     another are off by the difference of the station places (31.5 km at Goldstone between
     iau2006 and gmst on 2026-01-01), and a DC on them settles tens of km from the orbit
     (41.5 km for ``tapp simulate``'s TDM of ``leo_equatorial.toml`` fitted under
-    the study's gmst). The file's record (``obs.made_under``, :mod:`tapp.od.obsfile`):
+    the study's gmst). The file's record (``obs.made_under``, :mod:`tapp.io.obsfile`):
 
     - states the run's model, EOP source and frame: None;
     - states another, and the run's model is the study file's (``chosen`` False): refused,
@@ -481,7 +481,7 @@ def initial_estimate(x_true: np.ndarray, off: Offset) -> np.ndarray:
 
 def true_orbit(spec: str, path: Path = STUDY_FILE, *, allow_subsurface: bool = False
                ) -> np.ndarray:
-    """Return the true initial state of an orbit name or spec (see :mod:`tapp.orbits`).
+    """Return the true initial state of an orbit name or spec (see :mod:`tapp.io.orbits`).
 
     ``allow_subsurface`` accepts an orbit whose perigee is below the Earth's surface.
     """

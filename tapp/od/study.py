@@ -11,7 +11,7 @@ the state model at the end of the arc. The ρ curves use noise-free observations
 the times, stations and weights only). Every run uses the study's one Earth orientation
 (``earth_orientation`` and ``eop`` of the file, or the model passed in), for the data and the
 estimators alike; the results record it. The results are plain dataclasses;
-:mod:`tapp.report.approx_stm` turns them into the report.
+:mod:`tapp.report.od` turns them into the report.
 """
 
 from __future__ import annotations
@@ -26,13 +26,13 @@ from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator
 from tapp.errors import TooFewMeasurementsError
 from tapp.examples import STUDY_FILE
-from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
+from tapp.io.stations_file import load_network
 from tapp.od import setup
 from tapp.od.batch import DCResult, DCSettings, differential_correction
 from tapp.od.ekf import EKFResult, extended_kalman_filter
 from tapp.od.rate import PredictedRate, predicted_rate
 from tapp.od.rsig import RSignature, r_signature
-from tapp.stations_file import load_network
+from tapp.orbit.elements import cartesian_to_elements, elements_to_cartesian
 
 
 @dataclass(frozen=True, slots=True)

@@ -22,10 +22,10 @@ from scipy.integrate import solve_ivp
 from tapp.dynamics import Propagator
 from tapp.dynamics.equations import initial_augmented, split_augmented
 from tapp.frames.orientation import MODELS, orientation_for
+from tapp.measurements.observations import predict
 from tapp.od import setup
 from tapp.od.batch import _linearise, differential_correction
 from tapp.od.ekf import extended_kalman_filter
-from tapp.od.observations import predict
 from tapp.od.study import planned_cases, run_study
 from tests.bench.common import Section, time_calls
 

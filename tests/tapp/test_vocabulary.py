@@ -13,11 +13,11 @@ import pytest
 
 from tapp.errors import InputError
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.models_file import ModelTable
+from tapp.io.models_file import ModelTable
+from tapp.io.orbits import OrbitTable
+from tapp.io.tomlfile import read_toml
 from tapp.od.setup import study_file
-from tapp.orbits import OrbitTable
-from tapp.targeting import SearchFile, scenario_search
-from tapp.tomlfile import read_toml
+from tapp.targeting.program import SearchFile, scenario_search
 from tapp.tracking.scenario import ScenarioFile, parse_scenario, read_scenario
 
 

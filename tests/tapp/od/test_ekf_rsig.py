@@ -6,10 +6,10 @@ import numpy as np
 
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator, earth_model
-from tapp.frames.elements import cartesian_to_elements, kepler_states
 from tapp.od import setup
 from tapp.od.ekf import extended_kalman_filter
 from tapp.od.rsig import r_of_stm, r_signature
+from tapp.orbit.elements import cartesian_to_elements, kepler_states
 
 
 def test_ekf_with_matching_models_reaches_the_noise_level() -> None:

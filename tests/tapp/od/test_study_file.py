@@ -12,8 +12,8 @@ import pytest
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.errors import InputError
 from tapp.examples import STUDY_FILE
-from tapp.frames.elements import cartesian_to_elements
 from tapp.od import setup
+from tapp.orbit.elements import cartesian_to_elements
 
 SHIPPED = STUDY_FILE.read_text()
 

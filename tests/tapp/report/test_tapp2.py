@@ -12,9 +12,9 @@ import pytest
 from iter.execute import Execution
 from tapp.guidance.guidefile import GuideFile
 from tapp.guidance.study import guidance_study
-from tapp.report.tapp2 import CONTRADICTED, guidance_dict, guidance_markdown
-from tapp.schema import validate
-from tapp.tomlfile import read_toml
+from tapp.io.schema import validate
+from tapp.io.tomlfile import read_toml
+from tapp.report.guidance import CONTRADICTED, guidance_dict, guidance_markdown
 from tests.tapp.guidance.helpers import ELEMENTS, SCENARIOS, deep_space_t32, guide
 
 SERIAL = Execution(serial=True)
