@@ -1,6 +1,6 @@
 """The ``tapp`` console command: one typer app, one module per command, named after it
-(``<command>_cmd``; ``od_cmd`` holds the study's ``dc``, ``ekf`` and ``rsig``, ``simulate_cmd``
-also ``tape info``).
+(``<command>_cmd``; ``od_cmd`` holds the study's ``dc``, ``ekf`` and ``rsig``, which share
+their options and set-up).
 
 Only this package imports typer. Each submodule defines its commands on ``app`` (or on a
 sub-app it adds); every command turns a ``TappError`` into one line on stderr and a non-zero
@@ -20,6 +20,7 @@ from tapp.cli import propagate_cmd as _propagate_cmd  # noqa: F401
 from tapp.cli import schema_cmd as _schema_cmd  # noqa: F401
 from tapp.cli import search_cmd as _search_cmd  # noqa: F401
 from tapp.cli import simulate_cmd as _simulate_cmd  # noqa: F401
+from tapp.cli import tape_cmd as _tape_cmd  # noqa: F401
 from tapp.cli.common import app
 
 
