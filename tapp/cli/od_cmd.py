@@ -78,6 +78,7 @@ if TYPE_CHECKING:
     from tapp.measurements.observations import Observations
     from tapp.od.batch import DCResult, DCSettings, IllConditionedError
     from tapp.od.rate import PredictedRate
+    from tapp.od.setup import Study
 
 #: A duration: a positive number and its unit (s, m, h or d), as ``--arc`` takes it.
 _DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([smhd])\s*$")
@@ -131,11 +132,14 @@ def _scenario(scenario: Path | None) -> Path:
     return STUDY_FILE if scenario is None else scenario
 
 
-def _orientation(scenario: Path, earth_orientation: str | None) -> EarthOrientation:
-    """The run's Earth orientation: the study file's, or ``--earth-orientation``'s model."""
+def _read(path: Path, earth_orientation: str | None) -> tuple[Study, EarthOrientation]:
+    """The study file, read once, and the run's Earth orientation: the file's, or
+    ``--earth-orientation``'s model (the option checked first)."""
     from tapp.od import setup
 
-    return setup.orientation(scenario, earth_orientation_option(earth_orientation))
+    model = earth_orientation_option(earth_orientation)
+    study = setup.read_study(path)
+    return study, setup.orientation(study, model)
 
 
 def _model_pair(truth: str, stm: str, orient: EarthOrientation) -> Propagator:
@@ -148,7 +152,7 @@ def _model_pair(truth: str, stm: str, orient: EarthOrientation) -> Propagator:
 
 
 def _observations(x_true: np.ndarray, truth: str, stations: str | None, obs_file: Path | None,
-                  scenario: Path, seed: int | None, orient: EarthOrientation,
+                  study: Study, seed: int | None, orient: EarthOrientation,
                   chosen: bool) -> Observations:
     """The observations of ``--obs``, checked against the run's Earth orientation (``chosen``:
     by ``--earth-orientation``; :func:`tapp.od.setup.check_made_under`, whose note goes to
@@ -158,16 +162,15 @@ def _observations(x_true: np.ndarray, truth: str, stations: str | None, obs_file
     from tapp.od import setup
 
     if obs_file is not None:
-        data = setup.load_study(scenario)
-        obs = read_observations(obs_file, load_stations(data, str(scenario)),
-                                setup.tracking(scenario).sigma, epoch=setup.epoch(scenario),
+        obs = read_observations(obs_file, load_stations(study.data, str(study.path)),
+                                setup.tracking(study).sigma, epoch=setup.epoch(study),
                                 sigma_kinds=setup.KINDS)
-        note = setup.check_made_under(obs, orient, str(obs_file), scenario, chosen)
+        note = setup.check_made_under(obs, orient, str(obs_file), study, chosen)
         if note is not None:
             typer.echo(f"note: {note}", err=True)
         return obs
-    return setup.simulated_observations(x_true, truth, _network(x_true, stations, scenario),
-                                        scenario, seed, orient=orient)
+    return setup.simulated_observations(x_true, truth, _network(x_true, stations, study),
+                                        study, seed, orient=orient)
 
 
 def _made_under_json(data: Observations) -> dict[str, str] | None:
@@ -180,12 +183,11 @@ def _spacecraft(orbit: str) -> str:
     return orbit if orbit.replace("_", "").replace("-", "").isalnum() else "SPACECRAFT"
 
 
-def _settings(scenario: Path, max_iter: int | None) -> DCSettings:
+def _settings(study: Study, max_iter: int | None) -> DCSettings:
     """The scenario's [dc_settings], with ``--max-iter`` in place of its iteration limit."""
-    from tapp.od import setup
     from tapp.od.batch import MAX_ITERATIONS, DCSettings
 
-    table = setup.study_file(scenario).dc_settings.model_dump()
+    table = study.file.dc_settings.model_dump()
     if max_iter is not None:
         if not 2 <= max_iter <= MAX_ITERATIONS:
             raise InputError("--max-iter", "value", f"a whole number in 2 .. "
@@ -214,16 +216,16 @@ def _eigen_json(rate: PredictedRate | None) -> list[dict[str, float]] | None:
             for v in rate.eigenvalues]
 
 
-def _network(x_true: np.ndarray, stations: str | None, scenario: Path) -> tuple:
+def _network(x_true: np.ndarray, stations: str | None, study: Study) -> tuple:
     """The stations named by ``--stations`` (or the scenario's default for the orbit); an
     unknown name is the option's fault and names ``--stations``."""
     from tapp.od import setup
 
-    default = setup.network_for(x_true, None, scenario)  # a bad file names the file
+    default = setup.network_for(x_true, None, study)  # a bad file names the file
     if stations is None:
         return default
     try:
-        return setup.network_for(x_true, stations, scenario)
+        return setup.network_for(x_true, stations, study)
     except InputError as exc:
         if exc.field != "networks":
             raise
@@ -293,12 +295,13 @@ def dc(
             differential_correction,
         )
 
-        study = _scenario(scenario)
-        check_paths({"--obs": obs, "--scenario": study},
+        path = _scenario(scenario)
+        check_paths({"--obs": obs, "--scenario": path},
                     {"--save-obs": save_obs, "--json": json_file(json_out)})
         arc_s = parse_duration_s(arc)
+        study = setup.read_study(path)
         settings = _settings(study, max_iter)
-        orient = _orientation(study, earth_orientation)
+        orient = setup.orientation(study, earth_orientation_option(earth_orientation))
         x_true = setup.true_orbit(orbit, study, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm, orient)
         data = _observations(x_true, truth, stations, obs, study,
@@ -306,7 +309,7 @@ def dc(
         window = data.arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, window.t_s)
         if save_obs is not None:
-            notes = (f"observations of {orbit} for tapp dc (scenario {study.name})",
+            notes = (f"observations of {orbit} for tapp dc (scenario {path.name})",
                      f"read from {obs.name}" if obs is not None else "simulated with Earth "
                      f"orientation {setup.describe_orientation(used)}")
             outputs = OutputSet()
@@ -429,19 +432,17 @@ def _print_ill_conditioned(exc: IllConditionedError, used: dict) -> None:
     console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
 
-def _apriori(text: str, scenario: Path) -> np.ndarray:
+def _apriori(text: str, study: Study) -> np.ndarray:
     import numpy as np
 
-    from tapp.od import setup
-
-    table = setup.load_study(scenario).get("ekf", {}).get("apriori", {})
+    table = study.data.get("ekf", {}).get("apriori", {})
     if text in table:  # the scenario's a priori: a bad one is the file's fault, not --apriori
         try:
             sig = np.asarray(table[text], dtype=float)
         except (TypeError, ValueError):
             sig = np.empty(0)
         if sig.shape != (6,) or not np.all(np.isfinite(sig)) or np.any(sig <= 0):
-            raise InputError(str(scenario), f"ekf.apriori.{text}",
+            raise InputError(str(study.path), f"ekf.apriori.{text}",
                              "six standard deviations > 0 (km, km/s)", table[text])
     else:
         pairs = dict(item.partition("=")[::2] for item in text.split(","))
@@ -490,10 +491,10 @@ def ekf(
         from tapp.od import setup
         from tapp.od.ekf import extended_kalman_filter
 
-        study = _scenario(scenario)
-        check_paths({"--obs": obs, "--scenario": study}, {"--json": json_file(json_out)})
+        path = _scenario(scenario)
+        check_paths({"--obs": obs, "--scenario": path}, {"--json": json_file(json_out)})
         arc_s = parse_duration_s(arc)
-        orient = _orientation(study, earth_orientation)
+        study, orient = _read(path, earth_orientation)
         x_true = setup.true_orbit(orbit, study, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm, orient)
         p0 = _apriori(apriori, study)
@@ -551,12 +552,12 @@ def rsig(
         from tapp.od import setup
         from tapp.od.rsig import r_signature
 
-        study = _scenario(scenario)
-        check_paths({"--scenario": study}, {"--json": json_file(json_out)})
+        path = _scenario(scenario)
+        check_paths({"--scenario": path}, {"--json": json_file(json_out)})
         span_s = positive_option("--hours", hours) * 3600.0
         dt = positive_option("--step", step)
         check_grid_size("--hours/--step", grid_samples(span_s, dt))
-        orient = _orientation(study, earth_orientation)
+        study, orient = _read(path, earth_orientation)
         x_true = setup.true_orbit(orbit, study, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm, orient)
         t = np.arange(0.0, span_s + 0.5 * dt, dt)

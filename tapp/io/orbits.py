@@ -248,23 +248,32 @@ def named_orbits(path: Path, *, allow_subsurface: bool = False) -> dict[str, np.
     """
     data = read_toml(path)
     section = validate(_OrbitsSection, {"orbits": data.get("orbits", {})}, str(path))
+    return _states(section.orbits, path, allow_subsurface)
+
+
+def _states(tables: Mapping[str, OrbitTable], path: Path, allow_subsurface: bool
+            ) -> dict[str, np.ndarray]:
     return {name: table.state(str(path), f"orbits.{name}", allow_subsurface=allow_subsurface)
-            for name, table in section.orbits.items()}
+            for name, table in tables.items()}
 
 
 def parse_orbit(text: str, *, scenario: Path | None = None, source: str = "--orbit",
-                allow_subsurface: bool = False) -> np.ndarray:
+                allow_subsurface: bool = False,
+                orbits: Mapping[str, OrbitTable] | None = None) -> np.ndarray:
     """Return the initial state (6,) of an orbit spec (module docstring grammar).
 
     ``allow_subsurface`` (``--allow-subsurface``) accepts an orbit whose perigee is below
     the Earth's surface; otherwise it is refused with its perigee radius and the limit.
+    ``orbits``: the ``[orbits.NAME]`` tables of ``scenario``, when the caller has read them
+    already (:class:`tapp.od.setup.Study`); otherwise they are read from it.
     """
     text = text.strip()
     if "=" in text:
         x = _from_mapping(_parse_pairs(text, source, "orbit"), source, "orbit")
         return check_perigee(x, source, "orbit", allow_subsurface=allow_subsurface)
     path = scenario or STUDY_FILE
-    orbits = named_orbits(path, allow_subsurface=allow_subsurface)
+    orbits = (named_orbits(path, allow_subsurface=allow_subsurface) if orbits is None
+              else _states(orbits, path, allow_subsurface))
     if text not in orbits:
         raise InputError(source, "orbit", f"elements, a Cartesian state or an orbit named in "
                          f"{path} ({', '.join(orbits) or 'none'})", text)

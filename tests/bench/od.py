@@ -78,7 +78,7 @@ def _measure(model: str) -> dict:
     out["dc"] = dc
     out["dc_iterations"] = len(res.iterations)
     ekf_obs = obs.window(18 * 3600.0)
-    p0 = np.diag(np.square(setup.study_file().ekf.apriori["1"]))
+    p0 = np.diag(np.square(setup.shipped_study().file.ekf.apriori["1"]))
     ekf, _ = time_calls(lambda: extended_kalman_filter(
         ekf_obs, prop, x_start, p0, orientation=orientation_for(model, epoch)), 3)
     out["ekf"] = ekf

@@ -160,7 +160,7 @@ def small_obs():
 def test_observation_file_round_trip(tmp_path: Path, small_obs, suffix: str) -> None:
     path = tmp_path / f"obs{suffix}"
     write_observations(path, small_obs, epoch=setup.epoch(), spacecraft="SATORB1")
-    stations = load_stations(setup.load_study(), "approx_stm.toml")
+    stations = load_stations(setup.shipped_study().data, "approx_stm.toml")
     back = read_observations(path, stations, small_obs.sigma, epoch=setup.epoch())
     np.testing.assert_array_equal(back.t_s, small_obs.t_s)
     np.testing.assert_array_equal(back.values, small_obs.values)
@@ -487,7 +487,7 @@ def test_saved_observations_state_and_check_their_model(tmp_path: Path, suffix: 
     first = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--save-obs",
                                 str(saved), "--earth-orientation", "iau2006"])
     assert first.exit_code == 0, first.output
-    back = read_observations(saved, load_stations(setup.load_study(), "study"),
+    back = read_observations(saved, load_stations(setup.shipped_study().data, "study"),
                              setup.tracking().sigma)
     assert back.made_under == MadeUnder("iau2006", "finals2000A.all", "GCRS")
     for command in ("dc", "ekf"):

@@ -15,7 +15,7 @@ from tapp.orbit.elements import cartesian_to_elements, kepler_states
 def test_ekf_with_matching_models_reaches_the_noise_level() -> None:
     x_true = setup.true_orbit("SATORB1")
     x_start = setup.initial_estimate(x_true, setup.offset())
-    apriori = setup.load_study()["ekf"]["apriori"]["1"]
+    apriori = setup.shipped_study().data["ekf"]["apriori"]["1"]
     obs = setup.simulated_observations(x_true, "J2", setup.network_for(x_true, None))
     obs = obs.window(18 * 3600.0)
     res = extended_kalman_filter(obs, Propagator(earth_model("J2")), x_start,
