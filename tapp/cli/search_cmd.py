@@ -2,11 +2,11 @@
 
 The scenario is a SEARCH file (the example ``search_bplane.toml``: a ``[search]`` table) or a
 tracking scenario with a ``[targeting]`` table
-(:func:`tapp.targeting.program.scenario_targeting`: the
-aim point of its B-plane miss, SEARCH on its own models). Prints SEARCH's report in the
-spirit of the seed's Figs. 4 and 5 (inputs, each case's dependent variables, the partials,
-their inverse, the increments and total increments, the exit taken) followed by the encounter
-of the final trajectory, or one JSON object with ``--json``. Exit codes follow SEARCH's three
+(:func:`tapp.targeting.searchfile.scenario_targeting`: the aim point of its B-plane miss, SEARCH
+on its own models). Prints SEARCH's report in the spirit of the seed's Figs. 4 and 5 (inputs,
+each case's dependent variables, the partials, their inverse, the increments and total
+increments, the exit taken) followed by the encounter of the final trajectory, or one JSON
+object with ``--json``. Exit codes follow SEARCH's three
 non-standard exits (:data:`search.EXIT_FLAG`): 0 converged, FLAG + 1 otherwise (3 diverged,
 4 singular), so that they stay clear of 1 (a failed case or any other error) and 2 (bad
 input, one line on stderr naming file and field).
@@ -64,7 +64,7 @@ def is_tracking_scenario(data: dict) -> bool:
 def problem_of(data: dict, path: Path, earth_orientation: str | None) -> BPlaneSearch:
     """The search problem of a parsed scenario file (a SEARCH file, or a tracking scenario
     with a ``[targeting]`` table); ``earth_orientation`` overrides the file's model."""
-    from tapp.targeting.program import scenario_search
+    from tapp.targeting.searchfile import scenario_search
     from tapp.tracking.scenario import parse_scenario
 
     if is_tracking_scenario(data):

@@ -66,7 +66,7 @@ KINDS: dict[str, Kind] = {
         "A `tapp iter` parameter sweep: the body run for each case (a Python callable or a "
         "program) and the loops that vary its arguments, outermost first."),
     "search": Kind(
-        "tapp.targeting.program:SearchFile", "SEARCH file",
+        "tapp.targeting.searchfile:SearchFile", "SEARCH file",
         "A `tapp search` B-plane targeting: the injection whose velocity SEARCH moves, the "
         "force models, the target body's B-plane and SEARCH's targets, tolerances, "
         "increments and iteration control."),

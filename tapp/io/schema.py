@@ -28,8 +28,8 @@ pydantic attribute (``json``, ``copy``, ...), is declared ``x: T = Field(default
 
 The schemas: :class:`tapp.tracking.scenario.ScenarioFile` (tracking scenarios),
 :class:`tapp.od.setup.StudyFile` (the study file),
-:class:`tapp.targeting.program.SearchFile` (SEARCH
-scenarios), :class:`iter.sweepfile.SweepFile` (ITER sweep files), and the tables they share:
+:class:`tapp.targeting.searchfile.SearchFile` (SEARCH scenarios),
+:class:`iter.sweepfile.SweepFile` (ITER sweep files), and the tables they share:
 :class:`tapp.io.orbits.OrbitTable`, :class:`tapp.io.stations_file.StationTable`.
 
 The mechanism itself is :mod:`iter.schema` (``iter`` may not import ``tapp``, and its sweep

@@ -23,8 +23,7 @@ sphere-of-action literature, beside Laplace's :math:`D(\mu_b/\mu_P)^{2/5}` and H
 
 Why not Laplace's sphere of influence, which SEARCH's scan uses to look for a closest approach
 (:meth:`tapp.targeting.program.BPlaneProgram.soi_radius_km`, 66,000 km for the Moon)? It admits
-passes
-the B-plane does not describe. ``deep_space.toml`` with its epoch one day later and
+passes the B-plane does not describe. ``deep_space.toml`` with its epoch one day later and
 its injection unchanged passes the Moon at 46,450 km, inside it, on a Moon-relative hyperbola
 of e = 11 (bent by 10 deg), where the Earth's tidal acceleration is a quarter of the Moon's
 attraction: its osculating B moves by 11,000 km over the day and a half before the closest
@@ -39,9 +38,8 @@ That program flies the nominal model parameters: with ``[parameters.values]`` ot
 nominal the miss is at the nominal trajectory's periapsis (still inside the encounter).
 
 **Retargeting** (``[targeting]``): SEARCH on the scenario's own models and Earth orientation
-(:func:`tapp.targeting.program.scenario_targeting`) moves the injection velocity to the aim point;
-the
-miss time is then the targeted periapsis. A targeted injection whose perigee is below the
+(:func:`tapp.targeting.searchfile.scenario_targeting`) moves the injection velocity to the aim
+point; the miss time is then the targeted periapsis. A targeted injection whose perigee is below the
 Earth's surface is refused as the file's own would be (``injection.allow_subsurface``).
 """
 
@@ -66,10 +64,10 @@ from tapp.targeting.program import (
     ClosestApproach,
     FailedCaseError,
     FirstGuessError,
-    ScanTable,
     TargetingRun,
     run_search,
 )
+from tapp.targeting.searchfile import ScanTable
 from tapp.tracking.scenario import Scenario
 
 #: The primary of each body that can carry a B-plane miss (the body it orbits).

@@ -55,10 +55,10 @@ ISO strings or TOML dates)::
                        (tapp.tracking.encounter), checked before anything is written.
     [targeting]        optional: retarget the injection velocity to a B-plane aim point of the
                        miss body by SEARCH before simulating
-                       (tapp.targeting.program.scenario_targeting:
-                       targets.b_dot_r_km, targets.b_dot_t_km, targets.flight_time_s, vary,
-                       first_guess, tolerances, increments, SEARCH's iteration control and
-                       scan); needs miss.time = "periapsis" and nominal parameter values
+                       (tapp.targeting.searchfile.scenario_targeting: targets.b_dot_r_km,
+                       targets.b_dot_t_km, targets.flight_time_s, vary, first_guess,
+                       tolerances, increments, SEARCH's iteration control and scan); needs
+                       miss.time = "periapsis" and nominal parameter values
 """
 
 from __future__ import annotations
@@ -98,7 +98,8 @@ from tapp.io.tomlfile import read_toml
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.stations import Station
 from tapp.orbit.bplane import REFERENCE_POLES
-from tapp.targeting.program import BPlaneSearch, TargetingTable, scenario_targeting
+from tapp.targeting.program import BPlaneSearch
+from tapp.targeting.searchfile import TargetingTable, scenario_targeting
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
 #: Observable kinds, in the order of ``tapp.measurements.Observable``.

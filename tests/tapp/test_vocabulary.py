@@ -17,7 +17,7 @@ from tapp.io.models_file import ModelTable
 from tapp.io.orbits import OrbitTable
 from tapp.io.tomlfile import read_toml
 from tapp.od.setup import read_study
-from tapp.targeting.program import SearchFile, scenario_search
+from tapp.targeting.searchfile import SearchFile, scenario_search
 from tapp.tracking.scenario import ScenarioFile, parse_scenario, read_scenario
 
 

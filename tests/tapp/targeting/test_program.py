@@ -19,13 +19,8 @@ from tapp.dynamics.ephemeris import position_km
 from tapp.errors import InputError, NotHyperbolicError
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.orbit.bplane import b_plane
-from tapp.targeting.program import (
-    BPlaneProgram,
-    FailedCaseError,
-    TargetMissedError,
-    run_search,
-    scenario_search,
-)
+from tapp.targeting.program import BPlaneProgram, FailedCaseError, TargetMissedError, run_search
+from tapp.targeting.searchfile import scenario_search
 
 SCENARIO = EXAMPLES / "search_bplane.toml"
 
