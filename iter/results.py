@@ -23,7 +23,7 @@ format_version 1 (no digests) are still read, with a :class:`ResultFileWarning`.
 file may hold fewer rows than ``n_cases`` while a sweep runs: it is rewritten as cases
 complete, each time to a hidden temporary ``.NAME.<random>.tmp`` beside it, renamed over the
 old one, so it is never half written; temporaries left by a killed run are removed on the next
-write (the same convention as ``tapp.outputs``, which ``iter`` may not import). Reading checks
+write (the same convention as ``tapp.io.outputs``, which ``iter`` may not import). Reading checks
 the layout (every dataset present, one row per case, status codes, case numbers unique and
 within the sweep), so a tampered or truncated file is a :class:`ResultFileError`, not a
 traceback.
@@ -189,7 +189,7 @@ def _in_memory(path: Path) -> Iterator[h5py.File]:
 
     The HDF5 library then never writes to the disk itself: on a full disk it can crash the
     process (a segmentation fault) where a plain write raises an OSError (the same reason
-    as ``tapp.tape.hdf5io.create``, which ``iter`` may not import).
+    as ``tapp.io.tape.hdf5io.create``, which ``iter`` may not import).
     """
     with h5py.File(path.name, "w", track_order=True, driver="core",
                    backing_store=False) as f:

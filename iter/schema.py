@@ -1,8 +1,8 @@
 """Strict, closed schemas for input files, and one error path naming file and field.
 
-This is the mechanism behind :mod:`tapp.schema` (which raises ``tapp.errors.InputError``);
+This is the mechanism behind :mod:`tapp.io.schema` (which raises ``tapp.errors.InputError``);
 it lives here because ``iter`` may not import ``tapp`` and its sweep files are validated the
-same way (raising :class:`~iter.errors.SweepInputError`). Read :mod:`tapp.schema` for the
+same way (raising :class:`~iter.errors.SweepInputError`). Read :mod:`tapp.io.schema` for the
 rules; in short, a :class:`Schema` subclass is a pydantic v2 model that
 
 - forbids unknown keys and sections (the error names the key and lists the allowed ones);
@@ -110,7 +110,7 @@ class Schema(pydantic.BaseModel):
     Field names are the TOML keys; declare ``Field(alias="...")`` for a key that is not a
     Python identifier. Nested tables are nested ``Schema`` subclasses; ``[tables.NAME]`` are
     ``dict[str, Sub]``. Describe every key with ``Field(description=...)``: the reference
-    pages are generated from the descriptions (:mod:`tapp.reference`).
+    pages are generated from the descriptions (:mod:`tapp.io.reference`).
     """
 
     model_config = ConfigDict(extra="forbid", strict=True, frozen=True, allow_inf_nan=False,
@@ -311,7 +311,7 @@ def validate(model: type[M], data: Mapping, source: str, *, prefix: str = "",
     source : the file name (or option) named in the message.
     prefix : dotted path of ``data`` within its file, when validating one table of it.
     error : the exception class raised, called as ``error(source, field, expected, got)``
-        (``tapp.schema.validate`` passes ``tapp.errors.InputError``).
+        (``tapp.io.schema.validate`` passes ``tapp.errors.InputError``).
 
     Raises
     ------

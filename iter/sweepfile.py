@@ -9,7 +9,7 @@ Format
     # title = "..."
 
     [body]                       # exactly one of `callable` or `program`
-    callable = "iter.examples:launch_azimuth_case"   # "module:function"
+    callable = "tapp.targeting.launch_azimuth:launch_azimuth_case"   # "module:function"
     # program = ["tapp", "propagate"]                # argv of a command-line program
     # json = true          # program only: append --json - (default true)
     # dashes = false       # program only: --azimuth-deg instead of --azimuth_deg (default false)

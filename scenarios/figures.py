@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from iter import CaseStatus, read_hdf5
+from tapp.io.tape.files import describe
 from tapp.od.batch import DCOutcome
-from tapp.tape.files import describe
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "scenarios" / "readme_figures.json"
@@ -283,7 +283,7 @@ def _approx_stm(ex: _Extraction) -> None:
 
 
 def _rate_findings(ex: _Extraction, f: dict) -> None:
-    """ρ against R(t) (tapp.report.approx_stm.rate_findings)."""
+    """ρ against R(t) (tapp.report.od.rate_findings)."""
     for key in ("arc", "inclination", "same_r_pair"):
         if not f.get(key):
             raise ValueError(f"{ex.source}: rate_findings has no {key} (the README quotes it)")

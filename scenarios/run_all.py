@@ -40,8 +40,8 @@ from iter import CaseStatus, Execution, load_sweep, run_sweep
 from scenarios import readme
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.od.study import planned_cases, run_study
-from tapp.report.approx_stm import write_report
 from tapp.report.markdown import table
+from tapp.report.od import write_report
 from tapp.report.pipeline import recycle_sigma_table
 from tapp.report.sweeps import plot_departure_sweep
 

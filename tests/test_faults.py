@@ -121,7 +121,7 @@ def test_a_tape_never_crashes_the_process_however_full_the_disk(
         full: Path, temporary: Path, leo_tape: Path) -> None:
     """Twelve fill levels, from 10 kB to 450 kB free, against the 522 kB of a raw tape: h5py
     crashed the process at every level tried (24 of 24 in the measurement of
-    tapp.tape.hdf5io.create)."""
+    tapp.io.tape.hdf5io.create)."""
     tape = full / "run.t13.h5"
     shutil.copy(leo_tape, tape)
     before = _digest(tape)

@@ -33,7 +33,7 @@ from typer.testing import CliRunner
 from iter import read_hdf5
 from tapp.cli import app
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.tape.t13_hdf5 import read_t13
+from tapp.io.tape.t13_hdf5 import read_t13
 from tests.faults import names, one_line, processes_in, tapp_command, tapp_env
 
 ROOT = Path(__file__).resolve().parents[1]

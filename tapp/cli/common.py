@@ -35,7 +35,7 @@ Exit codes (every command keeps this contract)
     inconsistent with the noise model (7: the weighted residual RMS settled above its
     99.9 % χ² bound for the number of residuals and estimated parameters; the RMS and the
     bound are printed, and the estimate is not to be used as an orbit)
-    (:mod:`tapp.cli.od`); ``tapp search`` diverged (3) or met a singular matrix (4)
+    (:mod:`tapp.cli.od_cmd`); ``tapp search`` diverged (3) or met a singular matrix (4)
     (``--write-scenario`` is then not written: a scenario that misses its aim point is no
     answer). ``tapp simulate`` of a scenario with a ``[targeting]`` table whose SEARCH
     diverged (3) or met a singular matrix (4): one line on stderr, and no tape (there is no
@@ -54,11 +54,11 @@ Exit codes (every command keeps this contract)
 Limits checked before allocating: output grids of at most :data:`MAX_GRID_SAMPLES` samples
 (``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases (the product of
 the loops' ``sets``), TAPP II Monte Carlos of ``tapp.guidance.study.MIN_SAMPLES`` to
-``MAX_SAMPLES`` samples, SEARCH scans of at most ``tapp.targeting.MAX_SCAN_STEPS`` steps, local
-Dask clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (no limit with
-``--scheduler``), TOML files of at most ``iter.inputfile.MAX_TOML_BYTES`` (4 MiB), TDM and CSV
-observation files of ``tapp.od.obsfile.MAX_TEXT_BYTES`` (64 MiB), EOP tables of
-``tapp.frames.eop.MAX_EOP_BYTES`` (16 MiB), TAPP III decks of at most
+``MAX_SAMPLES`` samples, SEARCH scans of at most ``tapp.targeting.program.MAX_SCAN_STEPS``
+steps, local Dask clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core
+(no limit with ``--scheduler``), TOML files of at most ``iter.inputfile.MAX_TOML_BYTES``
+(4 MiB), TDM and CSV observation files of ``tapp.io.obsfile.MAX_TEXT_BYTES`` (64 MiB), EOP
+tables of ``tapp.frames.eop.MAX_EOP_BYTES`` (16 MiB), TAPP III decks of at most
 ``tapp.processor.deck.MAX_COMMANDS`` commands a list and runs of at most ``MAX_ENTITIES``
 output entities and ``MAX_ENTITY_NUMBERS`` numbers in them; each message gives the size that
 would be needed and the option or field to change.
@@ -82,7 +82,7 @@ propagation. An ITER case that runs longer than its body's ``timeout_s`` (progra
 
 What is left on disk: nothing new when a command fails. Outputs are written to hidden
 temporaries beside their targets and renamed over them only once all are complete
-(:class:`tapp.outputs.OutputSet`); on any failure the old outputs are left untouched.
+(:class:`tapp.io.outputs.OutputSet`); on any failure the old outputs are left untouched.
 A killed run leaves the old outputs or the new ones, each complete, and possibly hidden
 ``.NAME.*.tmp`` temporaries, which the next write of the same output removes. ``tapp iter``
 checkpoints its results file (each time atomically) as cases complete, so that a killed or
@@ -122,7 +122,7 @@ from typer.core import TyperGroup
 from iter.errors import ClusterError
 from iter.execute import MAX_WORKERS_PER_CORE
 from tapp.errors import InputError, TapeError, TappError
-from tapp.outputs import OutputSet
+from tapp.io.outputs import OutputSet
 
 if TYPE_CHECKING:
     from rich.progress import Progress, ProgressColumn

@@ -2,12 +2,40 @@
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from tapp.cli.common import STDOUT, JsonOpt, app, json_file, run_guarded, write_json
+
+
+def copy_examples(out_dir: Path, option: str = "DIR") -> tuple[Path, ...]:
+    """Copy every shipped file (:data:`tapp.examples.FILES`) into ``out_dir``, a new or empty
+    folder.
+
+    The files are written into a hidden folder beside ``out_dir`` and renamed to it once
+    all are there: nothing is left half-copied.
+
+    Returns
+    -------
+    tuple of Path
+        The copies, in the order of :data:`tapp.examples.FILES`.
+
+    Raises
+    ------
+    InputError
+        Naming ``option``: ``out_dir`` is a file or a folder with something in it.
+    """
+    from tapp.examples import FILES, FOLDER
+    from tapp.io.outputs import new_directory
+
+    with new_directory(out_dir, option, "examples are copied into a folder of their own, "
+                       "never over files") as work:
+        for name in FILES:
+            shutil.copyfile(FOLDER / name, work / name)
+    return tuple(Path(out_dir) / name for name in FILES)
 
 
 @app.command("examples")
@@ -17,8 +45,8 @@ def examples_cmd(
 ) -> None:
     """Copy every example input file (scenarios, decks, guidance, pipeline, sweeps, SEARCH,
     the study) into DIRECTORY, and list them with their kind (tapp schema KIND)."""
-    from tapp.examples import FILES, copy_examples
-    from tapp.outputs import check_paths
+    from tapp.examples import FILES
+    from tapp.io.outputs import check_paths
 
     def body() -> None:
         check_paths({}, {"--json": json_file(json_out)})

@@ -9,7 +9,7 @@ check, ``--plots`` the B-plane scatter and the ΔV histograms. Bad input (the ta
 guidance file or its fields, a corridor on a component not targeted, an option, an output
 path that is an input, a scheduler that does not answer) is one line on stderr naming the
 file or option and the field, exit 2; all outputs are written together or none
-(:class:`tapp.outputs.OutputSet`).
+(:class:`tapp.io.outputs.OutputSet`).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Executio
     from iter import SchedulerError
     from tapp.guidance.guidefile import read_guide
     from tapp.guidance.study import guidance_study
-    from tapp.tape.t32_hdf5 import read_t32
+    from tapp.io.tape.t32_hdf5 import read_t32
 
     guide_file = read_guide(guide)
     t32 = read_t32(tape)
@@ -99,9 +99,9 @@ def guide_cmd(
     def body() -> None:
         from tapp.guidance.statistics import bplane_rows
         from tapp.guidance.study import check_samples, check_seed, check_shard_samples
-        from tapp.outputs import OutputSet, check_paths
+        from tapp.io.outputs import OutputSet, check_paths
         from tapp.report import HISTOGRAM_PNG, SCATTER_PNG
-        from tapp.report.tapp2 import (
+        from tapp.report.guidance import (
             guidance_dict,
             guidance_markdown,
             plot_bplane_scatter,

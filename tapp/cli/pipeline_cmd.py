@@ -59,7 +59,7 @@ def pipeline_cmd(
         from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
         from iter import SchedulerError
-        from tapp.outputs import check_paths
+        from tapp.io.outputs import check_paths
         from tapp.pipeline.run import OUTPUTS, check_out_dir, run_pipeline, trade_outputs
         from tapp.pipeline.spec import read_pipeline
 

@@ -2,7 +2,7 @@
 
 Bad input (the tape, the deck or its fields, an output path that is an input) is one line on
 stderr naming the file and the field, exit 2; all outputs are written together or none
-(:class:`tapp.outputs.OutputSet`). The run ends with one line saying what was written and
+(:class:`tapp.io.outputs.OutputSet`). The run ends with one line saying what was written and
 the largest real-world over fit-world σ (:func:`tapp.processor.printout.largest_sigma_ratio`),
 on standard output, or on stderr when standard output carries the O3 printout or the JSON.
 """
@@ -83,11 +83,11 @@ def process_cmd(
     """TAPP III: process a T13 tape with a deck (fit world vs real world)."""
 
     def body() -> None:
-        from tapp.outputs import OutputSet, check_paths
+        from tapp.io.outputs import OutputSet, check_paths
+        from tapp.io.tape.t32_hdf5 import t32_file_writer
         from tapp.processor.printout import largest_sigma_ratio, o3_text, run_dict
         from tapp.processor.tape32 import build_t32, t32_provenance
         from tapp.report import BPLANE_PNG, SIGMA_PNG
-        from tapp.tape.t32_hdf5 import t32_file_writer
 
         pngs = {} if plots is None else {f"--plots ({name})": plots / name
                                          for name in (SIGMA_PNG, BPLANE_PNG)}
@@ -115,7 +115,7 @@ def process_cmd(
             written.append(f"T32 tape {tape_out}")
         if plots is not None:
             # matplotlib only when plots are asked for (it costs ~0.5 s to import)
-            from tapp.report.tapp3 import bplane_rows, plot_bplane_ellipses, plot_sigma_history
+            from tapp.report.processor import bplane_rows, plot_bplane_ellipses, plot_sigma_history
 
             title = f"{header.iden}: {deck_obj.title}" if deck_obj.title else header.iden
             outputs.add("--plots", plots / SIGMA_PNG, lambda tmp: plot_sigma_history(

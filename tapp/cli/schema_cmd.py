@@ -20,8 +20,8 @@ def schema_cmd(
 ) -> None:
     """Print the JSON Schema of an input file kind: every key with its type, unit, default,
     allowed values and meaning (the schema tapp validates the file against)."""
-    from tapp import reference
-    from tapp.outputs import check_paths
+    from tapp.io import reference
+    from tapp.io.outputs import check_paths
 
     def body() -> None:
         check_paths({}, {"--json": json_file(json_out)})

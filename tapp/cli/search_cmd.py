@@ -1,11 +1,12 @@
 """``tapp search``: SEARCH's Newton-Raphson targeting of a B-plane scenario.
 
 The scenario is a SEARCH file (the example ``search_bplane.toml``: a ``[search]`` table) or a
-tracking scenario with a ``[targeting]`` table (:func:`tapp.targeting.scenario_targeting`: the
-aim point of its B-plane miss, SEARCH on its own models). Prints SEARCH's report in the
-spirit of the seed's Figs. 4 and 5 (inputs, each case's dependent variables, the partials,
-their inverse, the increments and total increments, the exit taken) followed by the encounter
-of the final trajectory, or one JSON object with ``--json``. Exit codes follow SEARCH's three
+tracking scenario with a ``[targeting]`` table
+(:func:`tapp.targeting.searchfile.scenario_targeting`: the aim point of its B-plane miss, SEARCH
+on its own models). Prints SEARCH's report in the spirit of the seed's Figs. 4 and 5 (inputs,
+each case's dependent variables, the partials, their inverse, the increments and total
+increments, the exit taken) followed by the encounter of the final trajectory, or one JSON
+object with ``--json``. Exit codes follow SEARCH's three
 non-standard exits (:data:`search.EXIT_FLAG`): 0 converged, FLAG + 1 otherwise (3 diverged,
 4 singular), so that they stay clear of 1 (a failed case or any other error) and 2 (bad
 input, one line on stderr naming file and field).
@@ -39,7 +40,7 @@ from tapp.cli.common import (
 from tapp.errors import InputError
 
 if TYPE_CHECKING:
-    from tapp.targeting import BPlaneSearch, TargetingRun
+    from tapp.targeting.program import BPlaneSearch, TargetingRun
 
 # Column names in the report (the seed's IV1N.., DV1N..), at most 17 characters.
 _X_LABELS = ("VX (KM/S)", "VY (KM/S)", "VZ (KM/S)")
@@ -63,7 +64,7 @@ def is_tracking_scenario(data: dict) -> bool:
 def problem_of(data: dict, path: Path, earth_orientation: str | None) -> BPlaneSearch:
     """The search problem of a parsed scenario file (a SEARCH file, or a tracking scenario
     with a ``[targeting]`` table); ``earth_orientation`` overrides the file's model."""
-    from tapp.targeting import scenario_search
+    from tapp.targeting.searchfile import scenario_search
     from tapp.tracking.scenario import parse_scenario
 
     if is_tracking_scenario(data):
@@ -83,8 +84,8 @@ def _written_scenario(path: Path, data: dict, problem: BPlaneSearch, run: Target
     ``[targeting]``)."""
     import datetime as dt
 
-    from tapp.targeting import Y_NAMES
-    from tapp.tomlfile import replace_tables
+    from tapp.io.tomlfile import replace_tables
+    from tapp.targeting.program import Y_NAMES
 
     text = path.read_text()
     injection = {"r_km": problem.program.r0_km.tolist(),
@@ -218,10 +219,10 @@ def search_command(
         import time
 
         from search import format_report
-        from tapp.atomic import atomic_write
-        from tapp.outputs import check_paths
-        from tapp.targeting import run_search
-        from tapp.tomlfile import read_toml
+        from tapp.io.atomic import atomic_write
+        from tapp.io.outputs import check_paths
+        from tapp.io.tomlfile import read_toml
+        from tapp.targeting.program import run_search
 
         check_paths({"SCENARIO": scenario}, {"--write-scenario": write_scenario,
                                              "--json": json_file(json_out)})

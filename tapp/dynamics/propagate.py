@@ -214,7 +214,7 @@ class Propagator:
             if epoch_jd_utc is None:
                 raise InputError("propagate", "epoch", "an epoch (UTC) when third bodies are "
                                  "modelled", None)
-            from tapp.ephemeris import chebyshev_table
+            from tapp.dynamics.ephemeris import chebyshev_table
 
             table = chebyshev_table(eqs.bodies, self.state_model.center, epoch_jd_utc, lo, hi,
                                     scales=scales, origin_s=origin).stacked(table)

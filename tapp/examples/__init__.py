@@ -1,4 +1,4 @@
-"""The example input files shipped with tapp, and copying them for a new user.
+"""The example input files shipped with tapp (``tapp examples DIR`` copies them for a new user).
 
 The files of this folder are package data: every kind of input file, commented, as the
 reproduction runs use them (``make scenario``) and as ``tapp examples DIR`` copies them for a
@@ -14,11 +14,8 @@ copied to. The kind of each file is the schema that reads it (``tapp schema KIND
 from __future__ import annotations
 
 import os
-import shutil
 from importlib.resources import files
 from pathlib import Path
-
-from tapp.outputs import new_directory
 
 #: The shipped files and the kind of input each is (``tapp schema KIND``), in the order a new
 #: user meets them.
@@ -45,26 +42,3 @@ FILES: dict[str, str] = {
 FOLDER = Path(os.fspath(files(__name__)))
 #: The approximate-STM study file, the default of every command that reads one.
 STUDY_FILE = FOLDER / "approx_stm.toml"
-
-
-def copy_examples(out_dir: Path, option: str = "DIR") -> tuple[Path, ...]:
-    """Copy every shipped file (:data:`FILES`) into ``out_dir``, a new or empty folder.
-
-    The files are written into a hidden folder beside ``out_dir`` and renamed to it once
-    all are there: nothing is left half-copied.
-
-    Returns
-    -------
-    tuple of Path
-        The copies, in the order of :data:`FILES`.
-
-    Raises
-    ------
-    InputError
-        Naming ``option``: ``out_dir`` is a file or a folder with something in it.
-    """
-    with new_directory(out_dir, option, "examples are copied into a folder of their own, "
-                       "never over files") as work:
-        for name in FILES:
-            shutil.copyfile(FOLDER / name, work / name)
-    return tuple(Path(out_dir) / name for name in FILES)

@@ -4,7 +4,7 @@ The model
 ---------
 Linear deviations about the nominal trajectory, in each recycle's representation
 x^k = [orbit at t_k (x, y, z km; vx, vy, vz km/s, the tape's inertial frame); q] of the T32
-tape (:mod:`tapp.tape.t32`). Per sample, d (n_o) is the true deviation and e = x̂ − x (n_o) the
+tape (:mod:`tapp.io.tape.t32`). Per sample, d (n_o) is the true deviation and e = x̂ − x (n_o) the
 error of the navigation's estimate.
 
 1. Injection: d₀ ~ N(0, Λ̄⁰) (``apriori/Lambda0_real``); the a priori estimate is the
@@ -57,7 +57,7 @@ Public API
 ----------
 :func:`guidance_study` runs a study on a T32 tape and a guidance file in memory and returns a
 :class:`GuidanceResult` (:func:`tapp.pipeline.steps.run_guidance` runs one from their paths:
-this package reads no tape file); :func:`tapp.report.tapp2.guidance_markdown` renders it.
+this package reads no tape file); :func:`tapp.report.guidance.guidance_markdown` renders it.
 """
 
 from tapp.guidance.agreement import Agreement, Check, compare

@@ -43,8 +43,8 @@ from tapp.guidance.execution import ExecutionErrors
 from tapp.guidance.model import Problem, build_problem
 from tapp.guidance.navigation import inflate_after_manoeuvres
 from tapp.guidance.statistics import BPLANE, FLIGHT_TIME, Corridor, bplane_rows, flight_time_row
-from tapp.schema import Invalid, Schema, Unique, load
-from tapp.tape.t32 import T32
+from tapp.io.schema import Invalid, Schema, Unique, load
+from tapp.io.tape.t32 import T32
 
 #: Largest pointing σ, mrad: the model adds pointing errors as small angles.
 MAX_POINTING_MRAD = 200.0

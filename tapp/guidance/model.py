@@ -24,7 +24,7 @@ import numpy as np
 
 from tapp.errors import InputError
 from tapp.guidance.execution import NORMALS_PER_MANOEUVRE, ExecutionErrors
-from tapp.tape.t32 import T32
+from tapp.io.tape.t32 import T32
 
 #: Units of a Cartesian orbit (x, y, z, vx, vy, vz), the only orbit TAPP II can correct.
 CARTESIAN_UNITS = ("km", "km", "km", "km/s", "km/s", "km/s")

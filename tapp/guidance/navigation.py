@@ -45,7 +45,7 @@ from tapp.estimation.regression import FitSystem, regression
 from tapp.guidance.execution import error_second_moment
 from tapp.guidance.linear import initial, manoeuvre, recycle
 from tapp.guidance.model import Problem
-from tapp.tape.t32 import T32
+from tapp.io.tape.t32 import T32
 
 
 def fit_system(t32: T32) -> FitSystem:

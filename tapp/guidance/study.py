@@ -27,7 +27,7 @@ from tapp.guidance.model import Problem
 from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples
 from tapp.guidance.shards import run_shards
 from tapp.guidance.statistics import Corridor, Outcome, linear_outcome, sample_outcome
-from tapp.tape.t32 import T32
+from tapp.io.tape.t32 import T32
 
 #: Fewest samples (a covariance needs two).
 MIN_SAMPLES = 2

@@ -92,7 +92,7 @@ from scipy.stats import chi2
 from tapp.dynamics import PropagationError, Propagator
 from tapp.errors import InputError, SingularMatrixError, TooFewMeasurementsError
 from tapp.frames.orientation import EarthOrientation
-from tapp.od.observations import Observations, predict, residuals
+from tapp.measurements.observations import Observations, predict, residuals
 
 #: Names of the state components, in order (km, km/s).
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "vz")

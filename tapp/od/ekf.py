@@ -27,7 +27,7 @@ from tapp.dynamics import Propagator
 from tapp.errors import InputError, TooFewMeasurementsError
 from tapp.frames.orientation import EarthOrientation
 from tapp.measurements.observables import MeasurementModel
-from tapp.od.observations import Observations
+from tapp.measurements.observations import Observations
 
 
 @dataclass(frozen=True, slots=True)

@@ -34,7 +34,7 @@ import scipy.linalg
 from tapp.dynamics import ForceModel, Propagator
 from tapp.errors import TooFewMeasurementsError
 from tapp.frames.orientation import EarthOrientation
-from tapp.od.observations import Observations, predict
+from tapp.measurements.observations import Observations, predict
 
 
 @dataclass(frozen=True, slots=True)

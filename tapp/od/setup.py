@@ -3,13 +3,15 @@
 Everything a DC, EKF or R(t) run needs besides the models: the true orbits, the station
 networks, the tracking (data rate, span, noise, seed) and the brief's initial offset. The CLI
 commands and the study runner share these functions so a single run and the full study use
-the same data.
+the same data. The file is read and validated once, into a :class:`Study` value
+(:func:`read_study`), and every function here takes that value; given none, they take the
+shipped study's (:func:`shipped_study`, read once).
 
 The study file (the shipped ``approx_stm.toml``, :data:`tapp.examples.STUDY_FILE`) is
-validated as a whole against one schema, :class:`StudyFile` (``tapp.schema``: unknown keys
+validated as a whole against one schema, :class:`StudyFile` (``tapp.io.schema``: unknown keys
 and sections are errors, booleans are not numbers, ...): ``epoch``, ``[orbits.NAME]``
-(:class:`tapp.orbits.OrbitTable`), ``[stations.NAME]`` and ``[networks]``
-(:mod:`tapp.stations_file`), ``[tracking]``, ``[noise.fit]`` (:mod:`tapp.noise_file`),
+(:class:`tapp.io.orbits.OrbitTable`), ``[stations.NAME]`` and ``[networks]``
+(:mod:`tapp.io.stations_file`), ``[tracking]``, ``[noise.fit]`` (:mod:`tapp.io.noise_file`),
 ``[initial_offset]``, ``[dc_settings]``, ``[[dc]]``, ``[ekf]`` with ``[ekf.apriori]``,
 ``[rsig]``, ``[rate_vs_arc]`` and ``[rate_vs_inclination]`` (reference:
 ``docs/reference/study.md``). The runs name their models as every file does: ``gravity`` (the
@@ -22,7 +24,7 @@ Earth orientation: top-level ``earth_orientation`` ("iau2006", the default, or "
 :mod:`tapp.frames.orientation`) and ``eop`` ("iers", the default, "none" or a finals2000A file
 path relative to the study file). One model serves everything a run computes: the stations of
 the simulated data and of the estimator, and the geopotential of every force model built here
-(:func:`force_model`). :func:`orientation` builds it once per file and model (a CLI's
+(:func:`force_model`). :func:`orientation` builds it once per study and model (a CLI's
 ``--earth-orientation`` passes its model in place of the file's) and checks that the EOP
 table covers the epoch and the tracking span.
 """
@@ -43,18 +45,18 @@ from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import ForceModel, Propagator, earth_model
 from tapp.errors import InputError
 from tapp.examples import STUDY_FILE
-from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
 from tapp.frames.orientation import EarthOrientation, check_model, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.io.models_file import GravityName
+from tapp.io.noise_file import FitTable
+from tapp.io.orbits import OrbitTable, parse_orbit
+from tapp.io.schema import EarthOrientationName, EopSource, Invalid, Schema, UtcDate, validate
+from tapp.io.stations_file import StationsSection, load_network
+from tapp.io.tomlfile import read_toml
+from tapp.measurements.observations import MadeUnder, Observations, simulate
 from tapp.measurements.stations import Station
-from tapp.models_file import GravityName
-from tapp.noise_file import FitTable
 from tapp.od.batch import MAX_ITERATIONS
-from tapp.od.observations import MadeUnder, Observations, simulate
-from tapp.orbits import OrbitTable, parse_orbit
-from tapp.schema import EarthOrientationName, EopSource, Invalid, Schema, UtcDate, validate
-from tapp.stations_file import StationsSection, load_network
-from tapp.tomlfile import read_toml
+from tapp.orbit.elements import cartesian_to_elements, elements_to_cartesian
 
 Positive = Annotated[float, Field(gt=0)]
 #: The observable kinds of the study's tracking, in the order of ``Tracking.sigma``.
@@ -306,57 +308,83 @@ class Offset:
     e: float | None = None
 
 
-@cache
-def _study(path: Path) -> tuple[dict, StudyFile]:
+@dataclass(frozen=True, slots=True, eq=False)
+class Study:
+    """A study file, read and validated once (:func:`read_study`): what every function of this
+    module takes.
+
+    Compared and hashed by identity, so that :func:`orientation` builds the Earth orientation
+    of one study once per model.
+
+    Attributes
+    ----------
+    path : Path
+        The file: errors name it, and an ``eop`` file path is taken from its folder.
+    data : dict
+        The parsed TOML (the tables :func:`tapp.io.stations_file.load_network` reads, the
+        EKF's a priori).
+    file : StudyFile
+        The same, validated.
+    """
+
+    path: Path
+    data: dict
+    file: StudyFile
+
+
+def read_study(path: Path = STUDY_FILE) -> Study:
+    """Read and validate a study file; errors name the file and the field."""
     data = read_toml(path)
-    return data, validate(StudyFile, data, str(path))
+    return Study(Path(path), data, validate(StudyFile, data, str(path)))
 
 
-def study_file(path: Path = STUDY_FILE) -> StudyFile:
-    """Return the validated study file (cached); errors name the file and the field."""
-    return _study(Path(path))[1]
+@cache
+def shipped_study() -> Study:
+    """The shipped study file (:data:`tapp.examples.STUDY_FILE`), read once: the study of
+    every function here that is given none."""
+    return read_study()
 
 
-def load_study(path: Path = STUDY_FILE) -> dict:
-    """Return the parsed study TOML (cached), validated against :class:`StudyFile` first."""
-    return _study(Path(path))[0]
+def _or_shipped(study: Study | None) -> Study:
+    return shipped_study() if study is None else study
 
 
-def epoch(path: Path = STUDY_FILE) -> Epoch:
+def epoch(study: Study | None = None) -> Epoch:
     """Return the study's epoch (UTC), the t = 0 of its observations."""
-    text = study_file(path).epoch
+    study = _or_shipped(study)
+    text = study.file.epoch
     if isinstance(text, dt.datetime):
         text = text.isoformat().removesuffix("+00:00")
-    return parse_epoch(text, source=str(path))
+    return parse_epoch(text, source=str(study.path))
 
 
-def tracking(path: Path = STUDY_FILE) -> Tracking:
+def tracking(study: Study | None = None) -> Tracking:
     """Return the ``[tracking]`` settings."""
-    study = study_file(path)
-    table, fit = study.tracking, study.noise.fit
+    file = _or_shipped(study).file
+    table, fit = file.tracking, file.noise.fit
     sigma = np.array([fit.sigma_range_m * 1e-3, fit.sigma_range_rate_mm_s * 1e-6])
     return Tracking(table.data_interval_s, table.span_days * 86400.0, sigma, table.seed,
                     math.radians(table.equatorial_below_deg))
 
 
-def earth_orientation_name(path: Path = STUDY_FILE, model: str | None = None) -> str:
+def earth_orientation_name(study: Study | None = None, model: str | None = None) -> str:
     """Return the Earth orientation model of a run: ``model`` (a CLI override) or the file's."""
     if model is not None:
         return check_model(model, "--earth-orientation", "value")
-    return study_file(path).earth_orientation
+    return _or_shipped(study).file.earth_orientation
 
 
 @cache
-def _orientation(path: Path, model: str) -> EarthOrientation:
-    study = study_file(path)
-    orient = orientation_for(model, epoch(path), study.eop, path.parent, str(path))
+def _orientation(study: Study, model: str) -> EarthOrientation:
+    source = str(study.path)
+    orient = orientation_for(model, epoch(study), study.file.eop, study.path.parent, source)
     # the simulated tracking span (observations read from a file are checked as they are used)
-    orient.check_covers(np.array([0.0, tracking(path).span_s]), str(path))
+    orient.check_covers(np.array([0.0, tracking(study).span_s]), source)
     return orient
 
 
-def orientation(path: Path = STUDY_FILE, model: str | None = None) -> EarthOrientation:
-    """Return the study's Earth orientation (cached per file and model; module docstring).
+def orientation(study: Study | None = None, model: str | None = None) -> EarthOrientation:
+    """Return the study's Earth orientation (cached per study and model; module docstring).
 
     ``model`` overrides the file's ``earth_orientation`` (the CLI's ``--earth-orientation``).
 
@@ -366,7 +394,8 @@ def orientation(path: Path = STUDY_FILE, model: str | None = None) -> EarthOrien
         An unknown model (naming ``--earth-orientation``), an unreadable EOP file, or an epoch
         or tracking span outside the EOP table (naming the file and the epoch).
     """
-    return _orientation(Path(path), earth_orientation_name(path, model))
+    model = earth_orientation_name(study, model)
+    return _orientation(_or_shipped(study), model)
 
 
 def orientation_record(orient: EarthOrientation, t_s: np.ndarray | None = None) -> dict:
@@ -389,7 +418,7 @@ def _describe_made_under(made: MadeUnder) -> str:
 
 
 def check_made_under(obs: Observations, orient: EarthOrientation, source: str,
-                     path: Path = STUDY_FILE, chosen: bool = False) -> str | None:
+                     study: Study | None = None, chosen: bool = False) -> str | None:
     """Check observations read from ``source`` against the run's Earth orientation
     ``orient``; return a note for the user (one line) or None, or raise InputError.
 
@@ -397,7 +426,7 @@ def check_made_under(obs: Observations, orient: EarthOrientation, source: str,
     another are off by the difference of the station places (31.5 km at Goldstone between
     iau2006 and gmst on 2026-01-01), and a DC on them settles tens of km from the orbit
     (41.5 km for ``tapp simulate``'s TDM of ``leo_equatorial.toml`` fitted under
-    the study's gmst). The file's record (``obs.made_under``, :mod:`tapp.od.obsfile`):
+    the study's gmst). The file's record (``obs.made_under``, :mod:`tapp.io.obsfile`):
 
     - states the run's model, EOP source and frame: None;
     - states another, and the run's model is the study file's (``chosen`` False): refused,
@@ -430,7 +459,7 @@ def check_made_under(obs: Observations, orient: EarthOrientation, source: str,
     if chosen:
         return (f"{source} states observations made under {_describe_made_under(made)}; "
                 f"fitted under {_describe_made_under(run)} as --earth-orientation asks")
-    model = run.earth_orientation
+    model, path = run.earth_orientation, _or_shipped(study).path
     rows = (("earth_orientation", "Earth orientation model", f"{path}'s earth_orientation; "
              f"--earth-orientation {made.earth_orientation} fits them under theirs, "
              f"--earth-orientation {model} under {model} regardless"),
@@ -450,14 +479,9 @@ def force_model(spec: str, orient: EarthOrientation, source: str, field: str) ->
     return earth_model(spec, source=source, field=field, earth_orientation=orient.model)
 
 
-def sigma_by_kind(path: Path = STUDY_FILE) -> dict[str, float]:
-    """Return the study's measurement standard deviations by observable kind (km, km/s)."""
-    return dict(zip(KINDS, tracking(path).sigma.tolist(), strict=True))
-
-
-def offset(path: Path = STUDY_FILE) -> Offset:
+def offset(study: Study | None = None) -> Offset:
     """Return the ``[initial_offset]`` of the brief."""
-    table = study_file(path).initial_offset
+    table = _or_shipped(study).file.initial_offset
     return Offset(table.da_m * 1e-3, table.de or 0.0, math.radians(table.di_deg), table.e)
 
 
@@ -479,28 +503,31 @@ def initial_estimate(x_true: np.ndarray, off: Offset) -> np.ndarray:
     return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
-def true_orbit(spec: str, path: Path = STUDY_FILE, *, allow_subsurface: bool = False
+def true_orbit(spec: str, study: Study | None = None, *, allow_subsurface: bool = False
                ) -> np.ndarray:
-    """Return the true initial state of an orbit name or spec (see :mod:`tapp.orbits`).
+    """Return the true initial state of an orbit name (of the study's ``[orbits]``) or spec
+    (see :mod:`tapp.io.orbits`).
 
     ``allow_subsurface`` accepts an orbit whose perigee is below the Earth's surface.
     """
-    study_file(path)
-    return parse_orbit(spec, scenario=path, allow_subsurface=allow_subsurface)
+    study = _or_shipped(study)
+    return parse_orbit(spec, scenario=study.path, orbits=study.file.orbits,
+                       allow_subsurface=allow_subsurface)
 
 
-def network_for(x_true: np.ndarray, name: str | None, path: Path = STUDY_FILE
+def network_for(x_true: np.ndarray, name: str | None, study: Study | None = None
                 ) -> tuple[Station, ...]:
     """Return the named network/station, or the default for the orbit's inclination."""
+    study = _or_shipped(study)
     if name is None:
         h = np.cross(x_true[:3], x_true[3:])
         inc = math.acos(abs(h[2]) / np.linalg.norm(h))
-        name = "equatorial" if inc < tracking(path).equatorial_below_rad else "global"
-    return load_network(load_study(path), str(path), name)
+        name = "equatorial" if inc < tracking(study).equatorial_below_rad else "global"
+    return load_network(study.data, str(study.path), name)
 
 
 def simulated_observations(x_true: np.ndarray, truth_spec: str, stations: tuple[Station, ...],
-                           path: Path = STUDY_FILE, seed: int | None = None,
+                           study: Study | None = None, seed: int | None = None,
                            span_s: float | None = None, noise: bool = True,
                            orient: EarthOrientation | None = None) -> Observations:
     """Simulate the study's 5-day observation file for one orbit and truth model.
@@ -510,16 +537,12 @@ def simulated_observations(x_true: np.ndarray, truth_spec: str, stations: tuple[
     ``orient`` is the Earth orientation of the stations and of the truth's field (default: the
     file's, :func:`orientation`).
     """
-    orient = orientation(path) if orient is None else orient
-    trk = tracking(path)
+    study = _or_shipped(study)
+    orient = orientation(study) if orient is None else orient
+    trk = tracking(study)
     span = trk.span_s if span_s is None else min(span_s, trk.span_s)
     t = np.arange(0.0, span + 0.5 * trk.data_interval_s, trk.data_interval_s)
     t = t[t <= span + 1e-9 * max(span, 1.0)]
     rng = np.random.default_rng(trk.seed if seed is None else seed) if noise else None
-    truth = Propagator(force_model(truth_spec, orient, str(path), "truth"))
+    truth = Propagator(force_model(truth_spec, orient, str(study.path), "truth"))
     return simulate(truth, x_true, stations, t, trk.sigma, rng, orient)
-
-
-def named_orbit_names(path: Path = STUDY_FILE) -> list[str]:
-    """Names of the orbits of the scenario file."""
-    return list(study_file(path).orbits)

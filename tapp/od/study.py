@@ -11,28 +11,26 @@ the state model at the end of the arc. The ρ curves use noise-free observations
 the times, stations and weights only). Every run uses the study's one Earth orientation
 (``earth_orientation`` and ``eop`` of the file, or the model passed in), for the data and the
 estimators alike; the results record it. The results are plain dataclasses;
-:mod:`tapp.report.approx_stm` turns them into the report.
+:mod:`tapp.report.od` turns them into the report.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator
 from tapp.errors import TooFewMeasurementsError
-from tapp.examples import STUDY_FILE
-from tapp.frames.elements import cartesian_to_elements, elements_to_cartesian
+from tapp.io.stations_file import load_network
 from tapp.od import setup
 from tapp.od.batch import DCResult, DCSettings, differential_correction
 from tapp.od.ekf import EKFResult, extended_kalman_filter
 from tapp.od.rate import PredictedRate, predicted_rate
 from tapp.od.rsig import RSignature, r_signature
-from tapp.stations_file import load_network
+from tapp.orbit.elements import cartesian_to_elements, elements_to_cartesian
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,17 +113,18 @@ class StudyResults:
     earth_orientation: dict = field(default_factory=dict)
 
 
-def planned_cases(path: Path = STUDY_FILE) -> int:
-    """Number of runs the study will make (for a progress bar)."""
-    study = setup.study_file(path)
-    n = sum(len(b.orbits) * len(b.var_gravity) * len(b.arcs_h) for b in study.dc)
-    if study.ekf:
-        n += len(study.ekf.var_gravity) * len(study.ekf.apriori)
-    if study.rate_vs_arc:
-        n += len(study.rate_vs_arc.var_gravity)
-    if study.rate_vs_inclination:
-        n += len(study.rate_vs_inclination.var_gravity)
-    return n + (len(study.rsig.cases) if study.rsig else 0)
+def planned_cases(study: setup.Study | None = None) -> int:
+    """Number of runs the study will make (for a progress bar); given no study, the shipped
+    one's."""
+    file = (setup.shipped_study() if study is None else study).file
+    n = sum(len(b.orbits) * len(b.var_gravity) * len(b.arcs_h) for b in file.dc)
+    if file.ekf:
+        n += len(file.ekf.var_gravity) * len(file.ekf.apriori)
+    if file.rate_vs_arc:
+        n += len(file.rate_vs_arc.var_gravity)
+    if file.rate_vs_inclination:
+        n += len(file.rate_vs_inclination.var_gravity)
+    return n + (len(file.rsig.cases) if file.rsig else 0)
 
 
 def _rate_or_none(obs, truth, stm, x_true, orient) -> PredictedRate | None:
@@ -149,9 +148,10 @@ def with_inclination(x: np.ndarray, inclination_rad: float) -> np.ndarray:
     return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
-def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _: None,
+def run_study(study: setup.Study | None = None, advance: Callable[[str], None] = lambda _: None,
               earth_orientation: str | None = None) -> StudyResults:
-    """Run every case of the study; ``advance(label)`` is called after each case.
+    """Run every case of ``study`` (read once by :func:`tapp.od.setup.read_study`; the shipped
+    study's when None); ``advance(label)`` is called after each case.
 
     ``earth_orientation`` overrides the file's model ("iau2006" or "gmst").
 
@@ -160,24 +160,25 @@ def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _
     InputError
         A bad study file, an unknown model, an epoch or span outside the EOP table.
     """
-    study = setup.study_file(path)
-    settings = DCSettings(**study.dc_settings.model_dump())
-    orient = setup.orientation(path, earth_orientation)
+    study = setup.shipped_study() if study is None else study
+    file, path = study.file, study.path
+    settings = DCSettings(**file.dc_settings.model_dump())
+    orient = setup.orientation(study, earth_orientation)
 
     def model(spec: str, where: str):
         return setup.force_model(spec, orient, str(path), where)
 
-    off = setup.offset(path)
+    off = setup.offset(study)
     network: dict[str, tuple[str, ...]] = {}
     obs_cache: dict[tuple[str, str], object] = {}
 
     def observations(orbit: str, truth: str):
         if (orbit, truth) not in obs_cache:
-            x_true = setup.true_orbit(orbit, path)
-            stations = setup.network_for(x_true, None, path)
+            x_true = setup.true_orbit(orbit, study)
+            stations = setup.network_for(x_true, None, study)
             network[orbit] = tuple(s.name for s in stations)
             obs_cache[orbit, truth] = setup.simulated_observations(x_true, truth, stations,
-                                                                   path, orient=orient)
+                                                                   study, orient=orient)
         return obs_cache[orbit, truth]
 
     dc_runs, blocks = [], []
@@ -186,16 +187,16 @@ def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _
     def r_at_end(orbit: str, truth: str, stm: str, arc_h: float) -> float:
         if (orbit, truth, stm, arc_h) not in r_end:
             prop = Propagator(model(truth, "dc.gravity"), model(stm, "dc.var_gravity"))
-            sig = r_signature(prop, setup.true_orbit(orbit, path),
+            sig = r_signature(prop, setup.true_orbit(orbit, study),
                               np.array([0.0, arc_h * 3600.0]), orient)
             r_end[orbit, truth, stm, arc_h] = float(sig.r[-1])
         return r_end[orbit, truth, stm, arc_h]
 
-    for index, block in enumerate(study.dc):
+    for index, block in enumerate(file.dc):
         title = block.title if block.title is not None else f"block {len(blocks) + 1}"
         blocks.append(title)
         for orbit in block.orbits:
-            x_true = setup.true_orbit(orbit, path)
+            x_true = setup.true_orbit(orbit, study)
             x_start = setup.initial_estimate(x_true, off)
             truth = block.gravity
             obs = observations(orbit, truth)
@@ -216,10 +217,10 @@ def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _
                     advance(f"DC {orbit} ({truth},{stm}) {arc_h:g} h")
 
     ekf_runs = []
-    ekf = study.ekf
+    ekf = file.ekf
     if ekf:
         orbit, truth = ekf.orbit, ekf.gravity
-        x_true = setup.true_orbit(orbit, path)
+        x_true = setup.true_orbit(orbit, study)
         x_start = setup.initial_estimate(x_true, off)
         obs = observations(orbit, truth).arc(ekf.arc_h * 3600.0, str(path), "ekf.arc_h",
                                              ekf.arc_h)
@@ -232,9 +233,9 @@ def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _
                 advance(f"EKF ({truth},{stm}) a priori {label}")
 
     r_runs = []
-    rs = study.rsig
+    rs = file.rsig
     if rs:
-        x_true = setup.true_orbit(rs.orbit, path)
+        x_true = setup.true_orbit(rs.orbit, study)
         t = np.arange(0.0, rs.hours * 3600.0 + 0.5 * rs.step_s, rs.step_s)
         for truth, stm in rs.cases:
             prop = Propagator(model(truth, "rsig.cases"), model(stm, "rsig.cases"))
@@ -242,14 +243,14 @@ def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _
             advance(f"R(t) ({truth},{stm})")
 
     arc_curves = []
-    ra = study.rate_vs_arc
+    ra = file.rate_vs_arc
     if ra:
-        x_true = setup.true_orbit(ra.orbit, path)
+        x_true = setup.true_orbit(ra.orbit, study)
         arcs_h = ra.arcs_h.values()
         state_model = model(ra.gravity, "rate_vs_arc.gravity")
         obs = setup.simulated_observations(x_true, ra.gravity, setup.network_for(x_true, None,
-                                                                               path),
-                                           path, span_s=float(arcs_h[-1]) * 3600.0,
+                                                                               study),
+                                           study, span_s=float(arcs_h[-1]) * 3600.0,
                                            noise=False, orient=orient)
         for stm in ra.var_gravity:
             var_model = model(stm, "rate_vs_arc.var_gravity")
@@ -259,17 +260,17 @@ def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _
             advance(f"rho vs arc ({ra.gravity},{stm})")
 
     inc_curves = []
-    ri = study.rate_vs_inclination
+    ri = file.rate_vs_inclination
     if ri:
-        x_orbit = setup.true_orbit(ri.orbit, path)
-        stations = load_network(setup.load_study(path), str(path), ri.network)
+        x_orbit = setup.true_orbit(ri.orbit, study)
+        stations = load_network(study.data, str(path), ri.network)
         incs = ri.inclinations_deg.values()
         state_model = model(ri.gravity, "rate_vs_inclination.gravity")
         data = []
         for inc in incs:
             x_i = with_inclination(x_orbit, np.radians(inc))
             try:
-                o = setup.simulated_observations(x_i, ri.gravity, stations, path,
+                o = setup.simulated_observations(x_i, ri.gravity, stations, study,
                                                  span_s=ri.arc_h * 3600.0, noise=False,
                                                  orient=orient)
             except TooFewMeasurementsError:
@@ -282,7 +283,7 @@ def run_study(path: Path = STUDY_FILE, advance: Callable[[str], None] = lambda _
             inc_curves.append(_curve(ri.orbit, ri.gravity, stm, incs, rates))
             advance(f"rho vs inclination ({ri.gravity},{stm})")
 
-    trk = setup.tracking(path)
+    trk = setup.tracking(study)
     return StudyResults(tuple(dc_runs), tuple(blocks), tuple(ekf_runs),
                         ekf.title if ekf else "", ekf.last_passes if ekf else 0, tuple(r_runs),
                         trk.sigma, network, tuple(arc_curves),

@@ -28,15 +28,15 @@ from iter.execute import Execution
 from tapp.errors import InputError
 from tapp.guidance.guidefile import GuideFile
 from tapp.guidance.study import GuidanceResult, check_samples, check_seed, guidance_study
-from tapp.outputs import check_new_directory, new_directory
+from tapp.io.outputs import check_new_directory, new_directory
+from tapp.io.schema import validate
+from tapp.io.tape.t13_hdf5 import t13_file_writer
+from tapp.io.tape.t32_hdf5 import read_t32, t32_file_writer
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
 from tapp.pipeline.steps import process_tape
 from tapp.processor.deck import Deck
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.tape32 import build_t32, t32_provenance
-from tapp.schema import validate
-from tapp.tape.t13_hdf5 import t13_file_writer
-from tapp.tape.t32_hdf5 import read_t32, t32_file_writer
 from tapp.tracking.scenario import Scenario, parse_scenario
 from tapp.tracking.simulate import simulate
 
@@ -152,8 +152,8 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
         guide_source=pipeline.guidance.source, tape_source=t32_path.name)
     wall["guide"] = time.perf_counter() - start
 
+    from tapp.report.guidance import guidance_dict, guidance_markdown
     from tapp.report.pipeline import write_report
-    from tapp.report.tapp2 import guidance_dict, guidance_markdown
 
     (work / OUTPUTS["guide_json"]).write_text(json.dumps(guidance_dict(guidance)), "utf-8")
     (work / OUTPUTS["guide_md"]).write_text(guidance_markdown(guidance), "utf-8")

@@ -43,8 +43,8 @@ from tapp.guidance.study import (
     check_seed,
     check_shard_samples,
 )
-from tapp.schema import EarthOrientationName, Schema, validate
-from tapp.tomlfile import read_toml
+from tapp.io.schema import EarthOrientationName, Schema, validate
+from tapp.io.tomlfile import read_toml
 
 #: The three parts of a pipeline, in run order.
 PARTS = ("scenario", "deck", "guidance")

@@ -3,9 +3,9 @@
 TAPP III (:mod:`tapp.processor`) and TAPP II (:mod:`tapp.guidance`) compute on tapes in
 memory and import no h5py (an import-linter contract checks it): reading tape files belongs to
 the orchestration. :func:`process_tape` opens a T13 tape lazily
-(:func:`tapp.tape.t13_hdf5.open_t13`) and runs TAPP III on it, for ``tapp process`` and the
+(:func:`tapp.io.tape.t13_hdf5.open_t13`) and runs TAPP III on it, for ``tapp process`` and the
 pipeline (:mod:`tapp.pipeline.run`); :func:`run_guidance` reads a T32 tape
-(:func:`tapp.tape.t32_hdf5.read_t32`) and a guidance file and runs a TAPP II study.
+(:func:`tapp.io.tape.t32_hdf5.read_t32`) and a guidance file and runs a TAPP II study.
 """
 
 from __future__ import annotations
@@ -16,11 +16,11 @@ from pathlib import Path
 from iter.execute import Execution
 from tapp.guidance.guidefile import read_guide
 from tapp.guidance.study import GuidanceResult, guidance_study
+from tapp.io.tape.t13_hdf5 import open_t13
+from tapp.io.tape.t32_hdf5 import read_t32
 from tapp.processor.deck import bind
 from tapp.processor.plan import Plan
 from tapp.processor.sequencing import Run, process
-from tapp.tape.t13_hdf5 import open_t13
-from tapp.tape.t32_hdf5 import read_t32
 
 __all__ = ["process_tape", "run_guidance"]
 
@@ -29,7 +29,7 @@ def process_tape(path, deck, source: str, progress: Callable[[int, int], None] |
                  ) -> tuple[Run, Plan, object]:
     """Run TAPP III on a T13 tape file with a validated deck: (run, plan, the tape header).
 
-    The tape is read lazily (:func:`tapp.tape.t13_hdf5.open_t13`) and the deck bound to it
+    The tape is read lazily (:func:`tapp.io.tape.t13_hdf5.open_t13`) and the deck bound to it
     (:func:`tapp.processor.deck.bind`): what ``tapp process`` and the pipeline both do.
     ``source`` (the deck file) is named in errors.
     """

@@ -71,12 +71,12 @@ from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
 from tapp.estimation.factors import scaled_min_eigenvalue
 from tapp.frames.time import parse_epoch
+from tapp.io.schema import InfFloat, Schema, load
+from tapp.io.tape.packing import symmetry_defect
 from tapp.processor.commands import ROC, Command, Side, parse_command
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.plan import Plan, StationOff
 from tapp.processor.representations import ISOLATED_SETS, Systems
-from tapp.schema import InfFloat, Schema, load
-from tapp.tape.packing import symmetry_defect
 
 Ref = int | str
 TimeRef = int | float | str
@@ -86,7 +86,7 @@ TIME_MATCH_S = 1e-3
 #: matrix) taken as rounding (:func:`tapp.estimation.factors.scaled_min_eigenvalue`).
 PSD_TOL = 1e-10
 #: Largest relative asymmetry |a_ij − a_ji| / √(a_ii a_jj) of an a priori matrix taken as
-#: rounding (:func:`tapp.tape.packing.symmetry_defect`).
+#: rounding (:func:`tapp.io.tape.packing.symmetry_defect`).
 SYMMETRY_TOL = 1e-12
 #: Finite a priori σ's must lie in this range (any unit). Not for lack of doubles (σ² and
 #: 1/σ² are finite up to 1e154), but for what the programs do with them: a covariance is
@@ -104,7 +104,7 @@ NORMAL_RANGE = (SIGMA_RANGE[1] ** -2, SIGMA_RANGE[0] ** -2)
 #: Largest |e| of a constraint x(a) <- x(a) − e x(b), (unit of a)/(unit of b). e σ_b is a σ of
 #: the constrained system, and the links of two systems compose (the common world's, then the
 #: fit or real world's): e² σ_b stays within 1e50 for σ_b in SIGMA_RANGE, leaving the 1e10
-#: that transitions may add below the tapes' bound (:data:`tapp.tape.checks.MAX_MAGNITUDE`;
+#: that transitions may add below the tapes' bound (:data:`tapp.io.tape.checks.MAX_MAGNITUDE`;
 #: the Table D-1 deck at σ = 1e30 and e = 1e20 wrote a factor of 1e70). The seed's
 #: coefficients are ratios of σ's (Table D-1: up to 3e5 km per unit of J2).
 MAX_CONSTRAINT = 1e10

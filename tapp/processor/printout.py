@@ -22,9 +22,9 @@ import numpy as np
 from tapp.constants import SECONDS_PER_DAY
 from tapp.estimation.factors import gram
 from tapp.frames.time import Epoch
+from tapp.io.tape.t13 import INFO_COLUMNS
 from tapp.processor.executive import Entity
 from tapp.processor.sequencing import Block, Run
-from tapp.tape.t13 import INFO_COLUMNS
 
 _WIDTH = 12
 _MAX_COL = 30

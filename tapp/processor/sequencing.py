@@ -74,6 +74,7 @@ from tapp.estimation.factors import (
     upper_from_packed,
 )
 from tapp.estimation.regression import FitSystem, SingularFitError, regression
+from tapp.io.tape.t32 import T32Entity, T32Recycle
 from tapp.processor.commands import UPC, Command
 from tapp.processor.executive import Budget, Entity, evaluate, transform
 from tapp.processor.plan import Plan
@@ -84,7 +85,6 @@ from tapp.processor.representations import (
     Accumulator,
     Stored,
 )
-from tapp.tape.t32 import T32Entity, T32Recycle
 
 #: Pairs read from the tape at a time (bounds the memory of a block of packed factors).
 PAIRS_PER_BLOCK = 2048
@@ -119,8 +119,8 @@ def _digits(kappa: float) -> float:
 
 class TrackingData(Protocol):
     """What the processor reads: a T13 header and its pair factors by record range
-    (a T13 file opened by :func:`tapp.tape.t13_hdf5.open_t13`, or
-    :func:`tapp.tape.t13.memory_pairs`)."""
+    (a T13 file opened by :func:`tapp.io.tape.t13_hdf5.open_t13`, or
+    :func:`tapp.io.tape.t13.memory_pairs`)."""
 
     header: object
 

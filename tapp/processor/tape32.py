@@ -1,4 +1,4 @@
-"""What a TAPP III run puts on the T32 tape (:mod:`tapp.tape.t32`) for TAPP II.
+"""What a TAPP III run puts on the T32 tape (:mod:`tapp.io.tape.t32`) for TAPP II.
 
 The seed writes the recycle commands' outputs (Table B-5, "always ... under valid TAPP II
 assumptions: the fit-world constraints subtracted out of the consider parameters", §1); the
@@ -8,11 +8,11 @@ the representation of the recycle time, the system chains and the names of every
 
 from __future__ import annotations
 
+from tapp.io.tape.t32 import T32, T32Partition
 from tapp.processor.deck import deck_json
 from tapp.processor.plan import Plan
 from tapp.processor.representations import ISOLATED_SETS, SYSTEM_PARTITIONS, SYSTEMS
 from tapp.processor.sequencing import Run
-from tapp.tape.t32 import T32, T32Partition
 
 _SYSTEM = {1: "standard", 3: "common", 4: "fit", 6: "real"}
 

@@ -32,8 +32,8 @@ def recycle_sigma_table(content: dict) -> str:
 
 
 def _plots(folder: Path, run, header, guidance, title: str) -> list[Path]:
-    from tapp.report.tapp2 import plot_bplane_scatter, plot_dv_histograms
-    from tapp.report.tapp3 import bplane_rows, plot_bplane_ellipses, plot_sigma_history
+    from tapp.report.guidance import plot_bplane_scatter, plot_dv_histograms
+    from tapp.report.processor import bplane_rows, plot_bplane_ellipses, plot_sigma_history
 
     folder.mkdir(exist_ok=True)
     miss = tuple(header.miss.name)
@@ -52,7 +52,7 @@ def _plots(folder: Path, run, header, guidance, title: str) -> list[Path]:
 def write_report(folder: Path, pipeline, run, header, content: dict, guidance,
                  observations: int, wall_s: dict[str, float], plots: bool = True) -> Path:
     """Write ``folder/report.md`` (and the plots into ``folder/plots`` when asked)."""
-    from tapp.report.tapp2 import guidance_markdown
+    from tapp.report.guidance import guidance_markdown
 
     title = pipeline.title or header.iden
     prov = header.provenance

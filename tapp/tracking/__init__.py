@@ -5,7 +5,7 @@
 - :mod:`tapp.tracking.simulate`: trajectory, partials, records, miss partials -> :class:`T13`;
 - :mod:`tapp.tracking.encounter`: a B-plane miss must be an encounter; ``[targeting]``
   retargets the injection by SEARCH first;
-- :mod:`tapp.tracking.oem`: CCSDS OEM 2.0 (KVN) writer.
+- :mod:`tapp.io.ccsds.oem`: CCSDS OEM 2.0 (KVN) writer.
 """
 
 from tapp.tracking.noise import FitNoise, RealNoise, covariance_block, normal_matrices

@@ -22,8 +22,8 @@ sphere-of-action literature, beside Laplace's :math:`D(\mu_b/\mu_P)^{2/5}` and H
 :math:`D(\mu_b/3\mu_P)^{1/3}`). For the Moon it is 0.111 D: 40,000 to 45,000 km.
 
 Why not Laplace's sphere of influence, which SEARCH's scan uses to look for a closest approach
-(:meth:`tapp.targeting.BPlaneProgram.soi_radius_km`, 66,000 km for the Moon)? It admits passes
-the B-plane does not describe. ``deep_space.toml`` with its epoch one day later and
+(:meth:`tapp.targeting.program.BPlaneProgram.soi_radius_km`, 66,000 km for the Moon)? It admits
+passes the B-plane does not describe. ``deep_space.toml`` with its epoch one day later and
 its injection unchanged passes the Moon at 46,450 km, inside it, on a Moon-relative hyperbola
 of e = 11 (bent by 10 deg), where the Earth's tidal acceleration is a quarter of the Moon's
 attraction: its osculating B moves by 11,000 km over the day and a half before the closest
@@ -31,15 +31,15 @@ approach, and |B| = 50,000 km at the file's miss time. Even the shipped flyby's 
 Laplace's radius is 1,100 km from its value at periapsis.
 
 **Miss time "periapsis"** (``miss.time = "periapsis"``): the trajectory's first periapsis
-relative to the body, as SEARCH's program finds it (:meth:`tapp.targeting.BPlaneProgram
+relative to the body, as SEARCH's program finds it (:meth:`tapp.targeting.program.BPlaneProgram
 .evaluate`: the first closest approach inside the sphere of influence on a 600 s scan, then
 Newton on r·v = 0), within SEARCH's default horizon (8 days) or the scenario's span if longer.
 That program flies the nominal model parameters: with ``[parameters.values]`` other than
 nominal the miss is at the nominal trajectory's periapsis (still inside the encounter).
 
 **Retargeting** (``[targeting]``): SEARCH on the scenario's own models and Earth orientation
-(:func:`tapp.targeting.scenario_targeting`) moves the injection velocity to the aim point; the
-miss time is then the targeted periapsis. A targeted injection whose perigee is below the
+(:func:`tapp.targeting.searchfile.scenario_targeting`) moves the injection velocity to the aim
+point; the miss time is then the targeted periapsis. A targeted injection whose perigee is below the
 Earth's surface is refused as the file's own would be (``injection.allow_subsurface``).
 """
 
@@ -57,17 +57,17 @@ from tapp.constants import GM_km3_s2
 from tapp.dynamics import PropagationError, Propagator
 from tapp.dynamics.forces import default_parameters
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
-from tapp.orbits import check_perigee
-from tapp.tape.t13 import utc_at
-from tapp.targeting import (
+from tapp.io.orbits import check_perigee
+from tapp.io.tape.t13 import utc_at
+from tapp.targeting.program import (
     BPlaneProgram,
     ClosestApproach,
     FailedCaseError,
     FirstGuessError,
-    ScanTable,
     TargetingRun,
     run_search,
 )
+from tapp.targeting.searchfile import ScanTable
 from tapp.tracking.scenario import Scenario
 
 #: The primary of each body that can carry a B-plane miss (the body it orbits).

@@ -4,7 +4,7 @@ A scenario gives the trajectory (epoch, injection state, state and variational f
 the parameter vector x = [p; q], the tracking stations and schedule, the fit-world and
 real-world noise, the T13 times (input times and epoch times) and the miss parameters.
 The examples ``leo_equatorial.toml`` and ``deep_space.toml`` (``tapp examples``) are commented.
-The file is validated against one declared schema, :class:`ScenarioFile` (``tapp.schema``):
+The file is validated against one declared schema, :class:`ScenarioFile` (``tapp.io.schema``):
 unknown tables and keys are errors naming the allowed keys, booleans are not numbers, numbers
 are not strings; the rules between tables and the physics are checked while it is built.
 
@@ -21,7 +21,7 @@ ISO strings or TOML dates)::
     [injection]        r_km = [3], v_km_s = [3]   (EME2000, Earth-centred), or classical
                        elements a_km, e, i_deg, raan_deg, argp_deg and M_deg or nu_deg;
                        allow_subsurface = true accepts an orbit whose perigee is below the
-                       Earth's surface (refused otherwise, ``tapp.orbits.check_perigee``)
+                       Earth's surface (refused otherwise, ``tapp.io.orbits.check_perigee``)
     [model]            gravity (J0 | Jn | NxM), third_bodies (each once), var_gravity,
                        var_third_bodies (the variational model: the seed's truncated
                        variational equations; default the state model), rtol, atol (within
@@ -31,7 +31,7 @@ ISO strings or TOML dates)::
                        station_biases = ["range", "range_rate"], [parameters.values] non-nominal
                        values of dynamic parameters
     [stations.NAME]    lat_deg, lon_deg, h_km (-0.5 to 10 km), elev_mask_deg
-                       (tapp.stations_file)
+                       (tapp.io.stations_file)
     [tracking]         stations = [names], observables = ["range", "range_rate", "azimuth",
                        "elevation"], light_time = "none" | "one_way" | "two_way",
                        data_interval_s, start, end, min_pass_s, max_pass_s,
@@ -54,10 +54,11 @@ ISO strings or TOML dates)::
                        but flight_time_s). A B-plane miss must be an encounter
                        (tapp.tracking.encounter), checked before anything is written.
     [targeting]        optional: retarget the injection velocity to a B-plane aim point of the
-                       miss body by SEARCH before simulating (tapp.targeting.scenario_targeting:
-                       targets.b_dot_r_km, targets.b_dot_t_km, targets.flight_time_s, vary,
-                       first_guess, tolerances, increments, SEARCH's iteration control and
-                       scan); needs miss.time = "periapsis" and nominal parameter values
+                       miss body by SEARCH before simulating
+                       (tapp.targeting.searchfile.scenario_targeting: targets.b_dot_r_km,
+                       targets.b_dot_t_km, targets.flight_time_s, vary, first_guess,
+                       tolerances, increments, SEARCH's iteration control and scan); needs
+                       miss.time = "periapsis" and nominal parameter values
 """
 
 from __future__ import annotations
@@ -73,20 +74,17 @@ from typing import Annotated, Literal, NoReturn
 import numpy as np
 from pydantic import Field, PlainValidator
 
-from tapp.bplane import REFERENCE_POLES
 from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics import ForceModel, Propagator
+from tapp.dynamics.ephemeris import tai_minus_utc_s
 from tapp.dynamics.forces import check_parameter_value, default_parameters
-from tapp.ephemeris import tai_minus_utc_s
 from tapp.errors import InputError
 from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
-from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
-from tapp.measurements.stations import Station
-from tapp.models_file import ModelTable
-from tapp.noise_file import FitTable, NoiseTable, NonNegative, Positive, RealTable
-from tapp.orbits import OrbitTable
-from tapp.schema import (
+from tapp.io.models_file import ModelTable
+from tapp.io.noise_file import FitTable, NoiseTable, NonNegative, Positive, RealTable
+from tapp.io.orbits import OrbitTable
+from tapp.io.schema import (
     EarthOrientationName,
     EopSource,
     Invalid,
@@ -95,9 +93,13 @@ from tapp.schema import (
     UtcDate,
     validate,
 )
-from tapp.stations_file import StationsSection
-from tapp.targeting import BPlaneSearch, TargetingTable, scenario_targeting
-from tapp.tomlfile import read_toml
+from tapp.io.stations_file import StationsSection
+from tapp.io.tomlfile import read_toml
+from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
+from tapp.measurements.stations import Station
+from tapp.orbit.bplane import REFERENCE_POLES
+from tapp.targeting.program import BPlaneSearch
+from tapp.targeting.searchfile import TargetingTable, scenario_targeting
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
 #: Observable kinds, in the order of ``tapp.measurements.Observable``.
@@ -230,7 +232,7 @@ class MissSpec:
     """Miss parameters: ``quantities`` of ``kind`` at time ``t_s`` (s from the epoch).
 
     For "bplane", ``body`` is the target (a third body of the state model) and ``reference``
-    the B-plane reference plane (``tapp.bplane.REFERENCE_POLES``). ``at_periapsis``: the
+    the B-plane reference plane (``tapp.orbit.bplane.REFERENCE_POLES``). ``at_periapsis``: the
     time is the trajectory's periapsis at the body, NaN here until the simulator finds it
     (:func:`tapp.tracking.encounter.prepare_encounter`).
     """
@@ -329,7 +331,7 @@ def _unit_of(name: str) -> str:
 
 
 # ---------------------------------------------------------------------------------------------
-# Schema: the file's tables and keys, their types and bounds (tapp.schema)
+# Schema: the file's tables and keys, their types and bounds (tapp.io.schema)
 # ---------------------------------------------------------------------------------------------
 
 

@@ -26,7 +26,7 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    passes of at most max_pass_s (each its own block of the real world's M: its own per-pass
    bias), none of their samples removed. Every scheduled observation is either kept or
    counted under the first of :data:`EDITING_RULES` that removed it (the tape's
-   ``editing/``, :class:`tapp.tape.t13.TapeEditing`). Observables and their partials come from
+   ``editing/``, :class:`tapp.io.tape.t13.TapeEditing`). Observables and their partials come from
    :class:`tapp.measurements.MeasurementModel` (state, station location, biases; light time
    optional, with the bounce state from the integrated trajectory). One row of A per scalar
    observation, referred to the epoch t_j of its record:
@@ -68,22 +68,11 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from tapp.bplane import b_plane
 from tapp.dynamics import Propagator, Trajectory
 from tapp.dynamics.forces import default_parameters
 from tapp.errors import InputError
 from tapp.estimation.factors import triangularize
-from tapp.frames.elements import cartesian_to_elements
-from tapp.measurements import (
-    BIAS_NAMES,
-    STATION_PARAMETER_NAMES,
-    LightTime,
-    MeasurementModel,
-    find_passes,
-    is_visible,
-    wrap_angle_rad,
-)
-from tapp.tape.t13 import (
+from tapp.io.tape.t13 import (
     T13,
     TapeEditing,
     TapeMiss,
@@ -94,7 +83,18 @@ from tapp.tape.t13 import (
     TapeRecords,
     TapeStations,
 )
-from tapp.targeting import BPlaneProgram
+from tapp.measurements import (
+    BIAS_NAMES,
+    STATION_PARAMETER_NAMES,
+    LightTime,
+    MeasurementModel,
+    find_passes,
+    is_visible,
+    wrap_angle_rad,
+)
+from tapp.orbit.bplane import b_plane
+from tapp.orbit.elements import cartesian_to_elements
+from tapp.targeting.program import BPlaneProgram
 from tapp.tracking.encounter import prepare_encounter
 from tapp.tracking.noise import PARTS, pass_rows
 from tapp.tracking.scenario import (

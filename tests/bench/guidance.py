@@ -43,13 +43,13 @@ from tapp.guidance.guidefile import GuideFile, bind, read_guide
 from tapp.guidance.linear import linear_covariance
 from tapp.guidance.statistics import linear_outcome
 from tapp.guidance.study import MAX_SAMPLES, GuidanceResult, guidance_study
+from tapp.io.tape.t13_hdf5 import write_t13
+from tapp.io.tape.t32 import T32
+from tapp.io.tape.t32_hdf5 import read_t32, write_t32
 from tapp.pipeline.steps import process_tape
 from tapp.processor.deck import read_deck
 from tapp.processor.tape32 import build_t32, t32_provenance
-from tapp.report.tapp2 import guidance_dict
-from tapp.tape.t13_hdf5 import write_t13
-from tapp.tape.t32 import T32
-from tapp.tape.t32_hdf5 import read_t32, write_t32
+from tapp.report.guidance import guidance_dict
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 from tests.bench.common import (

@@ -22,10 +22,10 @@ from scipy.integrate import solve_ivp
 from tapp.dynamics import Propagator
 from tapp.dynamics.equations import initial_augmented, split_augmented
 from tapp.frames.orientation import MODELS, orientation_for
+from tapp.measurements.observations import predict
 from tapp.od import setup
 from tapp.od.batch import _linearise, differential_correction
 from tapp.od.ekf import extended_kalman_filter
-from tapp.od.observations import predict
 from tapp.od.study import planned_cases, run_study
 from tests.bench.common import Section, time_calls
 
@@ -78,7 +78,7 @@ def _measure(model: str) -> dict:
     out["dc"] = dc
     out["dc_iterations"] = len(res.iterations)
     ekf_obs = obs.window(18 * 3600.0)
-    p0 = np.diag(np.square(setup.study_file().ekf.apriori["1"]))
+    p0 = np.diag(np.square(setup.shipped_study().file.ekf.apriori["1"]))
     ekf, _ = time_calls(lambda: extended_kalman_filter(
         ekf_obs, prop, x_start, p0, orientation=orientation_for(model, epoch)), 3)
     out["ekf"] = ekf

@@ -11,12 +11,12 @@ bias and correlated parts (:data:`PART_SHARES` of ΔJ, so the error budget has i
 3 of the 10 stations per record, epochs at 3 times, the orbit block of U the
 exponential of a Hamiltonian matrix (exactly symplectic, as a TAPP I STM is to its
 integration error). Each tape is written twice to a temporary folder (not timed): as
-version 3 (the factors) with :func:`tapp.tape.t13_hdf5.write_t13`, and as version 2 (the
+version 3 (the factors) with :func:`tapp.io.tape.t13_hdf5.write_t13`, and as version 2 (the
 normal matrices RᵀR, R̃ᵀR̃ and the parts' Grams) with the writer's private
 ``_write(..., version=2)``.
 
 Measured (wall clock, best of :data:`REPEATS` after a warm-up): open + bind + process of the
-full deck on the version-3 tape through the lazy reader :func:`tapp.tape.t13_hdf5.open_t13`;
+full deck on the version-3 tape through the lazy reader :func:`tapp.io.tape.t13_hdf5.open_t13`;
 the same with one print (at the end) and no recycles (per record = that time / n_IT); the
 normal-matrix processor of commit :data:`tests.bench.legacy.NORMAL_MATRIX_COMMIT` on the
 version-2 tape, the same two decks timed the same way in a child process
@@ -45,11 +45,9 @@ from scipy import linalg
 
 from tapp.estimation.factors import triangularize
 from tapp.frames.time import Epoch
-from tapp.processor.deck import bind, read_deck
-from tapp.processor.sequencing import Processor, Run, process
-from tapp.tape import hdf5io
-from tapp.tape.packing import tr_size, unpack_tr
-from tapp.tape.t13 import (
+from tapp.io.tape import hdf5io
+from tapp.io.tape.packing import tr_size, unpack_tr
+from tapp.io.tape.t13 import (
     PARTS,
     T13,
     TapeMiss,
@@ -59,7 +57,9 @@ from tapp.tape.t13 import (
     TapeRecords,
     TapeStations,
 )
-from tapp.tape.t13_hdf5 import _write, open_t13, write_t13
+from tapp.io.tape.t13_hdf5 import _write, open_t13, write_t13
+from tapp.processor.deck import bind, read_deck
+from tapp.processor.sequencing import Processor, Run, process
 from tests.bench import legacy
 from tests.bench.common import (
     REPO_ROOT,
@@ -376,7 +376,7 @@ def _agreement(run: Run, peer: PeerResult) -> float:
 _NORMAL_FORM_CHILD = """
 from tapp.processor.deck import bind, read_deck
 from tapp.processor.sequencing import process
-from tapp.tape.t13_hdf5 import open_t13
+from tapp.io.tape.t13_hdf5 import open_t13
 
 with open_t13(ARGS["tape"]) as data:
     if data.version != 2:

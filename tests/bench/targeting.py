@@ -15,7 +15,8 @@ import tomllib
 import numpy as np
 
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.targeting import BPlaneSearch, run_search, scenario_search
+from tapp.targeting.program import BPlaneSearch, run_search
+from tapp.targeting.searchfile import scenario_search
 
 SCENARIO = EXAMPLES / "search_bplane.toml"
 REPEATS = 5

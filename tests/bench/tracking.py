@@ -20,9 +20,9 @@ import time
 from pathlib import Path
 
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.tape import T13
-from tapp.tape.t13 import VERSION as T13_VERSION
-from tapp.tape.t13_hdf5 import write_t13
+from tapp.io.tape import T13
+from tapp.io.tape.t13 import VERSION as T13_VERSION
+from tapp.io.tape.t13_hdf5 import write_t13
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 from tests.bench import legacy
@@ -56,7 +56,7 @@ def _run_once(raw: bool, out: Path, model: str = "iau2006") -> tuple[float, floa
 #: {"raw model": [simulate s, total s, tape MB, tape version]}.
 _NORMAL_FORM_CHILD = """
 import h5py
-from tapp.tape.t13_hdf5 import write_t13
+from tapp.io.tape.t13_hdf5 import write_t13
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 

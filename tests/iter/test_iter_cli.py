@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-import tapp.cli.sweep  # noqa: F401  (registers the iter command on the app)
+import tapp.cli.iter_cmd  # noqa: F401  (registers the iter command on the app)
 from iter import CaseStatus, read_hdf5
 from tapp.cli.common import EXIT_FAILURE, EXIT_INPUT, app
 from tapp.examples import FOLDER as EXAMPLES
@@ -47,7 +47,7 @@ def test_json_summary_and_resume(tmp_path):
 
 def _bad_sweep(tmp_path: Path, loop: str) -> Path:
     path = tmp_path / "bad.toml"
-    path.write_text('[body]\ncallable = "iter.examples:launch_azimuth_case"\n'
+    path.write_text('[body]\ncallable = "tapp.targeting.launch_azimuth:launch_azimuth_case"\n'
                     f'[[loop]]\nnames = ["azimuth_deg"]\n{loop}\n')
     return path
 
@@ -110,7 +110,7 @@ def bodies(monkeypatch):
 def _altitude_sweep(tmp_path: Path, altitudes_km: list[float]) -> Path:
     """A sweep over altitudes; one below the Earth's centre fails (math domain error)."""
     path = tmp_path / "altitudes.toml"
-    path.write_text('[body]\ncallable = "iter.examples:launch_azimuth_case"\n'
+    path.write_text('[body]\ncallable = "tapp.targeting.launch_azimuth:launch_azimuth_case"\n'
                     '[body.constants]\nlaunch_day = 0.0\nazimuth_deg = 90.0\n'
                     'latitude_deg = 28.5\neast_longitude_deg = 0.0\n'
                     f'[[loop]]\nnames = ["altitude_km"]\nsets = {len(altitudes_km)}\n'

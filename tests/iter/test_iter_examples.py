@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from iter.examples import launch_azimuth_case
+from tapp.targeting.launch_azimuth import launch_azimuth_case
 
 ONE_MICRODEGREE_deg = 1e-6
 ONE_MM_PER_S_km_s = 1e-6

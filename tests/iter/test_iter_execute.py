@@ -76,7 +76,7 @@ def test_local_dask_cluster_equals_serial_row_for_row(cluster_address):
 def test_failure_on_dask_is_recorded_and_the_sweep_goes_on(cluster_address):
     # An altitude below the Earth's centre makes sqrt of a negative number: ValueError.
     loop = Loop(type=1, names=("altitude_km",), sets=3, vary=(185.0, -7000.0, 400.0))
-    body = CallableBody("iter.examples:launch_azimuth_case",
+    body = CallableBody("tapp.targeting.launch_azimuth:launch_azimuth_case",
                         {"launch_day": 0.0, "azimuth_deg": 90.0, "latitude_deg": 28.5,
                          "east_longitude_deg": 0.0})
     result = run_sweep(Sweep(loops=(loop,), body=body),
@@ -404,8 +404,8 @@ def test_bad_input_stops_the_sweep_before_any_case_runs_or_anything_is_written(
 
 
 @pytest.mark.parametrize(("target", "names", "field", "fragment"), [
-    ("iter.examples:launch_azimuth_case", ("azimuth_deg",), "body.constants",
-     "a value for the argument 'launch_day' of iter.examples:launch_azimuth_case"),
+    ("tapp.targeting.launch_azimuth:launch_azimuth_case", ("azimuth_deg",), "body.constants",
+     "a value for the argument 'launch_day' of tapp.targeting.launch_azimuth:launch_azimuth_case"),
     ("iter_bodies:raising_body", ("azimut_deg",), "loop[0].names",
      "an argument of iter_bodies:raising_body (azimuth_deg)"),
 ])

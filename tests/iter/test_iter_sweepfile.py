@@ -39,7 +39,8 @@ def _document(**loop_overrides):
     loop = {"type": 1, "names": ["azimuth_deg"], "sets": 2, "vary": [96.0, 99.0]}
     loop.update(loop_overrides)
     loop = {k: v for k, v in loop.items() if v is not None}
-    return {"body": {"callable": "iter.examples:launch_azimuth_case"}, "loop": [loop]}
+    return {"body": {"callable": "tapp.targeting.launch_azimuth:launch_azimuth_case"},
+            "loop": [loop]}
 
 
 @pytest.mark.parametrize(("overrides", "field", "fragment"), [
@@ -67,9 +68,9 @@ def test_bad_loop_fields_name_file_and_field(overrides, field, fragment):
 
 @pytest.mark.parametrize(("target", "fragment"), [
     ("no_such_module_xyz:f", "an importable module"),
-    ("iter.examples:no_such_function", "a function 'no_such_function'"),
-    ("iter.examples", '"module:function"'),
-    ("iter.examples:GM_EARTH_km3_s2", "a callable"),
+    ("tapp.targeting.launch_azimuth:no_such_function", "a function 'no_such_function'"),
+    ("tapp.targeting.launch_azimuth", '"module:function"'),
+    ("tapp.targeting.launch_azimuth:GM_EARTH_km3_s2", "a callable"),
 ])
 def test_unknown_body_callable_is_bad_input(target, fragment):
     document = _document()
@@ -89,13 +90,15 @@ def test_unknown_program_is_bad_input():
 
 def test_body_fields_are_checked():
     document = _document()
-    document["body"] = {"callable": "iter.examples:launch_azimuth_case", "program": ["x"]}
+    document["body"] = {"callable": "tapp.targeting.launch_azimuth:launch_azimuth_case",
+                        "program": ["x"]}
     with pytest.raises(SweepInputError, match="exactly one of callable or program"):
         parse_sweep(document)
-    document["body"] = {"callable": "iter.examples:launch_azimuth_case", "json": True}
+    document["body"] = {"callable": "tapp.targeting.launch_azimuth:launch_azimuth_case",
+                        "json": True}
     with pytest.raises(SweepInputError, match="body.json"):
         parse_sweep(document)
-    document["body"] = {"callable": "iter.examples:launch_azimuth_case",
+    document["body"] = {"callable": "tapp.targeting.launch_azimuth:launch_azimuth_case",
                         "constants": {"azimuth_deg": 1.0}}
     with pytest.raises(SweepInputError, match=r"loop\[0\]\.names.*not also body.constants"):
         parse_sweep(document)
@@ -144,12 +147,12 @@ def test_file_errors_name_the_file(tmp_path):
 
 def test_loaded_sweep_keeps_the_file_contents(tmp_path):
     path = tmp_path / "s.toml"
-    path.write_text('[sweep]\ndescription = "d"\n[body]\ncallable = "iter.examples:'
+    path.write_text('[sweep]\ndescription = "d"\n[body]\ncallable = "tapp.targeting.launch_azimuth:'
                     'launch_azimuth_case"\n[[loop]]\nnames = ["azimuth_deg"]\nsets = 1\n'
                     "vary = [96.0]\n")
     sweep = load_sweep(path)
     assert sweep.loops[0].type == 1  # the seed's canned TYPE
-    assert sweep.body == CallableBody(target="iter.examples:launch_azimuth_case")
+    assert sweep.body == CallableBody(target="tapp.targeting.launch_azimuth:launch_azimuth_case")
     assert '"description": "d"' in sweep.contents_json()
     assert "description" not in sweep.definition_json()
 
@@ -168,7 +171,8 @@ def test_files_are_taken_from_the_sweep_files_folder_whatever_the_directory(tmp_
     absolute = tmp_path / "elsewhere.txt"
     absolute.write_text("3")
     _write_sweep(folder / "sweeps" / "s.toml",
-                 '[body]\ncallable = "iter.examples:launch_azimuth_case"\n[body.files]\n'
+                 '[body]\ncallable = "tapp.targeting.launch_azimuth:launch_azimuth_case"\n'
+                 '[body.files]\n'
                  f'scale_file = "../data/scale.txt"\nother = "{absolute}"\n')
     monkeypatch.chdir(tmp_path / "study" / "data")  # neither the repository nor the folder
     sweep = load_sweep(Path("..") / "sweeps" / "s.toml")
@@ -179,7 +183,7 @@ def test_files_are_taken_from_the_sweep_files_folder_whatever_the_directory(tmp_
 
 
 def test_a_missing_file_is_named_with_where_it_was_looked_for(tmp_path, monkeypatch):
-    path = _write_sweep(tmp_path / "s.toml", '[body]\ncallable = "iter.examples:'
+    path = _write_sweep(tmp_path / "s.toml", '[body]\ncallable = "tapp.targeting.launch_azimuth:'
                         'launch_azimuth_case"\n[body.files]\nscale_file = "scale.txt"\n')
     (tmp_path / "cwd").mkdir()
     (tmp_path / "cwd" / "scale.txt").write_text("2")  # beside the working directory: not used
@@ -205,7 +209,8 @@ def test_a_program_given_as_a_path_is_taken_from_the_sweep_files_folder(tmp_path
     ({"bad-name": "s.toml"}, {}, "azimuth_deg", "body.files.bad-name"),
 ])
 def test_file_names_are_checked_like_constants(tmp_path, files, constants, varied, field):
-    document = {"body": {"callable": "iter.examples:launch_azimuth_case", "files": files,
+    document = {"body": {"callable": "tapp.targeting.launch_azimuth:launch_azimuth_case",
+                         "files": files,
                          "constants": constants},
                 "loop": [{"names": [varied], "sets": 1, "vary": [96.0]}]}
     (tmp_path / "s.toml").touch()

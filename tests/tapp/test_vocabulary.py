@@ -13,11 +13,11 @@ import pytest
 
 from tapp.errors import InputError
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.models_file import ModelTable
-from tapp.od.setup import study_file
-from tapp.orbits import OrbitTable
-from tapp.targeting import SearchFile, scenario_search
-from tapp.tomlfile import read_toml
+from tapp.io.models_file import ModelTable
+from tapp.io.orbits import OrbitTable
+from tapp.io.tomlfile import read_toml
+from tapp.od.setup import read_study
+from tapp.targeting.searchfile import SearchFile, scenario_search
 from tapp.tracking.scenario import ScenarioFile, parse_scenario, read_scenario
 
 
@@ -34,13 +34,13 @@ def _search(path: Path) -> object:
     ("deep_space.toml", 'var_gravity = "J2"', 'stm_gravity = "J2"', read_scenario,
      "model.stm_gravity", "var_gravity"),
     ("approx_stm.toml", 'gravity = "J2"\nvar_gravity = ["J2", "J0"]',
-     'truth = "J2"\nvar_gravity = ["J2", "J0"]', study_file, "dc[0].truth", "gravity"),
-    ("approx_stm.toml", 'var_gravity = ["J2", "J0"]', 'stm = ["J2", "J0"]', study_file,
+     'truth = "J2"\nvar_gravity = ["J2", "J0"]', read_study, "dc[0].truth", "gravity"),
+    ("approx_stm.toml", 'var_gravity = ["J2", "J0"]', 'stm = ["J2", "J0"]', read_study,
      "dc[0].stm", "var_gravity"),
-    ("approx_stm.toml", "seed = 1969", "seed = 1969\nsigma_range_m = 15.0", study_file,
+    ("approx_stm.toml", "seed = 1969", "seed = 1969\nsigma_range_m = 15.0", read_study,
      "tracking.sigma_range_m", "[noise.fit] sigma_range_m"),
     ("approx_stm.toml", "[orbits.SATORB1]\n", "[orbits.SATORB1]\nx_km = 6550.524\n",
-     study_file, "orbits.SATORB1.x_km", "r_km = [x_km, y_km, z_km]"),
+     read_study, "orbits.SATORB1.x_km", "r_km = [x_km, y_km, z_km]"),
     ("search_bplane.toml", "v_km_s = [", "vy_km_s = 1.0\nv_km_s = [", _search,
      "injection.vy_km_s", "v_km_s = [vx_km_s, vy_km_s, vz_km_s]"),
 ])

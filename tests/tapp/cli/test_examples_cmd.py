@@ -12,7 +12,7 @@ import tapp.cli  # noqa: F401  (registers every command)
 from tapp.cli.common import app
 from tapp.examples import FILES
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.reference import KINDS, json_schema, markdown
+from tapp.io.reference import KINDS, json_schema, markdown
 
 runner = CliRunner()
 

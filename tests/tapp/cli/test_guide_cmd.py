@@ -13,8 +13,8 @@ from typer.testing import CliRunner
 import tapp.cli  # noqa: F401  (registers every command)
 from tapp.cli.common import app
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.tape.t13_hdf5 import write_t13
-from tapp.tape.t32_hdf5 import write_t32
+from tapp.io.tape.t13_hdf5 import write_t13
+from tapp.io.tape.t32_hdf5 import write_t32
 from tests.tapp.guidance.helpers import deep_space_t13, deep_space_t32
 
 runner = CliRunner()

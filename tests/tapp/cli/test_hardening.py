@@ -120,7 +120,7 @@ def test_a_failed_tape_write_leaves_the_old_oem_and_tape_and_no_temporary(
         Path(path).write_bytes(b"half a tape")
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr("tapp.tape.t13_hdf5.t13_file_writer", lambda tape, source: no_space)
+    monkeypatch.setattr("tapp.io.tape.t13_hdf5.t13_file_writer", lambda tape, source: no_space)
     line = _refused(["simulate", str(LEO), "-o", str(tape), "--oem", str(oem)],
                     code=EXIT_FAILURE)  # the disk's failure, not the input's
     assert line == f"error: -o/--output: {tape}: not written (No space left on device)"

@@ -12,8 +12,8 @@ from typer.testing import CliRunner
 
 import tapp.cli  # noqa: F401  (registers every command)
 from tapp.cli.common import app
-from tapp.tape.t13_hdf5 import write_t13
-from tapp.tape.t32_hdf5 import read_t32
+from tapp.io.tape.t13_hdf5 import write_t13
+from tapp.io.tape.t32_hdf5 import read_t32
 from tests.tapp.processor.helpers import leo_tape, sigmas
 
 runner = CliRunner()

@@ -11,12 +11,12 @@ import pytest
 from typer.testing import CliRunner
 
 import tapp.cli.search_cmd  # noqa: F401  (registers the command until tapp.cli imports it)
-import tapp.cli.tracking_cmd  # noqa: F401  (tapp simulate, for the written scenarios)
+import tapp.cli.simulate_cmd  # noqa: F401  (tapp simulate, for the written scenarios)
 from search import EXIT_FLAG
 from tapp.cli.common import app
 from tapp.cli.search_cmd import exit_code
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.tape.t13_hdf5 import read_t13
+from tapp.io.tape.t13_hdf5 import read_t13
 from tapp.tracking.scenario import read_scenario
 from tests.tapp.tracking.encounter_reference import (
     AIM,

@@ -14,13 +14,13 @@ from functools import lru_cache
 
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.guidance.guidefile import GuideFile
+from tapp.io.schema import validate
+from tapp.io.tape.t13 import T13, memory_pairs
+from tapp.io.tape.t32 import T32
+from tapp.io.tomlfile import read_toml
 from tapp.processor.deck import Deck, bind
 from tapp.processor.sequencing import process
 from tapp.processor.tape32 import build_t32
-from tapp.schema import validate
-from tapp.tape.t13 import T13, memory_pairs
-from tapp.tape.t32 import T32
-from tapp.tomlfile import read_toml
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import simulate
 

@@ -24,8 +24,8 @@ from tapp.guidance.guidefile import GuideFile, bind
 from tapp.guidance.linear import linear_covariance
 from tapp.guidance.statistics import BPLANE, ellipse
 from tapp.guidance.study import guidance_study
-from tapp.schema import validate
-from tapp.tomlfile import read_toml
+from tapp.io.schema import validate
+from tapp.io.tomlfile import read_toml
 from tests.tapp.guidance.helpers import SCENARIOS, deep_space_t32
 
 N = 100_000

@@ -2,7 +2,7 @@
 
 The audit, on main: ``sigma_fixed_mm_s`` had no upper bound (1e300 overflowed in Python,
 1e150 failed in LAPACK); a T32 Σ scaled by 1e300 failed in LAPACK. Now the field is bounded,
-the tape's numbers are (tests/tapp/tape/test_t32.py), and what the bounds let through
+the tape's numbers are (tests/tapp/io/tape/test_t32.py), and what the bounds let through
 together is caught before any sample is drawn (:func:`physical_linear_covariance`).
 """
 
@@ -21,9 +21,9 @@ from tapp.errors import InputError
 from tapp.guidance.guidefile import MAX_FIXED_MM_S
 from tapp.guidance.magnitude import CDF_TOL, SERIES_BELOW, quadratic_cdf
 from tapp.guidance.study import guidance_study
-from tapp.report.tapp2 import guidance_dict
-from tapp.tape.checks import MAX_MAGNITUDE
-from tapp.tape.t32 import validate as validate_t32
+from tapp.io.tape.checks import MAX_MAGNITUDE
+from tapp.io.tape.t32 import validate as validate_t32
+from tapp.report.guidance import guidance_dict
 from tests.tapp.guidance.helpers import EXECUTION, deep_space_t32, guide, with_recycles
 
 ALL = ["b_dot_r_km", "b_dot_t_km", "flight_time_s"]

@@ -13,7 +13,7 @@ from iter.execute import Execution
 from tapp.guidance.montecarlo import BLOCK_SAMPLES
 from tapp.guidance.shards import DASK_MIN_SAMPLES, plan_shards
 from tapp.guidance.study import guidance_study
-from tapp.report.tapp2 import guidance_dict
+from tapp.report.guidance import guidance_dict
 from tests.tapp.guidance.helpers import deep_space_t32, guide
 
 N = 5_500  # five whole blocks and a partial one

@@ -9,7 +9,6 @@ import tapp.measurements.observables
 import tapp.measurements.visibility
 from tapp.constants import C_LIGHT_km_s, GM_EARTH_km3_s2
 from tapp.errors import InputError
-from tapp.frames import Elements, kepler_states
 from tapp.frames.orientation import EarthOrientation
 from tapp.frames.time import Epoch
 from tapp.measurements import (
@@ -22,6 +21,7 @@ from tapp.measurements import (
     solve_light_time,
 )
 from tapp.measurements.stations import station_state_eci
+from tapp.orbit import Elements, kepler_states
 
 ALL_KINDS = ("range", "range_rate", "azimuth", "elevation")
 THETA0_rad = 1.3

@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 
-from tapp.frames import Elements, kepler_states
 from tapp.frames.orientation import EarthOrientation
 from tapp.measurements import (
     MeasurementModel,
@@ -15,6 +14,7 @@ from tapp.measurements import (
     wrap_angle_rad,
 )
 from tapp.measurements.stations import station_state_eci
+from tapp.orbit import Elements, kepler_states
 
 #: Angles from exactly constructed geometry: rounding of unit vectors (1e-16) over lengths of
 #: 1e3 km; a nanoradian.

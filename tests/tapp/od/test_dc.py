@@ -14,6 +14,7 @@ from scipy.stats import chi2
 from tapp.dynamics import Propagator, earth_model
 from tapp.errors import InputError, TooFewMeasurementsError
 from tapp.frames.orientation import EarthOrientation
+from tapp.measurements.observations import simulate
 from tapp.od import setup
 from tapp.od.batch import (
     NOISE_MODEL_PROBABILITY,
@@ -28,7 +29,6 @@ from tapp.od.batch import (
     rms_bound,
     rms_tail_probability,
 )
-from tapp.od.observations import simulate
 from tapp.od.rate import predicted_rate
 
 TEN_METRES_km = 1e-2

@@ -6,16 +6,16 @@ import numpy as np
 
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator, earth_model
-from tapp.frames.elements import cartesian_to_elements, kepler_states
 from tapp.od import setup
 from tapp.od.ekf import extended_kalman_filter
 from tapp.od.rsig import r_of_stm, r_signature
+from tapp.orbit.elements import cartesian_to_elements, kepler_states
 
 
 def test_ekf_with_matching_models_reaches_the_noise_level() -> None:
     x_true = setup.true_orbit("SATORB1")
     x_start = setup.initial_estimate(x_true, setup.offset())
-    apriori = setup.load_study()["ekf"]["apriori"]["1"]
+    apriori = setup.shipped_study().data["ekf"]["apriori"]["1"]
     obs = setup.simulated_observations(x_true, "J2", setup.network_for(x_true, None))
     obs = obs.window(18 * 3600.0)
     res = extended_kalman_filter(obs, Propagator(earth_model("J2")), x_start,

@@ -11,7 +11,7 @@ import pytest
 
 from tapp.od.batch import NOISE_MODEL_PROBABILITY
 from tapp.od.study import planned_cases, run_study
-from tapp.report.approx_stm import write_report
+from tapp.report.od import write_report
 
 #: The issue's bound on |q - ρ| / ρ in the linear regime.
 FIVE_PERCENT = 0.05

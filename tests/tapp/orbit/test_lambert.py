@@ -10,8 +10,8 @@ import pytest
 
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.errors import InputError
-from tapp.frames.elements import kepler_states
 from tapp.orbit import lambert
+from tapp.orbit.elements import kepler_states
 
 #: Curtis prints 4-5 significant digits: half a unit of the last digit.
 HALF_LAST_PRINTED_DIGIT_km_s = 5e-5
@@ -40,7 +40,7 @@ ORBITS = [
 
 @pytest.mark.parametrize("orbit", ORBITS)
 def test_velocities_are_those_of_the_kepler_arc_through_both_points(orbit) -> None:
-    """r1, r2 taken on a Keplerian arc (tapp.frames.elements, Kepler's equation): Lambert's
+    """r1, r2 taken on a Keplerian arc (tapp.orbit.elements, Kepler's equation): Lambert's
     velocities must be that arc's, with the pole on the side of its angular momentum."""
     *elements, tof = orbit
     states = kepler_states(np.array(elements), np.array([0.0, tof]), GM_EARTH_km3_s2)

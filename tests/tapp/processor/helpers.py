@@ -6,10 +6,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from tapp.io.schema import validate
+from tapp.io.tape.t13 import T13, memory_pairs
 from tapp.processor.deck import Deck, bind
 from tapp.processor.sequencing import Run, process
-from tapp.schema import validate
-from tapp.tape.t13 import T13, memory_pairs
 from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import leo_scenario
 

@@ -22,6 +22,9 @@ from typer.testing import CliRunner
 from tapp.cli.common import app
 from tapp.errors import InputError
 from tapp.examples import FOLDER as EXAMPLES
+from tapp.io.schema import validate
+from tapp.io.tape.t13 import memory_pairs
+from tapp.io.tape.t32 import validate as validate_t32
 from tapp.processor.deck import (
     COVARIANCE_RANGE,
     MAX_COMMANDS,
@@ -34,9 +37,6 @@ from tapp.processor.deck import (
 )
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.tape32 import build_t32
-from tapp.schema import validate
-from tapp.tape.t13 import memory_pairs
-from tapp.tape.t32 import validate as validate_t32
 from tests.tapp.processor.helpers import deck, leo_tape, run, sigmas
 from tests.test_fuzz import dumps_toml
 

@@ -22,12 +22,12 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
+from tapp.io.schema import validate
+from tapp.io.tape.t13 import T13, memory_pairs
+from tapp.io.tomlfile import read_toml
 from tapp.processor.deck import Deck, bind
 from tapp.processor.printout import closure
 from tapp.processor.sequencing import process
-from tapp.schema import validate
-from tapp.tape.t13 import T13, memory_pairs
-from tapp.tomlfile import read_toml
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.guidance.helpers import SCENARIOS

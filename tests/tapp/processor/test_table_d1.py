@@ -18,13 +18,13 @@ from typer.testing import CliRunner
 from tapp.cli.common import app
 from tapp.errors import InputError
 from tapp.examples import FOLDER as EXAMPLES
+from tapp.io.schema import validate
+from tapp.io.tape.t13 import memory_pairs
+from tapp.io.tape.t13_hdf5 import write_t13
+from tapp.io.tomlfile import read_toml
 from tapp.processor.deck import Deck, bind, read_deck
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.sequencing import Processor, Run
-from tapp.schema import validate
-from tapp.tape.t13 import memory_pairs
-from tapp.tape.t13_hdf5 import write_t13
-from tapp.tomlfile import read_toml
 from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 

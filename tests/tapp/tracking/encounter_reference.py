@@ -20,8 +20,8 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq
 
 from tapp.constants import GM_km3_s2, R_EARTH_km
+from tapp.dynamics.ephemeris import position_km
 from tapp.dynamics.forces import default_parameters
-from tapp.ephemeris import position_km
 from tapp.tracking.scenario import Scenario
 
 #: Spacing of the DE421 samples the splines interpolate, s (error ~1e-8 km for the Moon).

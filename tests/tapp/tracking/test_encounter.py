@@ -13,10 +13,10 @@ import pytest
 
 from tapp.constants import GM_km3_s2
 from tapp.dynamics import Propagator, earth_model
-from tapp.ephemeris import position_km
+from tapp.dynamics.ephemeris import position_km
 from tapp.errors import InputError
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.targeting import BPlaneSearch, FirstGuessError, patched_conic_guess, run_search
+from tapp.targeting.program import BPlaneSearch, FirstGuessError, patched_conic_guess, run_search
 from tapp.tracking.encounter import (
     NoEncounterError,
     TargetingError,

@@ -10,10 +10,10 @@ import pytest
 
 from tapp.constants import GM_EARTH_km3_s2, OMEGA_EARTH_rad_s, WGS84_A_km
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.frames.elements import elements_to_cartesian
+from tapp.io.tape.t13 import T13
 from tapp.measurements import wrap_angle_rad
 from tapp.measurements.stations import Station
-from tapp.tape.t13 import T13
+from tapp.orbit.elements import elements_to_cartesian
 from tapp.tracking.scenario import Scenario, parse_scenario, read_scenario
 from tapp.tracking.simulate import equinoctial_elements, miss_partials, simulate
 from tests.tapp.tracking.helpers import A_KM, leo_document, leo_scenario, scaled_close

@@ -1,5 +1,0 @@
-"""CCSDS Navigation Data Messages that tapp reads and writes (formats floor: files only).
-
-:mod:`tapp.ccsds.tdm`: Tracking Data Messages (observations). The trajectory's Orbit
-Ephemeris Message is written by :mod:`tapp.tracking.oem`.
-"""

@@ -1,0 +1,234 @@
+"""``tapp simulate``: TAPP I, a scenario -> a T13 tape (and its OEM and TDM).
+
+Bad input (scenario file or field, an unreadable or corrupt tape, an output path that is the
+scenario or the other output) is one line on stderr naming the file and the field or dataset,
+or the option, exit code 2 (1 for other failures; see :mod:`tapp.cli.common`). The tape, the
+OEM and the TDM are written together or not at all (:class:`tapp.io.outputs.OutputSet`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from tapp.cli.common import (
+    EXIT_FAILURE,
+    STDOUT,
+    EarthOrientationOpt,
+    JsonOpt,
+    add_json,
+    app,
+    earth_orientation_option,
+    echo_error,
+    json_file,
+    print_json,
+    progress_bar,
+    run_guarded,
+)
+from tapp.cli.search_cmd import exit_code as search_exit_code
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from tapp.io.outputs import OutputSet
+    from tapp.io.tape.t13 import T13
+    from tapp.tracking.scenario import Scenario
+    from tapp.tracking.simulate import Simulation
+
+def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: str | None = None
+                       ) -> tuple[Simulation, float, Scenario]:
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
+
+    from tapp.tracking.scenario import read_scenario
+    from tapp.tracking.simulate import simulate as run_simulation
+
+    scenario = read_scenario(path, earth_orientation)
+    start = time.perf_counter()
+    columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
+        "{task.completed}/{task.total}"), TimeElapsedColumn())
+    with progress_bar(*columns, quiet=quiet) as bar:
+        task = bar.add_task("TAPP I", total=None)
+
+        def progress(stage: str, done: int, total: int) -> None:
+            bar.update(task, description=stage, completed=done, total=total)
+
+        sim = run_simulation(scenario, raw=raw, progress=progress)
+    return sim, time.perf_counter() - start, scenario
+
+
+def _outputs(output: Path, sim: Simulation, oem: Path | None,
+             oem_text: str | None, tdm: Path | None = None,
+             tdm_text: str | None = None, sizes: dict | None = None) -> OutputSet:
+    """The tape, the OEM and the TDM, to be written together or not at all; the tape's size
+    goes into ``sizes["bytes"]`` as soon as it is written (before the outputs added later)."""
+    from tapp.io.outputs import OutputSet
+    from tapp.io.tape.t13_hdf5 import t13_file_writer
+
+    write_t13 = t13_file_writer(sim.tape, source=str(output))
+
+    def write_tape(tmp: Path) -> None:
+        write_t13(tmp)
+        if sizes is not None:
+            sizes["bytes"] = tmp.stat().st_size
+
+    outputs = OutputSet()
+    outputs.add("-o/--output", output, write_tape)
+    if oem is not None:
+        outputs.add("--oem", oem, lambda tmp: tmp.write_text(oem_text, encoding="utf-8"))
+    if tdm is not None:
+        outputs.add("--tdm", tdm, lambda tmp: tmp.write_text(tdm_text, encoding="utf-8"))
+    return outputs
+
+
+def _tdm_text(sim: Simulation, scenario: Path, parsed: Scenario) -> str:
+    """The observations of the tape's raw rows as a CCSDS TDM (one segment per station),
+    stating the Earth orientation they were made under (:mod:`tapp.io.obsfile`)."""
+    from tapp.io.ccsds.tdm import format_tdm, tdm_from_tracks, tracks_from_rows
+    from tapp.io.obsfile import TDM_PREFIX, made_under_statements
+    from tapp.measurements.observations import MadeUnder
+
+    tape, raw = sim.tape, sim.tape.raw
+    st = tape.stations
+    schedule = parsed.schedule
+    tracks = tracks_from_rows(raw.t_s, raw.station - 1, raw.kind, raw.value, raw.kinds,
+                              st.name, tape.iden,
+                              path="2,1" if schedule.light_time == "one_way" else "1,2,1",
+                              span_end_s=min(schedule.end_s, float(sim.t_s[-1])))
+    where = {n: f"station {n}: geodetic lat {lat:.6f} deg, lon {lon:.6f} deg, h {h:.4f} km "
+             f"(WGS84), mask {m:g} deg" for n, lat, lon, h, m in
+             zip(st.name, st.lat_deg, st.lon_deg, st.h_km, st.elev_mask_deg, strict=True)}
+    tracks = [dataclasses.replace(t, comments=(where[t.station],)) for t in tracks]
+    return format_tdm(tdm_from_tracks(tracks, tape.epoch, comments=(
+        f"TAPP I observations of {scenario.name}, tape {tape.iden}: the models' values, "
+        "noise-free", *made_under_statements(MadeUnder.of(parsed.orientation), TDM_PREFIX))))
+
+
+def _encounter_dict(tape: T13) -> tuple[dict, dict | None]:
+    """The tape's miss (kind, time, names, nominal values) and its retargeting record."""
+    from tapp.io.tape.t13 import utc_at
+
+    miss = tape.miss
+    record = tape.provenance.get("targeting")
+    return ({"kind": miss.kind, "t_s": miss.t_s, "utc": utc_at(tape.epoch, miss.t_s),
+             "names": list(miss.name), "nominal": miss.nominal.tolist()},
+            json.loads(record) if record else None)
+
+
+def _print_encounter(console: Console, miss: dict, targeting: dict | None) -> None:
+    """The targeted injection (when SEARCH moved it) and the miss achieved on the tape."""
+    aim = {} if targeting is None else targeting["aim"]
+    if targeting is not None:
+        v0, before = targeting["v0_targeted_km_s"], targeting["v0_file_km_s"]
+        change_m_s = 1e3 * sum((a - b) ** 2 for a, b in zip(v0, before, strict=True)) ** 0.5
+        console.print(
+            f"Injection retargeted by SEARCH ({targeting['first_guess']} first guess; "
+            f"{', '.join(targeting['vary'])} varied)\n  {targeting['status']} in "
+            f"{targeting['cases']} cases, {targeting['partial_sets']} sets of partials, "
+            f"{targeting['wall_time_s']:.2f} s; periapsis radius "
+            f"{targeting['periapsis_radius_km']:.3f} km\n  v0 = "
+            f"[{', '.join(f'{v:.9f}' for v in v0)}] km/s (changed by {change_m_s:.3f} m/s)")
+    console.print(f"Miss ({miss['kind']}) at {miss['utc']} UTC (t = {miss['t_s']:.3f} s):")
+    for name, value in zip(miss["names"], miss["nominal"], strict=True):
+        console.print(f"  {name} = {value:.10g}"
+                      + (f" (aim {aim[name]:.10g})" if name in aim else ""))
+
+
+@app.command()
+def simulate(
+    scenario: Annotated[Path, typer.Argument(help="Scenario file (TOML).")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="T13 tape to write "
+                                         "(RUN.t13.h5).")],
+    raw: Annotated[bool, typer.Option("--raw", help="Also store every observation's partial "
+                                      "row, weight and real-world noise (raw/ group).")] = False,
+    oem: Annotated[Path | None, typer.Option("--oem", help="Also write the trajectory as a "
+                                             "CCSDS OEM 2.0 (KVN) file.")] = None,
+    tdm: Annotated[Path | None, typer.Option("--tdm", help="Also write the observations as a "
+                                             "CCSDS TDM 2.0 (KVN) file.")] = None,
+    earth_orientation: EarthOrientationOpt = None,
+    json_out: JsonOpt = None,
+) -> None:
+    """TAPP I: simulate the tracking of a scenario and write its T13 tape.
+
+    A B-plane miss must be an encounter (exit 2 naming the closest approach otherwise); a
+    [targeting] table retargets the injection by SEARCH first (exit 3 diverged, 4 singular,
+    1 a case that failed; no tape then).
+    """
+
+    def body() -> int:
+        from rich.console import Console
+
+        from tapp.cli.tape_cmd import editing_table
+        from tapp.io.ccsds.oem import (
+            INTERPOLATION,
+            INTERPOLATION_DEGREE,
+            format_oem,
+        )
+        from tapp.io.outputs import check_paths
+        from tapp.io.tape.t13 import summary
+        from tapp.tracking.encounter import TargetingError
+        from tapp.tracking.oem_states import oem_trajectory
+
+        check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
+                                             "--tdm": tdm, "--json": json_file(json_out)})
+        try:
+            sim, wall_s, parsed = _simulate_with_bar(scenario, raw or tdm is not None,
+                                                     quiet=json_out == STDOUT,
+                                                     earth_orientation=earth_orientation_option(
+                                                         earth_orientation))
+        except TargetingError as exc:
+            echo_error(exc)
+            code = search_exit_code(exc.status)
+            return EXIT_FAILURE if code is None else code
+        tdm_text = None
+        if tdm is not None:
+            tdm_text = _tdm_text(sim, scenario, parsed)
+            if not raw:  # the raw rows were for the TDM only
+                sim = dataclasses.replace(sim, tape=dataclasses.replace(sim.tape, raw=None))
+        tape = sim.tape
+        oem_text, oem_states = None, 0
+        if oem is not None:
+            traj = oem_trajectory(sim.scenario, float(sim.t_s[-1]))
+            oem_states = traj.t_s.size
+            oem_text = format_oem(tape.epoch, traj.t_s, traj.states, object_name=tape.iden,
+                                  object_id=tape.iden, ref_frame=traj.ref_frame,
+                                  interpolation=INTERPOLATION,
+                                  interpolation_degree=INTERPOLATION_DEGREE,
+                                  comments=(f"TAPP I trajectory of {scenario.name}",),
+                                  meta_comments=traj.comments)
+        out = {"tape": str(output), "bytes": None, "iden": tape.iden,
+               "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
+               "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
+               "passes": int(tape.passes.station.size),
+               "observations": int(tape.pairs.n_obs.sum()),
+               "stations": summary(tape)["stations"], "raw": raw,
+               "oem": None if oem is None else str(oem),
+               "tdm": None if tdm is None else str(tdm), "wall_s": wall_s}
+        out["miss"], out["targeting"] = _encounter_dict(tape)
+        # the JSON is written after the tape's temporary, whose size it then holds
+        outputs = _outputs(output, sim, oem, oem_text, tdm, tdm_text, sizes=out)
+        add_json(outputs, json_out, out)
+        outputs.commit()
+        if json_out == STDOUT:
+            print_json(out)
+            return 0
+        console = Console(width=100)
+        console.print(f"T13 tape {output} ({out['bytes'] / 1e6:.2f} MB) written in "
+                      f"{wall_s:.2f} s: n_o = {tape.n_o}, n_p = {tape.n_p}, n_m = {tape.n_m}, "
+                      f"n_ts = {tape.n_ts}, n_it = {tape.n_it}; {out['observations']} "
+                      f"observations in {out['passes']} passes")
+        console.print(editing_table(out["stations"]))
+        if oem is not None:
+            console.print(f"OEM {oem} ({oem_states} states)")
+        if tdm is not None:
+            console.print(f"TDM {tdm} ({out['observations']} observations)")
+        _print_encounter(console, out["miss"], out["targeting"])
+        return 0
+
+    code = run_guarded(body)
+    if code:
+        raise typer.Exit(code)

@@ -1,0 +1,5 @@
+"""CCSDS Navigation Data Messages that tapp reads and writes (formats floor: files only).
+
+:mod:`tapp.io.ccsds.tdm`: Tracking Data Messages (observations). The trajectory's Orbit
+Ephemeris Message is written by :mod:`tapp.io.ccsds.oem`.
+"""

@@ -1,0 +1,207 @@
+"""CCSDS Orbit Ephemeris Message (OEM) 2.0 in KVN form: the trajectory of a simulation.
+
+Layout per CCSDS 502.0-B-2 (Orbit Data Messages, Blue Book, 2009), §5: a header
+(``CCSDS_OEM_VERS = 2.0``, ``COMMENT`` lines, ``CREATION_DATE``, ``ORIGINATOR``), one metadata
+block between ``META_START`` and ``META_STOP`` (``COMMENT`` lines, ``OBJECT_NAME``,
+``OBJECT_ID``, ``CENTER_NAME``, ``REF_FRAME``, ``TIME_SYSTEM``, ``START_TIME``,
+``STOP_TIME``, ``INTERPOLATION``, ``INTERPOLATION_DEGREE``), then one data line per epoch:
+the epoch (ISO, UTC) and x, y, z (km), x_dot, y_dot, z_dot (km/s). Epochs must increase.
+The file is written to a temporary name and renamed.
+
+What the OEM of a simulation says (:func:`tapp.tracking.oem_states.oem_trajectory`):
+
+- ``REF_FRAME`` is the frame the states are in: ``GCRF`` under the ``iau2006`` Earth
+  orientation (the states are GCRS: IAU 2006/2000A with IERS EOP), ``EME2000`` under ``gmst``
+  (:data:`REF_FRAMES`).
+- The states run from the injection (t = 0) to the end of the simulation, every data
+  interval, halved (repeatedly) around the intervals where the interpolation below would not
+  hold: near a low perigee, in a swing-by.
+- ``INTERPOLATION = LAGRANGE`` with ``INTERPOLATION_DEGREE = 7``: a Lagrange polynomial
+  through the 8 states nearest the time (the window centred on it, shifted inwards at the
+  ends, as the ``oem`` package chooses it) reproduces the propagated trajectory at
+  every mid-point between states within :data:`INTERPOLATION_TOL_KM` and
+  :data:`INTERPOLATION_TOL_KM_S`; the largest errors found are stated in a ``COMMENT``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+
+from tapp.constants import SECONDS_PER_DAY
+from tapp.errors import InputError
+from tapp.frames.time import Epoch
+from tapp.io.atomic import atomic_write
+
+#: Digits of the seconds of the epochs (1 us).
+EPOCH_DECIMALS = 6
+#: OEM ``REF_FRAME`` (CCSDS SANA name) of the inertial frame of each Earth orientation model.
+REF_FRAMES = {"iau2006": "GCRF", "gmst": "EME2000"}
+#: Interpolation methods an OEM may declare (CCSDS 502.0-B-2 Table 5-3).
+INTERPOLATIONS = ("HERMITE", "LAGRANGE", "LINEAR")
+#: The interpolation the OEM of a simulation declares, and its degree (degree + 1 states).
+INTERPOLATION = "LAGRANGE"
+INTERPOLATION_DEGREE = 7
+#: Largest interpolation error accepted at the mid-points between states: 1 mm in position,
+#: 1 um/s in velocity (the integrator's own noise, rtol 1e-13 of the state, is far below).
+INTERPOLATION_TOL_KM = 1e-6
+INTERPOLATION_TOL_KM_S = 1e-9
+
+
+@dataclass(frozen=True, slots=True)
+class OemTrajectory:
+    """States for an OEM and how well they interpolate.
+
+    Attributes
+    ----------
+    t_s : (N,) times, s from the epoch, from 0 to the end
+        (:func:`tapp.tracking.oem_states.oem_trajectory`).
+    states : (N, 6) km and km/s, Earth-centred, in ``ref_frame``.
+    ref_frame : OEM ``REF_FRAME`` (:data:`REF_FRAMES`).
+    min_step_s, max_step_s : shortest and longest spacing of the states, s.
+    error_km, error_km_s : largest interpolation error at the mid-points between states
+        (:data:`INTERPOLATION` of degree :data:`INTERPOLATION_DEGREE`), position and velocity.
+    """
+
+    t_s: np.ndarray
+    states: np.ndarray
+    ref_frame: str
+    min_step_s: float
+    max_step_s: float
+    error_km: float
+    error_km_s: float
+
+    @property
+    def comments(self) -> tuple[str, ...]:
+        """COMMENT lines that say where the states are and how well they interpolate."""
+        steps = (f"every {self.max_step_s:g} s" if self.min_step_s == self.max_step_s else
+                 f"every {self.max_step_s:g} s, down to {self.min_step_s:g} s where the "
+                 "motion is fast")
+        return (f"States from the injection (t = 0) to the end of the simulation, {steps}.",
+                f"{INTERPOLATION.capitalize()} interpolation of degree {INTERPOLATION_DEGREE} "
+                f"({INTERPOLATION_DEGREE + 1} states, the window centred on the time) "
+                "reproduces the propagated trajectory at every mid-point between states to "
+                f"{self.error_km * 1e6:.2g} mm and {self.error_km_s * 1e6:.2g} mm/s "
+                f"(required: {INTERPOLATION_TOL_KM * 1e6:g} mm, "
+                f"{INTERPOLATION_TOL_KM_S * 1e6:g} mm/s).")
+
+
+def lagrange_interpolate(t_nodes, y_nodes, t, degree: int) -> np.ndarray:
+    """Return the Lagrange interpolant of degree ``degree`` of (t_nodes, y_nodes) at ``t``.
+
+    At each time the polynomial runs through the degree + 1 nodes of the window whose centre
+    is nearest to it (centred on it, shifted inwards at the ends):
+
+    .. math:: y(t) = \\sum_j y_j \\prod_{k \\ne j} \\frac{t - t_k}{t_j - t_k}
+
+    Parameters
+    ----------
+    t_nodes : (N,) strictly increasing times, s (N > degree).
+    y_nodes : (N, m) values at the nodes.
+    t : (M,) times to interpolate at, s, within [t_nodes[0], t_nodes[-1]].
+    degree : int, >= 1.
+
+    Returns
+    -------
+    (M, m) interpolated values.
+    """
+    tn = np.asarray(t_nodes, dtype=float)
+    y = np.asarray(y_nodes, dtype=float)
+    tq = np.asarray(t, dtype=float)
+    n = degree + 1
+    centres = np.convolve(tn, np.full(n, 1.0 / n), mode="valid")  # mean of each window
+    above = np.searchsorted(centres, tq)  # centres[above - 1] < t <= centres[above]
+    lo = np.clip(above - 1, 0, centres.size - 1)
+    hi = np.clip(above, 0, centres.size - 1)
+    first = np.where(tq - centres[lo] <= centres[hi] - tq, lo, hi)
+    idx = first[:, None] + np.arange(n)  # (M, n)
+    tw = tn[idx]
+    weights = np.ones(idx.shape)  # weight of node j: prod over k != j of (t - t_k)/(t_j - t_k)
+    for k in range(n):
+        others = np.arange(n) != k
+        weights[:, others] *= ((tq - tw[:, k])[:, None] / (tw[:, others] - tw[:, k:k + 1]))
+    return np.einsum("mj,mjc->mc", weights, y[idx])
+
+
+def _utc(epoch: Epoch, t_s: float) -> str:
+    return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(EPOCH_DECIMALS)
+
+
+def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
+               ref_frame: str, interpolation: str, interpolation_degree: int,
+               originator: str = "TAPP", comments: tuple[str, ...] = (),
+               meta_comments: tuple[str, ...] = ()) -> str:
+    """Return the text of an OEM 2.0 (KVN) of an Earth-centred inertial trajectory.
+
+    Parameters
+    ----------
+    epoch : Epoch
+        UTC of t = 0.
+    t_s : array_like, shape (N,)
+        Strictly increasing times, s from the epoch.
+    states : array_like, shape (N, 6)
+        Position km and velocity km/s, Earth-centred, in ``ref_frame``.
+    object_name, object_id : str
+        Spacecraft name and identifier (non-empty).
+    ref_frame : str
+        ``REF_FRAME`` (CCSDS SANA name: "GCRF", "EME2000", ...).
+    interpolation, interpolation_degree : str, int
+        ``INTERPOLATION`` (one of :data:`INTERPOLATIONS`) and ``INTERPOLATION_DEGREE``
+        (>= 1; Lagrange needs degree + 1 <= N states).
+    originator : str
+        Creating agency.
+    comments, meta_comments : tuple of str
+        COMMENT lines of the header (after ``CCSDS_OEM_VERS``) and of the metadata (after
+        ``META_START``).
+
+    Raises
+    ------
+    InputError
+        Mismatched shapes, non-finite values, times not strictly increasing, empty names or
+        frame, an unknown interpolation or a degree the states cannot carry.
+    """
+    t = np.asarray(t_s, dtype=float)
+    x = np.asarray(states, dtype=float)
+    if t.ndim != 1 or t.size == 0 or x.shape != (t.size, 6):
+        raise InputError("OEM", "states", "times (N,) and states (N, 6)", (t.shape, x.shape))
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+        raise InputError("OEM", "states", "finite times and states")
+    if np.any(np.diff(t) <= 0):
+        raise InputError("OEM", "t_s", "strictly increasing times")
+    for field, value in (("OBJECT_NAME", object_name), ("OBJECT_ID", object_id),
+                         ("REF_FRAME", ref_frame)):
+        if not value.strip():
+            raise InputError("OEM", field, "a non-empty name", value)
+    if interpolation not in INTERPOLATIONS:
+        raise InputError("OEM", "INTERPOLATION", f"one of {', '.join(INTERPOLATIONS)}",
+                         interpolation)
+    if not 1 <= interpolation_degree < t.size:
+        raise InputError("OEM", "INTERPOLATION_DEGREE",
+                         f"a degree from 1 to the number of states less one ({t.size - 1})",
+                         interpolation_degree)
+    created = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S")
+    lines = ["CCSDS_OEM_VERS = 2.0", *(f"COMMENT {c}" for c in comments),
+             f"CREATION_DATE = {created}", f"ORIGINATOR = {originator}", "",
+             "META_START", *(f"COMMENT {c}" for c in meta_comments),
+             f"OBJECT_NAME = {object_name}",
+             f"OBJECT_ID = {object_id}",
+             "CENTER_NAME = EARTH",
+             f"REF_FRAME = {ref_frame}",
+             "TIME_SYSTEM = UTC",
+             f"START_TIME = {_utc(epoch, float(t[0]))}",
+             f"STOP_TIME = {_utc(epoch, float(t[-1]))}",
+             f"INTERPOLATION = {interpolation}",
+             f"INTERPOLATION_DEGREE = {interpolation_degree}",
+             "META_STOP", ""]
+    for ti, row in zip(t, x, strict=True):
+        lines.append(f"{_utc(epoch, float(ti))} " + " ".join(
+            [f"{v:.9f}" for v in row[:3]] + [f"{v:.12f}" for v in row[3:]]))
+    return "\n".join(lines) + "\n"
+
+
+def write_oem(path: Path | str, text: str) -> Path:
+    """Write OEM text to ``path`` atomically (temporary file in the same folder, rename)."""
+    return atomic_write(path, lambda tmp: tmp.write_text(text))
