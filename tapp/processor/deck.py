@@ -704,11 +704,15 @@ class _Binder:
     def _check_output_size(self, systems: Systems, n_print: int, poc: tuple[Command, ...],
                            n_recycle: int, roc: tuple[Command, ...]) -> None:
         """Refuse a run of more than :data:`MAX_ENTITIES` entities or
-        :data:`MAX_ENTITY_NUMBERS` numbers in their matrices, before any is computed."""
+        :data:`MAX_ENTITY_NUMBERS` numbers in their matrices, before any is computed (a
+        covariance of an orbit set counts twice when the deck asks for RIC axes: its copy)."""
+        ric = "ric" in self.deck.output.frames
 
         def numbers(cmd: Command) -> int:
             rows, cols = (systems.bounds(side.rho) for side in (cmd.rows, cmd.cols))
-            return (rows[2] - rows[1]) * (cols[2] - cols[1])
+            copies = 2 if (ric and cmd.is_covariance and cmd.rows == cmd.cols and
+                           systems.orbit_time(cmd.rows.tau, cmd.rows.rho) is not None) else 1
+            return copies * (rows[2] - rows[1]) * (cols[2] - cols[1])
 
         entities = n_print * len(poc) + n_recycle * len(roc)
         size = n_print * sum(map(numbers, poc)) + n_recycle * sum(map(numbers, roc))

@@ -16,7 +16,7 @@ from tapp.errors import InputError
 from tapp.io.schema import validate
 from tapp.io.tape.t13 import memory_pairs
 from tapp.processor.commands import parse_command
-from tapp.processor.deck import Deck, bind
+from tapp.processor.deck import MAX_ENTITY_NUMBERS, Deck, bind
 from tapp.processor.executive import Entity
 from tapp.processor.printout import (
     entity_dict,
@@ -188,3 +188,17 @@ def test_history_tables_give_fit_and_real_ellipses():
     assert f"{major / 2:.4e} / {major:.4e}" in text
     assert f"{angle:+.3f} / {angle:+.3f}" in text
     assert history_lines(run_, ("a_km", "ex", "ey")) == []
+
+
+def test_ric_copies_count_in_the_output_bound(tape):
+    """The covariances of the n_o standard parameters at epoch (o begins with the orbit) as
+    many times as the number bound allows at 4 print times: accepted in inertial axes only;
+    with their RIC copies twice the numbers, refused before any is computed."""
+    n_o = len(tape.parameters.name)
+    n = MAX_ENTITY_NUMBERS // (4 * n_o * n_o)
+    doc = deck(tape, times={"print": [1, 2, 3]}, commands={"print": ["Lb'; 0,0,o; 0,0,o"] * n})
+    header = memory_pairs(tape).header
+    bind(validate(Deck, doc, "deck.toml"), header, "deck.toml")
+    doc["output"] = {"frames": ["inertial", "ric"]}
+    with pytest.raises(InputError, match="commands.print: expected at most"):
+        bind(validate(Deck, doc, "deck.toml"), header, "deck.toml")
