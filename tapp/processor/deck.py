@@ -271,7 +271,8 @@ class Output(Schema):
         "the 6 position and velocity components at one time, e.g. orbit@current, r1@recycle, "
         "pk), with its σ, correlations and error budget, is also given in the radial R = r/|r|, "
         "cross-track C = (r x v)/|r x v| and in-track I = C x R axes of the nominal state at "
-        "that time (velocity components along the same axes, without the ω x r term of "
+        "that time as the tape stores it (Earth-centred; near the Moon these are still the "
+        "Earth's axes) (velocity components along the same axes, without the ω x r term of "
         "rotating axes), the σ history gets the RIC σ of the orbit at each print and recycle "
         "time, and --plots draws them (sigma_ric.png, sigma_ric.csv).")
 

@@ -91,9 +91,15 @@ def _plots(folder: Path, run, header, guidance, title: str) -> list[Path]:
     return out
 
 
-def _optional(caption: str, markdown: str) -> list[str]:
-    """A captioned table's lines, or none when the table is empty."""
-    return [caption, "", markdown, ""] if markdown else []
+def ellipse_and_ric_sections(content: dict) -> list[str]:
+    """Markdown lines of the B-plane ellipse and RIC σ tables of a ``run_dict``, each with
+    its caption, leaving out a table that is empty."""
+    tables = (("1σ B-plane dispersion ellipses, fit / real (3σ: three times the semi-axes):",
+               bplane_ellipse_table(content)),
+              ("σ of the orbit position in radial / in-track / cross-track axes of the nominal "
+               "state, fit / real:", ric_sigma_table(content)))
+    return [line for caption, markdown in tables if markdown
+            for line in (caption, "", markdown, "")]
 
 
 def write_report(folder: Path, pipeline, run, header, content: dict, guidance,
@@ -121,10 +127,7 @@ def write_report(folder: Path, pipeline, run, header, content: dict, guidance,
         "## TAPP III: fit world vs real world (`o3.txt`, `process.json`, `run.t32.h5`)", "",
         "σ of the miss at each recycle (the midcourse times handed to TAPP II), fit world / "
         "real world:", "", recycle_sigma_table(content), "",
-        *_optional("1σ B-plane dispersion ellipses (3σ: three times the semi-axes):",
-                   bplane_ellipse_table(content)),
-        *_optional("σ of the orbit position in radial / in-track / cross-track axes of the "
-                   "nominal state:", ric_sigma_table(content)),
+        *ellipse_and_ric_sections(content),
         f"The first {O3_EXCERPT_LINES} lines of the O3 printout:", "", "```",
         *o3, "```", "",
         tapp2.rstrip(), "",
