@@ -78,7 +78,9 @@ def process_cmd(
                                                   "(RUN.t32.h5) for TAPP II.")] = None,
     json_out: JsonOpt = None,
     plots: Annotated[Path | None, typer.Option("--plots", help="Write the PNG plots into "
-                                               "this folder.")] = None,
+                                               "this folder (σ against time; the B-plane "
+                                               "ellipses; RIC σ, with a CSV, when the deck "
+                                               "asks for RIC axes).")] = None,
 ) -> None:
     """TAPP III: process a T13 tape with a deck (fit world vs real world)."""
 

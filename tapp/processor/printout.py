@@ -10,6 +10,13 @@ holds (on the scale √(C_ii C_jj), estimated from the condition of the factors 
 :attr:`tapp.processor.executive.Entity.digits`); a real-world covariance its error budget:
 the σ of each source (signed: a negative variance, from correlations between sources, prints
 as −√|v|), whose variances add up to the printed total.
+
+When the deck asks for RIC axes (``[output] frames``), a covariance of an orbit set is followed
+by the same in radial / in-track / cross-track axes of the nominal state at its time
+(:attr:`tapp.processor.executive.Entity.ric`), budget included. A covariance whose rows hold
+B·T and B·R gets its B-plane dispersion ellipses (1σ and 3σ semi-axes in km, the major axis's
+angle from T towards R: :mod:`tapp.estimation.ellipse`). After the blocks, two summary tables
+over the print and recycle times, fit / real: the RIC σ of the orbit and the B-plane ellipses.
 """
 
 from __future__ import annotations
