@@ -42,7 +42,7 @@ from tapp.examples import FOLDER as EXAMPLES
 from tapp.od.study import planned_cases, run_study
 from tapp.report.markdown import table
 from tapp.report.od import write_report
-from tapp.report.pipeline import recycle_sigma_table
+from tapp.report.pipeline import ellipse_and_ric_sections, recycle_sigma_table
 from tapp.report.sweeps import plot_departure_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -152,6 +152,7 @@ def matrix_processor() -> None:
                   f"Miss parameters {', '.join(content['history']['miss'])}; σ at each "
                   "recycle (TAPP II's midcourse times), fit world vs real world:", ""]
         lines += [recycle_sigma_table(content)]
+        lines += ["", *ellipse_and_ric_sections(content)]
         plots = sorted((out / "plots" / scenario).glob("*.png"))
         lines += [f"![{p.stem}](plots/{scenario}/{p.name})" for p in plots] + [""]
         budgets += _budget_section(scenario, content)

@@ -78,7 +78,9 @@ def process_cmd(
                                                   "(RUN.t32.h5) for TAPP II.")] = None,
     json_out: JsonOpt = None,
     plots: Annotated[Path | None, typer.Option("--plots", help="Write the PNG plots into "
-                                               "this folder.")] = None,
+                                               "this folder (σ against time; the B-plane "
+                                               "ellipses; RIC σ, with a CSV, when the deck "
+                                               "asks for RIC axes).")] = None,
 ) -> None:
     """TAPP III: process a T13 tape with a deck (fit world vs real world)."""
 
@@ -87,10 +89,10 @@ def process_cmd(
         from tapp.io.tape.t32_hdf5 import t32_file_writer
         from tapp.processor.printout import largest_sigma_ratio, o3_text, run_dict
         from tapp.processor.tape32 import build_t32, t32_provenance
-        from tapp.report import BPLANE_PNG, SIGMA_PNG
+        from tapp.report import BPLANE_PNG, RIC_CSV, RIC_PNG, SIGMA_PNG
 
         pngs = {} if plots is None else {f"--plots ({name})": plots / name
-                                         for name in (SIGMA_PNG, BPLANE_PNG)}
+                                         for name in (SIGMA_PNG, BPLANE_PNG, RIC_PNG, RIC_CSV)}
         check_paths({"TAPE": tape, "DECK": deck}, {"--print": print_path, "--tape": tape_out,
                                                    "--json": json_file(json_out), **pngs})
         run, plan, (header, deck_obj), wall_s = _run(
@@ -115,7 +117,14 @@ def process_cmd(
             written.append(f"T32 tape {tape_out}")
         if plots is not None:
             # matplotlib only when plots are asked for (it costs ~0.5 s to import)
-            from tapp.report.processor import bplane_rows, plot_bplane_ellipses, plot_sigma_history
+            from tapp.report.processor import (
+                bplane_rows,
+                plot_bplane_ellipses,
+                plot_ric_history,
+                plot_sigma_history,
+                ric_csv,
+                ric_rows,
+            )
 
             title = f"{header.iden}: {deck_obj.title}" if deck_obj.title else header.iden
             outputs.add("--plots", plots / SIGMA_PNG, lambda tmp: plot_sigma_history(
@@ -124,8 +133,15 @@ def process_cmd(
             if bplane_rows(run.history, tuple(header.miss.name)):
                 outputs.add("--plots", plots / BPLANE_PNG, lambda tmp: plot_bplane_ellipses(
                     run.history, tuple(header.miss.name), tmp, f"{title}: B-plane 1σ/3σ"))
-                n_plots = 2
-            written.append(f"plots into {plots} ({n_plots} PNG)")
+                n_plots += 1
+            if ric_rows(run.history):
+                outputs.add("--plots", plots / RIC_PNG, lambda tmp: plot_ric_history(
+                    run.history, tmp, f"{title}: σ in RIC axes, fit vs real world"))
+                outputs.add("--plots", plots / RIC_CSV, lambda tmp: tmp.write_text(
+                    ric_csv(run.history), "utf-8"))
+                n_plots += 1
+            written.append(f"plots into {plots} ({n_plots} PNG"
+                           + (f", {RIC_CSV})" if ric_rows(run.history) else ")"))
         outputs.commit()
         if json_out == STDOUT:
             print_json(content)

@@ -4,7 +4,8 @@ Units are km, km/s, s and rad; time is SI seconds from the scenario epoch (a UTC
 date; :mod:`tapp.frames.timescales`). The Earth-fixed frame is reached from the inertial one by
 the scenario's Earth orientation (:mod:`tapp.frames.orientation`): the IAU 2006/2000A GCRS ->
 ITRS rotation with IERS EOP, or the gmst model R3(GMST IAU-82 + omega t) with UT1 = UTC of
-:mod:`tapp.frames.rotation`.
+:mod:`tapp.frames.rotation`. :mod:`tapp.frames.ric` gives the radial / in-track / cross-track
+axes of a state and rotates covariances into them.
 """
 
 from tapp.frames.geodesy import ecef_to_geodetic, enu_matrix, geodetic_to_ecef

@@ -48,6 +48,8 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     groups = { "station locations" = ["GOLDSTONE.rho_km", "..."] }
     [plots]
     partition = "p@current"     # σ against time of this set
+    [output]
+    frames = ["inertial", "ric"]    # also give orbit covariances in RIC axes
 
 In the sigma-table form every parameter of the tape needs a σ in the fit world (a parameter
 with σ = 0 is fixed, i.e. constrained) and in the real world (σ = 0: certain); the fit and
@@ -260,6 +262,21 @@ class Plots(Schema):
                            "time.")
 
 
+class Output(Schema):
+    """``[output]``: the axes orbit covariances are given in."""
+
+    frames: list[Literal["inertial", "ric"]] = Field(
+        ["inertial"], description="\"inertial\" (always: the tape's frame, EME2000 or GCRS) "
+        "and optionally \"ric\": every covariance of an orbit set (a set that begins with "
+        "the 6 position and velocity components at one time, e.g. orbit@current, r1@recycle, "
+        "pk), with its σ, correlations and error budget, is also given in the radial R = r/|r|, "
+        "cross-track C = (r x v)/|r x v| and in-track I = C x R axes of the nominal state at "
+        "that time as the tape stores it (Earth-centred; near the Moon these are still the "
+        "Earth's axes) (velocity components along the same axes, without the ω x r term of "
+        "rotating axes), the σ history gets the RIC σ of the orbit at each print and recycle "
+        "time, and --plots draws them (sigma_ric.png, sigma_ric.csv).")
+
+
 class Deck(Schema):
     """The deck file (module docstring); validated strictly, unknown keys are errors."""
 
@@ -275,6 +292,7 @@ class Deck(Schema):
     miss: Miss = Field(Miss(), description="Miss partitions.")
     budget: BudgetTable = Field(BudgetTable(), description="Error budgets.")
     plots: Plots = Field(Plots(), description="Plots.")
+    output: Output = Field(Output(), description="Output axes.")
 
 
 def read_deck(path: Path | str) -> Deck:
@@ -666,6 +684,13 @@ class _Binder:
             raise self.fail("plots.partition", exc.expected, text) from None
         return cmd.rows
 
+    def frames(self) -> tuple[str, ...]:
+        frames = self.deck.output.frames
+        if "inertial" not in frames or len(set(frames)) != len(frames):
+            raise self.fail("output.frames", "a list with \"inertial\" (always given) and "
+                            "optionally \"ric\", each once", frames)
+        return tuple(frames)
+
     def _check_positions(self) -> None:
         """Refuse parameters given by position in a deck that does not say which tape they
         refer to: positions fit any tape with enough parameters (the Table D-1 deck ran on
@@ -680,11 +705,15 @@ class _Binder:
     def _check_output_size(self, systems: Systems, n_print: int, poc: tuple[Command, ...],
                            n_recycle: int, roc: tuple[Command, ...]) -> None:
         """Refuse a run of more than :data:`MAX_ENTITIES` entities or
-        :data:`MAX_ENTITY_NUMBERS` numbers in their matrices, before any is computed."""
+        :data:`MAX_ENTITY_NUMBERS` numbers in their matrices, before any is computed (a
+        covariance of an orbit set counts twice when the deck asks for RIC axes: its copy)."""
+        ric = "ric" in self.deck.output.frames
 
         def numbers(cmd: Command) -> int:
             rows, cols = (systems.bounds(side.rho) for side in (cmd.rows, cmd.cols))
-            return (rows[2] - rows[1]) * (cols[2] - cols[1])
+            copies = 2 if (ric and cmd.is_covariance and cmd.rows == cmd.cols and
+                           systems.orbit_time(cmd.rows.tau, cmd.rows.rho) is not None) else 1
+            return copies * (rows[2] - rows[1]) * (cols[2] - cols[1])
 
         entities = n_print * len(poc) + n_recycle * len(roc)
         size = n_print * sum(map(numbers, poc)) + n_recycle * sum(map(numbers, roc))
@@ -730,7 +759,8 @@ class _Binder:
                                 else 0, roc)
         return Plan(systems, s0, lam0, tuple(sorted(set(prints))), recycles,
                     d.times.print_output, d.times.recycle_print, d.times.recycle_tape, poc, roc,
-                    self.stations_off(), d.budget.enabled, self.budget_groups(systems), hist)
+                    self.stations_off(), d.budget.enabled, self.budget_groups(systems), hist,
+                    self.frames())
 
 
 def bind(deck: Deck, header, source: str) -> Plan:

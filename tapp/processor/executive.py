@@ -37,7 +37,10 @@ class Entity:
     """One evaluated output entity: its command, labels and matrix (rows x cols).
 
     ``digits`` (covariances only) estimates how many significant digits the matrix holds,
-    on the scale √(Z_ii Z_jj) (:func:`tapp.estimation.factors.digits_held`).
+    on the scale √(Z_ii Z_jj) (:func:`tapp.estimation.factors.digits_held`). ``ric`` (a
+    covariance of an orbit set, when the deck asks for RIC axes) is the same entity with its
+    orbit rows and columns rotated to the radial / in-track / cross-track axes of the nominal
+    state at the set's time (:mod:`tapp.frames.ric`), budget included.
     """
 
     omega: int
@@ -47,6 +50,7 @@ class Entity:
     matrix: np.ndarray
     budget: Budget | None = None
     digits: float | None = None
+    ric: Entity | None = None
 
 
 def evaluate(omega: int, cmd: Command, acc: Accumulator, factor: Callable[[str], np.ndarray],

@@ -45,6 +45,9 @@ class Plan:
         not named are their own source (orbit: the whole rp block).
     history : the partition whose σ's, fit and real, are recorded at every statistics time
         (for the σ-against-time plots), e.g. ``p@current``.
+    frames : the axes orbit covariances are given in: "inertial" (the tape's), and "ric"
+        (radial, in-track, cross-track of the nominal state, :mod:`tapp.frames.ric`) for a
+        second copy of every covariance entity of an orbit set and the RIC σ history.
     """
 
     systems: Systems
@@ -61,3 +64,4 @@ class Plan:
     budget: bool = True
     budget_groups: tuple[tuple[str, tuple[int, ...]], ...] = ()
     history: Side = Side(0, 1, "p")
+    frames: tuple[str, ...] = ("inertial",)

@@ -10,6 +10,13 @@ holds (on the scale √(C_ii C_jj), estimated from the condition of the factors 
 :attr:`tapp.processor.executive.Entity.digits`); a real-world covariance its error budget:
 the σ of each source (signed: a negative variance, from correlations between sources, prints
 as −√|v|), whose variances add up to the printed total.
+
+When the deck asks for RIC axes (``[output] frames``), a covariance of an orbit set is followed
+by the same in radial / in-track / cross-track axes of the nominal state at its time
+(:attr:`tapp.processor.executive.Entity.ric`), budget included. A covariance whose rows hold
+B·T and B·R gets its B-plane dispersion ellipses (1σ and 3σ semi-axes in km, the major axis's
+angle from T towards R: :mod:`tapp.estimation.ellipse`). After the blocks, two summary tables
+over the print and recycle times, fit / real: the RIC σ of the orbit and the B-plane ellipses.
 """
 
 from __future__ import annotations
@@ -20,14 +27,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
+from tapp.estimation.ellipse import ErrorEllipse, error_ellipse, probability_inside
 from tapp.estimation.factors import gram
+from tapp.frames.ric import RIC_NAMES
 from tapp.frames.time import Epoch
 from tapp.io.tape.t13 import INFO_COLUMNS
 from tapp.processor.executive import Entity
-from tapp.processor.sequencing import Block, Run
+from tapp.processor.sequencing import Block, HistoryRow, Run
 
 _WIDTH = 12
 _MAX_COL = 30
+#: The miss components whose covariance gives the B-plane dispersion ellipse (T first).
+BPLANE_AXES = ("b_dot_t_km", "b_dot_r_km")
+#: The k of the k-σ ellipses printed (each holds 1 − exp(−k²/2) of a Gaussian miss).
+ELLIPSE_SCALES = (1.0, 3.0)
+ELLIPSE_NOTE = "semi-axes, and the angle of the major axis from T towards R"
+RIC_NOTE = ("RIC axes of the nominal state at the set's time (R = r/|r|, C = (r x v)/|r x v|, "
+            "I = C x R; velocity components along the same axes, without the ω x r term)")
 
 
 def _utc(epoch: Epoch, t_s: float) -> str:
@@ -62,13 +78,55 @@ def _grid(rows: tuple[str, ...], cols: tuple[str, ...], m: np.ndarray, fmt: str)
     return out
 
 
+def bplane_ellipse(ent: Entity) -> ErrorEllipse | None:
+    """The 1σ (B·T, B·R) dispersion ellipse of a covariance entity whose rows hold both
+    (:data:`BPLANE_AXES`); None otherwise."""
+    if not (ent.command.is_covariance and ent.rows == ent.cols
+            and all(n in ent.rows for n in BPLANE_AXES)):
+        return None
+    ix = [ent.rows.index(n) for n in BPLANE_AXES]
+    return error_ellipse(ent.matrix[np.ix_(ix, ix)])
+
+
+def ellipse_lines(ellipse: ErrorEllipse) -> list[str]:
+    """The O3 lines of a B-plane dispersion ellipse: 1σ and 3σ semi-axes, km, and angle."""
+    lines = [f"    B-plane dispersion ellipse of (B·T, B·R): {ELLIPSE_NOTE}:"]
+    for k in ELLIPSE_SCALES:
+        lines.append(f"      {k:g}σ ({100 * probability_inside(k):.2f} %): semi-major "
+                     f"{k * ellipse.semi_major:.4e} km, semi-minor {k * ellipse.semi_minor:.4e}"
+                     f" km, angle {ellipse.angle_deg:+.3f} deg")
+    return lines
+
+
+def ellipse_dict(ellipse: ErrorEllipse) -> dict:
+    """A B-plane dispersion ellipse as a JSON-ready dict (1σ and 3σ, km; angle, deg)."""
+    return {"axes": list(BPLANE_AXES), "angle_deg": ellipse.angle_deg,
+            "angle_convention": "major axis, from T towards R, in (-90, 90]",
+            **{f"sigma{k:g}": {"semi_major_km": k * ellipse.semi_major,
+                               "semi_minor_km": k * ellipse.semi_minor,
+                               "probability": probability_inside(k)} for k in ELLIPSE_SCALES}}
+
+
 def entity_lines(ent: Entity) -> list[str]:
-    """The O3 lines of one entity."""
+    """The O3 lines of one entity (and of its copy in RIC axes, when there is one)."""
     cmd = ent.command
     held = "" if ent.digits is None else f"   holds ~{ent.digits:.1f} digits"
     lines = [f"  ω = {ent.omega}   {cmd.seed()}   [{cmd.alias()}]   "
              f"({len(ent.rows)} x {len(ent.cols)}){held}"]
-    lines += ["    " + line for line in _grid(ent.rows, ent.cols, ent.matrix, ".4e")]
+    lines += _matrix_lines(ent)
+    ellipse = bplane_ellipse(ent)
+    if ellipse is not None:
+        lines += ellipse_lines(ellipse)
+    if ent.ric is not None:
+        lines.append(f"    in {RIC_NOTE}:")
+        lines += _matrix_lines(ent.ric)
+    return lines
+
+
+def _matrix_lines(ent: Entity) -> list[str]:
+    """The matrix of an entity, its σ and correlations (a covariance) and its budget."""
+    cmd = ent.command
+    lines = ["    " + line for line in _grid(ent.rows, ent.cols, ent.matrix, ".4e")]
     if cmd.is_covariance and ent.rows == ent.cols:
         lines.append("    σ:")
         lines += ["    " + line for line in _grid(("σ",), ent.rows, sigmas(ent.matrix)[None],
@@ -120,13 +178,26 @@ def o3_text(run: Run, header, deck_source: str, tape_source: str) -> str:
              f"{len(run.recycles)} recycles"]
     for block in run.blocks:
         lines += block_lines(block, header.epoch, INFO_COLUMNS)
+    lines += history_lines(run, tuple(header.miss.name))
     return "\n".join(lines) + "\n"
 
 
 def entity_dict(ent: Entity) -> dict:
-    """One entity as a JSON-ready dict: command, alias, labels, matrix (+ σ, budget)."""
+    """One entity as a JSON-ready dict: command, alias, labels, matrix (+ σ, budget, the
+    B-plane ellipse of a miss covariance, the same in RIC axes under ``ric``)."""
     out = {"omega": ent.omega, "command": ent.command.seed(), "alias": ent.command.alias(),
-           "rows": list(ent.rows), "cols": list(ent.cols), "matrix": ent.matrix.tolist()}
+           **_matrix_dict(ent)}
+    ellipse = bplane_ellipse(ent)
+    if ellipse is not None:
+        out["bplane_ellipse"] = ellipse_dict(ellipse)
+    if ent.ric is not None:
+        out["ric"] = {"frame": RIC_NOTE, **_matrix_dict(ent.ric)}
+    return out
+
+
+def _matrix_dict(ent: Entity) -> dict:
+    """Labels, matrix, σ and correlations (a covariance), digits and budget of an entity."""
+    out = {"rows": list(ent.rows), "cols": list(ent.cols), "matrix": ent.matrix.tolist()}
     if ent.command.is_covariance and ent.rows == ent.cols:
         out["sigma"] = sigmas(ent.matrix).tolist()
         out["correlation"] = correlation(ent.matrix).tolist()
@@ -150,13 +221,8 @@ def run_dict(run: Run, header, deck_source: str, tape_source: str) -> dict:
                     "t_s": b.t_s, "utc": _utc(header.epoch, b.t_s), "info": b.info.tolist(),
                     "entities": [entity_dict(e) for e in b.entities]} for b in run.blocks],
         "history": {"labels": list(run.history_labels), "miss": list(header.miss.name),
-                    "rows": [{"kind": h.kind, "k": h.k, "t_s": h.t_s, "digits": h.digits,
-                              "sigma_fit": None if h.sigma_fit is None else h.sigma_fit.tolist(),
-                              "sigma_real": h.sigma_real.tolist(),
-                              "miss_sigma_fit": None if h.miss_fit is None
-                              else sigmas(h.miss_fit).tolist(),
-                              "miss_sigma_real": sigmas(h.miss_real).tolist()}
-                             for h in run.history]},
+                    "ric_labels": list(RIC_NAMES),
+                    "rows": [_history_dict(h, tuple(header.miss.name)) for h in run.history]},
         "recycles": [{"number": r.number, "k": r.k, "l": r.l, "t_s": r.t_s,
                       "miss_sigma_fit": sigmas(gram(r.Lambda_fit_factor, r.B)).tolist(),
                       "miss_sigma_real": sigmas(gram(r.Lambda_real_factor, r.B)).tolist(),
@@ -164,6 +230,67 @@ def run_dict(run: Run, header, deck_source: str, tape_source: str) -> dict:
                                      if h.kind == "recycle" and h.k == r.k)}
                      for r in run.recycles],
     }
+
+
+def history_ellipses(h: HistoryRow, miss_names: Sequence[str]
+                     ) -> tuple[ErrorEllipse | None, ErrorEllipse | None]:
+    """The (fit, real) 1σ B-plane ellipses of a history row's miss covariances; None where
+    the miss set has no B·T and B·R or the fit covariance is not defined."""
+    if not all(n in miss_names for n in BPLANE_AXES):
+        return None, None
+    ix = [list(miss_names).index(n) for n in BPLANE_AXES]
+    return tuple(None if c is None else error_ellipse(c[np.ix_(ix, ix)])
+                 for c in (h.miss_fit, h.miss_real))
+
+
+def _history_dict(h: HistoryRow, miss_names: tuple[str, ...]) -> dict:
+    def listed(a: np.ndarray | None) -> list | None:
+        return None if a is None else a.tolist()
+
+    fit, real = history_ellipses(h, miss_names)
+    return {"kind": h.kind, "k": h.k, "t_s": h.t_s, "digits": h.digits,
+            "sigma_fit": listed(h.sigma_fit), "sigma_real": h.sigma_real.tolist(),
+            "miss_sigma_fit": None if h.miss_fit is None else sigmas(h.miss_fit).tolist(),
+            "miss_sigma_real": sigmas(h.miss_real).tolist(),
+            "ric_sigma_fit": listed(h.ric_fit), "ric_sigma_real": listed(h.ric_real),
+            "bplane_ellipse_fit": None if fit is None else ellipse_dict(fit),
+            "bplane_ellipse_real": None if real is None else ellipse_dict(real)}
+
+
+def history_lines(run: Run, miss_names: tuple[str, ...]) -> list[str]:
+    """The O3 summary tables after the blocks: the RIC σ of the orbit and the B-plane
+    ellipses, fit world / real world, at each print and recycle time (when there are any)."""
+
+    def pair(fit: float | None, real: float, fmt: str) -> str:
+        return f"{'-' if fit is None else format(fit, fmt)} / {format(real, fmt)}"
+
+    lines = []
+    rows = [h for h in run.history if h.ric_real is not None]
+    if rows:
+        lines += ["", "=" * 100, f"RIC σ OF THE ORBIT AT EACH STATISTICS TIME, fit / real "
+                  f"({RIC_NOTE})", "-" * 100]
+        head = f"{'kind':<8}{'k':>5}{'t (d)':>11}" + "".join(f"{n:>26}" for n in RIC_NAMES)
+        lines.append(head)
+        for h in rows:
+            fit = [None] * len(RIC_NAMES) if h.ric_fit is None else h.ric_fit
+            lines.append(f"{h.kind:<8}{h.k:>5}{h.t_s / SECONDS_PER_DAY:>11.4f}" + "".join(
+                f"{pair(f, r, '.4e'):>26}" for f, r in zip(fit, h.ric_real, strict=True)))
+    ellipses = [(h, *history_ellipses(h, miss_names)) for h in run.history]
+    ellipses = [e for e in ellipses if e[2] is not None]
+    if ellipses:
+        lines += ["", "=" * 100, "B-PLANE DISPERSION ELLIPSES OF (B·T, B·R), 1σ, fit / real: "
+                  f"{ELLIPSE_NOTE} (3σ: 3 times the semi-axes; 1σ holds "
+                  f"{100 * probability_inside(1.0):.2f} %, 3σ "
+                  f"{100 * probability_inside(3.0):.2f} % of a Gaussian miss)", "-" * 100,
+                  f"{'kind':<8}{'k':>5}{'t (d)':>11}{'semi-major (km)':>26}"
+                  f"{'semi-minor (km)':>26}{'angle (deg)':>22}"]
+        for h, fit, real in ellipses:
+            lines.append(
+                f"{h.kind:<8}{h.k:>5}{h.t_s / SECONDS_PER_DAY:>11.4f}"
+                f"{pair(fit and fit.semi_major, real.semi_major, '.4e'):>26}"
+                f"{pair(fit and fit.semi_minor, real.semi_minor, '.4e'):>26}"
+                f"{pair(fit and fit.angle_deg, real.angle_deg, '+.3f'):>22}")
+    return lines
 
 
 @dataclass(frozen=True, slots=True)

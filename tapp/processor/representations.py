@@ -77,6 +77,8 @@ ISOLATED_SETS = {"pj": "I", "pk": "U", "pl": "V", "pi": "W", "m": "B",
 PARTITIONS = (*SYSTEM_PARTITIONS, *ISOLATED_SETS)
 #: Time tag of the orbit rows of each stored orbit set.
 _ORBIT_TAG = {"I": "epoch", "U": "current", "V": "recycle", "W": "injection"}
+#: Orbit set option τ (Table B-2) of the isolated orbit sets.
+_ISOLATED_TAU = {"pj": 0, "pk": 1, "pl": 2, "pi": 3}
 
 
 @dataclass(frozen=True, slots=True)
@@ -141,6 +143,18 @@ class Systems:
         raise InputError("partition", rho, f"one of {', '.join(PARTITIONS)}"
                          + ("" if rho not in ISOLATED_SETS else
                             f" ({rho} is not defined: give it in the deck's [miss] table)"))
+
+    def orbit_time(self, tau: int | None, rho: str) -> int | None:
+        """Return the orbit set option τ (0..3: epoch, current, recycle, injection) when the
+        rows of the set (τ, ρ) begin with the n_p orbit components at one time (the links
+        never touch the orbit rows, :mod:`tapp.processor.links`); None otherwise (constants
+        only, a miss set, the miss orbit sets τ = 4, 5)."""
+        if rho in _ISOLATED_TAU:
+            return _ISOLATED_TAU[rho]
+        if rho not in SYSTEM_PARTITIONS or tau not in (0, 1, 2, 3):
+            return None
+        _, t, h = self.bounds(rho)
+        return tau if t == 0 and h >= self.n_p else None
 
     def system_names(self, chi: int) -> list[str]:
         """Names of the rows of system χ: permuted, and primed where a constraint acts."""

@@ -74,12 +74,14 @@ from tapp.estimation.factors import (
     upper_from_packed,
 )
 from tapp.estimation.regression import FitSystem, SingularFitError, regression
+from tapp.frames.ric import RIC_NAMES, ric_state_rotation, rotate_covariance, rotate_rows
 from tapp.io.tape.t32 import T32Entity, T32Recycle
 from tapp.processor.commands import UPC, Command
 from tapp.processor.executive import Budget, Entity, evaluate, transform
 from tapp.processor.plan import Plan
 from tapp.processor.representations import (
     ISOLATED_SETS,
+    ORBIT_SETS,
     SYSTEM_PARTITIONS,
     SYSTEMS,
     Accumulator,
@@ -147,7 +149,10 @@ class HistoryRow:
 
     ``miss_fit``/``miss_real`` are the (n_m, n_m) covariances of the miss set (None when the
     fit covariance is not defined, e.g. k = 0 without a full a priori); ``digits`` the
-    significant digits these covariances hold (:attr:`Entity.digits`).
+    significant digits these covariances hold (:attr:`Entity.digits`). ``ric_fit`` and
+    ``ric_real`` (when the deck asks for RIC axes) are the σ of the orbit at t_k along the
+    radial, in-track and cross-track axes of the nominal state, (6,) km and km/s in the order
+    of :data:`tapp.frames.ric.RIC_NAMES`.
     """
 
     kind: str
@@ -158,6 +163,8 @@ class HistoryRow:
     miss_fit: np.ndarray | None
     miss_real: np.ndarray
     digits: float
+    ric_fit: np.ndarray | None = None
+    ric_real: np.ndarray | None = None
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -462,18 +469,59 @@ class Processor:
         factor = self._factor(cur)
         for omega, cmd in enumerate(commands, start=1):
             ent = evaluate(omega, cmd, self.acc, factor, self.miss_names)
-            budget = digits = None
+            digits = None
             if cmd.is_covariance:
                 kappa = self.kappa if cmd.sigma == "Lb" else cur.kappa
                 digits = _digits(kappa)
-            if self.plan.budget and cmd.sigma in ("Lb", "Lb'") and cmd.rows == cmd.cols:
-                x = self.acc.partials(cmd.rows.mu, cmd.rows.tau, cmd.rows.rho)
-                maps, k_src = ((self.apriori, self.K) if cmd.sigma == "Lb"
-                               else (cur.apriori, cur.K))
-                budget = self._budget(x, maps, k_src, np.diagonal(ent.matrix).copy())
-            out.append(Entity(ent.omega, ent.command, ent.rows, ent.cols, ent.matrix, budget,
-                              digits))
+            ent = Entity(ent.omega, cmd, ent.rows, ent.cols, ent.matrix,
+                         self._entity_budget(cmd, cur, ent.matrix), digits)
+            rotation = self._ric_rotation(cmd, cur.k)
+            if rotation is not None:
+                matrix = rotate_covariance(rotation, ent.matrix)
+                labels = (*(f"{n}@{ORBIT_SETS[self._orbit_time(cmd)]}" for n in RIC_NAMES),
+                          *ent.rows[self.n_p:])
+                ric = Entity(omega, cmd, labels, labels, matrix,
+                             self._entity_budget(cmd, cur, matrix, rotation), digits)
+                ent = Entity(ent.omega, cmd, ent.rows, ent.cols, ent.matrix, ent.budget, digits,
+                             ric)
+            out.append(ent)
         return tuple(out)
+
+    def _entity_budget(self, cmd: Command, cur: _Current, matrix: np.ndarray,
+                       rotation: np.ndarray | None = None) -> Budget | None:
+        """The error budget of a real-world covariance entity (on one set of rows), its orbit
+        rows rotated by ``rotation`` when given (the budget in RIC axes)."""
+        if not (self.plan.budget and cmd.sigma in ("Lb", "Lb'") and cmd.rows == cmd.cols):
+            return None
+        x = self.acc.partials(cmd.rows.mu, cmd.rows.tau, cmd.rows.rho)
+        if rotation is not None:
+            x = rotate_rows(rotation, x)
+        maps, k_src = (self.apriori, self.K) if cmd.sigma == "Lb" else (cur.apriori, cur.K)
+        return self._budget(x, maps, k_src, np.diagonal(matrix).copy())
+
+    # -----------------------------------------------------------------------------------------
+    # RIC axes
+    # -----------------------------------------------------------------------------------------
+
+    def _orbit_time(self, cmd: Command) -> int | None:
+        return self.plan.systems.orbit_time(cmd.rows.tau, cmd.rows.rho)
+
+    def _state_at(self, k: int) -> np.ndarray:
+        """The nominal state (6,) at T13 time index k, km and km/s (the tape's INFO; k = 0:
+        the nominal orbit parameters at injection)."""
+        if k == 0:
+            return np.asarray(self.h.parameters.nominal[:self.n_p], dtype=float)
+        return np.asarray(self.h.records.info[k - 1], dtype=float)
+
+    def _ric_rotation(self, cmd: Command, k: int) -> np.ndarray | None:
+        """blockdiag(T, T) of the nominal state at the time of a covariance entity's orbit
+        rows, when the deck asks for RIC axes and the entity is a covariance (on one set of
+        rows) that begins with a Cartesian orbit at one time; else None."""
+        tau = self._orbit_time(cmd)
+        if ("ric" not in self.plan.frames or not cmd.is_covariance or cmd.rows != cmd.cols
+                or tau is None or self.n_p != len(RIC_NAMES)):
+            return None
+        return ric_state_rotation(self._state_at({0: self.j, 1: k, 2: self.l, 3: 0}[tau]))
 
     def _record_history(self, kind: str, k: int, cur: _Current) -> None:
         side = self.plan.history
@@ -482,8 +530,13 @@ class Processor:
         fit = None if cur.fit is None else np.sqrt(np.diagonal(gram(cur.fit, x)))
         b = self.stored.B
         miss_fit = None if cur.fit is None else gram(cur.fit, b)
+        ric_fit = ric_real = None
+        if "ric" in self.plan.frames and self.n_p == len(RIC_NAMES):
+            x_ric = ric_state_rotation(self._state_at(k)) @ self.acc.partials(0, 1, "p")
+            ric_real = np.sqrt(np.diagonal(gram(cur.Lb, x_ric)))
+            ric_fit = None if cur.fit is None else np.sqrt(np.diagonal(gram(cur.fit, x_ric)))
         self.history.append(HistoryRow(kind, k, self._t(k), fit, real, miss_fit,
-                                       gram(cur.Lb, b), _digits(cur.kappa)))
+                                       gram(cur.Lb, b), _digits(cur.kappa), ric_fit, ric_real))
 
     # -----------------------------------------------------------------------------------------
     # Phases 2 and 3

@@ -1,8 +1,10 @@
-"""Plots of a TAPP III run: σ against time (fit beside real) and B-plane dispersion ellipses.
+"""Plots of a TAPP III run: σ against time (fit beside real), the same in RIC axes, and
+B-plane dispersion ellipses.
 
-Both take the run's history (:class:`tapp.processor.sequencing.HistoryRow`, one per print or
-recycle time) and write PNG files. The ellipses are the 1σ and 3σ contours of the 2 x 2
-covariance of (B·T, B·R): semi-axes √λ of its eigenvalues along its eigenvectors.
+All take the run's history (:class:`tapp.processor.sequencing.HistoryRow`, one per print or
+recycle time) and write PNG files (the RIC σ also as CSV). The ellipses are the 1σ and 3σ
+contours of the 2 x 2 covariance of (B·T, B·R): semi-axes √λ of its eigenvalues along its
+eigenvectors (:mod:`tapp.estimation.ellipse`), the numbers the O3 printout states.
 """
 
 from __future__ import annotations
@@ -15,15 +17,65 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from tapp.estimation.ellipse import error_ellipse  # noqa: E402
+from tapp.frames.ric import RIC_NAMES  # noqa: E402
+
 _DAY_S = 86400.0
+RIC_AXES = ("R", "I", "C")
 
 
 def ellipse_points(cov: np.ndarray, scale: float, n: int = 181) -> np.ndarray:
-    """Return (n, 2) points of the contour xᵀ C⁻¹ x = scale² of a 2 x 2 covariance."""
-    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
-    angle = np.linspace(0.0, 2.0 * np.pi, n)
-    unit = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
-    return scale * (unit * np.sqrt(np.maximum(w, 0.0))) @ v.T
+    """Return (n, 2) points of the contour xᵀ C⁻¹ x = scale² of a 2 x 2 covariance (the
+    ellipse the O3 printout states, :func:`tapp.estimation.ellipse.error_ellipse`)."""
+    return error_ellipse(cov).points(scale, n)
+
+
+def ric_rows(history) -> list:
+    """The history rows that carry RIC σ (the deck's ``[output] frames`` has "ric")."""
+    return [h for h in history if h.ric_real is not None]
+
+
+def plot_ric_history(history, path: Path, title: str) -> Path:
+    """σ of the orbit along R, I, C against time, fit (dashed) and real (solid): position in
+    m, velocity in mm/s, time in days from the tape epoch."""
+    rows = ric_rows(history)
+    t = np.array([h.t_s for h in rows]) / _DAY_S
+    real = np.array([h.ric_real for h in rows])
+    fits = [(tt, h.ric_fit) for tt, h in zip(t, rows, strict=True) if h.ric_fit is not None]
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    colors = ("tab:red", "tab:green", "tab:blue")
+    for ax, first, scale, unit in ((axes[0], 0, 1e3, "m"), (axes[1], 3, 1e6, "mm/s")):
+        for i, (axis, color) in enumerate(zip(RIC_AXES, colors, strict=True)):
+            ax.semilogy(t, real[:, first + i] * scale, "o-", color=color,
+                        label=f"{axis} real")
+            if fits:
+                ax.semilogy([f[0] for f in fits], [f[1][first + i] * scale for f in fits],
+                            "s--", color=color, alpha=0.7, label=f"{axis} fit")
+        kind = "position" if first == 0 else "velocity"
+        ax.set_xlabel("t from the tape epoch (days)")
+        ax.set_ylabel(f"σ {kind} ({unit})")
+        ax.set_title(f"{kind}: radial R, in-track I, cross-track C", fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7, ncol=2)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110, format="png")
+    plt.close(fig)
+    return path
+
+
+def ric_csv(history) -> str:
+    """The RIC σ history as CSV: kind, k, t (s, days), then σ fit and σ real of
+    :data:`tapp.frames.ric.RIC_NAMES` (km, km/s); empty fields where the fit world has no
+    covariance."""
+    head = ["kind", "k", "t_s", "t_days", *(f"sigma_fit_{n}" for n in RIC_NAMES),
+            *(f"sigma_real_{n}" for n in RIC_NAMES)]
+    lines = [",".join(head)]
+    for h in ric_rows(history):
+        fit = [""] * len(RIC_NAMES) if h.ric_fit is None else [f"{v:.10e}" for v in h.ric_fit]
+        lines.append(",".join([h.kind, str(h.k), f"{h.t_s:.6f}", f"{h.t_s / _DAY_S:.9f}", *fit,
+                               *(f"{v:.10e}" for v in h.ric_real)]))
+    return "\n".join(lines) + "\n"
 
 
 def plot_sigma_history(history, labels: tuple[str, ...], path: Path, title: str) -> Path:
@@ -49,7 +101,7 @@ def plot_sigma_history(history, labels: tuple[str, ...], path: Path, title: str)
             ax.legend(fontsize=8)
     for j in range(n, nrows * cols):
         axes[j // cols][j % cols].axis("off")
-    fig.suptitle(title)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
@@ -76,18 +128,21 @@ def plot_bplane_ellipses(history, miss_names: tuple[str, ...], path: Path, title
                                  (h.miss_fit, "tab:blue", "fit")):
             if cov is None:
                 continue
-            c2 = cov[np.ix_(ix, ix)]
+            ell = error_ellipse(cov[np.ix_(ix, ix)])
             for scale, style in ((1.0, "-"), (3.0, ":")):
-                pts = ellipse_points(c2, scale)
+                pts = ell.points(scale)
+                axes_km = (f": {scale * ell.semi_major:.3g} x {scale * ell.semi_minor:.3g} km, "
+                           f"{ell.angle_deg:+.1f}°")
                 ax.plot(pts[:, 0], pts[:, 1], style, color=color,
-                        label=f"{name} {scale:g}σ")
+                        label=f"{name} {scale:g}σ{axes_km}")
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel("δB·T (km)")
         ax.set_ylabel("δB·R (km)")
-        ax.set_title(f"{h.kind} k = {h.k}, t = {h.t_s / _DAY_S:.2f} d", fontsize=9)
+        ax.set_title(f"{h.kind} k = {h.k}, t = {h.t_s / _DAY_S:.2f} d (angle: major axis "
+                     "from T towards R)", fontsize=8)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle(title)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
     plt.close(fig)

@@ -113,10 +113,12 @@ def test_the_directory_holds_every_output_and_a_report(piped) -> None:
     names = {p.name for p in piped.iterdir()}
     assert names == set(OUTPUTS.values())
     assert {p.name for p in (piped / "plots").iterdir()} == {
-        "sigma_history.png", "bplane_ellipses.png", "bplane_scatter.png", "dv_histograms.png"}
+        "sigma_history.png", "bplane_ellipses.png", "bplane_scatter.png", "dv_histograms.png",
+        "sigma_ric.png"}
     report = (piped / OUTPUTS["report"]).read_text()
     for heading in ("# Pipeline: three days", "## TAPP I", "## TAPP III", "## TAPP II",
-                    "## Plots", "σ b_dot_r_km fit / real", "ΔV magnitude per manoeuvre"):
+                    "## Plots", "σ b_dot_r_km fit / real", "ΔV magnitude per manoeuvre",
+                    "1σ B-plane dispersion ellipses", "σ radial R (m) fit / real"):
         assert heading in report, heading
     assert "Earth orientation iau2006" in report
 

@@ -89,6 +89,25 @@ def test_process_writes_the_printout_json_plots_and_a_t32_tape(files, tmp_path: 
         f"{t_s / 86400:.3f} d)"]
 
 
+def test_process_with_ric_axes_writes_their_plot_and_table(files, tmp_path: Path):
+    tape, path, _ = files
+    deck = tmp_path / "ric.toml"
+    deck.write_text(_deck_text(tape, extra='[output]\nframes = ["inertial", "ric"]'))
+    js, plots = tmp_path / "o.json", tmp_path / "plots"
+    res = runner.invoke(app, ["process", str(path), str(deck), "--print", str(tmp_path / "o3"),
+                              "--json", str(js), "--plots", str(plots)])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in plots.iterdir()) == ["sigma_history.png", "sigma_ric.csv",
+                                                       "sigma_ric.png"]
+    assert "(2 PNG, sigma_ric.csv)" in res.stdout
+    rows = [r for r in json.loads(js.read_text())["history"]["rows"]]
+    csv = (plots / "sigma_ric.csv").read_text().splitlines()
+    assert csv[0].split(",")[4:7] == ["sigma_fit_R_km", "sigma_fit_I_km", "sigma_fit_C_km"]
+    assert len(csv) == 1 + len(rows)
+    last = csv[-1].split(",")
+    assert np.allclose([float(v) for v in last[-6:]], rows[-1]["ric_sigma_real"], rtol=1e-9)
+
+
 def _largest_ratio(history: dict) -> tuple[float, str, str, float]:
     """The largest real/fit σ of a run's JSON history (fit σ > 0), by hand."""
     names = history["labels"] + history["miss"]
