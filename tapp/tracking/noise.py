@@ -46,9 +46,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tapp.constants import C_LIGHT_km_s
 from tapp.errors import InputError
 from tapp.estimation.factors import ar1_whitened, gram
 from tapp.measurements import OBSERVABLE_UNITS, Observable
+from tapp.measurements.ddor import DDOR_KIND, DDOR_UNIT
 
 #: The parts of the real-world AᵀWMWA (:func:`pass_rows`), in their order.
 PARTS = ("white", "bias", "correlated")
@@ -60,6 +62,8 @@ EDGE_UNITS: dict[str, tuple[str, float]] = {
     "range_rate": ("mm_s", 1e-6),
     "azimuth": ("deg", math.pi / 180.0),
     "elevation": ("deg", math.pi / 180.0),
+    # ΔDOR of a baseline: a delay in ns (× c), or an angle in nrad (tapp.tracking.ddor).
+    DDOR_KIND: ("ns", C_LIGHT_km_s * 1e-9),
 }
 
 
@@ -97,7 +101,9 @@ class FitNoise:
 
     @property
     def unit(self) -> str:
-        """Unit of σ (km, km/s or rad)."""
+        """Unit of σ (km, km/s or rad; ΔDOR: km, or rad when given as an angle)."""
+        if self.kind == DDOR_KIND:
+            return DDOR_UNIT
         return OBSERVABLE_UNITS[Observable(self.kind)]
 
     @property
