@@ -46,7 +46,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tapp.constants import C_LIGHT_km_s
 from tapp.errors import InputError
 from tapp.estimation.factors import ar1_whitened, gram
 from tapp.measurements import OBSERVABLE_UNITS, Observable
@@ -62,14 +61,13 @@ EDGE_UNITS: dict[str, tuple[str, float]] = {
     "range_rate": ("mm_s", 1e-6),
     "azimuth": ("deg", math.pi / 180.0),
     "elevation": ("deg", math.pi / 180.0),
-    # ΔDOR of a baseline: a delay in ns (× c), or an angle in nrad (tapp.tracking.ddor).
-    DDOR_KIND: ("ns", C_LIGHT_km_s * 1e-9),
 }
 
 
 def _check_kind(kind: str, where: str) -> str:
-    if kind not in EDGE_UNITS:
-        raise InputError(where, "kind", f"one of {', '.join(EDGE_UNITS)}", kind)
+    # ΔDOR is a baseline's kind: its noise is in [ddor], not [noise] (tapp.tracking.ddor).
+    if kind not in EDGE_UNITS and kind != DDOR_KIND:
+        raise InputError(where, "kind", f"one of {', '.join((*EDGE_UNITS, DDOR_KIND))}", kind)
     return kind
 
 
