@@ -15,6 +15,7 @@ from tapp.io.tape.t13 import T13
 from tapp.measurements.ddor import DdorModel, quasar_direction
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import simulate
+from tests.tapp.processor.helpers import deck, final, run, scaled_err
 from tests.tapp.tracking.helpers import SOURCE, geo_document, leo_document, scaled_close
 
 SIGMA_NS = 0.1
@@ -146,3 +147,24 @@ def test_a_baseline_that_never_sees_the_spacecraft_is_an_error() -> None:
     with pytest.raises(InputError, match="0 points on QUITO-MALINDI") as err:
         simulate(parse_scenario(doc, SOURCE))
     assert err.value.field == "ddor.baselines[0]"
+
+
+def test_flagging_the_baseline_off_in_tapp3_equals_the_tape_without_ddor() -> None:
+    """TAPP III's time-station flag acts on the baseline's entry: its ΔDOR alone leaves the
+    run, which is then the run of the scenario without [ddor] (same normal matrices)."""
+    with_ddor = _simulate(_document())
+    doc = _document()
+    del doc["ddor"]
+    without = _simulate(doc)
+    assert with_ddor.n_o == without.n_o
+    outputs = ["cov-real o@current", "cov-fit o@current"]
+    d = deck(without, times={"print": [1]}, commands={"print": outputs})
+    reference = run(without, d)
+    flagged = run(with_ddor, {**d, "stations_off": [{"station": "UNDER-EAST"}]})
+    kept = run(with_ddor, d)
+    for alias in outputs:
+        # The stations' pairs are the same on both tapes: equal to rounding.
+        assert scaled_err(final(flagged, alias), final(reference, alias)) < 1e-9
+    # With the ΔDOR points the fit's covariance shrinks.
+    fit_with, fit_without = final(kept, outputs[1]), final(reference, outputs[1])
+    assert np.trace(fit_with[:3, :3]) < np.trace(fit_without[:3, :3])
