@@ -12,6 +12,7 @@ import pytest
 from tapp.constants import C_LIGHT_km_s
 from tapp.errors import InputError
 from tapp.io.tape.t13 import T13
+from tapp.measurements import LightTime
 from tapp.measurements.ddor import DdorModel, quasar_direction
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import simulate
@@ -168,3 +169,27 @@ def test_flagging_the_baseline_off_in_tapp3_equals_the_tape_without_ddor() -> No
     # With the ΔDOR points the fit's covariance shrinks.
     fit_with, fit_without = final(kept, outputs[1]), final(reference, outputs[1])
     assert np.trace(fit_with[:3, :3]) < np.trace(fit_without[:3, :3])
+
+
+def test_a_two_way_scenario_takes_one_way_legs_for_ddor() -> None:
+    """ΔDOR is one-way whatever the stations' light time: the values are DdorModel's with a
+    one-way light time on the propagated trajectory (the simulator's bounce states)."""
+    doc = _document()
+    doc["tracking"]["light_time"] = "two_way"
+    sc = parse_scenario(doc, SOURCE)
+    sim = simulate(sc, raw=True)
+    raw, rows = sim.tape.raw, _ddor_rows(sim.tape)
+    t = raw.t_s[rows]
+    x = sim.states[np.searchsorted(sim.t_s, t)]
+
+    def state_at(t_s):
+        return sc.propagator().propagate(sc.x0, t_s, stm=False, orientation=sc.orientation,
+                                         epoch_jd_utc=sc.epoch.jd).states
+
+    under, east = (s.station for s in sc.stations)
+    model = DdorModel(under, east, sc.orientation, LightTime(two_way=False, state_at=state_at))
+    quasar = quasar_direction(x[:, :3], math.radians(5.0), 0.0)
+    np.testing.assert_allclose(raw.value[rows], model.compute(t, x, quasar)[:, 0], rtol=1e-14)
+    instantaneous = DdorModel(under, east, sc.orientation).compute(t, x, quasar)[:, 0]
+    # The light time matters: 35 m here (GEO, τ ≈ 0.12 s), far above 1 m.
+    assert np.abs(raw.value[rows] - instantaneous).max() > 1e-3
