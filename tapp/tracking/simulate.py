@@ -28,8 +28,13 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    counted under the first of :data:`EDITING_RULES` that removed it (the tape's
    ``editing/``, :class:`tapp.io.tape.t13.TapeEditing`). Observables and their partials come from
    :class:`tapp.measurements.MeasurementModel` (state, station location, biases; light time
-   optional, with the bounce state from the integrated trajectory). One row of A per scalar
-   observation, referred to the epoch t_j of its record:
+   optional, with the bounce state from the integrated trajectory). A ΔDOR baseline
+   (:mod:`tapp.tracking.ddor`) is an entry after the stations: its points fall on the same
+   grid where both stations see the spacecraft (a mutual-visibility window is its pass), its
+   rows come from :class:`tapp.measurements.ddor.DdorModel` (one-way legs; partials w.r.t.
+   both stations' locations), the reference quasar at its stated angle from the nominal
+   geocentric direction of the spacecraft. One row of A per scalar observation, referred to
+   the epoch t_j of its record:
 
    .. math::
 
@@ -458,7 +463,7 @@ def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, a
                       _light_time(scenario, prop, two_way=False))
     quasar = quasar_direction(x[:, :3], bl.separation_rad, bl.position_angle_rad)
     a = _state_rows(model.state_partials(t, x, quasar), arc.phi[p], arc.sens[p], len(columns))
-    for ts, which in zip(pair, range(2), strict=True):
+    for which, ts in enumerate(pair):
         if ts.location != "none":
             first = columns[f"{ts.station.name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
             a[..., first:first + 3] = model.station_partials(t, x, quasar, ts.location)[which]
