@@ -148,9 +148,10 @@ def _miss_sigmas(content: dict) -> dict[float, dict[str, list[float]]]:
             for b in content["blocks"] if b["kind"] == "print"}
 
 
-def ddor_comparison(out: Path) -> list[str]:
+def ddor_comparison(out: Path) -> tuple[list[str], dict]:
     """Run deep_space.toml + :data:`DDOR_TABLE` through TAPP I and the deep-space deck;
-    return the report's section: σ of B·R, B·T at each print time without and with ΔDOR."""
+    return the report's section (σ of B·R, B·T at each print time without and with ΔDOR)
+    and the run's JSON content."""
     scenario = out / "deep_space_ddor.toml"
     scenario.write_text((EXAMPLES / "deep_space.toml").read_text() + DDOR_TABLE)
     tape = RESULTS / "tapp1" / "deep_space_ddor.t13.h5"
@@ -183,7 +184,7 @@ def ddor_comparison(out: Path) -> list[str]:
     return [f"## deep_space with ΔDOR (`{scenario.name}`: deep_space.toml + [ddor])", "",
             "Goldstone-Canberra and Goldstone-Madrid, one ΔDOR point per mutual-visibility "
             "window, σ 0.06 ns (fit and real white) + 0.03 ns per window (real); same deck. "
-            "Miss σ at each print time:", "", table(headers, rows), ""]
+            "Miss σ at each print time:", "", table(headers, rows), ""], contents[1]
 
 
 def matrix_processor() -> None:
@@ -218,7 +219,9 @@ def matrix_processor() -> None:
         plots = sorted((out / "plots" / scenario).glob("*.png"))
         lines += [f"![{p.stem}](plots/{scenario}/{p.name})" for p in plots] + [""]
         budgets += _budget_section(scenario, content)
-    lines += ddor_comparison(out)
+    section, content = ddor_comparison(out)
+    lines += section
+    budgets += _budget_section("deep_space_ddor", content)
     (out / "report.md").write_text("\n".join(lines + ["## Error budgets", ""] + budgets))
     print(f"TAPP III -> {out / 'report.md'}")
 
