@@ -88,14 +88,19 @@ def _outputs(output: Path, sim: Simulation, oem: Path | None,
 def _tdm_text(sim: Simulation, scenario: Path, parsed: Scenario) -> str:
     """The observations of the tape's raw rows as a CCSDS TDM (one segment per station),
     stating the Earth orientation they were made under (:mod:`tapp.io.obsfile`)."""
-    from tapp.io.ccsds.tdm import format_tdm, tdm_from_tracks, tracks_from_rows
+    import numpy as np
+
+    from tapp.io.ccsds.tdm import KEYWORD_OF_KIND, format_tdm, tdm_from_tracks, tracks_from_rows
     from tapp.io.obsfile import TDM_PREFIX, made_under_statements
     from tapp.measurements.observations import MadeUnder
 
     tape, raw = sim.tape, sim.tape.raw
     st = tape.stations
     schedule = parsed.schedule
-    tracks = tracks_from_rows(raw.t_s, raw.station - 1, raw.kind, raw.value, raw.kinds,
+    # The single-station kinds only: ΔDOR rows (baselines) have no keyword of this writer.
+    rows = np.isin(raw.kind, [i for i, k in enumerate(raw.kinds) if k in KEYWORD_OF_KIND])
+    tracks = tracks_from_rows(raw.t_s[rows], raw.station[rows] - 1, raw.kind[rows],
+                              raw.value[rows], raw.kinds,
                               st.name, tape.iden,
                               path="2,1" if schedule.light_time == "one_way" else "1,2,1",
                               span_end_s=min(schedule.end_s, float(sim.t_s[-1])))

@@ -1,10 +1,12 @@
-"""Tracking measurements: stations, observables with partials, visibility and passes.
+"""Tracking measurements: stations, observables with partials (ΔDOR on a baseline:
+:mod:`tapp.measurements.ddor`), visibility and passes.
 
 Numerical kernels only (pure NumPy, no I/O), shared by the tracking simulator (TAPP I) and the
 orbit-determination code. Conventions: km, km/s, s, rad; time-major arrays (N, ...); spacecraft
 states in the inertial frame (GCRS); Earth orientation by :mod:`tapp.frames.orientation`.
 """
 
+from tapp.measurements.ddor import DdorModel, projected_baseline_km, quasar_direction
 from tapp.measurements.observables import (
     BIAS_NAMES,
     OBSERVABLE_UNITS,
@@ -36,6 +38,7 @@ __all__ = [
     "BIAS_NAMES",
     "OBSERVABLE_UNITS",
     "STATION_PARAMETER_NAMES",
+    "DdorModel",
     "LightTime",
     "LightTimeSolution",
     "MeasurementModel",
@@ -48,6 +51,8 @@ __all__ = [
     "light_time_range_km",
     "light_time_range_rate_km_s",
     "pass_labels",
+    "projected_baseline_km",
+    "quasar_direction",
     "range_km",
     "range_partials",
     "range_rate_km_s",

@@ -302,7 +302,13 @@ class LightTimeSolution:
     station_transmit_eci: np.ndarray
 
 
-def _iterate_light_time(distance_km, tau0_s, what: str):
+def iterate_light_time(distance_km, tau0_s, what: str):
+    """Return the fixed point tau = distance_km(tau) / c, s, shape (N,), from tau0_s.
+
+    The iteration contracts by v / c (~3e-5); it stops when every change is below
+    :data:`LIGHT_TIME_REL_TOL` of tau, and raises DivergenceError (naming ``what``) after
+    :data:`LIGHT_TIME_MAX_ITERATIONS`.
+    """
     tau = tau0_s
     for _ in range(LIGHT_TIME_MAX_ITERATIONS):
         new = distance_km(tau) / C_LIGHT_km_s
@@ -349,7 +355,7 @@ def solve_light_time(
         bounce = light_time.spacecraft_state(t, x, tau)
         return np.linalg.norm(bounce[..., :3] - station_rx[..., :3], axis=-1)
 
-    tau_d = _iterate_light_time(down_distance, range_km(x, station_rx) / C_LIGHT_km_s, "down")
+    tau_d = iterate_light_time(down_distance, range_km(x, station_rx) / C_LIGHT_km_s, "down")
     bounce = light_time.spacecraft_state(t, x, tau_d)
     if not light_time.two_way:
         return LightTimeSolution(tau_d, np.zeros_like(tau_d), bounce, station_rx, station_rx)
@@ -360,7 +366,7 @@ def solve_light_time(
     def up_distance(tau_u):
         return np.linalg.norm(bounce[..., :3] - station_at(tau_u)[..., :3], axis=-1)
 
-    tau_u = _iterate_light_time(up_distance, tau_d, "up")
+    tau_u = iterate_light_time(up_distance, tau_d, "up")
     return LightTimeSolution(tau_d, tau_u, bounce, station_rx, station_at(tau_u))
 
 

@@ -20,7 +20,7 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     print = ["cov real orbit@current", "I; 0,-,pk; 1,2,fp"]   # either notation
     recycle = "standard"        # Table B-5's ROC, or a list
     [[stations_off]]            # time-station flags: no data from the station in the window
-    station = "MADRID"          # name or number
+    station = "MADRID"          # name or number (a ΔDOR baseline: "GOLDSTONE-MADRID")
     start = 86400.0             # optional, default the first T13 time
     end = 172800.0              # optional, default the last
     [common]                    # common system: permutation P_c, n_c1, constraints K_c
@@ -173,7 +173,8 @@ class Commands(Schema):
 class StationsOff(Schema):
     """``[[stations_off]]``: a time-station flag: no data from a station in a window."""
 
-    station: Ref = Field(description="The station, by name or number.")
+    station: Ref = Field(description="The station, by name or number (a ΔDOR baseline by "
+                         "its name A-B: its ΔDOR only).")
     start: TimeRef | None = Field(None, description=f"Start of the window ({_TIMES}); default: "
                                   "the first T13 time.")
     end: TimeRef | None = Field(None, description="End of the window; default: the last T13 "

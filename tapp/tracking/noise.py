@@ -49,6 +49,7 @@ import numpy as np
 from tapp.errors import InputError
 from tapp.estimation.factors import ar1_whitened, gram
 from tapp.measurements import OBSERVABLE_UNITS, Observable
+from tapp.measurements.ddor import DDOR_KIND, DDOR_UNIT
 
 #: The parts of the real-world AᵀWMWA (:func:`pass_rows`), in their order.
 PARTS = ("white", "bias", "correlated")
@@ -64,8 +65,9 @@ EDGE_UNITS: dict[str, tuple[str, float]] = {
 
 
 def _check_kind(kind: str, where: str) -> str:
-    if kind not in EDGE_UNITS:
-        raise InputError(where, "kind", f"one of {', '.join(EDGE_UNITS)}", kind)
+    # ΔDOR is a baseline's kind: its noise is in [ddor], not [noise] (tapp.tracking.ddor).
+    if kind not in EDGE_UNITS and kind != DDOR_KIND:
+        raise InputError(where, "kind", f"one of {', '.join((*EDGE_UNITS, DDOR_KIND))}", kind)
     return kind
 
 
@@ -97,7 +99,9 @@ class FitNoise:
 
     @property
     def unit(self) -> str:
-        """Unit of σ (km, km/s or rad)."""
+        """Unit of σ (km, km/s or rad; ΔDOR: km, or rad when given as an angle)."""
+        if self.kind == DDOR_KIND:
+            return DDOR_UNIT
         return OBSERVABLE_UNITS[Observable(self.kind)]
 
     @property

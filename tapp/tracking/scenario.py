@@ -44,6 +44,10 @@ ISO strings or TOML dates)::
     [noise.real]       sigma_<kind>_<unit> (white, default the fit σ), bias_<kind>_<unit>
                        (constant per pass), correlated_<kind>_<unit> with tau_<kind>_s
                        (exponentially correlated)
+    [ddor]             optional: ΔDOR on baselines of tracked stations (baselines, interval_s,
+                       min_window_s, quasar_separation_deg, quasar_position_angle_deg;
+                       [ddor.fit] sigma_ns or sigma_nrad, [ddor.real] sigma_*, bias_*;
+                       tapp.tracking.ddor)
     [times]            input = [times] or input_step_s with end; epochs = [times] (epoch times
                        after t_0 = 0; re-epoching as in seed TAPP III §4.1)
     [miss]             kind = "bplane" (body, reference; b_dot_r_km, b_dot_t_km, ltof_s,
@@ -100,6 +104,7 @@ from tapp.measurements.stations import Station
 from tapp.orbit.bplane import REFERENCE_POLES
 from tapp.targeting.program import BPlaneSearch
 from tapp.targeting.searchfile import TargetingTable, scenario_targeting
+from tapp.tracking.ddor import DdorTable, TrackingBaseline, tracking_baselines
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
 #: Observable kinds, in the order of ``tapp.measurements.Observable``.
@@ -271,6 +276,7 @@ class Scenario:
     document_json : the scenario tables as JSON (tape provenance).
     targeting : the SEARCH problem of a ``[targeting]`` table, run before simulating; None
         without one (or once run: :func:`tapp.tracking.encounter.prepare_encounter`).
+    baselines : the ΔDOR baselines of a ``[ddor]`` table, numbered after the stations.
     """
 
     source: str
@@ -291,6 +297,7 @@ class Scenario:
     miss: MissSpec
     document_json: str
     targeting: BPlaneSearch | None = None
+    baselines: tuple[TrackingBaseline, ...] = ()
 
     def propagator(self) -> Propagator:
         """The (state model, variational model, dynamic parameters) propagator."""
@@ -468,6 +475,7 @@ class ScenarioFile(StationsSection):
     miss: MissTable = Field(description="The miss parameters.")
     targeting: TargetingTable | None = Field(
         None, description="Retarget the injection velocity by SEARCH before simulating.")
+    ddor: DdorTable | None = Field(None, description="ΔDOR on baselines of tracked stations.")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -753,9 +761,12 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     x0.setflags(write=False)
     targeting = _targeting(p, doc, miss, values, x0, Propagator(state_model, var_model, rtol=rtol,
                                                                   atol=atol), orientation)
+    baselines = tracking_baselines(source, doc.ddor, tuple(doc.tracking.stations),
+                                   schedule.data_interval_s)
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,
-                    dynamic, values, stations, schedule, times, miss, document, targeting)
+                    dynamic, values, stations, schedule, times, miss, document, targeting,
+                    baselines)
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

@@ -28,8 +28,13 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    counted under the first of :data:`EDITING_RULES` that removed it (the tape's
    ``editing/``, :class:`tapp.io.tape.t13.TapeEditing`). Observables and their partials come from
    :class:`tapp.measurements.MeasurementModel` (state, station location, biases; light time
-   optional, with the bounce state from the integrated trajectory). One row of A per scalar
-   observation, referred to the epoch t_j of its record:
+   optional, with the bounce state from the integrated trajectory). A ΔDOR baseline
+   (:mod:`tapp.tracking.ddor`) is an entry after the stations: its points fall on the same
+   grid where both stations see the spacecraft (a mutual-visibility window is its pass), its
+   rows come from :class:`tapp.measurements.ddor.DdorModel` (one-way legs; partials w.r.t.
+   both stations' locations), the reference quasar at its stated angle from the nominal
+   geocentric direction of the spacecraft. One row of A per scalar observation, referred to
+   the epoch t_j of its record:
 
    .. math::
 
@@ -88,13 +93,21 @@ from tapp.measurements import (
     STATION_PARAMETER_NAMES,
     LightTime,
     MeasurementModel,
+    Station,
     find_passes,
     is_visible,
     wrap_angle_rad,
 )
+from tapp.measurements.ddor import (
+    DDOR_KIND,
+    DdorModel,
+    projected_baseline_km,
+    quasar_direction,
+)
 from tapp.orbit.bplane import b_plane
 from tapp.orbit.elements import cartesian_to_elements
 from tapp.targeting.program import BPlaneProgram
+from tapp.tracking.ddor import TrackingBaseline
 from tapp.tracking.encounter import prepare_encounter
 from tapp.tracking.noise import PARTS, pass_rows
 from tapp.tracking.scenario import (
@@ -123,6 +136,8 @@ _GAP_INTERVALS = 1.5
 #: passes above the mask left without a sample); "min_pass": in a pass shorter than
 #: min_pass_s (passes: those passes).
 EDITING_RULES = ("outside_tape", "elevation_mask", "blackout", "min_pass")
+#: Kind codes of the raw rows: the stations' observables, then ΔDOR (baselines).
+RAW_KINDS = (*KINDS, DDOR_KIND)
 
 
 @dataclass(frozen=True, slots=True)
@@ -156,7 +171,9 @@ class _Arc:
 
 @dataclass(frozen=True, slots=True)
 class _StationData:
-    """Samples of one station: rows A (n, m, n_o), values, records, passes, segments."""
+    """Samples of one station (or ΔDOR baseline): rows A (n, m, n_o), values, records,
+    passes, segments; ``scale`` (n,) the observable's unit per noise unit of each sample (a
+    ΔDOR σ in nrad: its projected baseline, km), None: 1."""
 
     t_s: np.ndarray
     values: np.ndarray
@@ -164,16 +181,19 @@ class _StationData:
     record: np.ndarray
     segment: np.ndarray
     passes: list[tuple[float, float, int]]
+    scale: np.ndarray | None = None
 
 
 @dataclass(frozen=True, slots=True)
 class _Editing:
     """What the rules did at one station: samples and passes removed per rule (in the order
-    of :data:`EDITING_RULES`), passes added by splitting at max_pass_s."""
+    of :data:`EDITING_RULES`), passes added by splitting at max_pass_s, of ``scheduled``
+    samples (a ΔDOR baseline's: the points its schedule asks for)."""
 
     removed_samples: tuple[int, ...]
     removed_passes: tuple[int, ...]
     added_passes: int
+    scheduled: int
 
 
 def equinoctial_elements(state, mu_km3_s2: float) -> np.ndarray:
@@ -283,49 +303,84 @@ def _split(t: np.ndarray, start: int, stop: int, max_pass_s: float) -> list[tupl
     return out
 
 
-def _passes(ts: TrackingStation, scenario: Scenario, t: np.ndarray, states: np.ndarray,
-            n_scheduled: int) -> tuple[list[tuple[int, int]], _Editing]:
-    """Index ranges [start, stop) into the grid ``t`` of the station's passes, and what each
-    rule removed of the ``n_scheduled`` samples of the schedule (:data:`EDITING_RULES`)."""
-    sch = scenario.schedule
-    gap_s = _GAP_INTERVALS * sch.data_interval_s
-    geometric = MeasurementModel(ts.station, scenario.orientation, ("elevation",))
-    above = is_visible(geometric.elevation_rad(t, states), ts.station.elev_mask_rad)
+def _above(station: Station, scenario: Scenario, t: np.ndarray, states: np.ndarray
+           ) -> np.ndarray:
+    """Whether ``station`` sees the spacecraft strictly above its mask at t, (N,) bool."""
+    geometric = MeasurementModel(station, scenario.orientation, ("elevation",))
+    return is_visible(geometric.elevation_rad(t, states), station.elev_mask_rad)
+
+
+def _outside_blackouts(above: np.ndarray, t: np.ndarray,
+                       blackouts_s: tuple[tuple[float, float], ...]) -> np.ndarray:
+    """``above`` where t is in none of the blackouts (inclusive windows), (N,) bool."""
     visible = above.copy()
-    for start, end in ts.blackouts_s:
+    for start, end in blackouts_s:
         visible &= ~((t >= start) & (t <= end))
+    return visible
+
+
+def _passes(above: np.ndarray, blackouts_s: tuple[tuple[float, float], ...],
+            min_pass_s: float, max_pass_s: float, data_interval_s: float, t: np.ndarray,
+            n_scheduled: int) -> tuple[list[tuple[int, int]], _Editing]:
+    """Index ranges [start, stop) into the grid ``t`` of the passes of samples ``above`` the
+    mask and outside the blackouts, at least ``min_pass_s`` long and split at ``max_pass_s``,
+    and what each rule removed of the ``n_scheduled`` samples (:data:`EDITING_RULES`)."""
+    gap_s = _GAP_INTERVALS * data_interval_s
+    visible = _outside_blackouts(above, t, blackouts_s)
     blacked_out = sum(not visible[a:b].any() for a, b in find_passes(above, t, gap_s))
     long_enough = []
     short = [0, 0]  # samples, passes
     for start, stop in find_passes(visible, t, gap_s):
-        if t[stop - 1] - t[start] < sch.min_pass_s:
+        if t[stop - 1] - t[start] < min_pass_s:
             short[0] += int(stop - start)
             short[1] += 1
         else:
             long_enough.append((int(start), int(stop)))
     out = [piece for start, stop in long_enough
-           for piece in _split(t, start, stop, sch.max_pass_s)]
+           for piece in _split(t, start, stop, max_pass_s)]
     n_above, n_visible = int(np.count_nonzero(above)), int(np.count_nonzero(visible))
     return out, _Editing(
         (n_scheduled - t.size, t.size - n_above, n_above - n_visible, short[0]),
-        (0, 0, blacked_out, short[1]), len(out) - len(long_enough))
+        (0, 0, blacked_out, short[1]), len(out) - len(long_enough), n_scheduled)
+
+
+def _light_time(scenario: Scenario, prop: Propagator, two_way: bool) -> LightTime | None:
+    """The scenario's light-time model (None: off), the bounce state from the integrated
+    trajectory."""
+    if scenario.schedule.light_time == "none":
+        return None
+    values = dict(scenario.dynamic_values)
+
+    def state_at(t_s: np.ndarray) -> np.ndarray:
+        return prop.propagate(scenario.x0, t_s, stm=False, param_values=values,
+                              orientation=scenario.orientation,
+                              epoch_jd_utc=scenario.epoch.jd).states
+
+    return LightTime(two_way=two_way, state_at=state_at)
 
 
 def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
                        ) -> MeasurementModel:
-    light_time = None
-    if scenario.schedule.light_time != "none":
-        values = dict(scenario.dynamic_values)
-
-        def state_at(t_s: np.ndarray) -> np.ndarray:
-            return prop.propagate(scenario.x0, t_s, stm=False, param_values=values,
-                                  orientation=scenario.orientation,
-                                  epoch_jd_utc=scenario.epoch.jd).states
-
-        light_time = LightTime(two_way=scenario.schedule.light_time == "two_way",
-                               state_at=state_at)
+    light_time = _light_time(scenario, prop, scenario.schedule.light_time == "two_way")
     return MeasurementModel(ts.station, scenario.orientation, ts.kinds, light_time,
                             ts.range_bias_km, ts.range_rate_bias_km_s)
+
+
+def _state_rows(h: np.ndarray, phi: np.ndarray, sens: np.ndarray, n_o: int) -> np.ndarray:
+    """Rows A (n, m, n_o) with the orbit and dynamic columns [H Φ, H S] filled."""
+    a = np.zeros(h.shape[:2] + (n_o,))
+    a[..., :6] = h @ phi
+    a[..., 6:6 + sens.shape[-1]] = h @ sens
+    return a
+
+
+def _segments(t: np.ndarray, label: np.ndarray, t13: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Record k of each sample and its segment (a pass split at the T13 times), (n,) int."""
+    record = np.searchsorted(t13, t, side="left")
+    change = np.ones(t.size, dtype=bool)
+    change[1:] = (label[1:] != label[:-1]) | (record[1:] != record[:-1])
+    return record, np.cumsum(change) - 1
 
 
 def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc: _Arc,
@@ -334,7 +389,10 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     """Rows of A for one station (module docstring, item 2), or None without samples, and
     what the rules removed of its ``n_scheduled`` samples."""
     pos = np.searchsorted(arc.t_s, grid)
-    passes, editing = _passes(ts, scenario, grid, arc.states[pos], n_scheduled)
+    sch = scenario.schedule
+    passes, editing = _passes(_above(ts.station, scenario, grid, arc.states[pos]),
+                              ts.blackouts_s, sch.min_pass_s, sch.max_pass_s,
+                              sch.data_interval_s, grid, n_scheduled)
     if not passes:
         return None, editing
     take = np.concatenate([np.arange(a, b) for a, b in passes])
@@ -342,11 +400,7 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     t, p = grid[take], pos[take]
     x, phi, sens = arc.states[p], arc.phi[p], arc.sens[p]
     model = _measurement_model(ts, scenario, prop)
-    h = model.state_partials(t, x)
-    a = np.zeros(h.shape[:2] + (len(columns),))
-    n_dyn = sens.shape[-1]
-    a[..., :6] = h @ phi
-    a[..., 6:6 + n_dyn] = h @ sens
+    a = _state_rows(model.state_partials(t, x), phi, sens, len(columns))
     name = ts.station.name
     if ts.location != "none":
         first = columns[f"{name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
@@ -355,16 +409,76 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     for kind in ts.biases:
         i = BIAS_KINDS.index(kind)
         a[..., columns[f"{name}.{BIAS_NAMES[i]}"]] = bias[..., i]
-    record = np.searchsorted(t13, t, side="left")
-    change = np.ones(t.size, dtype=bool)
-    change[1:] = (label[1:] != label[:-1]) | (record[1:] != record[:-1])
+    record, segment = _segments(t, label, t13)
     m = len(ts.kinds)
     pass_list = [(float(grid[a_]), float(grid[b_ - 1]), (b_ - a_) * m) for a_, b_ in passes]
-    return (_StationData(t, model.compute(t, x), a, record, np.cumsum(change) - 1, pass_list),
+    return _StationData(t, model.compute(t, x), a, record, segment, pass_list), editing
+
+
+def _ddor_points(bl: TrackingBaseline, windows: list[tuple[int, int]], grid: np.ndarray,
+                 scenario: Scenario, n_scheduled: int) -> tuple[list[np.ndarray], np.ndarray, int]:
+    """The ΔDOR points of each window (grid indices, empty windows left out), the mask of
+    the grid samples the schedule asks for, and how many it asks for over the whole span:
+    every ``interval_s`` on the tracking grid, or the middle sample of each window."""
+    sch = scenario.schedule
+    if bl.interval_s is None:
+        picks = [np.array([(a + b - 1) // 2]) for a, b in windows]
+        asked = np.zeros(grid.size, dtype=bool)
+        asked[[int(p[0]) for p in picks]] = True
+        return picks, asked, len(picks)
+    k = round(bl.interval_s / sch.data_interval_s)
+    asked = np.rint((grid - sch.start_s) / sch.data_interval_s).astype(np.int64) % k == 0
+    picks = [np.flatnonzero(asked[a:b]) + a for a, b in windows]
+    return [p for p in picks if p.size], asked, -(-n_scheduled // k)
+
+
+def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, arc: _Arc,
+                   grid: np.ndarray, t13: np.ndarray, columns: dict[str, int],
+                   n_scheduled: int) -> tuple[_StationData | None, _Editing]:
+    """Rows of A of one ΔDOR baseline (:mod:`tapp.tracking.ddor`), or None without points,
+    and what the rules removed of the points its schedule asks for (a window is a pass)."""
+    sch = scenario.schedule
+    pair = [scenario.stations[n - 1] for n in (bl.station_a, bl.station_b)]
+    pos = np.searchsorted(arc.t_s, grid)
+    above = np.logical_and(*(_above(ts.station, scenario, grid, arc.states[pos])
+                             for ts in pair))
+    blackouts = pair[0].blackouts_s + pair[1].blackouts_s
+    windows, win_editing = _passes(above, blackouts, bl.min_window_s, math.inf,
+                                   sch.data_interval_s, grid, n_scheduled)
+    picks, asked, n_asked = _ddor_points(bl, windows, grid, scenario, n_scheduled)
+    visible = _outside_blackouts(above, grid, blackouts)
+    kept = np.zeros(grid.size, dtype=bool)
+    for p in picks:
+        kept[p] = True
+    removed = (n_asked - int(np.count_nonzero(asked)), np.count_nonzero(asked & ~above),
+               np.count_nonzero(asked & above & ~visible),
+               np.count_nonzero(asked & visible & ~kept))
+    editing = _Editing(tuple(int(n) for n in removed), win_editing.removed_passes, 0, n_asked)
+    if not picks:
+        return None, editing
+    take = np.concatenate(picks)
+    t, p = grid[take], pos[take]
+    x = arc.states[p]
+    model = DdorModel(pair[0].station, pair[1].station, scenario.orientation,
+                      _light_time(scenario, prop, two_way=False))
+    quasar = quasar_direction(x[:, :3], bl.separation_rad, bl.position_angle_rad)
+    a = _state_rows(model.state_partials(t, x, quasar), arc.phi[p], arc.sens[p], len(columns))
+    for which, ts in enumerate(pair):
+        if ts.location != "none":
+            first = columns[f"{ts.station.name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
+            a[..., first:first + 3] = model.station_partials(t, x, quasar, ts.location)[which]
+    scale = None
+    if bl.per_nrad:
+        r_a, r_b = (ts.station.state_eci(scenario.orientation, t)[:, :3] for ts in pair)
+        scale = projected_baseline_km(r_b - r_a, x[:, :3])
+    label = np.concatenate([np.full(q.size, i) for i, q in enumerate(picks)])
+    record, segment = _segments(t, label, t13)
+    pass_list = [(float(grid[q[0]]), float(grid[q[-1]]), int(q.size)) for q in picks]
+    return (_StationData(t, model.compute(t, x, quasar), a, record, segment, pass_list, scale),
             editing)
 
 
-def _accumulate(ts: TrackingStation, data: _StationData, n_o: int
+def _accumulate(ts: TrackingStation | TrackingBaseline, data: _StationData, n_o: int
                 ) -> dict[int, tuple[np.ndarray, np.ndarray, int, np.ndarray]]:
     """Per record k: the station's factors [R (n_o, n_o), R̃ (n_o, n_o), n_obs, the factors of
     R̃'s parts (3, n_o, n_o)] (module docstring, item 3): the rows of
@@ -376,9 +490,11 @@ def _accumulate(ts: TrackingStation, data: _StationData, n_o: int
         k = int(data.record[start])
         acc = rows.setdefault(k, [[], [[] for _ in PARTS], 0])
         t = data.t_s[start:stop]
+        # Rows in the noise unit: A / scale with σ in that unit (the same AᵀWA, AᵀWMWA).
+        scale = 1.0 if data.scale is None else data.scale[start:stop, None]
         for c, (fit, real) in enumerate(zip(ts.fit, ts.real, strict=True)):
             weights = np.full(t.size, fit.weight)
-            pr = pass_rows(data.a[start:stop, c, :], t, weights, real)
+            pr = pass_rows(data.a[start:stop, c, :] / scale, t, weights, real)
             acc[0].append(pr.fit)
             for part, block in zip(acc[1], pr.parts, strict=True):
                 part.append(block)
@@ -390,16 +506,19 @@ def _accumulate(ts: TrackingStation, data: _StationData, n_o: int
     return out
 
 
-def _raw(stations: tuple[TrackingStation, ...], data: list[_StationData | None], n_o: int
-         ) -> TapeRaw:
-    """One row per scalar observation, time-ordered within each station."""
+def _raw(stations: tuple[TrackingStation | TrackingBaseline, ...],
+         data: list[_StationData | None], n_o: int) -> TapeRaw:
+    """One row per scalar observation, time-ordered within each station (and baseline: kind
+    code ``RAW_KINDS.index("ddor")``), weights and variances in the observables' units."""
     cols: dict[str, list[np.ndarray]] = {}
     segment_offset = 0
     for ts, d in zip(stations, data, strict=True):
         if d is None:
             continue
         n, m = d.values.shape
-        kind_code = np.array([KINDS.index(k) for k in ts.kinds])
+        kind_code = np.array([RAW_KINDS.index(k) for k in ts.kinds])
+        # Variance of each sample: σ² scale² (the noise unit to the observable's).
+        scale2 = np.ones((n, 1)) if d.scale is None else d.scale[:, None] ** 2
         rows = {
             "t_s": np.repeat(d.t_s, m),
             "station": np.full(n * m, ts.number),
@@ -408,17 +527,17 @@ def _raw(stations: tuple[TrackingStation, ...], data: list[_StationData | None],
             "segment": segment_offset + (d.segment[:, None] * m + np.arange(m)).ravel(),
             "value": d.values.ravel(),
             "A": d.a.reshape(n * m, n_o),
-            "weight": np.tile([f.weight for f in ts.fit], n),
-            "m_white_var": np.tile([r.sigma_white**2 for r in ts.real], n),
-            "m_bias_var": np.tile([r.sigma_pass_bias**2 for r in ts.real], n),
-            "m_corr_var": np.tile([r.sigma_correlated**2 for r in ts.real], n),
+            "weight": (np.array([f.weight for f in ts.fit]) / scale2).ravel(),
+            "m_white_var": (np.array([r.sigma_white**2 for r in ts.real]) * scale2).ravel(),
+            "m_bias_var": (np.array([r.sigma_pass_bias**2 for r in ts.real]) * scale2).ravel(),
+            "m_corr_var": (np.array([r.sigma_correlated**2 for r in ts.real]) * scale2).ravel(),
             "m_tau_s": np.tile([r.tau_s for r in ts.real], n),
         }
         segment_offset += (int(d.segment[-1]) + 1) * m
         for key, value in rows.items():
             cols.setdefault(key, []).append(value)
     joined = {key: np.concatenate(value) for key, value in cols.items()}
-    return TapeRaw(KINDS, **joined)
+    return TapeRaw(RAW_KINDS, **joined)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -558,7 +677,9 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     columns = {par.name: i for i, par in enumerate(params)}
     prop = scenario.propagator()
     n_seg = int(np.count_nonzero(is_epoch))
-    total = n_seg + 2 * len(scenario.stations) + 1
+    entries = (*scenario.stations, *scenario.baselines)  # the tape's stations
+    names = [ts.station.name for ts in scenario.stations] + [b.name for b in scenario.baselines]
+    total = n_seg + 2 * len(entries) + 1
     step = iter(range(1, total + 1))
 
     def tick(stage: str) -> None:
@@ -577,6 +698,19 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         data.append(d)
         editing.append(e)
         tick(f"observations {ts.station.name}")
+    for i, bl in enumerate(scenario.baselines):
+        d, e = _baseline_data(bl, scenario, prop, arc, grid, t13, columns, n_scheduled)
+        if d is None:
+            raise InputError(scenario.source, f"ddor.baselines[{i}]",
+                             "a baseline whose stations both see the spacecraft above their "
+                             "masks, outside their blackouts, at some ΔDOR point (check the "
+                             "masks, min_window_s, interval_s)",
+                             f"0 points on {bl.name} of {e.scheduled} asked for; removed: "
+                             + ", ".join(f"{rule} {n}" for rule, n in
+                                         zip(EDITING_RULES, e.removed_samples, strict=True)))
+        data.append(d)
+        editing.append(e)
+        tick(f"observations {bl.name}")
     if all(d is None for d in data):
         removed = np.sum([e.removed_samples for e in editing], axis=0)
         raise InputError(scenario.source, "tracking",
@@ -589,11 +723,11 @@ def simulate(scenario: Scenario, *, raw: bool = False,
 
     pair_rows = []
     with threadpool_limits(limits=1, user_api="blas"):  # many small QRs: threads only cost
-        for ts, d in zip(scenario.stations, data, strict=True):
+        for ts, d, name in zip(entries, data, names, strict=True):
             if d is not None:
                 for k, (r, rt, count, parts) in sorted(_accumulate(ts, d, n_o).items()):
                     pair_rows.append((k, ts.number, count, r, rt, parts))
-            tick(f"square-root information {ts.station.name}")
+            tick(f"square-root information {name}")
     pair_rows.sort(key=lambda row: (row[0], row[1]))
 
     nominal, big_b = miss_partials(scenario)
@@ -604,7 +738,9 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     u[:, :, :6] = arc.phi[at_k]
     u[:, :, 6:6 + arc.sens.shape[-1]] = arc.sens[at_k]
     j = np.maximum.accumulate(np.where(is_epoch[:-1], np.arange(n_it), 0))
-    stations = scenario.stations
+    # A baseline's entry carries the position and mask of its first station.
+    located = [*(s.station for s in scenario.stations),
+               *(scenario.stations[b.station_a - 1].station for b in scenario.baselines)]
     tape = T13(
         iden=scenario.iden,
         epoch=scenario.epoch,
@@ -614,12 +750,11 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                                   np.array([p.station for p in params]),
                                   np.array([p.nominal for p in params])),
         stations=TapeStations(
-            np.array([s.number for s in stations]), tuple(s.station.name for s in stations),
-            tuple(",".join(s.kinds) for s in stations),
-            np.degrees([s.station.lat_rad for s in stations]),
-            np.degrees([s.station.lon_rad for s in stations]),
-            np.array([s.station.h_km for s in stations]),
-            np.degrees([s.station.elev_mask_rad for s in stations])),
+            np.array([s.number for s in entries]), tuple(names),
+            tuple(",".join(s.kinds) for s in entries),
+            np.degrees([s.lat_rad for s in located]), np.degrees([s.lon_rad for s in located]),
+            np.array([s.h_km for s in located]),
+            np.degrees([s.elev_mask_rad for s in located])),
         miss=TapeMiss(scenario.miss.kind, scenario.miss.t_s, scenario.miss.quantities,
                       scenario.miss.units, nominal, big_b),
         records=TapeRecords(t13, is_epoch, is_input, j, np.arange(1, n_it + 1),
@@ -628,9 +763,9 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                         np.array([r[2] for r in pair_rows]),
                         np.array([r[3] for r in pair_rows]), np.array([r[4] for r in pair_rows]),
                         Rt_parts=np.array([r[5] for r in pair_rows])),
-        passes=_pass_table(stations, data),
-        editing=_editing_table(stations, n_scheduled, editing),
-        raw=_raw(stations, data, n_o) if raw else None,
+        passes=_pass_table(entries, data),
+        editing=_editing_table(entries, editing),
+        raw=_raw(entries, data, n_o) if raw else None,
         provenance={"scenario": scenario.document_json, "scenario_source": scenario.source,
                     "earth_orientation": scenario.orientation.model,
                     "eop": scenario.orientation.eop_note + (
@@ -642,8 +777,8 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     return Simulation(tape, t_out, states, scenario)
 
 
-def _pass_table(stations: tuple[TrackingStation, ...], data: list[_StationData | None]
-                ) -> TapePasses:
+def _pass_table(stations: tuple[TrackingStation | TrackingBaseline, ...],
+                data: list[_StationData | None]) -> TapePasses:
     rows = [(ts.number, *p) for ts, d in zip(stations, data, strict=True) if d is not None
             for p in d.passes]
     rows.sort(key=lambda r: (r[1], r[0]))
@@ -651,11 +786,11 @@ def _pass_table(stations: tuple[TrackingStation, ...], data: list[_StationData |
                       np.array([r[2] for r in rows]), np.array([r[3] for r in rows]))
 
 
-def _editing_table(stations: tuple[TrackingStation, ...], n_scheduled: int,
+def _editing_table(stations: tuple[TrackingStation | TrackingBaseline, ...],
                    editing: list[_Editing]) -> TapeEditing:
     """The tape's ``editing/``: samples turned into scalar observations (m per sample)."""
     m = np.array([len(ts.kinds) for ts in stations])
-    return TapeEditing(EDITING_RULES, m * n_scheduled,
+    return TapeEditing(EDITING_RULES, m * np.array([e.scheduled for e in editing]),
                        m[:, None] * np.array([e.removed_samples for e in editing]),
                        np.array([e.removed_passes for e in editing]),
                        np.array([e.added_passes for e in editing]))

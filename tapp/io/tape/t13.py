@@ -104,7 +104,12 @@ class TapeParameters:
 
 @dataclass(frozen=True, slots=True, eq=False)
 class TapeStations:
-    """The n_ts tracking stations: numbers s = 1..n_ts, names, geodetic positions (deg, km)."""
+    """The n_ts tracking stations: numbers s = 1..n_ts, names, geodetic positions (deg, km).
+
+    ΔDOR baselines (:mod:`tapp.tracking.ddor`) follow the stations as entries of their own
+    (name ``A-B``, observables ``ddor``, the position and mask of A), so that time-station
+    flags act on a baseline's ΔDOR apart from either station's data.
+    """
 
     id: np.ndarray
     name: tuple[str, ...]

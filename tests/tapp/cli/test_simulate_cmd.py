@@ -369,3 +369,22 @@ def test_tape_info_says_the_injection_was_retargeted(retargeted_run, tmp_path: P
     plain = tmp_path / "leo.t13.h5"
     assert runner.invoke(app, ["simulate", str(LEO), "-o", str(plain)]).exit_code == 0
     assert "retargeted" not in runner.invoke(app, ["tape", "info", str(plain)]).stdout
+
+
+def test_a_ddor_scenario_writes_its_baseline_and_a_tdm_of_the_stations(tmp_path: Path) -> None:
+    """The baseline is the tape's third entry (its raw rows read back with kind "ddor"); the
+    TDM carries the stations' range and range-rate only (ΔDOR has no keyword there)."""
+    doc = geo_document()
+    doc["ddor"] = {"baselines": [["UNDER", "EAST"]], "interval_s": 3600.0,
+                   "fit": {"sigma_ns": 0.1}}
+    scenario, tape, tdm = tmp_path / "geo.toml", tmp_path / "geo.t13.h5", tmp_path / "geo.tdm"
+    scenario.write_bytes(tomli_w.dumps(doc).encode())
+    res = runner.invoke(app, ["simulate", str(scenario), "-o", str(tape), "--tdm", str(tdm),
+                              "--raw"])
+    assert res.exit_code == 0, res.output
+    back = read_t13(tape)
+    assert back.stations.name[2] == "UNDER-EAST"
+    rows = back.raw.kind == back.raw.kinds.index("ddor")
+    assert np.all(back.raw.station[rows] == 3) and rows.sum() == 12
+    text = tdm.read_text()
+    assert text.count("META_START") == 2 and "UNDER-EAST" not in text
