@@ -137,8 +137,8 @@ MISS_QUANTITIES = {
 class Parameter:
     """One TAPP I parameter: name (with unit), unit, kind, nominal value, station number.
 
-    ``kind`` is "orbit", "dynamic", "location", "bias" or "stochastic"; ``station`` is the station number
-    s (1-based) of a location or bias parameter, 0 otherwise.
+    ``kind`` is "orbit", "dynamic", "location", "bias" or "stochastic"; ``station`` is the
+    station number s (1-based) of a location or bias parameter, 0 otherwise.
     """
 
     name: str

@@ -101,7 +101,6 @@ from tapp.orbit.elements import cartesian_to_elements
 from tapp.targeting.program import BPlaneProgram
 from tapp.tracking.encounter import prepare_encounter
 from tapp.tracking.noise import PARTS, pass_rows
-from tapp.tracking.stochastic import BatchPartials, propagate_batches
 from tapp.tracking.scenario import (
     BIAS_KINDS,
     KINDS,
@@ -109,6 +108,7 @@ from tapp.tracking.scenario import (
     Scenario,
     TrackingStation,
 )
+from tapp.tracking.stochastic import BatchPartials, propagate_batches
 
 #: progress(stage, step, total): called as work advances (the CLI draws a bar with it).
 ProgressCallback = Callable[[str, int, int], None]

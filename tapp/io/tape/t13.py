@@ -46,9 +46,9 @@ from functools import cache
 import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
+from tapp.dynamics.empirical import COMPONENTS
 from tapp.errors import InputError
 from tapp.estimation.factors import psd_factor
-from tapp.dynamics.empirical import COMPONENTS
 from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
 from tapp.frames.orientation import INERTIAL_FRAME
 from tapp.frames.time import Epoch
