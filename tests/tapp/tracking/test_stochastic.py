@@ -34,6 +34,10 @@ EPS_KM_S2 = 1e-8
 #: Agreement of partials with their central differences, relative to the largest entry of
 #: the column: the integrator's error over the step, ~1e-10 km / 2e-3 km (measured 2.6e-8).
 FD_TOL = 1e-6
+#: The miss partials B = G S(t_m) carry the error of G = ∂m/∂x(t_m), which TAPP I takes by
+#: central differences (~1e-10 relative, tapp.tracking.simulate), amplified by cancellation:
+#: ∂a/∂r S_r and ∂a/∂v S_v are each ~2e7 km per km/s² and sum to ~100 (measured 9.4e-6).
+MISS_TOL = 5e-5
 
 
 @pytest.fixture(scope="module")
@@ -120,7 +124,7 @@ def test_miss_partials_match_central_differences(simulation):
         minus = equinoctial_elements(_piecewise(sc, sc.x0, 0.0, tape.miss.t_s, k, c,
                                                 -EPS_KM_S2), mu)
         fd = (plus - minus) / (2 * EPS_KM_S2)
-        np.testing.assert_allclose(b[:, col], fd, rtol=0, atol=FD_TOL * np.max(np.abs(fd)))
+        np.testing.assert_allclose(b[:, col], fd, rtol=0, atol=MISS_TOL * np.max(np.abs(fd)))
 
 
 def test_the_restarts_leave_the_transition_and_other_partials_unchanged(simulation):
