@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from tapp.dynamics.empirical import empirical_acceleration
 from tapp.dynamics.forces import acceleration
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError
@@ -84,15 +85,17 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
 
     x = ca.SX.sym("x", 6)
     r, v = x[:3], x[3:]
-    a_state = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow)
+    a_state = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow) + \
+        empirical_acceleration(r, v, q_map)
     xdot = ca.vertcat(v, a_state)
     f_state = ca.Function("f_state", [t, x, q, c, rb], [ca.cse(xdot)],
                           ["t", "y", "q", "c", "rb"], ["ydot"])
 
     y = ca.SX.sym("y", 42 + 6 * nq)
     r, v = y[:3], y[3:6]
-    a_n = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow)
-    a_m = acceleration(var_model, t, r, c[0], q_map, r_bodies, slow)
+    a_q = empirical_acceleration(r, v, q_map)  # both models (tapp.dynamics.empirical)
+    a_n = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow) + a_q
+    a_m = acceleration(var_model, t, r, c[0], q_map, r_bodies, slow) + a_q
     phi = ca.reshape(y[6:42], 6, 6)
     da_dr = ca.jacobian(a_m, r)
     a_mat = ca.vertcat(ca.horzcat(ca.SX.zeros(3, 3), ca.SX.eye(3)),

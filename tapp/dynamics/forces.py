@@ -38,7 +38,9 @@ eq. 3.37):
 Model parameters (values in :func:`default_parameters`) may be symbols so that their
 sensitivities come out of the variational equations: ``GM`` (centre, km^3/s^2), ``Jn``
 (unnormalised zonal, \\bar C_{n0} = -J_n/\\sqrt{2n+1}), ``Cnm``/``Snm`` (normalised, single
-digits n, m), ``GM_<body>`` for a third body.
+digits n, m), ``GM_<body>`` for a third body; and the constant empirical accelerations of
+:mod:`tapp.dynamics.empirical` (``acc_R``, ``acc_x``, ..., km/s², nominal 0), whose term
+:mod:`tapp.dynamics.equations` adds.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ from collections.abc import Callable, Mapping
 import casadi as ca
 
 from tapp.constants import GM_km3_s2, OMEGA_EARTH_rad_s, R_EARTH_km, egm96_coefficients
+from tapp.dynamics.empirical import NAMES as EMPIRICAL_NAMES
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError
 from tapp.frames.orientation import OMEGA_ERA_rad_s, itrs_from_gcrs_elements
@@ -72,6 +75,8 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
     for name in names:
         if name == "GM":
             values[name] = model.gm_center_km3_s2
+        elif name in EMPIRICAL_NAMES:
+            values[name] = 0.0
         elif name.startswith("GM_") and name[3:] in model.third_bodies:
             values[name] = GM_km3_s2[name[3:]]
         elif (m := _ZONAL_J.match(name)) and _in_field(model, int(m.group(1)), 0):
@@ -85,7 +90,8 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
             values[name] = (c_bar if m.group(1) == "C" else s_bar)[n, mm]
         else:
             raise InputError("model", "parameters",
-                             f"GM, Jn, Cnm, Snm within {model.gravity.name} or GM_<third body>",
+                             f"GM, Jn, Cnm, Snm within {model.gravity.name}, GM_<third body> "
+                             "or acc_R, acc_I, acc_C, acc_x, acc_y, acc_z",
                              name)
     return values
 

@@ -78,10 +78,10 @@ KINDS: dict[str, Kind] = {
 }
 
 #: Unit of a key from the end of its name, longest first.
-_SUFFIX_UNITS = (("_km3_s2", "km³/s²"), ("_km_s", "km/s"), ("_mm_s", "mm/s"), ("_km", "km"),
-                 ("_nrad", "nrad"), ("_mrad", "mrad"), ("_rad", "rad"), ("_deg", "deg"),
-                 ("_days", "d"), ("_ns", "ns"),
-                 ("_m", "m"), ("_s", "s"), ("_h", "h"))
+_SUFFIX_UNITS = (("_km3_s2", "km³/s²"), ("_km_s2", "km/s²"), ("_m_s2", "m/s²"),
+                 ("_km_s", "km/s"), ("_mm_s", "mm/s"), ("_km", "km"), ("_nrad", "nrad"),
+                 ("_mrad", "mrad"), ("_rad", "rad"), ("_deg", "deg"), ("_days", "d"),
+                 ("_ns", "ns"), ("_m", "m"), ("_s", "s"), ("_h", "h"))
 
 
 def unit_of(key: str) -> str | None:

@@ -31,12 +31,14 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     [fit]                       # fit system: P_f (an extension), n_f1, K_f, a priori
     fixed = ["GM_moon_km3_s2"]  # readable; or permutation/n_f1 as the seed
     constraints = []
+    stochastic = "ignore"       # the tape's stochastic accelerations: "estimate" | "ignore"
     [fit.apriori]
     sigma = { x_km = 1.0, "GM_moon_km3_s2" = 0.0 }  # σ = 0: held fixed; inf: no information
     # sigma = [1.0, 1.0, ...]   # positional over f1 (seed coding), or
     # normal = [[...], ...]     # the n_f1 x n_f1 normal matrix S₀
     [real]                      # real system: P_r, n_r1, K_r, a priori
     certain = []
+    stochastic = "include"      # "include" | "ignore"
     [real.apriori]
     sigma = { x_km = 1.0, "GM_moon_km3_s2" = 1e-4 }  # σ = 0: certain
     correlation = [["x_km", "y_km", 0.3]]
@@ -58,6 +60,19 @@ tape's order (stable). A priori σ's lie in :data:`SIGMA_RANGE` (the reason is g
 fit normal matrices and real covariances given as matrices must have their diagonal in the
 matching range, be symmetric and positive semi-definite, each entry on its own scale
 √(a_ii a_jj); constraint coefficients are bounded by :data:`MAX_CONSTRAINT`.
+
+Stochastic accelerations (parameters of kind "stochastic", defined on the tape by TAPP I's
+``[stochastic]``: :mod:`tapp.estimation.gauss_markov`) take their a priori from the tape, not
+from the σ tables: ``fit.stochastic = "estimate"`` puts them in the estimated set with the
+a priori information P⁻¹ of their Gauss-Markov covariance P, ``"ignore"`` (the default) holds
+them fixed at 0 (σ = 0); ``real.stochastic = "include"`` gives them the covariance P in the
+real world, ``"ignore"`` (the default) makes them certain. So a filter that estimates them is
+(estimate, include); one that considers them (the consider covariance of a filter that does
+not estimate them: the classic optimistic-filter study) is (ignore, include); neither world
+has them with (ignore, ignore); (estimate, ignore) is a filter that estimates what is not
+there. Their a priori is generated in the σ-table form only (not with matrices given whole);
+the σ tables and correlation triples must not name them (σ = 0 is accepted where they are
+fixed), and the error budget counts them as one source, "stochastic accelerations".
 """
 
 from __future__ import annotations
@@ -72,6 +87,7 @@ from pydantic import Field
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
 from tapp.estimation.factors import scaled_min_eigenvalue
+from tapp.estimation.gauss_markov import KIND as STOCHASTIC
 from tapp.frames.time import parse_epoch
 from tapp.io.schema import InfFloat, Schema, load
 from tapp.io.tape.packing import symmetry_defect
@@ -212,6 +228,10 @@ class Fit(Schema):
     fixed: list[Ref] = Field([], description="Parameters the fit holds fixed (the readable "
                              "form of permutation and n_f1).")
     constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
+    stochastic: Literal["estimate", "ignore"] = Field(
+        "ignore", description="The tape's stochastic accelerations: \"estimate\" them with "
+        "the a priori information of their Gauss-Markov covariance, or \"ignore\" them (held "
+        "fixed at 0; with real.stochastic = \"include\" they are then considered).")
     apriori: FitApriori = Field(FitApriori(), description="The fit world's a priori.")
 
 
@@ -236,6 +256,9 @@ class Real(Schema):
     certain: list[Ref] = Field([], description="Parameters known exactly in the real world "
                                "(the readable form of permutation and n_r1).")
     constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
+    stochastic: Literal["include", "ignore"] = Field(
+        "ignore", description="The tape's stochastic accelerations: \"include\" them with "
+        "their Gauss-Markov covariance, or \"ignore\" them (certain, 0).")
     apriori: RealApriori = Field(RealApriori(), description="The real world's a priori.")
 
 
@@ -316,6 +339,14 @@ class _Binder:
         self.times = np.asarray(header.records.times_s, dtype=float)
         #: Fields that refer to parameters by position (checked in :meth:`_check_positions`).
         self.positional: list[str] = []
+        #: The tape's stochastic accelerations (None without them) and their names.
+        self.stochastic = getattr(header, "stochastic", None)
+        self.stochastic_names = tuple(n for n, kind in zip(self.names, header.parameters.kind,
+                                                           strict=True) if kind == STOCHASTIC)
+        for world, on in (("fit", "estimate"), ("real", "include")):
+            if getattr(deck, world).stochastic == on and not self.stochastic_names:
+                raise self.fail(f"{world}.stochastic", "\"ignore\" (the tape has no "
+                                "stochastic accelerations)", on)
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -444,13 +475,15 @@ class _Binder:
         k_c = self._constraints(com.constraints, order_c, "common.constraints")
         fit_sigma_fixed = self._sigma_zero(d.fit.apriori.sigma, order_c, n_c1, "fit.apriori")
         p_f, n_f1 = self._world(d.fit.permutation, d.fit.fixed, fit_sigma_fixed, d.fit.n_f1,
-                                order_c, n_c1, "fit", "fixed", "n_f1")
+                                order_c, n_c1, "fit", "fixed", "n_f1",
+                                d.fit.stochastic == "ignore")
         order_f = p_f.move(order_c) if p_f else order_c
         k_f = self._constraints(d.fit.constraints, order_f, "fit.constraints")
         real_sigma_certain = self._sigma_zero(d.real.apriori.sigma, order_c, n_c1,
                                               "real.apriori")
         p_r, n_r1 = self._world(d.real.permutation, d.real.certain, real_sigma_certain,
-                                d.real.n_r1, order_c, n_c1, "real", "certain", "n_r1")
+                                d.real.n_r1, order_c, n_c1, "real", "certain", "n_r1",
+                                d.real.stochastic == "ignore")
         order_r = p_r.move(order_c) if p_r else order_c
         k_r = self._constraints(d.real.constraints, order_r, "real.constraints")
         miss = self.miss_partitions()
@@ -459,14 +492,20 @@ class _Binder:
         return sy, self.fit_normal(order_f, n_f1), self.real_covariance(order_r, n_r1)
 
     def _world(self, perm: list, listed: list, from_sigma: list, n_given: int | None,
-               order: list[str], n_c1: int, world: str, key: str, count: str
-               ) -> tuple[Permutation | None, int]:
-        if perm and (listed or from_sigma):
-            raise self.fail(world, f"either permutation (with {count}) or {key} / σ = 0")
+               order: list[str], n_c1: int, world: str, key: str, count: str,
+               without_stochastic: bool) -> tuple[Permutation | None, int]:
+        """The world's permutation and n_1; ``without_stochastic``: the stochastic
+        accelerations join the fixed (fit) or certain (real) set."""
+        generated = [n for n in self.stochastic_names if without_stochastic
+                     and n in (name.rstrip("'") for name in order[:n_c1])]
+        if perm and (listed or from_sigma or generated):
+            raise self.fail(world, f"either permutation (with {count}) or {key} / σ = 0"
+                            + (f" / {world}.stochastic = \"ignore\"" if generated else ""))
         if listed and from_sigma and sorted(map(str, listed)) != sorted(map(str, from_sigma)):
             raise self.fail(f"{world}.{key}", f"the parameters with σ = 0 in {world}.apriori",
                             listed)
-        refs = listed or from_sigma
+        refs = list(listed or from_sigma)
+        refs += [n for n in generated if n not in map(str, refs)]
         if perm:
             return (self._permutation(perm, order, f"{world}.permutation", self.n_p, n_c1),
                     self._count(n_given, n_c1, self.n_p, n_c1, f"{world}.{count}"))
@@ -493,8 +532,32 @@ class _Binder:
                 zero.append(order[pos].rstrip("'"))
         return zero
 
-    def _sigmas(self, sigma, order: list[str], n1: int, field: str) -> np.ndarray:
-        """σ of the first n1 parameters of ``order`` from a list or a table."""
+    def _stochastic_block(self, order: list[str], n1: int, field: str, world: str, on: str,
+                          sigma) -> list[int]:
+        """Positions in ``order`` of the stochastic accelerations (in the tape's order) when
+        the world has them (``{world}.stochastic = on``; [] otherwise), after checking the σ
+        table does not give them a σ (their a priori is generated)."""
+        if getattr(self.deck, world).stochastic != on:
+            return []
+        if not isinstance(sigma, dict):
+            raise self.fail(f"{field}.sigma", f"a σ table with {world}.stochastic = \"{on}\" "
+                            "(the stochastic block is generated; no list or matrix)")
+        given = [k for k in sigma if self._key(k, field) in self.stochastic_names]
+        if given:
+            raise self.fail(f"{field}.sigma.{given[0]}", f"no σ for a stochastic acceleration "
+                            f"(its a priori comes from the tape with {world}.stochastic = "
+                            f"\"{on}\")", sigma[given[0]])
+        bare = [n.rstrip("'") for n in order[:n1]]
+        outside = [n for n in self.stochastic_names if n not in bare]
+        if outside:
+            raise self.fail(f"{world}.stochastic", f"the stochastic accelerations in the "
+                            f"{world} world's set (not fixed, certain or eliminated)", outside[0])
+        return [bare.index(n) for n in self.stochastic_names]
+
+    def _sigmas(self, sigma, order: list[str], n1: int, field: str,
+                generated: list[int] = ()) -> np.ndarray:
+        """σ of the first n1 parameters of ``order`` from a list or a table; those at the
+        ``generated`` positions are the stochastic accelerations' σ."""
         if isinstance(sigma, list):
             self.positional.append(f"{field}.sigma")
             if len(sigma) != n1:
@@ -510,6 +573,8 @@ class _Binder:
                 elif value != 0:
                     raise self.fail(f"{field}.sigma.{key}", "σ = 0 (the parameter is not in the "
                                     "estimated set of this world)", value)
+            if generated:
+                out[list(generated)] = self.stochastic.sigma_km_s2
             missing = [order[i] for i in range(n1) if np.isnan(out[i])]
             if missing:
                 raise self.fail(f"{field}.sigma", "a σ for every parameter (missing: "
@@ -562,21 +627,28 @@ class _Binder:
         ap = self.deck.fit.apriori
         if (ap.sigma is None) == (ap.normal is None):
             raise self.fail("fit.apriori", "exactly one of sigma or normal")
+        block = self._stochastic_block(order, n_f1, "fit.apriori", "fit", "estimate",
+                                       ap.sigma)
         if ap.normal is not None:
             return self._matrix(ap.normal, n_f1, "fit.apriori.normal", order, "normal")
-        sigma = self._sigmas(ap.sigma, order, n_f1, "fit.apriori")
-        return np.diag(1.0 / sigma**2)
+        sigma = self._sigmas(ap.sigma, order, n_f1, "fit.apriori", block)
+        s0 = np.diag(1.0 / sigma**2)
+        if block:
+            s0[np.ix_(block, block)] = self.stochastic.information()
+        return s0
 
     def real_covariance(self, order: list[str], n_r1: int) -> np.ndarray:
         ap = self.deck.real.apriori
         if (ap.sigma is None) == (ap.covariance is None):
             raise self.fail("real.apriori", "exactly one of sigma or covariance")
+        block = self._stochastic_block(order, n_r1, "real.apriori", "real", "include",
+                                       ap.sigma)
         if ap.covariance is not None:
             if ap.correlation:
                 raise self.fail("real.apriori.correlation", "no correlations with a covariance")
             return self._matrix(ap.covariance, n_r1, "real.apriori.covariance", order,
                                 "covariance")
-        sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori")
+        sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori", block)
         if np.any(~np.isfinite(sigma)):
             raise self.fail("real.apriori.sigma", "finite σ's")
         corr = np.eye(n_r1)
@@ -588,7 +660,13 @@ class _Binder:
             if a >= n_r1 or b >= n_r1 or a == b or not -1 <= tr[2] <= 1:
                 raise self.fail(where, "two different uncertain parameters and -1 <= ρ <= 1",
                                 tr)
+            if a in block or b in block:
+                raise self.fail(where, "no stochastic acceleration (their correlations are "
+                                "the Gauss-Markov process's)", tr)
             corr[a, b] = corr[b, a] = float(tr[2])
+        if block:
+            corr[np.ix_(block, block)] = self.stochastic.covariance() / \
+                self.stochastic.sigma_km_s2**2
         smallest = scaled_min_eigenvalue(corr)
         if smallest < -PSD_TOL:
             raise self.fail("real.apriori.correlation", "a positive semi-definite real-world "
@@ -675,6 +753,11 @@ class _Binder:
                 raise self.fail(field, "groups with no parameter in common")
             seen |= set(idx)
             out.append((name, idx))
+        bare = [n.rstrip("'") for n in order]
+        rest = tuple(i for i in (bare.index(n) for n in self.stochastic_names)
+                     if systems.n_p <= i < systems.n_r1 and i not in seen)
+        if rest:
+            out.append(("stochastic accelerations", rest))
         return tuple(out)
 
     def history(self) -> Side:

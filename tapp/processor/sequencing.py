@@ -86,6 +86,7 @@ from tapp.processor.representations import (
     SYSTEMS,
     Accumulator,
     Stored,
+    orbit_link,
 )
 
 #: Pairs read from the tape at a time (bounds the memory of a block of packed factors).
@@ -572,7 +573,12 @@ class Processor:
         t = self.acc.transformation(0, 1, 1)
         ta = self.acc.transformation(1, 1, 1)
         transition = accurate_map(t, self.acc.transformation(1, 2, 1))
-        adjoint = accurate_map(ta, self.acc.transformation(0, 2, 1))
+        # The adjoint of the transition itself ([[P, Q], [0, I]] -> [[P*, 0], [-QᵀP*, I]]),
+        # not of its two factors: a column of Q that is exactly 0 (a stochastic acceleration
+        # whose interval ended before the last recycle) is the cancellation of sensitivities
+        # of 1e10 km per km/s², and the two routes left different remainders of it (|TᵀA − I|
+        # of 0.86 of the terms); from T's own blocks they cancel to rounding.
+        adjoint = orbit_link(transition[:self.n_p], self.n_o, adjoint=True)
         fit = self._factor(cur)("L'")
         entities = tuple(T32Entity(e.omega, e.command.seed(), e.command.alias(), e.rows, e.cols,
                                    e.matrix) for e in ents)

@@ -57,6 +57,13 @@ ISO strings or TOML dates)::
                        body, found as SEARCH finds it); quantities (default: all of the kind
                        but flight_time_s). A B-plane miss must be an encounter
                        (tapp.tracking.encounter), checked before anything is written.
+    [stochastic]       optional: piecewise-constant stochastic accelerations
+                       (tapp.estimation.gauss_markov): frame = "ric" | "inertial",
+                       components (default all three), interval_s with start, end (default
+                       0 and the last T13 time; the last interval may be shorter) or
+                       boundaries = [times], sigma_km_s2 or sigma_m_s2, tau_s (first-order
+                       Gauss-Markov across the intervals); one parameter acc_<c>_<k> (km/s²,
+                       kind "stochastic") per interval and component, appended to x
     [targeting]        optional: retarget the injection velocity to a B-plane aim point of the
                        miss body by SEARCH before simulating
                        (tapp.targeting.searchfile.scenario_targeting: targets.b_dot_r_km,
@@ -80,9 +87,11 @@ from pydantic import Field, PlainValidator
 
 from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics import ForceModel, Propagator
+from tapp.dynamics.empirical import COMPONENTS
 from tapp.dynamics.ephemeris import tai_minus_utc_s
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.errors import InputError
+from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
 from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.io.models_file import ModelTable
@@ -133,8 +142,8 @@ MISS_QUANTITIES = {
 class Parameter:
     """One TAPP I parameter: name (with unit), unit, kind, nominal value, station number.
 
-    ``kind`` is "orbit", "dynamic", "location" or "bias"; ``station`` is the station number
-    s (1-based) of a location or bias parameter, 0 otherwise.
+    ``kind`` is "orbit", "dynamic", "location", "bias" or "stochastic"; ``station`` is the
+    station number s (1-based) of a location or bias parameter, 0 otherwise.
     """
 
     name: str
@@ -277,6 +286,7 @@ class Scenario:
     targeting : the SEARCH problem of a ``[targeting]`` table, run before simulating; None
         without one (or once run: :func:`tapp.tracking.encounter.prepare_encounter`).
     baselines : the ΔDOR baselines of a ``[ddor]`` table, numbered after the stations.
+    stochastic : the stochastic accelerations of a ``[stochastic]`` table, or None.
     """
 
     source: str
@@ -298,6 +308,7 @@ class Scenario:
     document_json: str
     targeting: BPlaneSearch | None = None
     baselines: tuple[TrackingBaseline, ...] = ()
+    stochastic: StochasticAccelerations | None = None
 
     def propagator(self) -> Propagator:
         """The (state model, variational model, dynamic parameters) propagator."""
@@ -306,7 +317,8 @@ class Scenario:
 
     @property
     def parameters(self) -> tuple[Parameter, ...]:
-        """x = [p; q]: orbit state at the epoch, dynamic parameters, station parameters."""
+        """x = [p; q]: orbit state at the epoch, dynamic parameters, station parameters,
+        stochastic accelerations."""
         out = [Parameter(name, unit, "orbit", float(v))
                for (name, unit), v in zip(ORBIT_PARAMETERS, self.x0, strict=True)]
         values = default_parameters(self.state_model, self.dynamic)
@@ -317,6 +329,8 @@ class Scenario:
                                  "dynamic", values[name]))
         for st in self.stations:
             out.extend(st.parameters())
+        if self.stochastic is not None:
+            out.extend(Parameter(name, UNIT, KIND, 0.0) for name in self.stochastic.names)
         return tuple(out)
 
     @property
@@ -455,6 +469,37 @@ class MissTable(Schema):
         "\"earth_equator\".")
 
 
+#: Most stochastic-acceleration parameters (intervals x components): each adds a column to
+#: every factor on the tape (3 n_o² doubles per pair) and to the processor's matrices.
+MAX_STOCHASTIC = 300
+
+
+class StochasticTable(Schema):
+    """``[stochastic]``: piecewise-constant accelerations, constant over each interval,
+    correlated across intervals as a first-order Gauss-Markov process of their mid-times
+    (tapp.estimation.gauss_markov); each (interval, component) is a parameter in q."""
+
+    frame: Literal[FRAMES] = Field(  # type: ignore[valid-type]
+        "ric", description="\"ric\": radial, in-track, cross-track of the trajectory; "
+        "\"inertial\": x, y, z.")
+    components: Annotated[list[str], Field(min_length=1), Unique] | None = Field(
+        None, description="Components modelled (R, I, C or x, y, z); default: all three.")
+    interval_s: Positive | None = Field(
+        None, description="Interval length, from start to end (the last may be shorter); or "
+        "boundaries.")
+    start: Time | None = Field(None, description="Start of the first interval, with "
+                               "interval_s; default: 0.")
+    end: Time | None = Field(None, description="End of the last interval, with interval_s; "
+                             "default: the last T13 time.")
+    boundaries: Annotated[list[Time], Field(min_length=2)] | None = Field(
+        None, description="Interval boundaries t_0 < ... < t_K, from 0 to the last T13 time.")
+    sigma_km_s2: Positive | None = Field(None, description="Steady-state σ of each component "
+                                         "(or sigma_m_s2).")
+    sigma_m_s2: Positive | None = Field(None, description="The same σ in m/s².")
+    tau_s: Positive = Field(description="Gauss-Markov time constant τ: consecutive intervals "
+                            "correlate by exp(-Δt/τ) over their mid-times' distance Δt.")
+
+
 class ScenarioFile(StationsSection):
     """Schema of a TAPP I tracking scenario (module docstring for the tables)."""
 
@@ -476,6 +521,8 @@ class ScenarioFile(StationsSection):
     targeting: TargetingTable | None = Field(
         None, description="Retarget the injection velocity by SEARCH before simulating.")
     ddor: DdorTable | None = Field(None, description="ΔDOR on baselines of tracked stations.")
+    stochastic: StochasticTable | None = Field(
+        None, description="Stochastic accelerations, estimated or considered by TAPP III.")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -701,6 +748,55 @@ def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -
     return MissSpec(kind, t_s, quantities, miss.body, reference, at_periapsis)
 
 
+def _stochastic(p: _Parser, table: StochasticTable | None, last_s: float
+                ) -> StochasticAccelerations | None:
+    """The stochastic accelerations of ``[stochastic]`` (None without one): intervals within
+    [0, last T13 time], σ in km/s², finite τ."""
+    if table is None:
+        return None
+    allowed = COMPONENTS[table.frame]
+    components = tuple(allowed) if table.components is None else tuple(table.components)
+    for i, c in enumerate(components):
+        if c not in allowed:
+            p.fail(f"stochastic.components[{i}]", f"components of the {table.frame} frame "
+                   f"({', '.join(allowed)})", c)
+    components = tuple(c for c in allowed if c in components)  # frame order
+    if (table.sigma_km_s2 is None) == (table.sigma_m_s2 is None):
+        p.fail("stochastic.sigma_km_s2", "exactly one of sigma_km_s2 or sigma_m_s2")
+    sigma = table.sigma_km_s2 if table.sigma_m_s2 is None else table.sigma_m_s2 * 1e-3
+    for key, value in (("sigma_km_s2", sigma), ("tau_s", table.tau_s)):
+        if not math.isfinite(value):
+            p.fail(f"stochastic.{key}", "a finite number > 0", value)
+    if (table.interval_s is None) == (table.boundaries is None):
+        p.fail("stochastic", "either interval_s (with start, end) or boundaries")
+    if table.boundaries is not None:
+        for key in ("start", "end"):
+            if getattr(table, key) is not None:
+                p.fail(f"stochastic.{key}", "no start or end with boundaries",
+                       getattr(table, key))
+        bounds = p.times(table.boundaries, "stochastic.boundaries")
+        field = "stochastic.boundaries"
+    else:
+        start = p.time_s(0.0 if table.start is None else table.start, "stochastic.start")
+        end = p.time_s(last_s if table.end is None else table.end, "stochastic.end")
+        if end <= start:
+            p.fail("stochastic.end", f"a time after stochastic.start = {start:g} s", end)
+        n = math.ceil((end - start) / table.interval_s * (1 - 1e-12))
+        if n > MAX_STOCHASTIC:
+            p.fail("stochastic.interval_s", f"at most {MAX_STOCHASTIC} intervals", n)
+        bounds = tuple(min(start + i * table.interval_s, end) for i in range(n)) + (end,)
+        field = "stochastic.end" if bounds[0] >= 0 else "stochastic.start"
+    if bounds[0] < 0 or bounds[-1] > last_s * (1 + 1e-15):
+        p.fail(field, f"intervals within [0, {last_s:g}] s (the T13 times)",
+               [bounds[0], bounds[-1]])
+    n_par = (len(bounds) - 1) * len(components)
+    if n_par > MAX_STOCHASTIC:
+        p.fail("stochastic", f"at most {MAX_STOCHASTIC} parameters (intervals x components)",
+               n_par)
+    return StochasticAccelerations(table.frame, components, bounds, float(sigma),
+                                   float(table.tau_s))
+
+
 def _targeting(p: _Parser, doc: ScenarioFile, miss: MissSpec, values: tuple,
                x0: np.ndarray, propagator: Propagator, orientation: EarthOrientation
                ) -> BPlaneSearch | None:
@@ -756,6 +852,7 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     last_s = float(times.t13_s[-1])
     schedule = _schedule(p, doc.tracking, last_s)
     miss = _miss(p, doc.miss, state_model, last_s)
+    stochastic = _stochastic(p, doc.stochastic, last_s)
     orientation.check_covers(np.array([0.0, last_s, schedule.end_s]), source)
     document = json.dumps(data, default=str, sort_keys=True)
     x0.setflags(write=False)
@@ -766,7 +863,7 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,
                     dynamic, values, stations, schedule, times, miss, document, targeting,
-                    baselines)
+                    baselines, stochastic)
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

@@ -17,7 +17,10 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    (n_o x n_o, the parameter block of Φ extended by the sensitivities). Composing through t_0
    instead, Φ(t, t̂_i) = Φ(t, t_0) Φ(t̂_i, t_0)⁻¹, loses every digit after a lunar swing-by
    (cond Φ ~ 1e17 over 30 days): the restart keeps the full precision of the integrator.
-   U of record k is the top n_p rows of Ψ(t_k, t_j).
+   U of record k is the top n_p rows of Ψ(t_k, t_j). Stochastic accelerations (a
+   ``[stochastic]`` table) add the columns S_k(t) = ∂x(t)/∂a_k referred to the same epoch;
+   the integration then also restarts at their interval boundaries
+   (:mod:`tapp.tracking.stochastic`), Φ and S being carried across them by forward products.
 
 2. **Observations.** Samples fall on the schedule's grid; a station observes where the
    spacecraft is above its mask (geometric elevation) and outside its blackouts; runs of
@@ -39,7 +42,7 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    .. math::
 
        A = \\Big[\\, H\\,\\Phi(t, t_j),\\; H\\,S_j(t),\\; \\partial h/\\partial(\\text{location}),
-       \\; \\partial h/\\partial(\\text{bias}) \\,\\Big].
+       \\; \\partial h/\\partial(\\text{bias}),\\; H\\,S_{a,j}(t) \\,\\Big].
 
 3. **Square-root information.** Per (record k, station s): upper-triangular factors R and R̃
    with RᵀR = ΔJ = AᵀWA and R̃ᵀR̃ = ΔJ̃ = AᵀWMWA over the observations in (t_{k-1}, t_k],
@@ -55,7 +58,8 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
 4. **Miss parameters.** m at the miss time from the state propagated from t_0 (B-plane of the
    osculating target-relative hyperbola, or orbit elements), and
 
-   .. math:: B = \\frac{\\partial m}{\\partial x(t_0)} = G\\,[\\Phi(t_m, t_0),\\ S(t_m),\\ 0]
+   .. math:: B = \\frac{\\partial m}{\\partial x(t_0)} = G\\,[\\Phi(t_m, t_0),\\ S(t_m),\\ 0,
+             \\ S_a(t_m)]
              + \\frac{\\partial m}{\\partial q}\\Big|_{\\text{direct}}
 
    with G = ∂m/∂x(t_m) by central differences of the closed-form m (steps 1e-6 of |r|,
@@ -117,6 +121,7 @@ from tapp.tracking.scenario import (
     Scenario,
     TrackingStation,
 )
+from tapp.tracking.stochastic import BatchPartials, propagate_batches
 
 #: progress(stage, step, total): called as work advances (the CLI draws a bar with it).
 ProgressCallback = Callable[[str, int, int], None]
@@ -161,12 +166,14 @@ class Simulation:
 
 @dataclass(frozen=True, slots=True)
 class _Arc:
-    """Trajectory on the output times, partials referred to each time's epoch."""
+    """Trajectory on the output times, partials referred to each time's epoch (those of the
+    stochastic accelerations in ``batches``, None without them)."""
 
     t_s: np.ndarray
     states: np.ndarray
     phi: np.ndarray
     sens: np.ndarray
+    batches: BatchPartials | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -264,6 +271,14 @@ def _grid(scenario: Scenario, last_s: float) -> np.ndarray:
     return t[(t > 0) & (t <= end)]
 
 
+def _batch_propagator(scenario: Scenario) -> Propagator:
+    """The scenario's propagator with the empirical accelerations of its stochastic ones
+    appended to the model parameters (:func:`tapp.tracking.stochastic.propagate_batches`)."""
+    return Propagator(scenario.state_model, scenario.var_model,
+                      scenario.dynamic + scenario.stochastic.model_parameters,
+                      rtol=scenario.rtol, atol=scenario.atol)
+
+
 def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.ndarray,
          grid: np.ndarray, progress: Callable[[str], None]) -> _Arc:
     """Propagate segment by segment from each epoch time (module docstring, item 1)."""
@@ -272,19 +287,29 @@ def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.nda
     x_start = np.asarray(scenario.x0, dtype=float)
     values = dict(scenario.dynamic_values)
     parts: list[Trajectory] = []
+    batches: list[BatchPartials] = []
     for a, b in zip(epochs, ends, strict=True):
         out = np.unique(np.concatenate([grid[(grid > a) & (grid <= b)],
                                         t13[(t13 > a) & (t13 <= b)]]))
-        traj = prop.propagate(x_start, out, t0_s=float(a), stm=True, param_values=values,
-                              orientation=scenario.orientation,
-                              epoch_jd_utc=scenario.epoch.jd)
+        if scenario.stochastic is None:
+            traj = prop.propagate(x_start, out, t0_s=float(a), stm=True, param_values=values,
+                                  orientation=scenario.orientation,
+                                  epoch_jd_utc=scenario.epoch.jd)
+        else:
+            arc = propagate_batches(_batch_propagator(scenario), scenario.stochastic, x_start,
+                                    out, t0_s=float(a), param_values=values,
+                                    orientation=scenario.orientation,
+                                    epoch_jd_utc=scenario.epoch.jd)
+            traj = Trajectory(out, arc.states, arc.phi, arc.sens, prop.params, 0, 0)
+            batches.append(arc.batches)
         parts.append(traj)
         x_start = traj.states[-1]
         progress("propagation")
     return _Arc(np.concatenate([p.t_s for p in parts]),
                 np.concatenate([p.states for p in parts]),
                 np.concatenate([p.stm for p in parts]),
-                np.concatenate([p.sensitivity for p in parts]))
+                np.concatenate([p.sensitivity for p in parts]),
+                BatchPartials.join(batches) if batches else None)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -366,11 +391,17 @@ def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
                             ts.range_bias_km, ts.range_rate_bias_km_s)
 
 
-def _state_rows(h: np.ndarray, phi: np.ndarray, sens: np.ndarray, n_o: int) -> np.ndarray:
-    """Rows A (n, m, n_o) with the orbit and dynamic columns [H Φ, H S] filled."""
-    a = np.zeros(h.shape[:2] + (n_o,))
-    a[..., :6] = h @ phi
+def _state_rows(h: np.ndarray, arc: _Arc, p: np.ndarray, scenario: Scenario,
+                columns: dict[str, int]) -> np.ndarray:
+    """Rows A (n, m, n_o) of the samples at arc positions ``p`` with the orbit, dynamic and
+    stochastic-acceleration columns [H Φ, H S, H S_k] filled."""
+    a = np.zeros(h.shape[:2] + (len(columns),))
+    sens = arc.sens[p]
+    a[..., :6] = h @ arc.phi[p]
     a[..., 6:6 + sens.shape[-1]] = h @ sens
+    if arc.batches is not None:
+        first = columns[scenario.stochastic.names[0]]
+        a[..., first:first + len(scenario.stochastic.names)] = arc.batches.rows(p, h)
     return a
 
 
@@ -398,9 +429,9 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     take = np.concatenate([np.arange(a, b) for a, b in passes])
     label = np.concatenate([np.full(b - a, i) for i, (a, b) in enumerate(passes)])
     t, p = grid[take], pos[take]
-    x, phi, sens = arc.states[p], arc.phi[p], arc.sens[p]
+    x = arc.states[p]
     model = _measurement_model(ts, scenario, prop)
-    a = _state_rows(model.state_partials(t, x), phi, sens, len(columns))
+    a = _state_rows(model.state_partials(t, x), arc, p, scenario, columns)
     name = ts.station.name
     if ts.location != "none":
         first = columns[f"{name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
@@ -462,7 +493,7 @@ def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, a
     model = DdorModel(pair[0].station, pair[1].station, scenario.orientation,
                       _light_time(scenario, prop, two_way=False))
     quasar = quasar_direction(x[:, :3], bl.separation_rad, bl.position_angle_rad)
-    a = _state_rows(model.state_partials(t, x, quasar), arc.phi[p], arc.sens[p], len(columns))
+    a = _state_rows(model.state_partials(t, x, quasar), arc, p, scenario, columns)
     for which, ts in enumerate(pair):
         if ts.location != "none":
             first = columns[f"{ts.station.name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
@@ -635,6 +666,14 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
         column = 6 + scenario.dynamic.index(gm_name)
         big_b[:, column] += _difference(lambda q: f(x, float(q[0])), np.array([gm]),
                                         np.array([MISS_STEP * gm]), angles)[:, 0]
+    if scenario.stochastic is not None:
+        names = scenario.stochastic.names
+        first = [p.name for p in scenario.parameters].index(names[0])
+        arc = propagate_batches(_batch_propagator(scenario), scenario.stochastic, scenario.x0,
+                                np.array([miss.t_s]), t0_s=0.0, param_values=values,
+                                orientation=scenario.orientation,
+                                epoch_jd_utc=scenario.epoch.jd)
+        big_b[:, first:first + len(names)] = arc.batches.rows(np.array([0]), g[None])[0]
     return nominal, big_b
 
 
@@ -737,6 +776,9 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     u = np.zeros((n_it, n_p, n_o))
     u[:, :, :6] = arc.phi[at_k]
     u[:, :, 6:6 + arc.sens.shape[-1]] = arc.sens[at_k]
+    if arc.batches is not None:
+        first = columns[scenario.stochastic.names[0]]
+        u[:, :, first:] = arc.batches.rows(at_k, np.broadcast_to(np.eye(n_p), (n_it, n_p, 6)))
     j = np.maximum.accumulate(np.where(is_epoch[:-1], np.arange(n_it), 0))
     # A baseline's entry carries the position and mask of its first station.
     located = [*(s.station for s in scenario.stations),
@@ -766,6 +808,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         passes=_pass_table(entries, data),
         editing=_editing_table(entries, editing),
         raw=_raw(entries, data, n_o) if raw else None,
+        stochastic=scenario.stochastic,
         provenance={"scenario": scenario.document_json, "scenario_source": scenario.source,
                     "earth_orientation": scenario.orientation.model,
                     "eop": scenario.orientation.eop_note + (

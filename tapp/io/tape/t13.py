@@ -16,7 +16,10 @@ t_j: upper-triangular factors R, R̃ with RᵀR = AᵀWA and R̃ᵀR̃ = AᵀWMW
 into the factors of its white-noise, per-pass bias and exponentially correlated parts
 (:class:`TapePairs`; the normal matrices are their Gram matrices, :attr:`TapePairs.dJ`), the
 tracking passes (:class:`TapePasses`), optionally what the tracking schedule asked for and
-what each rule that removes data removed, per station (:class:`TapeEditing`), and, optionally,
+what each rule that removes data removed, per station (:class:`TapeEditing`), optionally the
+definition of the stochastic accelerations among the parameters (kind "stochastic": frame,
+components, interval boundaries, σ, τ; :class:`tapp.estimation.gauss_markov.
+StochasticAccelerations`, from which TAPP III builds their a priori), and, optionally,
 one row per scalar observation (:class:`TapeRaw`). Units: factor entry (r, b) in 1/u_b with
 u the parameters' units (normal matrices 1/(u_a u_b)); U and B entries in (unit of row)/(unit
 of column).
@@ -43,8 +46,10 @@ from functools import cache
 import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
+from tapp.dynamics.empirical import COMPONENTS
 from tapp.errors import InputError
 from tapp.estimation.factors import psd_factor
+from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
 from tapp.frames.orientation import INERTIAL_FRAME
 from tapp.frames.time import Epoch
 from tapp.io.tape.checks import PACKINGS, SYMMETRY_TOL, Checker, frozen
@@ -92,7 +97,8 @@ class TapeParameters:
     """The n_o TAPP I parameters x = [p; q]: names (with units), units, kinds, nominal values.
 
     ``kind`` is "orbit" (p), "dynamic" (model constants), "location" or "bias" (station
-    parameters, with ``station`` their station number; 0 otherwise).
+    parameters, with ``station`` their station number; 0 otherwise) or "stochastic" (the
+    accelerations of :attr:`T13.stochastic`).
     """
 
     name: tuple[str, ...]
@@ -268,7 +274,8 @@ class T13:
 
     ``provenance`` holds the root attributes that describe how the tape was made
     (scenario JSON and source on writing; plus tapp_version, git_commit, created_utc on
-    reading). ``editing`` is None on tapes written before it was recorded.
+    reading). ``editing`` is None on tapes written before it was recorded. ``stochastic``
+    defines the parameters of kind "stochastic" (None without them).
     """
 
     iden: str
@@ -283,6 +290,7 @@ class T13:
     raw: TapeRaw | None = None
     provenance: dict[str, str] = field(default_factory=dict)
     editing: TapeEditing | None = None
+    stochastic: StochasticAccelerations | None = None
 
     @property
     def n_o(self) -> int:
@@ -457,11 +465,46 @@ def check_parameters(c: Checker, par: TapeParameters, n_p: int) -> None:
         c.fail("parameters/name", "unique names", sorted(par.name))
 
 
+def _validate_stochastic(c: Checker, spec: StochasticAccelerations | None,
+                         par: TapeParameters) -> None:
+    """The parameters of kind "stochastic" are exactly the accelerations ``spec`` defines,
+    named and ordered as it names them, nominal 0, in km/s²; its definition is sound."""
+    at = [i for i, kind in enumerate(par.kind) if kind == KIND]
+    if spec is None:
+        if at:
+            c.fail("stochastic", "the definition of the stochastic parameters",
+                   "parameters of kind stochastic and no stochastic/ group")
+        return
+    if spec.frame not in FRAMES:
+        c.fail("stochastic.attrs/frame", f"one of {', '.join(FRAMES)}", spec.frame)
+    allowed = COMPONENTS[spec.frame]
+    if not spec.components or any(x not in allowed for x in spec.components) or \
+            len(set(spec.components)) != len(spec.components):
+        c.fail("stochastic.attrs/components", f"distinct components among {allowed}",
+               list(spec.components))
+    bounds = np.asarray(spec.boundaries_s, dtype=float)
+    if bounds.size < 2 or not np.all(np.isfinite(bounds)) or np.any(np.diff(bounds) <= 0):
+        c.fail("stochastic/boundaries_s", "at least 2 finite, strictly ascending times",
+               bounds[:8].tolist())
+    for name in ("sigma_km_s2", "tau_s"):
+        value = getattr(spec, name)
+        if not (math.isfinite(value) and value > 0):
+            c.fail(f"stochastic.attrs/{name}", "a finite number > 0", value)
+    names = tuple(par.name[i] for i in at)
+    if names != spec.names:
+        c.fail("parameters/kind", f"the {len(spec.names)} stochastic parameters of stochastic/ "
+               "in order", f"{len(names)}: {', '.join(names[:4])}")
+    if any(par.unit[i] != UNIT for i in at) or np.any(par.nominal[at] != 0):
+        c.fail("parameters/unit", f"stochastic accelerations in {UNIT}, nominal 0")
+
+
 def _validate_header(c: Checker, tape: T13) -> None:
     """Everything of :func:`validate` but the pair matrices and the raw rows."""
     n_o, n_p, n_m, n_ts, n_it = tape.n_o, tape.n_p, tape.n_m, tape.n_ts, tape.n_it
     par = tape.parameters
     check_parameters(c, par, n_p)
+
+    _validate_stochastic(c, tape.stochastic, par)
 
     st = tape.stations
     c.shape("stations/id", st.id, (n_ts,))

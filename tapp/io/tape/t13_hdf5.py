@@ -60,6 +60,10 @@ removed_passes                                     (each observation under the f
                                                    pairs/n_obs) + sum of removed_obs)
 editing/added_passes        (n_ts,) int            passes added by splitting passes longer
                                                    than the scenario's max_pass_s
+stochastic/ (optional)                             the parameters of kind "stochastic" (tapp.
+                                                   estimation.gauss_markov): attrs frame,
+                                                   components, sigma_km_s2, tau_s
+stochastic/boundaries_s     (K+1,) float           interval boundaries, s
 raw/... (optional)          (N, ...)               one row per scalar observation: t_s,
                                                    station, kind (code into attr ``kinds``),
                                                    record, segment, value, A (N, n_o) referred
@@ -103,6 +107,7 @@ import h5py
 import numpy as np
 
 from tapp.errors import InputError, TapeError
+from tapp.estimation.gauss_markov import StochasticAccelerations
 from tapp.frames.time import Epoch
 from tapp.io.atomic import atomic_write
 from tapp.io.tape import hdf5io
@@ -250,6 +255,14 @@ def _write(f: h5py.File, tape: T13, packing: str, version: int = VERSION) -> Non
         numbers(g, "removed_obs", ed.removed_obs, "scalar observations")
         numbers(g, "removed_passes", ed.removed_passes, "passes")
         numbers(g, "added_passes", ed.added_passes, "passes")
+
+    if tape.stochastic is not None:
+        sto = tape.stochastic
+        g = f.create_group("stochastic")
+        hdf5io.write_attrs(g, {"frame": sto.frame, "components": list(sto.components),
+                               "sigma_km_s2": sto.sigma_km_s2, "tau_s": sto.tau_s},
+                           checksums=cs)
+        numbers(g, "boundaries_s", np.asarray(sto.boundaries_s), "s")
 
     if tape.raw is not None:
         raw = tape.raw
@@ -430,6 +443,14 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, n
                               *(r.read(f"editing/{name}", "i") for name in (
                                   "scheduled_obs", "removed_obs", "removed_passes",
                                   "added_passes")))
+    stochastic = None
+    if r.has("stochastic"):
+        stochastic = StochasticAccelerations(
+            r.attr("frame", str, owner="stochastic"),
+            tuple(r.attr("components", list, owner="stochastic")),
+            tuple(float(t) for t in r.read("stochastic/boundaries_s")),
+            r.attr("sigma_km_s2", float, owner="stochastic"),
+            r.attr("tau_s", float, owner="stochastic"))
     tape_raw = None
     if raw and r.has("raw"):
         kinds = r.attr("kinds", list, owner="raw", default=())
@@ -441,7 +462,7 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, n
                                                     "created_utc", *SCENARIO_PROVENANCE)
                   if r.has_attr(key)}
     tape = T13(r.attr("iden", str), epoch, dims["n_p"], parameters, stations, miss, records,
-               pairs, passes, tape_raw, provenance, editing)
+               pairs, passes, tape_raw, provenance, editing, stochastic)
     return tape, r.read("records/t_s")
 
 

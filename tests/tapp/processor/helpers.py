@@ -10,6 +10,7 @@ from tapp.io.schema import validate
 from tapp.io.tape.t13 import T13, memory_pairs
 from tapp.processor.deck import Deck, bind
 from tapp.processor.sequencing import Run, process
+from tapp.tracking.noise import RealNoise, covariance_block
 from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import leo_scenario
 
@@ -63,3 +64,27 @@ def scaled_err(a: np.ndarray, b: np.ndarray) -> float:
     d = np.sqrt(np.abs(np.diag(b)))
     scale = np.outer(d, d)
     return float(np.max(np.abs(a - b) / np.where(scale > 0, scale, 1.0)))
+
+
+def segment_factors(raw) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(rows, Cholesky factor of M) of every noise segment of the raw rows."""
+    out = []
+    for seg in np.unique(raw.segment):
+        rows = np.flatnonzero(raw.segment == seg)
+        real = RealNoise("range", float(np.sqrt(raw.m_white_var[rows[0]])),
+                         float(np.sqrt(raw.m_bias_var[rows[0]])),
+                         float(np.sqrt(raw.m_corr_var[rows[0]])), float(raw.m_tau_s[rows[0]]))
+        m = covariance_block(raw.t_s[rows], real)
+        out.append((rows, np.linalg.cholesky(m + 1e-30 * np.eye(rows.size))))
+    return out
+
+
+def z_scores(sample: np.ndarray, c: np.ndarray, n_draws: int, skip: int | None = None
+             ) -> np.ndarray:
+    """|Ĉ − C| / sd(Ĉ) entry by entry, sd² = (C_ii C_jj + C_ij²)/N (Gaussian, zero mean)."""
+    d = np.diag(c)
+    sd = np.sqrt((np.outer(d, d) + c * c) / n_draws)
+    z = np.divide(np.abs(sample - c), sd, out=np.zeros_like(c), where=sd > 0)
+    if skip is not None:
+        z[skip, :] = z[:, skip] = 0.0
+    return z

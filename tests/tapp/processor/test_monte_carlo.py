@@ -19,8 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tapp.tracking.noise import RealNoise, covariance_block
-from tests.tapp.processor.helpers import deck, leo_tape, run, sigmas
+from tests.tapp.processor.helpers import deck, leo_tape, run, segment_factors, sigmas, z_scores
 
 N_DRAWS = 20_000
 CHUNK = 2_000
@@ -31,19 +30,6 @@ PRINTS = (1, 2, 3)
 @pytest.fixture(scope="module")
 def tape():
     return leo_tape()
-
-
-def _segment_factors(raw) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(rows, Cholesky factor of M) of every noise segment of the raw rows."""
-    out = []
-    for seg in np.unique(raw.segment):
-        rows = np.flatnonzero(raw.segment == seg)
-        real = RealNoise("range", float(np.sqrt(raw.m_white_var[rows[0]])),
-                         float(np.sqrt(raw.m_bias_var[rows[0]])),
-                         float(np.sqrt(raw.m_corr_var[rows[0]])), float(raw.m_tau_s[rows[0]]))
-        m = covariance_block(raw.t_s[rows], real)
-        out.append((rows, np.linalg.cholesky(m + 1e-30 * np.eye(rows.size))))
-    return out
 
 
 def test_real_world_covariance_matches_a_monte_carlo_of_the_fit_estimator(tape):
@@ -72,7 +58,7 @@ def test_real_world_covariance_matches_a_monte_carlo_of_the_fit_estimator(tape):
         gain[k] = (rows, lam)
     lam_bar = np.diag([real_sigma[n] ** 2 for n in names])
     chol_bar = np.linalg.cholesky(lam_bar)
-    factors = _segment_factors(raw)
+    factors = segment_factors(raw)
 
     rng = np.random.default_rng(20261123)
     sums = {k: np.zeros((n_o, n_o)) for k in PRINTS}
@@ -89,17 +75,7 @@ def test_real_world_covariance_matches_a_monte_carlo_of_the_fit_estimator(tape):
             err[:, fitted] -= rhs[:, fitted] @ lam.T              # δx − μ'δx (GM not fitted)
             sums[k] += err.T @ err
     for k in PRINTS:
-        z = _z_scores(sums[k] / N_DRAWS, predicted[k])
+        z = z_scores(sums[k] / N_DRAWS, predicted[k], N_DRAWS)
         assert np.max(z) < Z_LIMIT, (k, np.unravel_index(np.argmax(z), z.shape), np.max(z))
         # the test has power: the fit world's own covariance (GM known, white noise) fails it
-        assert np.max(_z_scores(sums[k] / N_DRAWS, fit_world[k], skip=gm)) > 10 * Z_LIMIT
-
-
-def _z_scores(sample: np.ndarray, c: np.ndarray, skip: int | None = None) -> np.ndarray:
-    """|Ĉ − C| / sd(Ĉ) entry by entry, sd² = (C_ii C_jj + C_ij²)/N (Gaussian, zero mean)."""
-    d = np.diag(c)
-    sd = np.sqrt((np.outer(d, d) + c * c) / N_DRAWS)
-    z = np.divide(np.abs(sample - c), sd, out=np.zeros_like(c), where=sd > 0)
-    if skip is not None:
-        z[skip, :] = z[:, skip] = 0.0
-    return z
+        assert np.max(z_scores(sums[k] / N_DRAWS, fit_world[k], N_DRAWS, skip=gm)) > 10 * Z_LIMIT
