@@ -9,6 +9,13 @@ the trajectory, and the variational model's Jacobian drives Φ and the sensitivi
     third_bodies = ["moon"]    # ... and point-mass third bodies (DE421)
     var_gravity = "J2"         # the variational model (default: the state model's)
     var_third_bodies = []
+    area_to_mass_m2_kg = 0.01  # cannonball spacecraft, for SRP and drag ...
+    c_r = 1.3                  # ... its radiation pressure coefficient (parameter "Cr")
+    c_d = 2.2                  # ... and its drag coefficient (parameter "Cd")
+    srp = true                 # solar radiation pressure (Earth and Moon shadows) ...
+    var_srp = false            # ... in the variational model (default: srp)
+    atmosphere = "harris_priester"   # drag: "none", "exponential" or "harris_priester" ...
+    var_atmosphere = "none"    # ... in the variational model (default: atmosphere)
     rtol = 1e-13               # integrator tolerances
     atol = 1e-13
 
@@ -24,7 +31,15 @@ from typing import Annotated, Literal
 from pydantic import AfterValidator, Field
 
 from tapp.constants import MAX_DEGREE
-from tapp.dynamics.spec import BODIES, ForceModel, earth_model, parse_gravity
+from tapp.dynamics.spec import (
+    ATMOSPHERES,
+    BODIES,
+    ForceModel,
+    SurfaceForces,
+    check_surface_value,
+    earth_model,
+    parse_gravity,
+)
 from tapp.errors import InputError
 from tapp.io.schema import Invalid, Schema, Tolerance, Unique
 
@@ -45,6 +60,18 @@ GravityName = Annotated[str, AfterValidator(_gravity), Field(json_schema_extra={
 ThirdBody = Literal[tuple(b for b in BODIES if b != "earth")]  # type: ignore[valid-type]
 #: Third bodies, each once.
 ThirdBodies = Annotated[list[ThirdBody], Unique]
+#: An atmosphere model of the drag force ("none": no drag).
+Atmosphere = Literal[ATMOSPHERES]  # type: ignore[valid-type]
+
+
+def _surface_value(field: str):
+    def check(value: float) -> float:
+        try:
+            return check_surface_value(field, value)
+        except InputError as exc:
+            raise Invalid(exc.expected, value) from None
+
+    return AfterValidator(check)
 
 
 class ModelTable(Schema):
@@ -62,6 +89,26 @@ class ModelTable(Schema):
         "truncated variational equations); default: gravity.")
     var_third_bodies: ThirdBodies | None = Field(
         None, description="Third bodies of the variational model; default: third_bodies.")
+    area_to_mass_m2_kg: Annotated[float, _surface_value("area_to_mass_m2_kg")] | None = Field(
+        None, description="Cross-section over mass of the cannonball spacecraft, m^2/kg, in "
+        "(0, 50] (spacecraft ~0.002-0.05, solar sails ~10); required by srp and atmosphere.")
+    c_r: Annotated[float, _surface_value("c_r")] = Field(
+        1.3, description="Radiation pressure coefficient C_r = 1 + reflectivity, in [0, 2.5] "
+        "(a sphere: [1, 2]; margin for estimated values); the nominal value of parameter Cr.")
+    c_d: Annotated[float, _surface_value("c_d")] = Field(
+        2.2, description="Drag coefficient, in (0, 5] (free-molecular flow: ~2-4); the nominal "
+        "value of parameter Cd.")
+    srp: bool = Field(False, description="Solar radiation pressure on a cannonball, with "
+                      "conical Earth and Moon shadows, in the state model.")
+    var_srp: bool | None = Field(None, description="Solar radiation pressure in the "
+                                 "variational model; default: srp.")
+    atmosphere: Atmosphere = Field(
+        "none", description="Drag in the state model: \"none\", \"exponential\" (one layer, "
+        "Vallado 2013 Table 8-4 at 400 km) or \"harris_priester\" (Montenbruck & Gill Table "
+        "3.8, mean solar activity); Earth-centred orbits only.")
+    var_atmosphere: Atmosphere | None = Field(
+        None, description="Drag in the variational model (its Jacobian then has ∂a/∂v); "
+        "default: atmosphere.")
     rtol: Tolerance = Field(1e-13, description="Relative tolerance of the integrator (DOP853).")
     atol: Tolerance = Field(1e-13, description="Absolute tolerance of the integrator (DOP853), "
                             "on km and km/s.")
@@ -73,13 +120,28 @@ class ModelTable(Schema):
         Raises
         ------
         InputError
-            Naming ``source`` and ``model.gravity`` or ``model.var_gravity``.
+            Naming ``source`` and ``model.gravity`` or ``model.var_gravity``, or
+            ``model.area_to_mass_m2_kg`` when SRP or drag is asked without it.
         """
         state = earth_model(self.gravity, tuple(self.third_bodies), source=source,
-                            field="model.gravity", earth_orientation=earth_orientation)
+                            field="model.gravity", earth_orientation=earth_orientation,
+                            surface=self._surface(source, self.srp, self.atmosphere))
         var = earth_model(self.gravity if self.var_gravity is None else self.var_gravity,
                           tuple(self.third_bodies if self.var_third_bodies is None
                                 else self.var_third_bodies),
                           source=source, field="model.var_gravity",
-                          earth_orientation=earth_orientation)
+                          earth_orientation=earth_orientation,
+                          surface=self._surface(
+                              source, self.srp if self.var_srp is None else self.var_srp,
+                              self.atmosphere if self.var_atmosphere is None
+                              else self.var_atmosphere))
         return state, var
+
+    def _surface(self, source: str, srp: bool, atmosphere: str) -> SurfaceForces | None:
+        """The surface forces of one model, None when it has neither SRP nor drag."""
+        if not srp and atmosphere == "none":
+            return None
+        if self.area_to_mass_m2_kg is None:
+            raise InputError(source, "model.area_to_mass_m2_kg", "the spacecraft's area-to-mass "
+                             "ratio (m^2/kg) when srp or an atmosphere is modelled")
+        return SurfaceForces(self.area_to_mass_m2_kg, srp, self.c_r, atmosphere, self.c_d)
