@@ -24,10 +24,11 @@ The angles are taken as atan2(y, x) and atan2(y, c − x), with c² − b² = (c
 a² − x² = (a − x)(a + x): acos near 1 (the thin segment of the large Earth disc in LEO)
 would lose half the digits, 1e-10 of ν.
 
-The discs are treated as flat circles (the angles are small). The Earth's and the Moon's
-factors are multiplied: a simultaneous occultation by both (rare) is then not exact. The
-Earth's radius is its equatorial one (no oblateness in the shadow). Positions are relative to
-the integration centre, in km, from DE421.
+The discs overlap as plane circles (M&G's model): the boundaries c = a + b and c = b − a are
+exact cones, the partial area is approximate where the Earth's disc is large (LEO). The
+Earth's and the Moon's factors are multiplied: a simultaneous occultation by both (rare) is
+then not exact. The Earth's radius is its equatorial one (no oblateness in the shadow).
+Positions are relative to the integration centre, in km, from DE421.
 """
 
 from __future__ import annotations
