@@ -116,7 +116,7 @@ def check_parameter_value(name: str, value: float, source: str = "model",
         Naming ``source`` and ``field``.
     """
     if name in ("Cr", "Cd"):
-        return check_surface_value(name, value, source)
+        return check_surface_value(name, value, source, field)
     gm = name == "GM" or name.startswith("GM_")
     ok = (isinstance(value, int | float) and not isinstance(value, bool)
           and math.isfinite(value) and (value > 0 or not gm))

@@ -38,20 +38,23 @@ C_R_RANGE = (0.0, 2.5)
 C_D_RANGE = (0.0, 5.0)
 
 
-def check_surface_value(field: str, value: object, source: str = "model") -> float:
-    """Return ``value`` as a float if ``field`` (``area_to_mass_m2_kg``, ``c_r``/``Cr`` or
-    ``c_d``/``Cd``) accepts it, else raise InputError naming the range and its reason."""
-    if field == "area_to_mass_m2_kg":
+def check_surface_value(name: str, value: object, source: str = "model",
+                        field: str | None = None) -> float:
+    """Return ``value`` as a float if ``name`` (``area_to_mass_m2_kg``, ``c_r``/``Cr`` or
+    ``c_d``/``Cd``) accepts it, else raise InputError naming ``source``, ``field`` (default
+    ``name``), the range and its reason."""
+    field = name if field is None else field
+    if name == "area_to_mass_m2_kg":
         (lo, hi), closed, why = AREA_TO_MASS_RANGE_m2_kg, False, (
             "m^2/kg: spacecraft ~0.002-0.05, solar sails ~10; above 50 is a unit slip")
-    elif field in ("c_r", "Cr"):
+    elif name in ("c_r", "Cr"):
         (lo, hi), closed, why = C_R_RANGE, True, (
             "C_r = 1 + reflectivity lies in [1, 2]; up to 2.5 for estimated values")
-    elif field in ("c_d", "Cd"):
+    elif name in ("c_d", "Cd"):
         (lo, hi), closed, why = C_D_RANGE, False, (
             "free-molecular drag coefficients are ~2-4")
     else:
-        raise InputError(source, field, "area_to_mass_m2_kg, c_r or c_d", field)
+        raise InputError(source, field, "area_to_mass_m2_kg, c_r or c_d", name)
     ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
     if not ok or not (lo <= value <= hi if closed else lo < value <= hi):
         raise InputError(source, field, f"a value in {'[' if closed else '('}{lo:g}, {hi:g}] "

@@ -34,6 +34,9 @@ from tapp.constants import MAX_DEGREE
 from tapp.dynamics.spec import (
     ATMOSPHERES,
     BODIES,
+    C_D_RANGE,
+    C_R_RANGE,
+    AREA_TO_MASS_RANGE_m2_kg,
     ForceModel,
     SurfaceForces,
     check_surface_value,
@@ -64,14 +67,22 @@ ThirdBodies = Annotated[list[ThirdBody], Unique]
 Atmosphere = Literal[ATMOSPHERES]  # type: ignore[valid-type]
 
 
-def _surface_value(field: str):
+def _surface_value(name: str, lo: float, hi: float, closed: bool):
+    """A float checked by :func:`tapp.dynamics.spec.check_surface_value`, its range shown."""
+
     def check(value: float) -> float:
         try:
-            return check_surface_value(field, value)
+            return check_surface_value(name, value)
         except InputError as exc:
             raise Invalid(exc.expected, value) from None
 
-    return AfterValidator(check)
+    bounds = {"minimum" if closed else "exclusiveMinimum": lo, "maximum": hi}
+    return Annotated[float, AfterValidator(check), Field(json_schema_extra=bounds)]
+
+
+AreaToMass = _surface_value("area_to_mass_m2_kg", *AREA_TO_MASS_RANGE_m2_kg, closed=False)
+RadiationCoefficient = _surface_value("c_r", *C_R_RANGE, closed=True)
+DragCoefficient = _surface_value("c_d", *C_D_RANGE, closed=False)
 
 
 class ModelTable(Schema):
@@ -89,13 +100,13 @@ class ModelTable(Schema):
         "truncated variational equations); default: gravity.")
     var_third_bodies: ThirdBodies | None = Field(
         None, description="Third bodies of the variational model; default: third_bodies.")
-    area_to_mass_m2_kg: Annotated[float, _surface_value("area_to_mass_m2_kg")] | None = Field(
+    area_to_mass_m2_kg: AreaToMass | None = Field(
         None, description="Cross-section over mass of the cannonball spacecraft, m^2/kg, in "
         "(0, 50] (spacecraft ~0.002-0.05, solar sails ~10); required by srp and atmosphere.")
-    c_r: Annotated[float, _surface_value("c_r")] = Field(
+    c_r: RadiationCoefficient = Field(
         1.3, description="Radiation pressure coefficient C_r = 1 + reflectivity, in [0, 2.5] "
         "(a sphere: [1, 2]; margin for estimated values); the nominal value of parameter Cr.")
-    c_d: Annotated[float, _surface_value("c_d")] = Field(
+    c_d: DragCoefficient = Field(
         2.2, description="Drag coefficient, in (0, 5] (free-molecular flow: ~2-4); the nominal "
         "value of parameter Cd.")
     srp: bool = Field(False, description="Solar radiation pressure on a cannonball, with "
