@@ -276,8 +276,9 @@ def surface_acceleration(model: ForceModel, acc: ca.SX, r: ca.SX, v: ca.SX | Non
         return ca.SX.zeros(3) if body == model.center else r_bodies[body]
 
     if surface.srp:
-        acc = acc + srp_acceleration(r, position("sun"), {b: position(b) for b in SHADOW_BODIES},
-                                     q.get("Cr", surface.c_r), surface.area_to_mass_m2_kg)
+        occulters = {b: position(b) for b in SHADOW_BODIES} if surface.shadows else {}
+        acc = acc + srp_acceleration(r, position("sun"), occulters, q.get("Cr", surface.c_r),
+                                     surface.area_to_mass_m2_kg)
     if surface.drag:
         sun = position("sun") if surface.atmosphere == "harris_priester" else None
         rho = density_kg_m3(surface.atmosphere, r, sun)

@@ -81,7 +81,7 @@ def srp_acceleration(r, r_sun, occulters, c_r, area_to_mass_m2_kg: float):
     ----------
     r, r_sun : SX (3,) spacecraft and Sun positions relative to the centre, km.
     occulters : mapping of body name (:data:`SHADOW_BODIES`) to its position relative to the
-        centre (km, SX (3,)).
+        centre (km, SX (3,)); empty for no shadows (ν = 1: a conservative force).
     c_r : radiation pressure coefficient (a number or a symbol).
     area_to_mass_m2_kg : A/m, m^2/kg.
     """

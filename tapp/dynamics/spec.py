@@ -117,6 +117,10 @@ class SurfaceForces:
     atmosphere : one of :data:`ATMOSPHERES`: the density model of the drag force
         (:mod:`tapp.dynamics.atmosphere`), ``"none"`` for no drag.
     c_d : drag coefficient, in :data:`C_D_RANGE`; its nominal value as the parameter ``Cd``.
+    shadows : True to dim SRP in the Earth's and the Moon's shadows. Without them SRP is the
+        gradient of a potential (−k/|r − r☉|), so a variational model without shadows keeps
+        the STM symplectic (which TAPP III's exact adjoint (3-13) relies on); with them,
+        and with drag, it is not.
     """
 
     area_to_mass_m2_kg: float
@@ -124,6 +128,7 @@ class SurfaceForces:
     c_r: float = 1.3
     atmosphere: str = "none"
     c_d: float = 2.2
+    shadows: bool = True
 
     def __post_init__(self) -> None:
         check_surface_value("area_to_mass_m2_kg", self.area_to_mass_m2_kg)
@@ -140,8 +145,10 @@ class SurfaceForces:
 
     @property
     def name(self) -> str:
-        """Short label: ``srp``, ``drag(harris_priester)``, both joined by ``+``, or ``""``."""
-        parts = ["srp"] * self.srp + [f"drag({self.atmosphere})"] * self.drag
+        """Short label: ``srp`` (or ``srp(no shadows)``), ``drag(harris_priester)``, both
+        joined by ``+``, or ``""``."""
+        srp = "srp" if self.shadows else "srp(no shadows)"
+        parts = [srp] * self.srp + [f"drag({self.atmosphere})"] * self.drag
         return "+".join(parts)
 
 
@@ -213,7 +220,7 @@ class ForceModel:
         SRP (source and shadow), the Sun for the Harris-Priester bulge; not the centre."""
         need = set(self.third_bodies)
         if self.srp:
-            need |= {"sun", "moon"}
+            need |= {"sun", "moon"} if self.surface.shadows else {"sun"}
         if self.drag and self.surface.atmosphere == "harris_priester":
             need.add("sun")
         return tuple(sorted(need - {self.center}))

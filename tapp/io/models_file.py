@@ -14,6 +14,8 @@ the trajectory, and the variational model's Jacobian drives Φ and the sensitivi
     c_d = 2.2                  # ... and its drag coefficient (parameter "Cd")
     srp = true                 # solar radiation pressure (Earth and Moon shadows) ...
     var_srp = false            # ... in the variational model (default: srp)
+    shadows = true             # SRP dimmed in Earth and Moon shadows ...
+    var_shadows = false        # ... in the variational model (default: shadows)
     atmosphere = "harris_priester"   # drag: "none", "exponential" or "harris_priester" ...
     var_atmosphere = "none"    # ... in the variational model (default: atmosphere)
     rtol = 1e-13               # integrator tolerances
@@ -113,6 +115,12 @@ class ModelTable(Schema):
                       "conical Earth and Moon shadows, in the state model.")
     var_srp: bool | None = Field(None, description="Solar radiation pressure in the "
                                  "variational model; default: srp.")
+    shadows: bool = Field(True, description="Dim SRP in the conical shadows of the Earth and "
+                          "the Moon (penumbra included), in the state model.")
+    var_shadows: bool | None = Field(
+        None, description="Shadows in the variational model's SRP; default: shadows. Without "
+        "them SRP is conservative and the STM stays symplectic, as TAPP III's exact adjoint "
+        "of the orbit link assumes (with them it falls back to an LU solve).")
     atmosphere: Atmosphere = Field(
         "none", description="Drag in the state model: \"none\", \"exponential\" (one layer, "
         "Vallado 2013 Table 8-4 at 400 km) or \"harris_priester\" (Montenbruck & Gill Table "
@@ -136,7 +144,8 @@ class ModelTable(Schema):
         """
         state = earth_model(self.gravity, tuple(self.third_bodies), source=source,
                             field="model.gravity", earth_orientation=earth_orientation,
-                            surface=self._surface(source, self.srp, self.atmosphere))
+                            surface=self._surface(source, self.srp, self.atmosphere,
+                                                  self.shadows))
         var = earth_model(self.gravity if self.var_gravity is None else self.var_gravity,
                           tuple(self.third_bodies if self.var_third_bodies is None
                                 else self.var_third_bodies),
@@ -145,14 +154,17 @@ class ModelTable(Schema):
                           surface=self._surface(
                               source, self.srp if self.var_srp is None else self.var_srp,
                               self.atmosphere if self.var_atmosphere is None
-                              else self.var_atmosphere))
+                              else self.var_atmosphere,
+                              self.shadows if self.var_shadows is None else self.var_shadows))
         return state, var
 
-    def _surface(self, source: str, srp: bool, atmosphere: str) -> SurfaceForces | None:
+    def _surface(self, source: str, srp: bool, atmosphere: str, shadows: bool
+                 ) -> SurfaceForces | None:
         """The surface forces of one model, None when it has neither SRP nor drag."""
         if not srp and atmosphere == "none":
             return None
         if self.area_to_mass_m2_kg is None:
             raise InputError(source, "model.area_to_mass_m2_kg", "the spacecraft's area-to-mass "
                              "ratio (m^2/kg) when srp or an atmosphere is modelled")
-        return SurfaceForces(self.area_to_mass_m2_kg, srp, self.c_r, atmosphere, self.c_d)
+        return SurfaceForces(self.area_to_mass_m2_kg, srp, self.c_r, atmosphere, self.c_d,
+                             shadows)

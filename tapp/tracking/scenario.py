@@ -27,8 +27,9 @@ ISO strings or TOML dates)::
                        variational equations; default the state model), rtol, atol (within
                        ``tapp.dynamics.propagate.TOLERANCE_RANGE``, 1e-15 to 1e-6);
                        surface forces of a cannonball (tapp.io.models_file):
-                       area_to_mass_m2_kg, c_r, c_d, srp / var_srp, atmosphere /
-                       var_atmosphere ("none", "exponential", "harris_priester")
+                       area_to_mass_m2_kg, c_r, c_d, srp / var_srp, shadows /
+                       var_shadows, atmosphere / var_atmosphere ("none", "exponential",
+                       "harris_priester")
     [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", "Cr", "Cd", ...]
                        (tapp.dynamics.forces names), station_location = "cylindrical" |
                        "ecef" | "none", station_biases = ["range", "range_rate"],

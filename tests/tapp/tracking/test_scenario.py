@@ -48,10 +48,11 @@ def test_times_as_utc_text_or_toml_dates_equal_seconds() -> None:
 
 def test_both_shipped_scenarios_parse() -> None:
     leo = read_scenario(SCENARIOS / "leo_equatorial.toml")
-    assert leo.n_o == 38 and leo.var_model.gravity.name == "J2"
-    assert leo.state_model.gravity.name == "5x5"
+    assert leo.n_o == 39 and leo.var_model.name == "J2+drag(harris_priester)"
+    assert leo.state_model.name == "5x5+drag(harris_priester)"
     deep = read_scenario(SCENARIOS / "deep_space.toml")
-    assert deep.n_o == 23 >= 20
+    assert deep.n_o == 24 >= 20 and deep.dynamic == ("GM", "GM_moon", "Cr")
+    assert deep.state_model.name == deep.var_model.name == "J2+sun+moon+srp"
     assert [s.station.name for s in deep.stations] == ["GOLDSTONE", "CANBERRA", "MADRID"]
     assert deep.miss.quantities == ("b_dot_r_km", "b_dot_t_km", "flight_time_s")
     assert deep.schedule.end_s == pytest.approx(30 * 86400.0)
