@@ -52,7 +52,8 @@ def test_both_shipped_scenarios_parse() -> None:
     assert leo.state_model.name == "5x5+drag(harris_priester)"
     deep = read_scenario(SCENARIOS / "deep_space.toml")
     assert deep.n_o == 24 >= 20 and deep.dynamic == ("GM", "GM_moon", "Cr")
-    assert deep.state_model.name == deep.var_model.name == "J2+sun+moon+srp"
+    assert deep.state_model.name == "J2+sun+moon+srp"
+    assert deep.var_model.name == "J2+sun+moon+srp(no shadows)"
     assert [s.station.name for s in deep.stations] == ["GOLDSTONE", "CANBERRA", "MADRID"]
     assert deep.miss.quantities == ("b_dot_r_km", "b_dot_t_km", "flight_time_s")
     assert deep.schedule.end_s == pytest.approx(30 * 86400.0)
