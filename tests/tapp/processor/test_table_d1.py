@@ -302,5 +302,5 @@ def test_positions_are_checked_against_the_parameter_names_given(tape, leo_heade
     assert plan.systems.n_c1 == N_C1
     with pytest.raises(InputError) as info:
         bind(_without_tape_table(parameters=names), leo_header, "d1.toml")
-    assert str(info.value) == ("d1.toml: tape.parameters: expected the tape's 39 parameter "
-                               "names in order (position 9: Cd) (got 'J3')")
+    assert str(info.value) == ("d1.toml: tape.parameters: expected the tape's 38 parameter "
+                               "names in order (position 9: QUITO.spin_radius_km) (got 'J3')")
