@@ -18,9 +18,10 @@ h = |r| − a (1 − f sin²φ'), φ' the geocentric latitude from the inertial 
 
 Densities:
 
-- ``"exponential"``: ρ = ρ0 exp(−(h − h0)/H) with the 400-450 km band of Vallado
+- ``"exponential"``: ρ = ρ0 exp(−(h − h0)/H), one layer
+  (:class:`tapp.dynamics.spec.ExponentialLayer`), by default the 400-450 km band of Vallado
   (*Fundamentals of Astrodynamics and Applications*, 4th ed., 2013, Table 8-4, from CIRA-72):
-  h0 = 400 km, ρ0 = 3.725e-12 kg/m³, H = 58.515 km, used at every height (one layer).
+  h0 = 400 km, ρ0 = 3.725e-12 kg/m³, H = 58.515 km, used at every height.
 - ``"harris_priester"``: M&G §3.5.2, Table 3.8 (mean solar activity, 100 to 1000 km),
   ρ = ρ_m(h) + (ρ_M(h) − ρ_m(h)) cos^n(ψ/2), the antapex and apex densities ρ_m, ρ_M
   interpolated exponentially between table heights (ln ρ linear in h; beyond the table,
@@ -37,12 +38,7 @@ import casadi as ca
 import numpy as np
 
 from tapp.constants import WGS84_F, OMEGA_EARTH_rad_s, WGS84_A_km
-
-#: One-layer exponential atmosphere: base height (km), density (kg/m^3), scale height (km);
-#: Vallado (2013) Table 8-4, the 400-450 km band.
-EXPONENTIAL_H0_km = 400.0
-EXPONENTIAL_RHO0_kg_m3 = 3.725e-12
-EXPONENTIAL_SCALE_HEIGHT_km = 58.515
+from tapp.dynamics.spec import ExponentialLayer
 
 #: Harris-Priester, mean solar activity (M&G Table 3.8): height (km), ρ_min and ρ_max
 #: (g/km^3 = 1e-12 kg/m^3).
@@ -87,15 +83,16 @@ def _log_interp(h, table_g_km3: np.ndarray):
     return ca.exp(ca.pw_lin(h, ca.DM(HP_HEIGHT_km), ca.DM(log_rho)))
 
 
-def density_kg_m3(atmosphere: str, r, r_sun=None):
+def density_kg_m3(atmosphere: str, r, r_sun=None, layer: ExponentialLayer | None = None):
     """Return the density (kg/m^3) at inertial position r (km) of an Earth-centred orbit.
 
-    ``r_sun`` (km, Earth-centred) orients the Harris-Priester bulge; unused otherwise.
+    ``r_sun`` (km, Earth-centred) orients the Harris-Priester bulge; ``layer`` is the
+    exponential atmosphere's (default :class:`ExponentialLayer`'s defaults).
     """
     h = height_km(r)
     if atmosphere == "exponential":
-        return EXPONENTIAL_RHO0_kg_m3 * ca.exp(-(h - EXPONENTIAL_H0_km)
-                                               / EXPONENTIAL_SCALE_HEIGHT_km)
+        layer = ExponentialLayer() if layer is None else layer
+        return layer.rho0_kg_m3 * ca.exp(-(h - layer.h0_km) / layer.scale_height_km)
     rho_min = _log_interp(h, HP_RHO_MIN_g_km3)
     rho_max = _log_interp(h, HP_RHO_MAX_g_km3)
     c, s = math.cos(HP_LAG_rad), math.sin(HP_LAG_rad)

@@ -281,7 +281,7 @@ def surface_acceleration(model: ForceModel, acc: ca.SX, r: ca.SX, v: ca.SX | Non
                                      surface.area_to_mass_m2_kg)
     if surface.drag:
         sun = position("sun") if surface.atmosphere == "harris_priester" else None
-        rho = density_kg_m3(surface.atmosphere, r, sun)
+        rho = density_kg_m3(surface.atmosphere, r, sun, surface.exponential)
         acc = acc + drag_acceleration(r, v, rho, q.get("Cd", surface.c_d),
                                       surface.area_to_mass_m2_kg)
     return acc

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from tapp.constants import MAX_DEGREE, GM_km3_s2
 from tapp.errors import InputError
@@ -25,41 +25,62 @@ BODIES = ("sun", "mercury", "venus", "earth", "moon", "mars", "jupiter", "saturn
           "neptune")
 #: Atmosphere models of the drag force (:mod:`tapp.dynamics.atmosphere`); "none": no drag.
 ATMOSPHERES = ("none", "exponential", "harris_priester")
-#: Accepted area-to-mass ratios, m^2/kg, (lower exclusive, upper inclusive). Spacecraft lie
-#: between ~0.002 (a dense bus) and ~0.05 (large arrays); solar sails reach ~10 (LightSail 2:
-#: 32 m^2 / 5 kg = 6.4) and thin MLI debris ~30: above 50 the value is a unit slip (cm^2/g).
-AREA_TO_MASS_RANGE_m2_kg = (0.0, 50.0)
-#: Accepted radiation pressure coefficients. C_r = 1 + ε for a sphere of reflectivity ε in
-#: [0, 1] lies in [1, 2] (0: a transparent body, no force); the margin to 2.5 admits values
-#: estimated on flight data, which absorb unmodelled forces.
-C_R_RANGE = (0.0, 2.5)
-#: Accepted drag coefficients (lower exclusive). Free-molecular flow gives 2 to 2.5 for a
-#: compact body and up to ~4 for a flat plate in very rarefied flow; above 5 is not physical.
-C_D_RANGE = (0.0, 5.0)
+#: Accepted values of the surface-force inputs: name -> (low, high, low included, why).
+#: Area-to-mass (m^2/kg): spacecraft lie between ~0.002 (a dense bus) and ~0.05 (large
+#: arrays); solar sails reach ~10 (LightSail 2: 32 m^2 / 5 kg = 6.4) and thin MLI debris ~30:
+#: above 50 the value is a unit slip (cm^2/g). C_r = 1 + ε for a sphere of reflectivity ε in
+#: [0, 1] lies in [1, 2] (0: a transparent body); the margin to 2.5 admits values estimated on
+#: flight data, which absorb unmodelled forces. C_d: free-molecular flow gives 2 to 2.5 for a
+#: compact body and up to ~4 for a flat plate in very rarefied flow. The exponential layer:
+#: densities above sea level's 1.225 kg/m^3, base heights beyond 2500 km (where no drag is
+#: left to model) and scale heights above 1000 km (the thermosphere's are < 300 km) are slips.
+SURFACE_RANGES = {
+    "area_to_mass_m2_kg": (0.0, 50.0, False,
+                           "m^2/kg: spacecraft ~0.002-0.05, solar sails ~10; above 50 is a "
+                           "unit slip"),
+    "c_r": (0.0, 2.5, True, "C_r = 1 + reflectivity lies in [1, 2]; up to 2.5 for estimated "
+                            "values"),
+    "c_d": (0.0, 5.0, False, "free-molecular drag coefficients are ~2-4"),
+    "rho0_kg_m3": (0.0, 1.3, False, "kg/m^3: sea level's density is 1.225"),
+    "h0_km": (0.0, 2500.0, True, "km above the ellipsoid, within the atmosphere"),
+    "scale_height_km": (0.0, 1000.0, False, "km: thermospheric scale heights are 5-300 km"),
+}
+#: Parameter names of q that are surface-force inputs.
+_PARAMETER_FIELDS = {"Cr": "c_r", "Cd": "c_d"}
 
 
 def check_surface_value(name: str, value: object, source: str = "model",
                         field: str | None = None) -> float:
-    """Return ``value`` as a float if ``name`` (``area_to_mass_m2_kg``, ``c_r``/``Cr`` or
-    ``c_d``/``Cd``) accepts it, else raise InputError naming ``source``, ``field`` (default
-    ``name``), the range and its reason."""
+    """Return ``value`` as a float if the input ``name`` (a key of :data:`SURFACE_RANGES`,
+    or the parameter ``Cr``/``Cd``) accepts it, else raise InputError naming ``source``,
+    ``field`` (default ``name``), the range and its reason."""
     field = name if field is None else field
-    if name == "area_to_mass_m2_kg":
-        (lo, hi), closed, why = AREA_TO_MASS_RANGE_m2_kg, False, (
-            "m^2/kg: spacecraft ~0.002-0.05, solar sails ~10; above 50 is a unit slip")
-    elif name in ("c_r", "Cr"):
-        (lo, hi), closed, why = C_R_RANGE, True, (
-            "C_r = 1 + reflectivity lies in [1, 2]; up to 2.5 for estimated values")
-    elif name in ("c_d", "Cd"):
-        (lo, hi), closed, why = C_D_RANGE, False, (
-            "free-molecular drag coefficients are ~2-4")
-    else:
-        raise InputError(source, field, "area_to_mass_m2_kg, c_r or c_d", name)
+    key = _PARAMETER_FIELDS.get(name, name)
+    if key not in SURFACE_RANGES:
+        raise InputError(source, field, f"one of {', '.join(SURFACE_RANGES)}", name)
+    lo, hi, closed, why = SURFACE_RANGES[key]
     ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
     if not ok or not (lo <= value <= hi if closed else lo < value <= hi):
         raise InputError(source, field, f"a value in {'[' if closed else '('}{lo:g}, {hi:g}] "
                          f"({why})", value)
     return float(value)
+
+
+@dataclass(frozen=True, slots=True)
+class ExponentialLayer:
+    """One-layer exponential atmosphere ρ = ρ0 exp(−(h − h0)/H).
+
+    The defaults are the 400-450 km band of Vallado (*Fundamentals of Astrodynamics and
+    Applications*, 4th ed., 2013, Table 8-4, from CIRA-72), used at every height.
+    """
+
+    rho0_kg_m3: float = 3.725e-12
+    h0_km: float = 400.0
+    scale_height_km: float = 58.515
+
+    def __post_init__(self) -> None:
+        for name in ("rho0_kg_m3", "h0_km", "scale_height_km"):
+            check_surface_value(name, getattr(self, name))
 
 
 @dataclass(frozen=True, slots=True)
@@ -109,18 +130,19 @@ class SurfaceForces:
 
     Attributes
     ----------
-    area_to_mass_m2_kg : cross-section over mass, m^2/kg, in :data:`AREA_TO_MASS_RANGE_m2_kg`.
+    area_to_mass_m2_kg : cross-section over mass, m^2/kg, in :data:`SURFACE_RANGES`.
     srp : True to include solar radiation pressure with Earth and Moon shadows
         (:mod:`tapp.dynamics.radiation`).
-    c_r : radiation pressure coefficient (1 + reflectivity), in :data:`C_R_RANGE`; its nominal
+    c_r : radiation pressure coefficient (1 + reflectivity), in :data:`SURFACE_RANGES`; its nominal
         value as the parameter ``Cr``.
     atmosphere : one of :data:`ATMOSPHERES`: the density model of the drag force
         (:mod:`tapp.dynamics.atmosphere`), ``"none"`` for no drag.
-    c_d : drag coefficient, in :data:`C_D_RANGE`; its nominal value as the parameter ``Cd``.
+    c_d : drag coefficient, in :data:`SURFACE_RANGES`; its nominal value as the parameter ``Cd``.
     shadows : True to dim SRP in the Earth's and the Moon's shadows. Without them SRP is the
         gradient of a potential (−k/|r − r☉|), so a variational model without shadows keeps
         the STM symplectic (which TAPP III's exact adjoint (3-13) relies on); with them,
         and with drag, it is not.
+    exponential : the layer of the ``"exponential"`` atmosphere.
     """
 
     area_to_mass_m2_kg: float
@@ -129,6 +151,7 @@ class SurfaceForces:
     atmosphere: str = "none"
     c_d: float = 2.2
     shadows: bool = True
+    exponential: ExponentialLayer = field(default_factory=ExponentialLayer)
 
     def __post_init__(self) -> None:
         check_surface_value("area_to_mass_m2_kg", self.area_to_mass_m2_kg)

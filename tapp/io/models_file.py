@@ -18,6 +18,9 @@ the trajectory, and the variational model's Jacobian drives Φ and the sensitivi
     var_shadows = false        # ... in the variational model (default: shadows)
     atmosphere = "harris_priester"   # drag: "none", "exponential" or "harris_priester" ...
     var_atmosphere = "none"    # ... in the variational model (default: atmosphere)
+    rho0_kg_m3 = 3.725e-12     # the "exponential" layer: ρ0 at h0, scale height H
+    h0_km = 400.0
+    scale_height_km = 58.515
     rtol = 1e-13               # integrator tolerances
     atol = 1e-13
 
@@ -36,9 +39,8 @@ from tapp.constants import MAX_DEGREE
 from tapp.dynamics.spec import (
     ATMOSPHERES,
     BODIES,
-    C_D_RANGE,
-    C_R_RANGE,
-    AREA_TO_MASS_RANGE_m2_kg,
+    SURFACE_RANGES,
+    ExponentialLayer,
     ForceModel,
     SurfaceForces,
     check_surface_value,
@@ -69,7 +71,7 @@ ThirdBodies = Annotated[list[ThirdBody], Unique]
 Atmosphere = Literal[ATMOSPHERES]  # type: ignore[valid-type]
 
 
-def _surface_value(name: str, lo: float, hi: float, closed: bool):
+def _surface_value(name: str):
     """A float checked by :func:`tapp.dynamics.spec.check_surface_value`, its range shown."""
 
     def check(value: float) -> float:
@@ -78,13 +80,12 @@ def _surface_value(name: str, lo: float, hi: float, closed: bool):
         except InputError as exc:
             raise Invalid(exc.expected, value) from None
 
+    lo, hi, closed, _ = SURFACE_RANGES[name]
     bounds = {"minimum" if closed else "exclusiveMinimum": lo, "maximum": hi}
     return Annotated[float, AfterValidator(check), Field(json_schema_extra=bounds)]
 
 
-AreaToMass = _surface_value("area_to_mass_m2_kg", *AREA_TO_MASS_RANGE_m2_kg, closed=False)
-RadiationCoefficient = _surface_value("c_r", *C_R_RANGE, closed=True)
-DragCoefficient = _surface_value("c_d", *C_D_RANGE, closed=False)
+_LAYER = ExponentialLayer()
 
 
 class ModelTable(Schema):
@@ -102,13 +103,13 @@ class ModelTable(Schema):
         "truncated variational equations); default: gravity.")
     var_third_bodies: ThirdBodies | None = Field(
         None, description="Third bodies of the variational model; default: third_bodies.")
-    area_to_mass_m2_kg: AreaToMass | None = Field(
+    area_to_mass_m2_kg: _surface_value("area_to_mass_m2_kg") | None = Field(
         None, description="Cross-section over mass of the cannonball spacecraft, m^2/kg, in "
         "(0, 50] (spacecraft ~0.002-0.05, solar sails ~10); required by srp and atmosphere.")
-    c_r: RadiationCoefficient = Field(
+    c_r: _surface_value("c_r") = Field(
         1.3, description="Radiation pressure coefficient C_r = 1 + reflectivity, in [0, 2.5] "
         "(a sphere: [1, 2]; margin for estimated values); the nominal value of parameter Cr.")
-    c_d: DragCoefficient = Field(
+    c_d: _surface_value("c_d") = Field(
         2.2, description="Drag coefficient, in (0, 5] (free-molecular flow: ~2-4); the nominal "
         "value of parameter Cd.")
     srp: bool = Field(False, description="Solar radiation pressure on a cannonball, with "
@@ -125,6 +126,15 @@ class ModelTable(Schema):
         "none", description="Drag in the state model: \"none\", \"exponential\" (one layer, "
         "Vallado 2013 Table 8-4 at 400 km) or \"harris_priester\" (Montenbruck & Gill Table "
         "3.8, mean solar activity); Earth-centred orbits only.")
+    rho0_kg_m3: _surface_value("rho0_kg_m3") = Field(
+        _LAYER.rho0_kg_m3, description="Density at h0_km of the \"exponential\" atmosphere, "
+        "kg/m^3 (default: Vallado 2013 Table 8-4, 400 km).")
+    h0_km: _surface_value("h0_km") = Field(
+        _LAYER.h0_km, description="Base height of the \"exponential\" atmosphere above the "
+        "WGS84 ellipsoid, km.")
+    scale_height_km: _surface_value("scale_height_km") = Field(
+        _LAYER.scale_height_km, description="Scale height H of the \"exponential\" "
+        "atmosphere, ρ = ρ0 exp(−(h − h0)/H), km.")
     var_atmosphere: Atmosphere | None = Field(
         None, description="Drag in the variational model (its Jacobian then has ∂a/∂v); "
         "default: atmosphere.")
@@ -167,4 +177,5 @@ class ModelTable(Schema):
             raise InputError(source, "model.area_to_mass_m2_kg", "the spacecraft's area-to-mass "
                              "ratio (m^2/kg) when srp or an atmosphere is modelled")
         return SurfaceForces(self.area_to_mass_m2_kg, srp, self.c_r, atmosphere, self.c_d,
-                             shadows)
+                             shadows, ExponentialLayer(self.rho0_kg_m3, self.h0_km,
+                                                       self.scale_height_km))

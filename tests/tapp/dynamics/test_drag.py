@@ -16,7 +16,7 @@ from tapp.constants import GM_EARTH_km3_s2, OMEGA_EARTH_rad_s
 from tapp.dynamics import Propagator
 from tapp.dynamics.atmosphere import density_kg_m3, drag_acceleration, height_km
 from tapp.dynamics.equations import build_equations
-from tapp.dynamics.spec import SurfaceForces, earth_model
+from tapp.dynamics.spec import ExponentialLayer, SurfaceForces, earth_model
 from tests.tapp.dynamics.conftest import periapsis_state
 
 JD_2026 = 2461041.5  # 2026-01-01T00:00 UTC
@@ -104,6 +104,15 @@ def test_exponential_density_is_vallados_400_km_band() -> None:
         got = float(_rho_fn("exponential")(_equatorial(h_km, 1.0), np.ones(3)))
         assert got == pytest.approx(3.725e-12 * math.exp(-(h_km - 400.0) / 58.515),
                                     rel=ROUNDING)
+
+
+def test_exponential_density_takes_its_layer() -> None:
+    """Vallado (2013) Table 8-4's 150 km band as the layer: 2.070e-9 kg/m^3, H = 22.523 km."""
+    layer = ExponentialLayer(2.070e-9, 150.0, 22.523)
+    r, s = ca.SX.sym("r", 3), ca.SX.sym("s", 3)
+    fn = ca.Function("rho", [r, s], [density_kg_m3("exponential", r, s, layer)])
+    got = float(fn(_equatorial(172.0, 1.0), np.ones(3)))
+    assert got == pytest.approx(2.070e-9 * math.exp(-22.0 / 22.523), rel=ROUNDING)
 
 
 def test_drag_acceleration_matches_numpy() -> None:

@@ -29,6 +29,15 @@ def test_surface_keys_build_both_models_and_the_parameters() -> None:
     assert named["Cr"] == ("1", 1.4) and named["Cd"] == ("1", 2.3)
 
 
+def test_the_exponential_layer_keys_reach_both_models() -> None:
+    sc = leo_scenario(model={"area_to_mass_m2_kg": 0.01, "atmosphere": "exponential",
+                             "rho0_kg_m3": 2.07e-9, "h0_km": 150.0, "scale_height_km": 22.523})
+    for model in (sc.state_model, sc.var_model):
+        layer = model.surface.exponential
+        assert (layer.rho0_kg_m3, layer.h0_km, layer.scale_height_km) == (2.07e-9, 150.0,
+                                                                           22.523)
+
+
 def test_without_surface_keys_the_models_have_none() -> None:
     sc = leo_scenario()
     assert sc.state_model.surface is None and sc.var_model.surface is None
@@ -48,6 +57,9 @@ def test_without_surface_keys_the_models_have_none() -> None:
      "Cd (with an atmosphere)"),
     (SURFACE, {"dynamic": ["Cd"], "values": {"Cd": -1.0}}, "parameters.values.Cd", "(0, 5]"),
     (SURFACE, {"dynamic": ["Cr"], "values": {"Cr": 9.0}}, "parameters.values.Cr", "[0, 2.5]"),
+    ({**SURFACE, "rho0_kg_m3": 0.0}, {}, "model.rho0_kg_m3", "sea level"),
+    ({**SURFACE, "h0_km": -5.0}, {}, "model.h0_km", "[0, 2500]"),
+    ({**SURFACE, "scale_height_km": 5e3}, {}, "model.scale_height_km", "(0, 1000]"),
 ])
 def test_bad_surface_input_is_one_line_naming_file_and_key(model, parameters, field,
                                                           words) -> None:
