@@ -131,8 +131,7 @@ class SurfaceForces:
     Attributes
     ----------
     area_to_mass_m2_kg : cross-section over mass, m^2/kg, in :data:`SURFACE_RANGES`.
-    srp : True to include solar radiation pressure with Earth and Moon shadows
-        (:mod:`tapp.dynamics.radiation`).
+    srp : True to include solar radiation pressure (:mod:`tapp.dynamics.radiation`).
     c_r : radiation pressure coefficient (1 + reflectivity), in :data:`SURFACE_RANGES`; its nominal
         value as the parameter ``Cr``.
     atmosphere : one of :data:`ATMOSPHERES`: the density model of the drag force

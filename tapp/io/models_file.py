@@ -85,6 +85,13 @@ def _surface_value(name: str):
     return Annotated[float, AfterValidator(check), Field(json_schema_extra=bounds)]
 
 
+AreaToMass = _surface_value("area_to_mass_m2_kg")
+RadiationCoefficient = _surface_value("c_r")
+DragCoefficient = _surface_value("c_d")
+LayerDensity = _surface_value("rho0_kg_m3")
+LayerHeight = _surface_value("h0_km")
+ScaleHeight = _surface_value("scale_height_km")
+#: The exponential atmosphere's default layer (Vallado 2013 Table 8-4, 400 km).
 _LAYER = ExponentialLayer()
 
 
@@ -103,13 +110,13 @@ class ModelTable(Schema):
         "truncated variational equations); default: gravity.")
     var_third_bodies: ThirdBodies | None = Field(
         None, description="Third bodies of the variational model; default: third_bodies.")
-    area_to_mass_m2_kg: _surface_value("area_to_mass_m2_kg") | None = Field(
+    area_to_mass_m2_kg: AreaToMass | None = Field(
         None, description="Cross-section over mass of the cannonball spacecraft, m^2/kg, in "
         "(0, 50] (spacecraft ~0.002-0.05, solar sails ~10); required by srp and atmosphere.")
-    c_r: _surface_value("c_r") = Field(
+    c_r: RadiationCoefficient = Field(
         1.3, description="Radiation pressure coefficient C_r = 1 + reflectivity, in [0, 2.5] "
         "(a sphere: [1, 2]; margin for estimated values); the nominal value of parameter Cr.")
-    c_d: _surface_value("c_d") = Field(
+    c_d: DragCoefficient = Field(
         2.2, description="Drag coefficient, in (0, 5] (free-molecular flow: ~2-4); the nominal "
         "value of parameter Cd.")
     srp: bool = Field(False, description="Solar radiation pressure on a cannonball, with "
@@ -126,13 +133,13 @@ class ModelTable(Schema):
         "none", description="Drag in the state model: \"none\", \"exponential\" (one layer, "
         "Vallado 2013 Table 8-4 at 400 km) or \"harris_priester\" (Montenbruck & Gill Table "
         "3.8, mean solar activity); Earth-centred orbits only.")
-    rho0_kg_m3: _surface_value("rho0_kg_m3") = Field(
+    rho0_kg_m3: LayerDensity = Field(
         _LAYER.rho0_kg_m3, description="Density at h0_km of the \"exponential\" atmosphere, "
         "kg/m^3 (default: Vallado 2013 Table 8-4, 400 km).")
-    h0_km: _surface_value("h0_km") = Field(
+    h0_km: LayerHeight = Field(
         _LAYER.h0_km, description="Base height of the \"exponential\" atmosphere above the "
         "WGS84 ellipsoid, km.")
-    scale_height_km: _surface_value("scale_height_km") = Field(
+    scale_height_km: ScaleHeight = Field(
         _LAYER.scale_height_km, description="Scale height H of the \"exponential\" "
         "atmosphere, ρ = ρ0 exp(−(h − h0)/H), km.")
     var_atmosphere: Atmosphere | None = Field(
