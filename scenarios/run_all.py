@@ -7,7 +7,7 @@ The input files are the examples shipped in the package (:mod:`tapp.examples`, t
 2. The approximate-STM study: every run of the brief -> results/approx_stm/report.md.
 3. SEARCH: the lunar B-plane targeting of search_bplane.toml, differenced and
    analytic partials -> results/search/ (the seed's report, and the same run as JSON).
-4. TAPP I: tracking simulations of leo_equatorial.toml and deep_space.toml -> T13 tapes,
+4. TAPP I: tracking simulations of leo_equatorial, deep_space and leo_drag.toml -> T13 tapes,
    their summaries and trajectories (CCSDS OEM) in results/tapp1/.
 5. TAPP III: each TAPP I tape through its deck (tapp3_*.toml) -> O3 printouts, JSON,
    plots, T32 tapes and results/tapp3/report.md (fit vs real σ of the miss at each recycle, the
@@ -93,7 +93,7 @@ def search_targeting() -> None:
 def tracking_simulations() -> None:
     out = RESULTS / "tapp1"
     out.mkdir(parents=True, exist_ok=True)
-    for name in ("leo_equatorial", "deep_space"):
+    for name in ("leo_equatorial", "deep_space", "leo_drag"):
         tape = out / f"{name}.t13.h5"
         proc = _tapp("simulate", str(EXAMPLES / f"{name}.toml"), "-o", str(tape),
                      "--oem", str(out / f"{name}.oem"))
@@ -106,7 +106,7 @@ def tracking_simulations() -> None:
 
 #: (TAPP I scenario, TAPP III deck) pairs of the matrix-processor reproduction.
 TAPP3_RUNS = (("leo_equatorial", "tapp3_leo_equatorial"), ("deep_space", "tapp3_deep_space"),
-              ("tapp1_table_d1", "tapp3_table_d1"))
+              ("leo_drag", "tapp3_leo_drag"), ("tapp1_table_d1", "tapp3_table_d1"))
 
 
 def _budget_section(name: str, content: dict) -> list[str]:

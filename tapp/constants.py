@@ -26,6 +26,9 @@ WGS84_F = 1.0 / 298.257223563
 C_LIGHT_km_s = 299792.458
 AU_km = 149597870.700  # IAU 2012 Resolution B2
 SECONDS_PER_DAY = 86400.0
+# Solar radiation pressure on an absorbing surface at 1 AU, P = Φ/c with the solar flux
+# Φ ≈ 1367 W/m^2 (Montenbruck & Gill, Satellite Orbits, 2000, §3.4.1), N/m^2.
+SOLAR_PRESSURE_1AU_N_m2 = 4.56e-6
 
 # GM of Sun, Moon and planet systems, DE430 (Folkner et al. 2014, Table 8), km^3/s^2.
 GM_km3_s2 = {

@@ -333,6 +333,7 @@ ITER_CODES = frozenset({1})
 FILE_CASES = [
     FileCase("leo_equatorial.toml", _simulate, ("run.oem", "run.t13.h5"), 30),
     FileCase("deep_space.toml", _simulate, ("run.oem", "run.t13.h5"), 8),
+    FileCase("leo_drag.toml", _simulate, ("run.oem", "run.t13.h5"), 15),
     # DC: 3 diverged, 4 ill-conditioned, 5 stalled, 6 converging (tapp.cli.od_cmd)
     FileCase("approx_stm.toml", _dc, ("obs.h5",), 30, frozenset({3, 4, 5, 6})),
     # SEARCH: 3 diverged, 4 singular, 1 a case that failed (missed the sphere of influence)

@@ -234,7 +234,7 @@ def deep_space_t32(tmp_path_factory) -> Path:
     (folder / "scenario.toml").write_text(tomli_w.dumps(scenario))
     deck = tomllib.loads((EXAMPLES / "tapp3_deep_space.toml").read_text())
     deck["times"]["print"] = [1, 2, 3]
-    deck["tape"]["n_o"] = 29  # 3 days of 2-day stochastic batches: 23 + 2 x 3
+    deck["tape"]["n_o"] = 30  # 3 days of 2-day stochastic batches: 24 + 2 x 3
     (folder / "deck.toml").write_text(tomli_w.dumps(deck))
     for args in (["simulate", folder / "scenario.toml", "-o", folder / "run.t13.h5"],
                  ["process", folder / "run.t13.h5", folder / "deck.toml", "--tape",

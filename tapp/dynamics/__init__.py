@@ -1,7 +1,14 @@
 """Force models, variational equations and compiled propagation."""
 
 from tapp.dynamics.propagate import PropagationError, Propagator, Trajectory
-from tapp.dynamics.spec import BODIES, ForceModel, GravitySpec, earth_model, parse_gravity
+from tapp.dynamics.spec import (
+    BODIES,
+    ForceModel,
+    GravitySpec,
+    SurfaceForces,
+    earth_model,
+    parse_gravity,
+)
 
 __all__ = ["BODIES", "ForceModel", "GravitySpec", "PropagationError", "Propagator",
-           "Trajectory", "earth_model", "parse_gravity"]
+           "SurfaceForces", "Trajectory", "earth_model", "parse_gravity"]

@@ -11,16 +11,21 @@ With x = (r, v), q the solve-for model parameters:
     A_M = \\begin{pmatrix} 0 & I \\\\ \\partial a_M/\\partial r & \\partial a_M/\\partial v
     \\end{pmatrix},\\ B_M = \\begin{pmatrix} 0 \\\\ \\partial a_M/\\partial q \\end{pmatrix},
 
-with Φ(t0) = I and S(t0) = 0, so Φ = ∂x(t)/∂x(t0) and S = ∂x(t)/∂q when M = N.
+with Φ(t0) = I and S(t0) = 0, so Φ = ∂x(t)/∂x(t0) and S = ∂x(t)/∂q when M = N. The block
+∂a_M/∂v is built only when the variational model has drag (:attr:`ForceModel.drag`), the one
+velocity-dependent force; otherwise it is the zero block, and the generated code is the same
+as before drag existed.
 
 Layout of the augmented vector y (length 6 + 36 + 6 n_q): x, then Φ column-major, then S
 column-major. Nobody slices it by hand: use :func:`split_augmented`.
 
 Both CasADi functions share the signature ``f(t, y, q, c, rb) -> ydot`` with c = [θ0] (Earth
 rotation angle at the epoch, rad) and rb the stacked third-body positions relative to the
-centre (km), in the order of :attr:`Equations.bodies`, followed, when the field is oriented by
-the iau2006 model (:attr:`Equations.oriented`), by the series that orient it: the ITRS pole
-("pole", 3 entries: enough when every oriented field is zonal) or the nine slow terms ("full",
+centre (km), in the order of :attr:`Equations.bodies` (the third bodies and the Sun and Moon
+that SRP and the Harris-Priester atmosphere read, :attr:`ForceModel.ephemeris_bodies`),
+followed, when the field is oriented by the iau2006 model (:attr:`Equations.oriented`), by
+the series that orient it: the ITRS pole ("pole", 3 entries: enough when every oriented field
+is zonal) or the nine slow terms ("full",
 :meth:`tapp.frames.orientation.EarthOrientation.slow_terms`). The driver evaluates all of rb
 from one Chebyshev table.
 """
@@ -70,7 +75,7 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
         raise InputError("model", "earth_orientation", "the same Earth orientation for the "
                          "state and variational models", f"{state_model.earth_orientation} vs "
                          f"{var_model.earth_orientation}")
-    bodies = tuple(sorted(set(state_model.third_bodies) | set(var_model.third_bodies)))
+    bodies = tuple(sorted(set(state_model.ephemeris_bodies) | set(var_model.ephemeris_bodies)))
     models = [m for m in (state_model, var_model) if m.oriented_field]
     oriented = "" if not models else (
         "pole" if all(m.gravity.order == 0 for m in models) else "full")
@@ -85,7 +90,7 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
 
     x = ca.SX.sym("x", 6)
     r, v = x[:3], x[3:]
-    a_state = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow) + \
+    a_state = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow, v) + \
         empirical_acceleration(r, v, q_map)
     xdot = ca.vertcat(v, a_state)
     f_state = ca.Function("f_state", [t, x, q, c, rb], [ca.cse(xdot)],
@@ -94,12 +99,13 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
     y = ca.SX.sym("y", 42 + 6 * nq)
     r, v = y[:3], y[3:6]
     a_q = empirical_acceleration(r, v, q_map)  # both models (tapp.dynamics.empirical)
-    a_n = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow) + a_q
-    a_m = acceleration(var_model, t, r, c[0], q_map, r_bodies, slow) + a_q
+    a_n = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow, v) + a_q
+    a_m = acceleration(var_model, t, r, c[0], q_map, r_bodies, slow, v) + a_q
     phi = ca.reshape(y[6:42], 6, 6)
     da_dr = ca.jacobian(a_m, r)
+    da_dv = ca.jacobian(a_m, v) if var_model.drag else ca.SX.zeros(3, 3)
     a_mat = ca.vertcat(ca.horzcat(ca.SX.zeros(3, 3), ca.SX.eye(3)),
-                       ca.horzcat(da_dr, ca.SX.zeros(3, 3)))
+                       ca.horzcat(da_dr, da_dv))
     parts = [v, a_n, ca.vec(ca.mtimes(a_mat, phi))]
     if nq:
         s = ca.reshape(y[42:], 6, nq)

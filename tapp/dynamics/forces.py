@@ -35,10 +35,16 @@ eq. 3.37):
     \\mathbf a = -GM_b\\left(\\frac{\\mathbf r - \\mathbf s}{|\\mathbf r - \\mathbf s|^3}
         + \\frac{\\mathbf s}{|\\mathbf s|^3}\\right).
 
+Surface forces of a cannonball spacecraft (:class:`tapp.dynamics.spec.SurfaceForces`): solar
+radiation pressure with Earth and Moon shadows (:mod:`tapp.dynamics.radiation`) and drag in a
+co-rotating atmosphere (:mod:`tapp.dynamics.atmosphere`, Earth centre only); drag makes the
+acceleration depend on v.
+
 Model parameters (values in :func:`default_parameters`) may be symbols so that their
 sensitivities come out of the variational equations: ``GM`` (centre, km^3/s^2), ``Jn``
 (unnormalised zonal, \\bar C_{n0} = -J_n/\\sqrt{2n+1}), ``Cnm``/``Snm`` (normalised, single
-digits n, m), ``GM_<body>`` for a third body; and the constant empirical accelerations of
+digits n, m), ``GM_<body>`` for a third body, ``Cr`` (radiation pressure coefficient) and
+``Cd`` (drag coefficient), dimensionless; and the constant empirical accelerations of
 :mod:`tapp.dynamics.empirical` (``acc_R``, ``acc_x``, ..., km/s², nominal 0), whose term
 :mod:`tapp.dynamics.equations` adds.
 """
@@ -52,8 +58,10 @@ from collections.abc import Callable, Mapping
 import casadi as ca
 
 from tapp.constants import GM_km3_s2, OMEGA_EARTH_rad_s, R_EARTH_km, egm96_coefficients
+from tapp.dynamics.atmosphere import density_kg_m3, drag_acceleration
 from tapp.dynamics.empirical import NAMES as EMPIRICAL_NAMES
-from tapp.dynamics.spec import ForceModel
+from tapp.dynamics.radiation import SHADOW_BODIES, srp_acceleration
+from tapp.dynamics.spec import ForceModel, check_surface_value
 from tapp.errors import InputError
 from tapp.frames.orientation import OMEGA_ERA_rad_s, itrs_from_gcrs_elements
 
@@ -68,7 +76,7 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
     ------
     InputError
         For a name the model does not contain (a harmonic outside its truncation, a third
-        body it does not have, an unknown name).
+        body it does not have, Cr without SRP, Cd without drag, an unknown name).
     """
     c_bar, s_bar = egm96_coefficients()
     values: dict[str, float] = {}
@@ -79,6 +87,10 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
             values[name] = 0.0
         elif name.startswith("GM_") and name[3:] in model.third_bodies:
             values[name] = GM_km3_s2[name[3:]]
+        elif name == "Cr" and model.srp:
+            values[name] = model.surface.c_r
+        elif name == "Cd" and model.drag:
+            values[name] = model.surface.c_d
         elif (m := _ZONAL_J.match(name)) and _in_field(model, int(m.group(1)), 0):
             n = int(m.group(1))
             values[name] = -math.sqrt(2 * n + 1) * c_bar[n, 0]
@@ -90,9 +102,9 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
             values[name] = (c_bar if m.group(1) == "C" else s_bar)[n, mm]
         else:
             raise InputError("model", "parameters",
-                             f"GM, Jn, Cnm, Snm within {model.gravity.name}, GM_<third body> "
-                             "or acc_R, acc_I, acc_C, acc_x, acc_y, acc_z",
-                             name)
+                             f"GM, Jn, Cnm, Snm within {model.gravity.name}, GM_<third body>, "
+                             "Cr (with srp), Cd (with an atmosphere) or acc_R, acc_I, acc_C, "
+                             "acc_x, acc_y, acc_z", name)
     return values
 
 
@@ -101,13 +113,16 @@ def check_parameter_value(name: str, value: float, source: str = "model",
     """Return a model parameter's value as a float: finite, and > 0 for a GM.
 
     A gravitational parameter GM (``GM``, ``GM_<body>``, km^3/s^2) <= 0 would make the body
-    repel or vanish: it is refused with the value and the limit.
+    repel or vanish: it is refused with the value and the limit. ``Cr`` and ``Cd`` must lie
+    in the ranges of :func:`tapp.dynamics.spec.check_surface_value`.
 
     Raises
     ------
     InputError
         Naming ``source`` and ``field``.
     """
+    if name in ("Cr", "Cd"):
+        return check_surface_value(name, value, source, field)
     gm = name == "GM" or name.startswith("GM_")
     ok = (isinstance(value, int | float) and not isinstance(value, bool)
           and math.isfinite(value) and (value > 0 or not gm))
@@ -224,7 +239,8 @@ def body_fixed_position(model: ForceModel, r: ca.SX, t: ca.SX, theta0: ca.SX,
 
 
 def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mapping[str, ca.SX],
-                 r_bodies: Mapping[str, ca.SX], slow: ca.SX | None = None) -> ca.SX:
+                 r_bodies: Mapping[str, ca.SX], slow: ca.SX | None = None,
+                 v: ca.SX | None = None) -> ca.SX:
     """Return the inertial acceleration (km/s^2) of ``model`` as a CasADi expression.
 
     Parameters
@@ -233,9 +249,11 @@ def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mappin
     r : SX (3,)  inertial position relative to the centre, km.
     theta0 : SX (1,)  Earth rotation angle at the epoch, rad.
     q : mapping of parameter name to symbol; absent names take their nominal values.
-    r_bodies : mapping of third-body name to its position relative to the centre (km).
+    r_bodies : mapping of body name to its position relative to the centre (km): the third
+        bodies and :attr:`ForceModel.ephemeris_bodies`.
     slow : SX (9,) or (3,), the iau2006 slow terms or the pole at t
         (:func:`body_fixed_position`), if oriented.
+    v : SX (3,) inertial velocity, km/s; needed by drag only.
     """
     gm = q.get("GM", model.gm_center_km3_s2)
     r_fixed, r2 = body_fixed_position(model, r, t, theta0, slow)
@@ -246,4 +264,30 @@ def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mappin
         d = r - s
         gm_b = q.get(f"GM_{body}", GM_km3_s2[body])
         acc = acc - gm_b * (d / ca.norm_2(d) ** 3 + s / ca.norm_2(s) ** 3)
+    return surface_acceleration(model, acc, r, v, q, r_bodies)
+
+
+def surface_acceleration(model: ForceModel, acc: ca.SX, r: ca.SX, v: ca.SX | None,
+                         q: Mapping[str, ca.SX], r_bodies: Mapping[str, ca.SX]) -> ca.SX:
+    """Return ``acc`` plus the SRP and drag accelerations of ``model`` (km/s^2).
+
+    Other arguments as in :func:`acceleration`; the centre's own position is the origin. A
+    model without them returns ``acc`` itself (the expression graph is unchanged).
+    """
+    surface = model.surface
+    if surface is None:
+        return acc
+
+    def position(body: str) -> ca.SX:
+        return ca.SX.zeros(3) if body == model.center else r_bodies[body]
+
+    if surface.srp:
+        occulters = {b: position(b) for b in SHADOW_BODIES} if surface.shadows else {}
+        acc = acc + srp_acceleration(r, position("sun"), occulters, q.get("Cr", surface.c_r),
+                                     surface.area_to_mass_m2_kg)
+    if surface.drag:
+        sun = position("sun") if surface.atmosphere == "harris_priester" else None
+        rho = density_kg_m3(surface.atmosphere, r, sun, surface.exponential)
+        acc = acc + drag_acceleration(r, v, rho, q.get("Cd", surface.c_d),
+                                      surface.area_to_mass_m2_kg)
     return acc

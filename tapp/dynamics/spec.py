@@ -2,14 +2,16 @@
 
 A gravity spec is written as in the approximate-STM study: ``J0`` (point mass), ``Jn``
 (zonal harmonics to degree n), ``NxM`` (degree N, order M, zonals and tesserals). A force
-model adds the central body and the third bodies. These are plain data; the CasADi
-expressions are built from them in :mod:`tapp.dynamics.forces`.
+model adds the central body, the third bodies and the surface forces of a cannonball
+spacecraft (solar radiation pressure and atmospheric drag, :class:`SurfaceForces`). These are
+plain data; the CasADi expressions are built from them in :mod:`tapp.dynamics.forces`.
 """
 
 from __future__ import annotations
 
+import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from tapp.constants import MAX_DEGREE, GM_km3_s2
 from tapp.errors import InputError
@@ -21,6 +23,64 @@ _FIELD = re.compile(r"^(\d+)\s*[xX]\s*(\d+)$")
 #: Bodies whose ephemeris DE421 provides (centre or third body).
 BODIES = ("sun", "mercury", "venus", "earth", "moon", "mars", "jupiter", "saturn", "uranus",
           "neptune")
+#: Atmosphere models of the drag force (:mod:`tapp.dynamics.atmosphere`); "none": no drag.
+ATMOSPHERES = ("none", "exponential", "harris_priester")
+#: Accepted values of the surface-force inputs: name -> (low, high, low included, why).
+#: Area-to-mass (m^2/kg): spacecraft lie between ~0.002 (a dense bus) and ~0.05 (large
+#: arrays); solar sails reach ~10 (LightSail 2: 32 m^2 / 5 kg = 6.4) and thin MLI debris ~30:
+#: above 50 the value is a unit slip (cm^2/g). C_r = 1 + ε for a sphere of reflectivity ε in
+#: [0, 1] lies in [1, 2] (0: a transparent body); the margin to 2.5 admits values estimated on
+#: flight data, which absorb unmodelled forces. C_d: free-molecular flow gives 2 to 2.5 for a
+#: compact body and up to ~4 for a flat plate in very rarefied flow. The exponential layer:
+#: densities above sea level's 1.225 kg/m^3, base heights beyond 2500 km (where no drag is
+#: left to model) and scale heights above 1000 km (the thermosphere's are < 300 km) are slips.
+SURFACE_RANGES = {
+    "area_to_mass_m2_kg": (0.0, 50.0, False,
+                           "m^2/kg: spacecraft ~0.002-0.05, solar sails ~10; above 50 is a "
+                           "unit slip"),
+    "c_r": (0.0, 2.5, True, "C_r = 1 + reflectivity lies in [1, 2]; up to 2.5 for estimated "
+                            "values"),
+    "c_d": (0.0, 5.0, False, "free-molecular drag coefficients are ~2-4"),
+    "rho0_kg_m3": (0.0, 1.3, False, "kg/m^3: sea level's density is 1.225"),
+    "h0_km": (0.0, 2500.0, True, "km above the ellipsoid, within the atmosphere"),
+    "scale_height_km": (0.0, 1000.0, False, "km: thermospheric scale heights are 5-300 km"),
+}
+#: Parameter names of q that are surface-force inputs.
+_PARAMETER_FIELDS = {"Cr": "c_r", "Cd": "c_d"}
+
+
+def check_surface_value(name: str, value: object, source: str = "model",
+                        field: str | None = None) -> float:
+    """Return ``value`` as a float if the input ``name`` (a key of :data:`SURFACE_RANGES`,
+    or the parameter ``Cr``/``Cd``) accepts it, else raise InputError naming ``source``,
+    ``field`` (default ``name``), the range and its reason."""
+    field = name if field is None else field
+    key = _PARAMETER_FIELDS.get(name, name)
+    if key not in SURFACE_RANGES:
+        raise InputError(source, field, f"one of {', '.join(SURFACE_RANGES)}", name)
+    lo, hi, closed, why = SURFACE_RANGES[key]
+    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+    if not ok or not (lo <= value <= hi if closed else lo < value <= hi):
+        raise InputError(source, field, f"a value in {'[' if closed else '('}{lo:g}, {hi:g}] "
+                         f"({why})", value)
+    return float(value)
+
+
+@dataclass(frozen=True, slots=True)
+class ExponentialLayer:
+    """One-layer exponential atmosphere ρ = ρ0 exp(−(h − h0)/H).
+
+    The defaults are the 400-450 km band of Vallado (*Fundamentals of Astrodynamics and
+    Applications*, 4th ed., 2013, Table 8-4, from CIRA-72), used at every height.
+    """
+
+    rho0_kg_m3: float = 3.725e-12
+    h0_km: float = 400.0
+    scale_height_km: float = 58.515
+
+    def __post_init__(self) -> None:
+        for name in ("rho0_kg_m3", "h0_km", "scale_height_km"):
+            check_surface_value(name, getattr(self, name))
 
 
 @dataclass(frozen=True, slots=True)
@@ -65,6 +125,56 @@ def parse_gravity(spec: str, *, source: str = "model", field: str = "gravity") -
 
 
 @dataclass(frozen=True, slots=True)
+class SurfaceForces:
+    """Non-gravitational forces on a cannonball spacecraft (one area for every direction).
+
+    Attributes
+    ----------
+    area_to_mass_m2_kg : cross-section over mass, m^2/kg, in :data:`SURFACE_RANGES`.
+    srp : True to include solar radiation pressure (:mod:`tapp.dynamics.radiation`).
+    c_r : radiation pressure coefficient (1 + reflectivity), in :data:`SURFACE_RANGES`; its nominal
+        value as the parameter ``Cr``.
+    atmosphere : one of :data:`ATMOSPHERES`: the density model of the drag force
+        (:mod:`tapp.dynamics.atmosphere`), ``"none"`` for no drag.
+    c_d : drag coefficient, in :data:`SURFACE_RANGES`; its nominal value as the parameter ``Cd``.
+    shadows : True to dim SRP in the Earth's and the Moon's shadows. Without them SRP is the
+        gradient of a potential (−k/|r − r☉|), so a variational model without shadows keeps
+        the STM symplectic (which TAPP III's exact adjoint (3-13) relies on); with them,
+        and with drag, it is not.
+    exponential : the layer of the ``"exponential"`` atmosphere.
+    """
+
+    area_to_mass_m2_kg: float
+    srp: bool = False
+    c_r: float = 1.3
+    atmosphere: str = "none"
+    c_d: float = 2.2
+    shadows: bool = True
+    exponential: ExponentialLayer = field(default_factory=ExponentialLayer)
+
+    def __post_init__(self) -> None:
+        check_surface_value("area_to_mass_m2_kg", self.area_to_mass_m2_kg)
+        check_surface_value("c_r", self.c_r)
+        check_surface_value("c_d", self.c_d)
+        if self.atmosphere not in ATMOSPHERES:
+            raise InputError("model", "atmosphere", f"one of {', '.join(ATMOSPHERES)}",
+                             self.atmosphere)
+
+    @property
+    def drag(self) -> bool:
+        """True when an atmosphere is modelled."""
+        return self.atmosphere != "none"
+
+    @property
+    def name(self) -> str:
+        """Short label: ``srp`` (or ``srp(no shadows)``), ``drag(harris_priester)``, both
+        joined by ``+``, or ``""``."""
+        srp = "srp" if self.shadows else "srp(no shadows)"
+        parts = [srp] * self.srp + [f"drag({self.atmosphere})"] * self.drag
+        return "+".join(parts)
+
+
+@dataclass(frozen=True, slots=True)
 class ForceModel:
     """The accelerations acting on the spacecraft, relative to ``center``.
 
@@ -83,12 +193,16 @@ class ForceModel:
         ``"gmst"`` (a zonal field about the inertial z axis, tesserals by GMST + ω t) or
         ``"iau2006"`` (the full GCRS → ITRS rotation). Scenario files default to iau2006;
         this kernel default keeps the study's model.
+    surface : SurfaceForces or None
+        Solar radiation pressure and drag; None (the default) for neither. Drag needs an
+        Earth centre (the atmospheres are the Earth's).
     """
 
     gravity: GravitySpec
     center: str = "earth"
     third_bodies: tuple[str, ...] = ()
     earth_orientation: str = "gmst"
+    surface: SurfaceForces | None = None
 
     def __post_init__(self) -> None:
         check_model(self.earth_orientation, "model")
@@ -107,6 +221,31 @@ class ForceModel:
                 raise InputError("model", "third_bodies", f"each body once ({body} given "
                                  f"{self.third_bodies.count(body)} times would multiply its "
                                  "pull)", list(self.third_bodies))
+        if self.drag and self.center != "earth":
+            raise InputError("model", "atmosphere", "drag only about the Earth (the atmosphere "
+                             f"models are the Earth's; centre {self.center})",
+                             self.surface.atmosphere)
+
+    @property
+    def srp(self) -> bool:
+        """True when solar radiation pressure is modelled."""
+        return self.surface is not None and self.surface.srp
+
+    @property
+    def drag(self) -> bool:
+        """True when atmospheric drag is modelled (the acceleration then depends on v)."""
+        return self.surface is not None and self.surface.drag
+
+    @property
+    def ephemeris_bodies(self) -> tuple[str, ...]:
+        """Bodies whose positions the model reads: third bodies, the Sun and the Moon for
+        SRP (source and shadow), the Sun for the Harris-Priester bulge; not the centre."""
+        need = set(self.third_bodies)
+        if self.srp:
+            need |= {"sun", "moon"} if self.surface.shadows else {"sun"}
+        if self.drag and self.surface.atmosphere == "harris_priester":
+            need.add("sun")
+        return tuple(sorted(need - {self.center}))
 
     @property
     def gm_center_km3_s2(self) -> float:
@@ -116,7 +255,8 @@ class ForceModel:
     @property
     def name(self) -> str:
         """Short label, e.g. ``J2`` or ``5x5+sun+moon``."""
-        return "+".join((self.gravity.name, *self.third_bodies))
+        surface = () if self.surface is None or not self.surface.name else (self.surface.name,)
+        return "+".join((self.gravity.name, *self.third_bodies, *surface))
 
     @property
     def oriented_field(self) -> bool:
@@ -126,7 +266,8 @@ class ForceModel:
 
 
 def earth_model(spec: str, third_bodies: tuple[str, ...] = (), *, source: str = "model",
-                field: str = "gravity", earth_orientation: str = "gmst") -> ForceModel:
+                field: str = "gravity", earth_orientation: str = "gmst",
+                surface: SurfaceForces | None = None) -> ForceModel:
     """Return an Earth-centred :class:`ForceModel` from a gravity spec string."""
     return ForceModel(parse_gravity(spec, source=source, field=field), "earth",
-                      tuple(third_bodies), earth_orientation)
+                      tuple(third_bodies), earth_orientation, surface)

@@ -22,9 +22,11 @@ from pathlib import Path
 FILES: dict[str, str] = {
     "leo_equatorial.toml": "scenario",
     "deep_space.toml": "scenario",
+    "leo_drag.toml": "scenario",
     "tapp1_table_d1.toml": "scenario",
     "tapp3_leo_equatorial.toml": "deck",
     "tapp3_deep_space.toml": "deck",
+    "tapp3_leo_drag.toml": "deck",
     "tapp3_table_d1.toml": "deck",
     "tapp2_deep_space.toml": "guidance",
     "pipeline_deep_space.toml": "pipeline",

@@ -9,6 +9,18 @@ the trajectory, and the variational model's Jacobian drives Φ and the sensitivi
     third_bodies = ["moon"]    # ... and point-mass third bodies (DE421)
     var_gravity = "J2"         # the variational model (default: the state model's)
     var_third_bodies = []
+    area_to_mass_m2_kg = 0.01  # cannonball spacecraft, for SRP and drag ...
+    c_r = 1.3                  # ... its radiation pressure coefficient (parameter "Cr")
+    c_d = 2.2                  # ... and its drag coefficient (parameter "Cd")
+    srp = true                 # solar radiation pressure (Earth and Moon shadows) ...
+    var_srp = false            # ... in the variational model (default: srp)
+    shadows = true             # SRP dimmed in Earth and Moon shadows ...
+    var_shadows = false        # ... in the variational model (default: shadows)
+    atmosphere = "harris_priester"   # drag: "none", "exponential" or "harris_priester" ...
+    var_atmosphere = "none"    # ... in the variational model (default: atmosphere)
+    rho0_kg_m3 = 3.725e-12     # the "exponential" layer: ρ0 at h0, scale height H
+    h0_km = 400.0
+    scale_height_km = 58.515
     rtol = 1e-13               # integrator tolerances
     atol = 1e-13
 
@@ -24,7 +36,17 @@ from typing import Annotated, Literal
 from pydantic import AfterValidator, Field
 
 from tapp.constants import MAX_DEGREE
-from tapp.dynamics.spec import BODIES, ForceModel, earth_model, parse_gravity
+from tapp.dynamics.spec import (
+    ATMOSPHERES,
+    BODIES,
+    SURFACE_RANGES,
+    ExponentialLayer,
+    ForceModel,
+    SurfaceForces,
+    check_surface_value,
+    earth_model,
+    parse_gravity,
+)
 from tapp.errors import InputError
 from tapp.io.schema import Invalid, Schema, Tolerance, Unique
 
@@ -45,6 +67,32 @@ GravityName = Annotated[str, AfterValidator(_gravity), Field(json_schema_extra={
 ThirdBody = Literal[tuple(b for b in BODIES if b != "earth")]  # type: ignore[valid-type]
 #: Third bodies, each once.
 ThirdBodies = Annotated[list[ThirdBody], Unique]
+#: An atmosphere model of the drag force ("none": no drag).
+Atmosphere = Literal[ATMOSPHERES]  # type: ignore[valid-type]
+
+
+def _surface_value(name: str):
+    """A float checked by :func:`tapp.dynamics.spec.check_surface_value`, its range shown."""
+
+    def check(value: float) -> float:
+        try:
+            return check_surface_value(name, value)
+        except InputError as exc:
+            raise Invalid(exc.expected, value) from None
+
+    lo, hi, closed, _ = SURFACE_RANGES[name]
+    bounds = {"minimum" if closed else "exclusiveMinimum": lo, "maximum": hi}
+    return Annotated[float, AfterValidator(check), Field(json_schema_extra=bounds)]
+
+
+AreaToMass = _surface_value("area_to_mass_m2_kg")
+RadiationCoefficient = _surface_value("c_r")
+DragCoefficient = _surface_value("c_d")
+LayerDensity = _surface_value("rho0_kg_m3")
+LayerHeight = _surface_value("h0_km")
+ScaleHeight = _surface_value("scale_height_km")
+#: The exponential atmosphere's default layer (Vallado 2013 Table 8-4, 400 km).
+_LAYER = ExponentialLayer()
 
 
 class ModelTable(Schema):
@@ -62,6 +110,41 @@ class ModelTable(Schema):
         "truncated variational equations); default: gravity.")
     var_third_bodies: ThirdBodies | None = Field(
         None, description="Third bodies of the variational model; default: third_bodies.")
+    area_to_mass_m2_kg: AreaToMass | None = Field(
+        None, description="Cross-section over mass of the cannonball spacecraft, m^2/kg, in "
+        "(0, 50] (spacecraft ~0.002-0.05, solar sails ~10); required by srp and atmosphere.")
+    c_r: RadiationCoefficient = Field(
+        1.3, description="Radiation pressure coefficient C_r = 1 + reflectivity, in [0, 2.5] "
+        "(a sphere: [1, 2]; margin for estimated values); the nominal value of parameter Cr.")
+    c_d: DragCoefficient = Field(
+        2.2, description="Drag coefficient, in (0, 5] (free-molecular flow: ~2-4); the nominal "
+        "value of parameter Cd.")
+    srp: bool = Field(False, description="Solar radiation pressure on a cannonball, with "
+                      "conical Earth and Moon shadows, in the state model.")
+    var_srp: bool | None = Field(None, description="Solar radiation pressure in the "
+                                 "variational model; default: srp.")
+    shadows: bool = Field(True, description="Dim SRP in the conical shadows of the Earth and "
+                          "the Moon (penumbra included), in the state model.")
+    var_shadows: bool | None = Field(
+        None, description="Shadows in the variational model's SRP; default: shadows. Without "
+        "them SRP is conservative and the STM stays symplectic, as TAPP III's exact adjoint "
+        "of the orbit link assumes (with them it falls back to an LU solve).")
+    atmosphere: Atmosphere = Field(
+        "none", description="Drag in the state model: \"none\", \"exponential\" (one layer, "
+        "Vallado 2013 Table 8-4 at 400 km) or \"harris_priester\" (Montenbruck & Gill Table "
+        "3.8, mean solar activity); Earth-centred orbits only.")
+    rho0_kg_m3: LayerDensity = Field(
+        _LAYER.rho0_kg_m3, description="Density at h0_km of the \"exponential\" atmosphere, "
+        "kg/m^3 (default: Vallado 2013 Table 8-4, 400 km).")
+    h0_km: LayerHeight = Field(
+        _LAYER.h0_km, description="Base height of the \"exponential\" atmosphere above the "
+        "WGS84 ellipsoid, km.")
+    scale_height_km: ScaleHeight = Field(
+        _LAYER.scale_height_km, description="Scale height H of the \"exponential\" "
+        "atmosphere, ρ = ρ0 exp(−(h − h0)/H), km.")
+    var_atmosphere: Atmosphere | None = Field(
+        None, description="Drag in the variational model (its Jacobian then has ∂a/∂v); "
+        "default: atmosphere.")
     rtol: Tolerance = Field(1e-13, description="Relative tolerance of the integrator (DOP853).")
     atol: Tolerance = Field(1e-13, description="Absolute tolerance of the integrator (DOP853), "
                             "on km and km/s.")
@@ -73,13 +156,33 @@ class ModelTable(Schema):
         Raises
         ------
         InputError
-            Naming ``source`` and ``model.gravity`` or ``model.var_gravity``.
+            Naming ``source`` and ``model.gravity`` or ``model.var_gravity``, or
+            ``model.area_to_mass_m2_kg`` when SRP or drag is asked without it.
         """
         state = earth_model(self.gravity, tuple(self.third_bodies), source=source,
-                            field="model.gravity", earth_orientation=earth_orientation)
+                            field="model.gravity", earth_orientation=earth_orientation,
+                            surface=self._surface(source, self.srp, self.atmosphere,
+                                                  self.shadows))
         var = earth_model(self.gravity if self.var_gravity is None else self.var_gravity,
                           tuple(self.third_bodies if self.var_third_bodies is None
                                 else self.var_third_bodies),
                           source=source, field="model.var_gravity",
-                          earth_orientation=earth_orientation)
+                          earth_orientation=earth_orientation,
+                          surface=self._surface(
+                              source, self.srp if self.var_srp is None else self.var_srp,
+                              self.atmosphere if self.var_atmosphere is None
+                              else self.var_atmosphere,
+                              self.shadows if self.var_shadows is None else self.var_shadows))
         return state, var
+
+    def _surface(self, source: str, srp: bool, atmosphere: str, shadows: bool
+                 ) -> SurfaceForces | None:
+        """The surface forces of one model, None when it has neither SRP nor drag."""
+        if not srp and atmosphere == "none":
+            return None
+        if self.area_to_mass_m2_kg is None:
+            raise InputError(source, "model.area_to_mass_m2_kg", "the spacecraft's area-to-mass "
+                             "ratio (m^2/kg) when srp or an atmosphere is modelled")
+        return SurfaceForces(self.area_to_mass_m2_kg, srp, self.c_r, atmosphere, self.c_d,
+                             shadows, ExponentialLayer(self.rho0_kg_m3, self.h0_km,
+                                                       self.scale_height_km))

@@ -25,11 +25,15 @@ ISO strings or TOML dates)::
     [model]            gravity (J0 | Jn | NxM), third_bodies (each once), var_gravity,
                        var_third_bodies (the variational model: the seed's truncated
                        variational equations; default the state model), rtol, atol (within
-                       ``tapp.dynamics.propagate.TOLERANCE_RANGE``, 1e-15 to 1e-6)
-    [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", ...] (tapp.dynamics.forces
-                       names), station_location = "cylindrical" | "ecef" | "none",
-                       station_biases = ["range", "range_rate"], [parameters.values] non-nominal
-                       values of dynamic parameters
+                       ``tapp.dynamics.propagate.TOLERANCE_RANGE``, 1e-15 to 1e-6);
+                       surface forces of a cannonball (tapp.io.models_file):
+                       area_to_mass_m2_kg, c_r, c_d, srp / var_srp, shadows /
+                       var_shadows, atmosphere / var_atmosphere ("none", "exponential",
+                       "harris_priester")
+    [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", "Cr", "Cd", ...]
+                       (tapp.dynamics.forces names), station_location = "cylindrical" |
+                       "ecef" | "none", station_biases = ["range", "range_rate"],
+                       [parameters.values] non-nominal values of dynamic parameters
     [stations.NAME]    lat_deg, lon_deg, h_km (-0.5 to 10 km), elev_mask_deg
                        (tapp.io.stations_file)
     [tracking]         stations = [names], observables = ["range", "range_rate", "azimuth",
@@ -385,7 +389,8 @@ class ParametersTable(Schema):
 
     dynamic: Annotated[list[str], Unique] = Field(
         [], description="Model parameters in q: \"GM\", \"GM_moon\" (a third body's), "
-        "\"J2\", \"C22\", \"S22\", ... of the state model.")
+        "\"J2\", \"C22\", \"S22\", ... of the state model, \"Cr\" (with model.srp) and "
+        "\"Cd\" (with a model.atmosphere).")
     station_location: LocationMode = Field("none", description=_LOCATION)
     station_biases: Annotated[list[BiasKind], Unique] = Field([], description=_BIASES)
     values: dict[str, float] = Field(

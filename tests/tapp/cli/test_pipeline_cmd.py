@@ -41,7 +41,7 @@ def parts(tmp_path_factory) -> dict[str, Path]:
     scenario["times"]["epochs"] = []
     deck = tomllib.loads((SCENARIOS / "tapp3_deep_space.toml").read_text())
     deck["times"]["print"] = [1, 2, 3]
-    deck["tape"]["n_o"] = 29  # 3 days of 2-day stochastic batches: 23 + 2 x 3
+    deck["tape"]["n_o"] = 30  # 3 days of 2-day stochastic batches: 24 + 2 x 3
     out = {"scenario": folder / "scenario.toml", "deck": folder / "deck.toml",
            "guidance": folder / "guide.toml", "pipeline": folder / "pipe.toml"}
     out["scenario"].write_text(tomli_w.dumps(scenario))

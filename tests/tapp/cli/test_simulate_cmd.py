@@ -66,7 +66,7 @@ def test_deep_space_scenario_through_the_cli(tmp_path: Path) -> None:
     out = tmp_path / "deep.t13.h5"
     res = runner.invoke(app, ["simulate", str(SCENARIOS / "deep_space.toml"), "-o", str(out)])
     assert res.exit_code == 0, res.output
-    assert "n_o = 68" in res.stdout and "n_ts = 3" in res.stdout  # 23 + 45 stochastic
+    assert "n_o = 69" in res.stdout and "n_ts = 3" in res.stdout  # 24 + 45 stochastic
     info = runner.invoke(app, ["tape", "info", str(out), "--json", "-"])
     summary = json.loads(info.stdout)
     assert [s["name"] for s in summary["stations"]] == ["GOLDSTONE", "CANBERRA", "MADRID"]

@@ -52,7 +52,7 @@ def deep_space_t13(elements: bool = False) -> T13:
 def deep_space_t32(elements: bool = False) -> T32:
     """Its T32 tape: recycles 1, 2, 3 at days 1, 2, 3 (module docstring)."""
     deck = read_toml(SCENARIOS / "tapp3_deep_space.toml")
-    deck["tape"].pop("n_o")  # the study's 23 parameters, without the stochastic accelerations
+    deck["tape"].pop("n_o")  # the study's 24 parameters, without the stochastic accelerations
     deck["fit"]["stochastic"] = deck["real"]["stochastic"] = "ignore"
     deck["times"]["print"] = [1, 2, 3]
     deck["commands"]["print"] = []

@@ -93,8 +93,8 @@ def test_the_marks_are_those_of_the_contradicted_linear_values(shipped):
                    if line.startswith("| 1 |") or "Monte Carlo |" in line)
     # and each is listed with the Monte Carlo value and its sampling error
     section = md[md.index("## Linear covariance against the Monte Carlo"):]
-    listed = re.findall(r"^\| (recycle \d: \\\|Δv\\\| [^|]+|outside [^|]+) \|", section,
-                        flags=re.MULTILINE)
+    listed = re.findall(r"^\| ((?:recycle \d:|total) \\\|Δv\\\| [^|]+|outside [^|]+) \|",
+                        section, flags=re.MULTILINE)
     assert [s.replace("\\|", "|") for s in listed] == [agreement["checks"][k]["label"]
                                                        for k in bad]
     assert f"{len(bad)} contradicted" in section

@@ -109,9 +109,12 @@ b_dot_t_km = 0.1
 
 def moved_deep_space(shipped: str, *, days: int = 1, targeting: str | None = None) -> str:
     """The text of the example ``deep_space.toml`` with its epoch ``days`` later and its
-    injection unchanged, cut to 3 days of tracking (no re-epoch); with ``targeting`` (a
+    injection unchanged, cut to 3 days of tracking (no re-epoch), without solar radiation
+    pressure (the reference has gravity only; it moves B by ~3 km); with ``targeting`` (a
     [targeting] table) appended and the miss time at "periapsis"."""
-    replacements = [('epoch = "2026-03-10T12:00:00"', f'epoch = "2026-03-{10 + days}T12:00:00"'),
+    replacements = [("srp = true", "srp = false"),
+                    ('dynamic = ["GM", "GM_moon", "Cr"]', 'dynamic = ["GM", "GM_moon"]'),
+                    ('epoch = "2026-03-10T12:00:00"', f'epoch = "2026-03-{10 + days}T12:00:00"'),
                     ('end = "2026-04-09T12:00:00"', "end = 259200.0"),
                     ('end = "2026-04-09T12:00:00"', "end = 259200.0"),
                     ('epochs = ["2026-03-14T02:05:58.384", 1296000.0]', "epochs = []")]

@@ -46,13 +46,19 @@ def test_times_as_utc_text_or_toml_dates_equal_seconds() -> None:
     assert sc.times.epochs_s == (0.0, 1800.0)
 
 
-def test_both_shipped_scenarios_parse() -> None:
+def test_the_shipped_scenarios_parse() -> None:
     leo = read_scenario(SCENARIOS / "leo_equatorial.toml")
     assert leo.n_o == 38 and leo.var_model.gravity.name == "J2"
     assert leo.state_model.gravity.name == "5x5"
     deep = read_scenario(SCENARIOS / "deep_space.toml")
-    assert deep.n_o == 23 + 45     # 15 two-day intervals x 3 stochastic accelerations
+    assert deep.n_o == 24 + 45     # 15 two-day intervals x 3 stochastic accelerations
     assert deep.stochastic.n_intervals == 15 and deep.stochastic.frame == "ric"
+    assert deep.dynamic == ("GM", "GM_moon", "Cr")
+    assert deep.state_model.name == "J2+sun+moon+srp"
+    assert deep.var_model.name == "J2+sun+moon+srp(no shadows)"
+    drag = read_scenario(SCENARIOS / "leo_drag.toml")
+    assert drag.n_o == 13 and drag.dynamic == ("GM", "J2", "Cd")
+    assert drag.state_model.name == drag.var_model.name == "J2+drag(harris_priester)"
     assert [s.station.name for s in deep.stations] == ["GOLDSTONE", "CANBERRA", "MADRID"]
     assert deep.miss.quantities == ("b_dot_r_km", "b_dot_t_km", "flight_time_s")
     assert deep.schedule.end_s == pytest.approx(30 * 86400.0)
