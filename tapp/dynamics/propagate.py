@@ -2,9 +2,19 @@
 
 The caller names two force models: ``state_model`` moves the trajectory, ``var_model``
 drives Φ(t, t0) and S(t) = ∂x(t)/∂q (see :mod:`tapp.dynamics.equations`). Integration runs
-in compiled code (CasADi-generated C under a DOP853 driver, :mod:`tapp.dynamics.compiled`),
-never a Python callback per step. Outputs come on the requested grid by the integrator's
-7th-order dense output, so the grid does not constrain the step size.
+in compiled code (CasADi-generated C under a driver, :mod:`tapp.dynamics.compiled`), never a
+Python callback per step. Two methods (:data:`METHODS`):
+
+- ``"dop853"`` (default): Dormand-Prince 8(5,3) on x' = f(t, x), with its 7th-order dense
+  output; any force model.
+- ``"rkn12"``: the Runge-Kutta-Nyström 12(10) pair of Dormand, El-Mikkawy & Prince (1987) on
+  the second-order form r'' = a(t, r) and Φ_r'' = (∂a/∂r) Φ_r, with outputs from a
+  degree-11 Hermite polynomial through four step ends. About 3x fewer acceleration
+  evaluations than DOP853 right-hand sides at 1e-12 on a LEO day (2890 vs 9638 for J2), each
+  on half the components. Only for models without velocity-dependent forces
+  (:func:`tapp.dynamics.equations.velocity_dependent`); others are refused.
+
+Either way the grid does not constrain the step size.
 """
 
 from __future__ import annotations
@@ -15,8 +25,17 @@ from functools import cache
 
 import numpy as np
 
-from tapp.dynamics.compiled import STATUS, CompiledPropagator, compiled_propagator
-from tapp.dynamics.equations import Equations, build_equations, initial_augmented, split_augmented
+from tapp.dynamics.compiled import METHODS, STATUS, CompiledPropagator, compiled_propagator
+from tapp.dynamics.equations import (
+    Equations,
+    build_equations,
+    from_second_order,
+    initial_augmented,
+    second_order,
+    split_augmented,
+    to_second_order,
+    velocity_dependent,
+)
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError, TappError
@@ -78,10 +97,17 @@ class Trajectory:
 
 
 @cache
-def _compiled(state_model: ForceModel, var_model: ForceModel, params: tuple[str, ...]
-              ) -> tuple[Equations, CompiledPropagator]:
-    eqs = build_equations(state_model, var_model, params)
-    return eqs, compiled_propagator(eqs.f_state, eqs.f_var)
+def _equations(state_model: ForceModel, var_model: ForceModel, params: tuple[str, ...]
+               ) -> Equations:
+    return build_equations(state_model, var_model, params)
+
+
+@cache
+def _compiled(state_model: ForceModel, var_model: ForceModel, params: tuple[str, ...],
+              method: str) -> tuple[Equations, CompiledPropagator]:
+    eqs = _equations(state_model, var_model, params)
+    driven = second_order(eqs) if method == "rkn12" else eqs
+    return eqs, compiled_propagator(driven.f_state, driven.f_var, method)
 
 
 @dataclass(frozen=True, slots=True)
@@ -101,6 +127,8 @@ class Propagator:
     error_control : ``"state"`` controls the step on the 6 state components only;
         ``"all"`` includes Φ and S.
     max_steps : cap on integration steps per call.
+    method : ``"dop853"`` (default) or ``"rkn12"`` (see the module docstring); ``"rkn12"``
+        refuses a model whose acceleration depends on velocity.
     """
 
     state_model: ForceModel
@@ -110,6 +138,7 @@ class Propagator:
     atol: float = 1e-13
     error_control: str = "state"
     max_steps: int = 10_000_000
+    method: str = "dop853"
     _nominal: dict[str, float] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -120,11 +149,19 @@ class Propagator:
         if self.error_control not in ("state", "all"):
             raise InputError("propagator", "error_control", "'state' or 'all'",
                              self.error_control)
+        if self.method not in METHODS:
+            raise InputError("propagator", "method", f"one of {', '.join(METHODS)}",
+                             self.method)
+        if self.method == "rkn12" and velocity_dependent(
+                _equations(self.state_model, self.var_model, self.params)):
+            raise InputError("propagator", "method", "'dop853' for a model with velocity-"
+                             "dependent forces ('rkn12' integrates r'' = a(t, r) only)",
+                             self.method)
         object.__setattr__(self, "_nominal", default_parameters(self.state_model, self.params))
 
     def compiled(self) -> tuple[Equations, CompiledPropagator]:
         """Build (or fetch from the cache) the equations and the compiled library."""
-        return _compiled(self.state_model, self.var_model, self.params)
+        return _compiled(self.state_model, self.var_model, self.params, self.method)
 
     def propagate(self, x0: np.ndarray, t_s: np.ndarray, *, t0_s: float = 0.0,
                   stm: bool = True, param_values: Mapping[str, float] | None = None,
@@ -178,14 +215,16 @@ class Propagator:
                                  orientation.model)
             theta0_rad = orientation.theta0_rad
         table = self._series(eqs, epoch_jd_utc, orientation, t0_s, t_s)
-        if stm:
-            y0 = initial_augmented(x0, len(self.params))
-            n_err = 6 if self.error_control == "state" else y0.size
-        else:
-            y0, n_err = x0, 6
+        y0 = initial_augmented(x0, len(self.params)) if stm else x0
+        n_err = 6 if self.error_control == "state" or not stm else y0.size
+        nystrom = self.method == "rkn12"
+        if nystrom:  # [z, z']; the norm counts components of z and of z' alike
+            y0, n_err = to_second_order(y0), n_err // 2
         status, y, stats = lib.integrate(1 if stm else 0, y0, t0_s, t_s, q,
                                          np.array([theta0_rad]), table, self.rtol, self.atol,
                                          n_err, self.max_steps)
+        if nystrom:
+            y = from_second_order(y)
         if status != 0:
             raise PropagationError(f"propagation stopped: {STATUS.get(status, status)} after "
                                    f"{int(stats[0])} steps")
