@@ -55,7 +55,7 @@ STATUS = {
     4: "time outside the ephemeris table",
 }
 
-_CFLAGS = ("-O2", "-fPIC", "-shared", "-fno-math-errno")
+_CFLAGS = ("-O3", "-fPIC", "-shared", "-fno-math-errno")
 #: A C ``double *``, passed as an address (an array's ``.ctypes.data``).
 _DOUBLE_P = ctypes.c_void_p
 
