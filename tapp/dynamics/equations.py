@@ -28,6 +28,7 @@ from one Chebyshev table.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import casadi as ca
 import numpy as np
@@ -123,6 +124,7 @@ def split_augmented(y: np.ndarray, n_params: int) -> tuple[np.ndarray, np.ndarra
     return states, phi, sens
 
 
+@cache
 def _halves(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Indices of the position and velocity halves of the 6-blocks of a first-order vector."""
     blocks = np.arange(n).reshape(-1, 6)

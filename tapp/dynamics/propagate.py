@@ -191,13 +191,15 @@ class Propagator:
             The integrator stopped early (see ``tapp.dynamics.compiled.STATUS``).
         """
         x0 = np.asarray(x0, dtype=float)
-        if x0.shape != (6,) or not np.all(np.isfinite(x0)):
+        if x0.shape != (6,) or not np.isfinite(x0).all():
             raise InputError("propagate", "state", "6 finite numbers (km, km/s)", x0.tolist())
         t_s = np.atleast_1d(np.asarray(t_s, dtype=float))
-        if not np.all(np.isfinite(t_s)) or t_s.size == 0:
+        if t_s.size == 0 or not np.isfinite(t_s).all():
             raise InputError("propagate", "times", "a non-empty grid of finite times", None)
-        steps = np.diff(np.concatenate([[t0_s], t_s]))
-        if not (np.all(steps >= 0) or np.all(steps <= 0)):
+        steps = np.empty_like(t_s)  # t_s - (t0_s, t_s[:-1]), without np.diff's overhead
+        steps[0] = t_s[0] - t0_s
+        np.subtract(t_s[1:], t_s[:-1], out=steps[1:])
+        if not (steps.min() >= 0 or steps.max() <= 0):
             raise InputError("propagate", "times", "times monotonic away from t0", None)
         eqs, lib = self.compiled()
         values = dict(self._nominal)
@@ -217,9 +219,11 @@ class Propagator:
         table = self._series(eqs, epoch_jd_utc, orientation, t0_s, t_s)
         y0 = initial_augmented(x0, len(self.params)) if stm else x0
         n_err = 6 if self.error_control == "state" or not stm else y0.size
-        nystrom = self.method == "rkn12"
-        if nystrom:  # [z, z']; the norm counts components of z and of z' alike
-            y0, n_err = to_second_order(y0), n_err // 2
+        nystrom = self.method == "rkn12" and stm  # x alone is already [z, z'] = [r, v]
+        if nystrom:
+            y0 = to_second_order(y0)
+        if self.method == "rkn12":  # the norm counts components of z and of z' alike
+            n_err //= 2
         status, y, stats = lib.integrate(1 if stm else 0, y0, t0_s, t_s, q,
                                          np.array([theta0_rad]), table, self.rtol, self.atol,
                                          n_err, self.max_steps)
