@@ -56,8 +56,16 @@ STATUS = {
 }
 
 _CFLAGS = ("-O3", "-fPIC", "-shared", "-fno-math-errno")
-#: A C ``double *``, passed as an address (an array's ``.ctypes.data``).
+#: A C ``double *``, passed as an address (:func:`_address`).
 _DOUBLE_P = ctypes.c_void_p
+
+
+def _address(a: np.ndarray) -> int:
+    """The address of a C-contiguous float64 array's data: through the buffer protocol when
+    the array is writable and not empty (0.3 µs), else ``.ctypes.data`` (1.5 µs)."""
+    if a.flags.writeable and a.size:
+        return ctypes.addressof(ctypes.c_double.from_buffer(a))
+    return a.ctypes.data
 
 
 class CompileError(TappError):
@@ -150,7 +158,7 @@ class CompiledPropagator:
         components of z (and of z') in the error norm."""
         y0 = np.ascontiguousarray(y0, dtype=float)
         t_out_s = np.ascontiguousarray(t_out_s, dtype=float)
-        y_out = np.zeros((t_out_s.size, y0.size))
+        y_out = np.empty((t_out_s.size, y0.size))  # every row written when status is 0
         stats = np.zeros(3)
         q = np.ascontiguousarray(q, dtype=float) if len(q) else np.zeros(1)
         c = np.ascontiguousarray(c, dtype=float)
@@ -159,10 +167,10 @@ class CompiledPropagator:
         # signal handler cannot run, whereas an ndpointer's conversion runs Python code, and
         # ctypes turns what a handler raises there (the CLI's SIGTERM and Ctrl-C) into an
         # ArgumentError (a traceback instead of a clean stop).
-        status = self.fn(which, y0.size, float(t0_s), y0.ctypes.data, t_out_s.size,
-                         t_out_s.ctypes.data, y_out.ctypes.data, q.ctypes.data, c.ctypes.data,
-                         coeffs.ctypes.data, eph.n_series, eph.n_segments, eph.n_coef,
-                         eph.t0_s, eph.h_s, rtol, atol, n_err, max_steps, stats.ctypes.data)
+        status = self.fn(which, y0.size, float(t0_s), _address(y0), t_out_s.size,
+                         _address(t_out_s), _address(y_out), _address(q), _address(c),
+                         _address(coeffs), eph.n_series, eph.n_segments, eph.n_coef,
+                         eph.t0_s, eph.h_s, rtol, atol, n_err, max_steps, _address(stats))
         return int(status), y_out, stats
 
 

@@ -33,6 +33,9 @@
 #define HERMITE_N (3 * HERMITE_NODES)
 /* An output in step j is written once step end j + HERMITE_AHEAD is known. */
 #define HERMITE_AHEAD (HERMITE_NODES / 2)
+/* Ring buffer of step ends: a power of two >= HERMITE_NODES, so that a slot is a mask. */
+#define RING 8
+#define SLOT(m) ((size_t)(m) & (RING - 1))
 /* Outputs evaluated side by side (Horner is latency-bound for one output). */
 #define DENSE_BATCH 16
 /* Inlined into each caller, so that the state case (n2 = 3) is compiled with n2 constant. */
@@ -42,8 +45,8 @@
  * one, and the outputs still to write. */
 typedef struct {
     long count;                /* step ends received so far */
-    double t[HERMITE_NODES];
-    double *node;              /* HERMITE_NODES x (z, z'), each n2 */
+    double t[RING];
+    double *node;              /* RING x (z, z'), each n2 */
     double *dd;                /* HERMITE_N x n2: f[y_{J-k}, .., y_J], k = 0 .. */
     int n_dd;                  /* rows of dd in use: 3 min(count, HERMITE_NODES) */
     int nout;
@@ -54,7 +57,7 @@ typedef struct {
 } dense_t;
 
 INLINE double *node_slot(dense_t *d, long m, int n2) {
-    return d->node + (size_t)(m % HERMITE_NODES) * 2 * n2;
+    return d->node + SLOT(m) * 2 * n2;
 }
 
 /* Append a step end, thrice (z, then z' and z''/2 as the confluent differences), to the points
@@ -64,7 +67,7 @@ INLINE double *node_slot(dense_t *d, long m, int n2) {
 INLINE void dense_add(dense_t *d, double t, const double *z, const double *zd,
                       const double *zdd, int n2) {
     double *slot = node_slot(d, d->count, n2);
-    d->t[d->count % HERMITE_NODES] = t;
+    d->t[SLOT(d->count)] = t;
     memcpy(slot, z, sizeof(double) * (size_t)n2);
     memcpy(slot + n2, zd, sizeof(double) * (size_t)n2);
     d->count++;
@@ -73,7 +76,7 @@ INLINE void dense_add(dense_t *d, double t, const double *z, const double *zd,
     for (int copy = 0; copy < 3; ++copy) {
         int n = 3 * (w - 1) + copy + 1;  /* rows after this append */
         for (int k = copy + 1; k < n; ++k)  /* y_J - y_{J-k}: another step end */
-            inv[k] = 1.0 / (t - d->t[(d->count - 1 - (k - copy + 2) / 3) % HERMITE_NODES]);
+            inv[k] = 1.0 / (t - d->t[SLOT(d->count - 1 - (k - copy + 2) / 3)]);
         for (int i = 0; i < n2; ++i) {
             double *col = d->dd + i;
             double old = col[0];  /* f[y_{J-1-(k-1)}, .., y_{J-1}] before it is replaced */
@@ -90,18 +93,18 @@ INLINE void dense_add(dense_t *d, double t, const double *z, const double *zd,
     d->n_dd = 3 * w;
 }
 
-/* Evaluate the Newton form (points from the last back) and its derivative at nb times ts
- * into rows out[b] ([z, z'], 2 n2 each): one Horner recurrence over the table, the outputs
- * side by side so that their independent chains overlap. */
-INLINE void dense_batch(const dense_t *d, int nb, const double *ts, double *const *out,
-                        int n2) {
+/* Evaluate the Newton form (points from the last back: step end times tb[0] = newest, ...)
+ * and its derivative at nb times ts into rows out[b] ([z, z'], 2 n2 each): one Horner
+ * recurrence over the table, the outputs side by side so their independent chains overlap. */
+INLINE void dense_batch(const dense_t *d, const double *tb, int nb, const double *ts,
+                        double *const *out, int n2) {
     const double *dd = d->dd;
     int n = d->n_dd;
     for (int b = 0; b < nb; ++b)
         for (int i = 0; i < n2; ++i) { out[b][i] = dd[(n - 1) * n2 + i]; out[b][n2 + i] = 0.0; }
     for (int k = n - 2; k >= 0; --k) {
         const double *row = dd + k * n2;
-        double tk = d->t[(d->count - 1 - k / 3) % HERMITE_NODES];
+        double tk = tb[k / 3];
         for (int b = 0; b < nb; ++b) {
             double u = ts[b] - tk;
             double *restrict o = out[b];
@@ -116,24 +119,24 @@ INLINE void dense_batch(const dense_t *d, int nb, const double *ts, double *cons
 /* Write every output up to t_limit (inclusive, in the direction of integration) from the
  * Hermite polynomial through the buffered step ends; an output on a step end is copied. */
 INLINE void dense_emit(dense_t *d, double t_limit, int n2) {
-    long first = d->count > HERMITE_NODES ? d->count - HERMITE_NODES : 0;
-    int nb = 0;
-    double ts[DENSE_BATCH];
+    int w = d->count < HERMITE_NODES ? (int)d->count : HERMITE_NODES, nb = 0;
+    double tb[HERMITE_NODES], ts[DENSE_BATCH];
     double *out[DENSE_BATCH];
+    for (int b = 0; b < w; ++b) tb[b] = d->t[SLOT(d->count - 1 - b)];
     for (; d->k_out < d->nout && d->dir * (d->tout[d->k_out] - t_limit) <= 0; d->k_out++) {
         double tk = d->tout[d->k_out];
         double *row = d->yout + (size_t)d->k_out * 2 * n2;
-        long hit = -1;
-        for (long m = first; m < d->count; ++m) if (d->t[m % HERMITE_NODES] == tk) hit = m;
+        int hit = -1;
+        for (int b = 0; b < w; ++b) if (tb[b] == tk) hit = b;
         if (hit >= 0) {
-            memcpy(row, node_slot(d, hit, n2), sizeof(double) * 2 * (size_t)n2);
+            memcpy(row, node_slot(d, d->count - 1 - hit, n2), sizeof(double) * 2 * (size_t)n2);
             continue;
         }
         ts[nb] = tk;
         out[nb++] = row;
-        if (nb == DENSE_BATCH) { dense_batch(d, nb, ts, out, n2); nb = 0; }
+        if (nb == DENSE_BATCH) { dense_batch(d, tb, nb, ts, out, n2); nb = 0; }
     }
-    if (nb) dense_batch(d, nb, ts, out, n2);
+    if (nb) dense_batch(d, tb, nb, ts, out, n2);
 }
 
 /* Scaled RMS size of (z, z') and of (z', z'') over the first n_err components of each. */
@@ -231,7 +234,7 @@ INLINE int rkn_run(ctx_t *cx, int n2, double t0, const double *y0, dense_t *dn, 
             if (cx->eph_error) { status = 4; break; }
             dense_add(dn, t, z, zd, K, n2);
             if (dn->count >= HERMITE_NODES)
-                dense_emit(dn, dn->t[(dn->count - HERMITE_AHEAD) % HERMITE_NODES], n2);
+                dense_emit(dn, dn->t[SLOT(dn->count - HERMITE_AHEAD)], n2);
             h_abs *= factor;
             rejected = 0;
             ++*n_acc;
@@ -257,7 +260,7 @@ int tapp_integrate(int which, int ny, double t0, const double *y0, int nout, con
     ctx_t cx;
     ctx_open(&cx, which, n2, q, c, eph, nb, nseg, ncoef, eph_t0, eph_h);
     double *work = malloc(sizeof(double) * (RKN_STAGES + 6) * (size_t)n2);
-    dense_t dn = {0, {0}, malloc(sizeof(double) * HERMITE_NODES * 2 * (size_t)n2),
+    dense_t dn = {0, {0}, malloc(sizeof(double) * RING * 2 * (size_t)n2),
                   malloc(sizeof(double) * HERMITE_N * (size_t)n2), 0, nout, tout, yout, 0,
                   (tout[nout - 1] >= t0) ? 1.0 : -1.0};
     long n_acc = 0, n_rej = 0;

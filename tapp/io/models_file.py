@@ -11,6 +11,7 @@ the trajectory, and the variational model's Jacobian drives Φ and the sensitivi
     var_third_bodies = []
     rtol = 1e-13               # integrator tolerances
     atol = 1e-13
+    method = "dop853"          # or "rkn12" (tapp.dynamics.propagate)
 
 and the study file's runs name their models ``gravity`` and ``var_gravity`` too. The
 spellings ``stm_gravity`` and ``stm_third_bodies`` of earlier SEARCH files are refused, naming
@@ -24,6 +25,7 @@ from typing import Annotated, Literal
 from pydantic import AfterValidator, Field
 
 from tapp.constants import MAX_DEGREE
+from tapp.dynamics.compiled import METHODS
 from tapp.dynamics.spec import BODIES, ForceModel, earth_model, parse_gravity
 from tapp.errors import InputError
 from tapp.io.schema import Invalid, Schema, Tolerance, Unique
@@ -45,6 +47,8 @@ GravityName = Annotated[str, AfterValidator(_gravity), Field(json_schema_extra={
 ThirdBody = Literal[tuple(b for b in BODIES if b != "earth")]  # type: ignore[valid-type]
 #: Third bodies, each once.
 ThirdBodies = Annotated[list[ThirdBody], Unique]
+#: An integration method of :class:`tapp.dynamics.Propagator`.
+Method = Literal[tuple(METHODS)]  # type: ignore[valid-type]
 
 
 class ModelTable(Schema):
@@ -65,6 +69,10 @@ class ModelTable(Schema):
     rtol: Tolerance = Field(1e-13, description="Relative tolerance of the integrator (DOP853).")
     atol: Tolerance = Field(1e-13, description="Absolute tolerance of the integrator (DOP853), "
                             "on km and km/s.")
+    method: Method = Field(
+        "dop853", description="Integration method: 'dop853' (Dormand-Prince 8(5,3), any "
+        "force model) or 'rkn12' (Runge-Kutta-Nystrom 12(10) on r'' = a(t, r): about 3x "
+        "fewer evaluations than dop853 at 1e-12; refuses velocity-dependent forces).")
 
     def force_models(self, source: str, earth_orientation: str
                      ) -> tuple[ForceModel, ForceModel]:

@@ -25,7 +25,8 @@ ISO strings or TOML dates)::
     [model]            gravity (J0 | Jn | NxM), third_bodies (each once), var_gravity,
                        var_third_bodies (the variational model: the seed's truncated
                        variational equations; default the state model), rtol, atol (within
-                       ``tapp.dynamics.propagate.TOLERANCE_RANGE``, 1e-15 to 1e-6)
+                       ``tapp.dynamics.propagate.TOLERANCE_RANGE``, 1e-15 to 1e-6), method
+                       ("dop853" default, or "rkn12": ``tapp.dynamics.propagate``)
     [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", ...] (tapp.dynamics.forces
                        names), station_location = "cylindrical" | "ecef" | "none",
                        station_biases = ["range", "range_rate"], [parameters.values] non-nominal
@@ -271,6 +272,7 @@ class Scenario:
     document_json : the scenario tables as JSON (tape provenance).
     targeting : the SEARCH problem of a ``[targeting]`` table, run before simulating; None
         without one (or once run: :func:`tapp.tracking.encounter.prepare_encounter`).
+    method : the integration method of every propagation (``tapp.dynamics.propagate``).
     """
 
     source: str
@@ -291,11 +293,12 @@ class Scenario:
     miss: MissSpec
     document_json: str
     targeting: BPlaneSearch | None = None
+    method: str = "dop853"
 
     def propagator(self) -> Propagator:
         """The (state model, variational model, dynamic parameters) propagator."""
         return Propagator(self.state_model, self.var_model, self.dynamic, rtol=self.rtol,
-                          atol=self.atol)
+                          atol=self.atol, method=self.method)
 
     @property
     def parameters(self) -> tuple[Parameter, ...]:
@@ -752,10 +755,13 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     document = json.dumps(data, default=str, sort_keys=True)
     x0.setflags(write=False)
     targeting = _targeting(p, doc, miss, values, x0, Propagator(state_model, var_model, rtol=rtol,
-                                                                  atol=atol), orientation)
+                                                                  atol=atol,
+                                                                  method=doc.model.method),
+                           orientation)
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,
-                    dynamic, values, stations, schedule, times, miss, document, targeting)
+                    dynamic, values, stations, schedule, times, miss, document, targeting,
+                    doc.model.method)
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

@@ -206,6 +206,13 @@ def test_tolerances_outside_the_documented_range_are_refused() -> None:
         leo_document(model={"atol": 1e-18}))
 
 
+def test_the_integration_method_is_chosen_in_the_model_table() -> None:
+    assert leo_scenario().propagator().method == "dop853"
+    assert leo_scenario(model={"method": "rkn12"}).propagator().method == "rkn12"
+    assert _message(leo_document(model={"method": "rk4"})).startswith(
+        f"{SOURCE}: model.method: expected one of")
+
+
 def test_a_third_body_listed_twice_is_refused() -> None:
     text = _message(leo_document(model={"third_bodies": ["sun", "moon", "sun"]}))
     assert text == (f"{SOURCE}: model.third_bodies: expected each item once ('sun' is repeated) "
