@@ -62,7 +62,7 @@ def propagate(
     tol: Annotated[float, typer.Option(help="Relative and absolute tolerance, in [1e-15, "
                                        "1e-6].")] = 1e-13,
     method: Annotated[str, typer.Option(help="Integration method: dop853 or rkn12 "
-                                        "(Runge-Kutta-Nystrom 12(10), ~3x fewer evaluations "
+                                        "(Runge-Kutta-Nystrom 12(10), ~4x fewer evaluations "
                                         "at 1e-12).")] = "dop853",
     scenario: Annotated[Path | None, typer.Option(
         help="Scenario file with named orbits [default: the shipped approx_stm.toml].")]

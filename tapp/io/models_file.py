@@ -66,12 +66,12 @@ class ModelTable(Schema):
         "truncated variational equations); default: gravity.")
     var_third_bodies: ThirdBodies | None = Field(
         None, description="Third bodies of the variational model; default: third_bodies.")
-    rtol: Tolerance = Field(1e-13, description="Relative tolerance of the integrator (DOP853).")
-    atol: Tolerance = Field(1e-13, description="Absolute tolerance of the integrator (DOP853), "
-                            "on km and km/s.")
+    rtol: Tolerance = Field(1e-13, description="Relative tolerance of the integrator.")
+    atol: Tolerance = Field(1e-13, description="Absolute tolerance of the integrator, on km "
+                            "and km/s.")
     method: Method = Field(
         "dop853", description="Integration method: 'dop853' (Dormand-Prince 8(5,3), any "
-        "force model) or 'rkn12' (Runge-Kutta-Nystrom 12(10) on r'' = a(t, r): about 3x "
+        "force model) or 'rkn12' (Runge-Kutta-Nystrom 12(10) on r'' = a(t, r): about 4x "
         "fewer evaluations than dop853 at 1e-12; refuses velocity-dependent forces).")
 
     def force_models(self, source: str, earth_orientation: str
