@@ -211,6 +211,10 @@ def test_the_integration_method_is_chosen_in_the_model_table() -> None:
     assert leo_scenario(model={"method": "rkn12"}).propagator().method == "rkn12"
     assert _message(leo_document(model={"method": "rk4"})).startswith(
         f"{SOURCE}: model.method: expected one of")
+    # the simulated trajectory does not depend on the method beyond the tolerance (1e-13)
+    dop, rkn = (simulate(leo_scenario(model={"method": m})).states for m in ("dop853", "rkn12"))
+    one_mm_km = 1e-6
+    assert np.abs(dop[:, :3] - rkn[:, :3]).max() < one_mm_km
 
 
 def test_a_third_body_listed_twice_is_refused() -> None:
