@@ -38,6 +38,15 @@ def _third_bodies(names: list[str]) -> tuple[str, ...]:
     return tuple(names)
 
 
+def _method(name: str) -> str:
+    """The ``--method`` value, one of :data:`tapp.dynamics.compiled.METHODS`."""
+    from tapp.dynamics.compiled import METHODS
+
+    if name not in METHODS:
+        raise InputError("--method", "method", f"one of {', '.join(METHODS)}", name)
+    return name
+
+
 @app.command()
 def propagate(
     orbit: Annotated[str, typer.Option(help="a=..,e=..,i=..,raan=..,argp=..,M=.. (km, deg), "
@@ -52,6 +61,9 @@ def propagate(
     = "2026-01-01T00:00:00",
     tol: Annotated[float, typer.Option(help="Relative and absolute tolerance, in [1e-15, "
                                        "1e-6].")] = 1e-13,
+    method: Annotated[str, typer.Option(help="Integration method: dop853 or rkn12 "
+                                        "(Runge-Kutta-Nystrom 12(10), ~4x fewer evaluations "
+                                        "at 1e-12).")] = "dop853",
     scenario: Annotated[Path | None, typer.Option(
         help="Scenario file with named orbits [default: the shipped approx_stm.toml].")]
     = None,
@@ -90,7 +102,8 @@ def propagate(
                                       earth_orientation=model),
                           earth_model(stm, bodies, source="--stm", field="model",
                                       earth_orientation=model),
-                          rtol=check_tolerance(tol, "--tol", "value"), atol=tol)
+                          rtol=check_tolerance(tol, "--tol", "value"), atol=tol,
+                          method=_method(method))
         if bodies:
             check_coverage(utc_to_tdb_jd(ep.jd, source="--epoch"),
                            np.array([0.0, arc_s]) / SECONDS_PER_DAY,
@@ -113,7 +126,7 @@ def propagate(
                           f"{np.abs(traj.stm[k]).max():.4g}")
         console = Console(width=130)
         console.print(table)
-        console.print(f"{traj.steps} steps, {traj.rhs_evaluations} RHS evaluations, "
-                      f"{elapsed * 1e3:.1f} ms")
+        console.print(f"{method}: {traj.steps} steps, {traj.rhs_evaluations} RHS "
+                      f"evaluations, {elapsed * 1e3:.1f} ms")
 
     run_guarded(body)

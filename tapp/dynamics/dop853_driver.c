@@ -6,84 +6,17 @@
  * emitted above this file by tapp.dynamics.compiled from SciPy's published copy of the same
  * coefficients, so no coefficient is typed by hand here.
  *
- * Third-body positions come from piecewise Chebyshev series (fitted to DE421 by
- * tapp.ephemeris) evaluated here, so the right-hand side stays a pure function.
+ * The right-hand-side context, the ephemeris evaluation and the norm come from
+ * driver_common.c, emitted before this file.
  *
  * Return codes (documented in tapp.dynamics.compiled.STATUS):
  *   0 ok, 1 too many steps, 2 step size underflow, 3 non-finite state, 4 time outside the
  *   ephemeris table.
  */
-#include <math.h>
-#include <stdlib.h>
-#include <string.h>
-
 #define DOP_SAFETY 0.9
 #define DOP_MIN_FACTOR 0.2
 #define DOP_MAX_FACTOR 10.0
 #define DOP_ORDER_EXP (-1.0 / 8.0)
-
-typedef int (*rhs_fn)(const casadi_real **arg, casadi_real **res, casadi_int *iw,
-                      casadi_real *w, int mem);
-
-typedef struct {
-    rhs_fn f;
-    int ny;
-    casadi_real t_buf;
-    const double *q, *c;
-    const double *eph;
-    int nb, nseg, ncoef;
-    double eph_t0, eph_h;
-    double *rb;
-    const casadi_real **arg;
-    casadi_real **res;
-    casadi_int *iw;
-    casadi_real *w;
-    long nfev;
-    int eph_error;
-} ctx_t;
-
-static void eph_eval(ctx_t *cx, double t) {
-    double u = (t - cx->eph_t0) / cx->eph_h;
-    int seg = (int)floor(u);
-    if (seg < 0 || seg >= cx->nseg) {
-        /* allow the end point of the last segment and rounding at the first */
-        if (seg == cx->nseg && u <= cx->nseg + 1e-9) seg = cx->nseg - 1;
-        else if (seg == -1 && u >= -1e-9) seg = 0;
-        else { cx->eph_error = 1; seg = seg < 0 ? 0 : cx->nseg - 1; }
-    }
-    double tau = 2.0 * (u - seg) - 1.0;
-    for (int b = 0; b < cx->nb; ++b) {
-        for (int k = 0; k < 3; ++k) {
-            const double *a = cx->eph + (((size_t)b * cx->nseg + seg) * 3 + k) * cx->ncoef;
-            double b1 = 0.0, b2 = 0.0;
-            for (int j = cx->ncoef - 1; j >= 1; --j) {
-                double tmp = 2.0 * tau * b1 - b2 + a[j];
-                b2 = b1;
-                b1 = tmp;
-            }
-            cx->rb[3 * b + k] = tau * b1 - b2 + a[0];
-        }
-    }
-}
-
-static void rhs(ctx_t *cx, double t, const double *y, double *dy) {
-    if (cx->nb > 0) eph_eval(cx, t);
-    cx->t_buf = t;
-    cx->arg[0] = &cx->t_buf;
-    cx->arg[1] = y;
-    cx->arg[2] = cx->q;
-    cx->arg[3] = cx->c;
-    cx->arg[4] = cx->rb;
-    cx->res[0] = dy;
-    cx->f(cx->arg, cx->res, cx->iw, cx->w, 0);
-    cx->nfev++;
-}
-
-static double rms_scaled(const double *v, const double *scale, int n) {
-    double s = 0.0;
-    for (int i = 0; i < n; ++i) { double e = v[i] / scale[i]; s += e * e; }
-    return sqrt(s / n);
-}
 
 /* Dense output: extra stages 13..15 and the 7 interpolation vectors F (scipy layout). */
 static void dense_prepare(ctx_t *cx, int ny, double t_old, double h, const double *y_old,
@@ -131,18 +64,7 @@ int tapp_integrate(int which, int ny, double t0, const double *y0, int nout, con
                    int nseg, int ncoef, double eph_t0, double eph_h, double rtol, double atol,
                    int n_err, long max_steps, double *stats) {
     ctx_t cx;
-    memset(&cx, 0, sizeof cx);
-    casadi_int sz_arg, sz_res, sz_iw, sz_w;
-    if (which == 0) { cx.f = f_state; f_state_work(&sz_arg, &sz_res, &sz_iw, &sz_w); }
-    else { cx.f = f_var; f_var_work(&sz_arg, &sz_res, &sz_iw, &sz_w); }
-    cx.ny = ny; cx.q = q; cx.c = c; cx.eph = eph; cx.nb = nb; cx.nseg = nseg;
-    cx.ncoef = ncoef; cx.eph_t0 = eph_t0; cx.eph_h = eph_h;
-    double rb_static[3 * 16];
-    cx.rb = rb_static;
-    cx.arg = malloc(sizeof(casadi_real *) * (sz_arg > 5 ? sz_arg : 5));
-    cx.res = malloc(sizeof(casadi_real *) * (sz_res > 1 ? sz_res : 1));
-    cx.iw = malloc(sizeof(casadi_int) * (sz_iw > 0 ? sz_iw : 1));
-    cx.w = malloc(sizeof(casadi_real) * (sz_w > 0 ? sz_w : 1));
+    ctx_open(&cx, which, ny, q, c, eph, nb, nseg, ncoef, eph_t0, eph_h);
     double *K = malloc(sizeof(double) * 16 * (size_t)ny);
     double *F = malloc(sizeof(double) * 7 * (size_t)ny);
     double *y = malloc(sizeof(double) * (size_t)ny);
@@ -249,7 +171,7 @@ int tapp_integrate(int which, int ny, double t0, const double *y0, int nout, con
         }
     }
     stats[0] = (double)n_acc; stats[1] = (double)n_rej; stats[2] = (double)cx.nfev;
-    free(cx.arg); free(cx.res); free(cx.iw); free(cx.w);
+    ctx_close(&cx);
     free(K); free(F); free(y); free(y_new); free(ytmp); free(scale); free(e3); free(e5);
     return status;
 }

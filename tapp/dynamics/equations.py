@@ -33,6 +33,7 @@ from one Chebyshev table.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import casadi as ca
 import numpy as np
@@ -130,3 +131,68 @@ def split_augmented(y: np.ndarray, n_params: int) -> tuple[np.ndarray, np.ndarra
     phi = y[:, 6:42].reshape(n, 6, 6).transpose(0, 2, 1)
     sens = y[:, 42:].reshape(n, n_params, 6).transpose(0, 2, 1)
     return states, phi, sens
+
+
+@cache
+def _halves(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the position and velocity halves of the 6-blocks of a first-order vector."""
+    blocks = np.arange(n).reshape(-1, 6)
+    return blocks[:, :3].ravel(), blocks[:, 3:].ravel()
+
+
+def velocity_dependent(eqs: Equations) -> bool:
+    """True when an acceleration of either function depends on velocity (∂a/∂v ≠ 0).
+
+    The structural test (``casadi.depends_on``) of the velocity-derivative halves of each
+    6-block of ``f_state`` and ``f_var`` on the velocity halves of their input: the
+    predicate a second-order method (y'' = f(t, y)) checks before it accepts a model.
+    """
+    for f in (eqs.f_state, eqs.f_var):
+        y = ca.SX.sym("y", f.size1_in(1))
+        ydot = f(ca.SX.sym("t"), y, ca.SX.sym("q", f.size1_in(2)), ca.SX.sym("c", 1),
+                 ca.SX.sym("rb", f.size1_in(4)))
+        _, vel = _halves(y.numel())
+        if ca.depends_on(ydot[vel.tolist()], y[vel.tolist()]):
+            return True
+    return False
+
+
+def second_order(eqs: Equations) -> Equations:
+    """The same equations in second-order form z'' = g(t, z, q, c, rb).
+
+    z gathers the position halves of the 6-blocks of the first-order vector (r, then the
+    position rows of each column of Φ and of S); g is the velocity-derivative halves of
+    ``f_state`` / ``f_var`` evaluated with the velocity halves set to zero, which is exact
+    only when :func:`velocity_dependent` is False (Φ_r'' = (∂a/∂r) Φ_r, P'' = (∂a/∂r) P +
+    ∂a/∂q: the second-order variational equations).
+    """
+    functions = []
+    for f in (eqs.f_state, eqs.f_var):
+        n = f.size1_in(1)
+        pos, vel = _halves(n)
+        t, q, c, rb = (ca.SX.sym("t"), ca.SX.sym("q", f.size1_in(2)), ca.SX.sym("c", 1),
+                       ca.SX.sym("rb", f.size1_in(4)))
+        z = ca.SX.sym("z", n // 2)
+        y = ca.SX.zeros(n)
+        y[pos.tolist()] = z
+        zdd = f(t, y, q, c, rb)[vel.tolist()]
+        functions.append(ca.Function(f.name(), [t, z, q, c, rb], [ca.cse(zdd)],
+                                     ["t", "y", "q", "c", "rb"], ["ydot"]))
+    return Equations(*functions, eqs.bodies, eqs.params, eqs.oriented)
+
+
+def to_second_order(y: np.ndarray) -> np.ndarray:
+    """First-order rows (..., n) -> [z, z'] rows (..., n): position halves, then velocity."""
+    pos, vel = _halves(np.shape(y)[-1])
+    return np.concatenate([y[..., pos], y[..., vel]], axis=-1)
+
+
+def from_second_order(zz: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`to_second_order`."""
+    zz = np.asarray(zz)
+    pos, vel = _halves(zz.shape[-1])
+    y = np.empty_like(zz)
+    half = zz.shape[-1] // 2
+    y[..., pos] = zz[..., :half]
+    y[..., vel] = zz[..., half:]
+    return y

@@ -2,9 +2,20 @@
 
 The caller names two force models: ``state_model`` moves the trajectory, ``var_model``
 drives Φ(t, t0) and S(t) = ∂x(t)/∂q (see :mod:`tapp.dynamics.equations`). Integration runs
-in compiled code (CasADi-generated C under a DOP853 driver, :mod:`tapp.dynamics.compiled`),
-never a Python callback per step. Outputs come on the requested grid by the integrator's
-7th-order dense output, so the grid does not constrain the step size.
+in compiled code (CasADi-generated C under a driver, :mod:`tapp.dynamics.compiled`), never a
+Python callback per step. Two methods (:data:`METHODS`):
+
+- ``"dop853"`` (default): Dormand-Prince 8(5,3) on x' = f(t, x), with its 7th-order dense
+  output; any force model.
+- ``"rkn12"``: the Runge-Kutta-Nyström 12(10) pair of Dormand, El-Mikkawy & Prince (1987) on
+  the second-order form r'' = a(t, r) and Φ_r'' = (∂a/∂r) Φ_r, with outputs from the
+  Hermite polynomial through (r, v, a) at six step ends (eight with Φ). On a LEO day at
+  1e-12, 4x fewer right-hand-side evaluations than DOP853 (about 2900 accelerations against
+  12000 derivatives with the dense-output stages), each on half the components. Only for
+  models without velocity-dependent forces
+  (:func:`tapp.dynamics.equations.velocity_dependent`); others are refused.
+
+Either way the grid does not constrain the step size.
 """
 
 from __future__ import annotations
@@ -15,8 +26,17 @@ from functools import cache
 
 import numpy as np
 
-from tapp.dynamics.compiled import STATUS, CompiledPropagator, compiled_propagator
-from tapp.dynamics.equations import Equations, build_equations, initial_augmented, split_augmented
+from tapp.dynamics.compiled import METHODS, STATUS, CompiledPropagator, compiled_propagator
+from tapp.dynamics.equations import (
+    Equations,
+    build_equations,
+    from_second_order,
+    initial_augmented,
+    second_order,
+    split_augmented,
+    to_second_order,
+    velocity_dependent,
+)
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError, TappError
@@ -78,10 +98,23 @@ class Trajectory:
 
 
 @cache
-def _compiled(state_model: ForceModel, var_model: ForceModel, params: tuple[str, ...]
-              ) -> tuple[Equations, CompiledPropagator]:
-    eqs = build_equations(state_model, var_model, params)
-    return eqs, compiled_propagator(eqs.f_state, eqs.f_var)
+def _equations(state_model: ForceModel, var_model: ForceModel, params: tuple[str, ...]
+               ) -> Equations:
+    return build_equations(state_model, var_model, params)
+
+
+@cache
+def _velocity_dependent(state_model: ForceModel, var_model: ForceModel,
+                        params: tuple[str, ...]) -> bool:
+    return velocity_dependent(_equations(state_model, var_model, params))
+
+
+@cache
+def _compiled(state_model: ForceModel, var_model: ForceModel, params: tuple[str, ...],
+              method: str) -> tuple[Equations, CompiledPropagator]:
+    eqs = _equations(state_model, var_model, params)
+    driven = second_order(eqs) if method == "rkn12" else eqs
+    return eqs, compiled_propagator(driven.f_state, driven.f_var, method)
 
 
 @dataclass(frozen=True, slots=True)
@@ -101,6 +134,8 @@ class Propagator:
     error_control : ``"state"`` controls the step on the 6 state components only;
         ``"all"`` includes Φ and S.
     max_steps : cap on integration steps per call.
+    method : ``"dop853"`` (default) or ``"rkn12"`` (see the module docstring); ``"rkn12"``
+        refuses a model whose acceleration depends on velocity.
     """
 
     state_model: ForceModel
@@ -110,6 +145,7 @@ class Propagator:
     atol: float = 1e-13
     error_control: str = "state"
     max_steps: int = 10_000_000
+    method: str = "dop853"
     _nominal: dict[str, float] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -120,11 +156,19 @@ class Propagator:
         if self.error_control not in ("state", "all"):
             raise InputError("propagator", "error_control", "'state' or 'all'",
                              self.error_control)
+        if self.method not in METHODS:
+            raise InputError("propagator", "method", f"one of {', '.join(METHODS)}",
+                             self.method)
+        if self.method == "rkn12" and _velocity_dependent(self.state_model, self.var_model,
+                                                          self.params):
+            raise InputError("propagator", "method", "'dop853' for a model with velocity-"
+                             "dependent forces ('rkn12' integrates r'' = a(t, r) only)",
+                             self.method)
         object.__setattr__(self, "_nominal", default_parameters(self.state_model, self.params))
 
     def compiled(self) -> tuple[Equations, CompiledPropagator]:
         """Build (or fetch from the cache) the equations and the compiled library."""
-        return _compiled(self.state_model, self.var_model, self.params)
+        return _compiled(self.state_model, self.var_model, self.params, self.method)
 
     def propagate(self, x0: np.ndarray, t_s: np.ndarray, *, t0_s: float = 0.0,
                   stm: bool = True, param_values: Mapping[str, float] | None = None,
@@ -154,13 +198,15 @@ class Propagator:
             The integrator stopped early (see ``tapp.dynamics.compiled.STATUS``).
         """
         x0 = np.asarray(x0, dtype=float)
-        if x0.shape != (6,) or not np.all(np.isfinite(x0)):
+        if x0.shape != (6,) or not np.isfinite(x0).all():
             raise InputError("propagate", "state", "6 finite numbers (km, km/s)", x0.tolist())
         t_s = np.atleast_1d(np.asarray(t_s, dtype=float))
-        if not np.all(np.isfinite(t_s)) or t_s.size == 0:
+        if t_s.size == 0 or not np.isfinite(t_s).all():
             raise InputError("propagate", "times", "a non-empty grid of finite times", None)
-        steps = np.diff(np.concatenate([[t0_s], t_s]))
-        if not (np.all(steps >= 0) or np.all(steps <= 0)):
+        steps = np.empty_like(t_s)  # t_s - (t0_s, t_s[:-1]), without np.diff's overhead
+        steps[0] = t_s[0] - t0_s
+        np.subtract(t_s[1:], t_s[:-1], out=steps[1:])
+        if not (steps.min() >= 0 or steps.max() <= 0):
             raise InputError("propagate", "times", "times monotonic away from t0", None)
         eqs, lib = self.compiled()
         values = dict(self._nominal)
@@ -178,14 +224,18 @@ class Propagator:
                                  orientation.model)
             theta0_rad = orientation.theta0_rad
         table = self._series(eqs, epoch_jd_utc, orientation, t0_s, t_s)
-        if stm:
-            y0 = initial_augmented(x0, len(self.params))
-            n_err = 6 if self.error_control == "state" else y0.size
-        else:
-            y0, n_err = x0, 6
+        y0 = initial_augmented(x0, len(self.params)) if stm else x0
+        n_err = 6 if self.error_control == "state" or not stm else y0.size
+        nystrom = self.method == "rkn12" and stm  # x alone is already [z, z'] = [r, v]
+        if nystrom:
+            y0 = to_second_order(y0)
+        if self.method == "rkn12":  # the norm counts components of z and of z' alike
+            n_err //= 2
         status, y, stats = lib.integrate(1 if stm else 0, y0, t0_s, t_s, q,
                                          np.array([theta0_rad]), table, self.rtol, self.atol,
                                          n_err, self.max_steps)
+        if nystrom:
+            y = from_second_order(y)
         if status != 0:
             raise PropagationError(f"propagation stopped: {STATUS.get(status, status)} after "
                                    f"{int(stats[0])} steps")

@@ -23,6 +23,7 @@ the trajectory, and the variational model's Jacobian drives Φ and the sensitivi
     scale_height_km = 58.515
     rtol = 1e-13               # integrator tolerances
     atol = 1e-13
+    method = "dop853"          # or "rkn12" (tapp.dynamics.propagate)
 
 and the study file's runs name their models ``gravity`` and ``var_gravity`` too. The
 spellings ``stm_gravity`` and ``stm_third_bodies`` of earlier SEARCH files are refused, naming
@@ -36,6 +37,7 @@ from typing import Annotated, Literal
 from pydantic import AfterValidator, Field
 
 from tapp.constants import MAX_DEGREE
+from tapp.dynamics.compiled import METHODS
 from tapp.dynamics.spec import (
     ATMOSPHERES,
     BODIES,
@@ -93,6 +95,8 @@ LayerHeight = _surface_value("h0_km")
 ScaleHeight = _surface_value("scale_height_km")
 #: The exponential atmosphere's default layer (Vallado 2013 Table 8-4, 400 km).
 _LAYER = ExponentialLayer()
+#: An integration method of :class:`tapp.dynamics.Propagator`.
+Method = Literal[tuple(METHODS)]  # type: ignore[valid-type]
 
 
 class ModelTable(Schema):
@@ -145,9 +149,13 @@ class ModelTable(Schema):
     var_atmosphere: Atmosphere | None = Field(
         None, description="Drag in the variational model (its Jacobian then has ∂a/∂v); "
         "default: atmosphere.")
-    rtol: Tolerance = Field(1e-13, description="Relative tolerance of the integrator (DOP853).")
-    atol: Tolerance = Field(1e-13, description="Absolute tolerance of the integrator (DOP853), "
-                            "on km and km/s.")
+    rtol: Tolerance = Field(1e-13, description="Relative tolerance of the integrator.")
+    atol: Tolerance = Field(1e-13, description="Absolute tolerance of the integrator, on km "
+                            "and km/s.")
+    method: Method = Field(
+        "dop853", description="Integration method: 'dop853' (Dormand-Prince 8(5,3), any "
+        "force model) or 'rkn12' (Runge-Kutta-Nystrom 12(10) on r'' = a(t, r): about 4x "
+        "fewer evaluations than dop853 at 1e-12; refuses velocity-dependent forces).")
 
     def force_models(self, source: str, earth_orientation: str
                      ) -> tuple[ForceModel, ForceModel]:

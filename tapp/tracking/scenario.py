@@ -25,7 +25,8 @@ ISO strings or TOML dates)::
     [model]            gravity (J0 | Jn | NxM), third_bodies (each once), var_gravity,
                        var_third_bodies (the variational model: the seed's truncated
                        variational equations; default the state model), rtol, atol (within
-                       ``tapp.dynamics.propagate.TOLERANCE_RANGE``, 1e-15 to 1e-6);
+                       ``tapp.dynamics.propagate.TOLERANCE_RANGE``, 1e-15 to 1e-6), method
+                       ("dop853" default, or "rkn12": ``tapp.dynamics.propagate``);
                        surface forces of a cannonball (tapp.io.models_file):
                        area_to_mass_m2_kg, c_r, c_d, srp / var_srp, shadows /
                        var_shadows, atmosphere / var_atmosphere ("none", "exponential",
@@ -291,6 +292,7 @@ class Scenario:
         without one (or once run: :func:`tapp.tracking.encounter.prepare_encounter`).
     baselines : the ΔDOR baselines of a ``[ddor]`` table, numbered after the stations.
     stochastic : the stochastic accelerations of a ``[stochastic]`` table, or None.
+    method : the integration method of every propagation (``tapp.dynamics.propagate``).
     """
 
     source: str
@@ -313,11 +315,12 @@ class Scenario:
     targeting: BPlaneSearch | None = None
     baselines: tuple[TrackingBaseline, ...] = ()
     stochastic: StochasticAccelerations | None = None
+    method: str = "dop853"
 
     def propagator(self) -> Propagator:
         """The (state model, variational model, dynamic parameters) propagator."""
         return Propagator(self.state_model, self.var_model, self.dynamic, rtol=self.rtol,
-                          atol=self.atol)
+                          atol=self.atol, method=self.method)
 
     @property
     def parameters(self) -> tuple[Parameter, ...]:
@@ -862,13 +865,15 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     document = json.dumps(data, default=str, sort_keys=True)
     x0.setflags(write=False)
     targeting = _targeting(p, doc, miss, values, x0, Propagator(state_model, var_model, rtol=rtol,
-                                                                  atol=atol), orientation)
+                                                                  atol=atol,
+                                                                  method=doc.model.method),
+                           orientation)
     baselines = tracking_baselines(source, doc.ddor, tuple(doc.tracking.stations),
                                    schedule.data_interval_s)
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,
                     dynamic, values, stations, schedule, times, miss, document, targeting,
-                    baselines, stochastic)
+                    baselines, stochastic, doc.model.method)
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

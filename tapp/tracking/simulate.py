@@ -276,7 +276,7 @@ def _batch_propagator(scenario: Scenario) -> Propagator:
     appended to the model parameters (:func:`tapp.tracking.stochastic.propagate_batches`)."""
     return Propagator(scenario.state_model, scenario.var_model,
                       scenario.dynamic + scenario.stochastic.model_parameters,
-                      rtol=scenario.rtol, atol=scenario.atol)
+                      rtol=scenario.rtol, atol=scenario.atol, method=scenario.method)
 
 
 def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.ndarray,

@@ -2,16 +2,18 @@
 
 Workload (the issue): circular orbit a = 6550.524 km, i = 0° and 30°, 24 h, output every
 60 s, EGM96 J2 and 5x5 fields (θ0 = 0), tolerance 1e-12, state only and state + STM, for
-tapp, heyoka (Taylor, LLVM JIT) and SciPy ``solve_ivp`` DOP853 with a NumPy right-hand side,
-all in one process and one run.
+tapp under each of its integration methods (DOP853 and RKN12(10)), heyoka (Taylor, LLVM JIT)
+and SciPy ``solve_ivp`` DOP853 with a NumPy right-hand side, all in one process and one run.
 
-Targets (ratios of best times taken in this run):
+Targets (ratios of best times taken in this run; "tapp" is its faster method on the row):
 
-- state + STM, J2: tapp at most 3x heyoka's time at tolerance 1e-12;
-- state + STM, 5x5: tapp no slower than heyoka;
+- every case (issue 22): tapp no slower than heyoka at tolerance 1e-12;
+- state + STM, J2: tapp at most 3x heyoka's time; state + STM, 5x5: no slower (earlier
+  issues, implied by the first);
 - every case: tapp at least 50x faster than SciPy;
-- final position within 1 mm of heyoka at machine-precision tolerance, and every tool
-  within 1 m of every other over the whole grid.
+- final position within 0.1 mm of heyoka at machine-precision tolerance (1 mm before issue
+  22), STM within 1e-10 relative of heyoka's over the grid, and every tool within 1 m of
+  every other over the whole grid.
 
 heyoka is timed in each compact mode whose JIT is practical and its faster time is used
 (non-compact 5x5 + STM is skipped: its JIT took 14 min in a trial). The
@@ -34,6 +36,7 @@ import numpy as np
 
 from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import Propagator, Trajectory, earth_model
+from tapp.dynamics.compiled import METHODS
 from tapp.dynamics.equations import build_equations
 from tests.bench.baselines import (
     HeyokaPropagator,
@@ -66,14 +69,16 @@ THETA0_rad = 0.0
 TIMED_TOL = 1e-12
 DEFAULT_TOL = Propagator(earth_model("J0")).rtol  # tapp's default (rtol = atol)
 
-# Targets from the issue.
+# Targets from the issues.
+MAX_TIME_RATIO = 1.0  # tapp (faster method) / heyoka, every case (issue 22)
 J2_STM_MAX_TIME_RATIO = 3.0  # tapp / heyoka
 FIELD_5X5_STM_MAX_TIME_RATIO = 1.0  # tapp / heyoka
 SCIPY_MIN_SPEEDUP = 50.0  # SciPy / tapp
-one_mm_km = 1e-6
+STM_MAX_REL = 1e-10  # max ||ΔΦ||_F / ||Φ||_F against heyoka over the grid (issue 22)
+tenth_mm_km = 1e-7
 one_m_km = 1e-3
 
-REPEATS_FAST = 7
+REPEATS_FAST = 21
 REPEATS_SCIPY = 3
 SCIPY_BUDGET_s = 5.0  # stop repeating a SciPy case (after 2 runs) beyond this total
 
@@ -104,20 +109,22 @@ _COMPILE_PROBE = """
 import json, sys, time
 from tapp.dynamics import Propagator, earth_model
 from tapp.dynamics.compiled import generate_source
-from tapp.dynamics.equations import build_equations
-model = earth_model(sys.argv[1])
+from tapp.dynamics.equations import build_equations, second_order
+model, method = earth_model(sys.argv[1]), sys.argv[2]
 t0 = time.perf_counter()
-Propagator(model).compiled()
+Propagator(model, method=method).compiled()
 t1 = time.perf_counter()
 eqs = build_equations(model, model)
+if method == "rkn12":
+    eqs = second_order(eqs)
 t2 = time.perf_counter()
-generate_source(eqs.f_state, eqs.f_var)
+generate_source(eqs.f_state, eqs.f_var, method)
 t3 = time.perf_counter()
 print(json.dumps({"compiled_s": t1 - t0, "equations_s": t2 - t1, "c_source_s": t3 - t2}))
 """
 
 
-def tapp_compile_cost(field: str, cache_dir: Path) -> dict[str, float]:
+def tapp_compile_cost(field: str, method: str, cache_dir: Path) -> dict[str, float]:
     """First ``Propagator.compiled()`` in a fresh process with ``TAPP_CACHE_DIR=cache_dir``.
 
     Also times, in the same process, the CasADi equation build and the C source generation,
@@ -125,7 +132,7 @@ def tapp_compile_cost(field: str, cache_dir: Path) -> dict[str, float]:
     """
     env = dict(os.environ, TAPP_CACHE_DIR=str(cache_dir))
     before = set(cache_dir.glob("*.so"))
-    proc = subprocess.run([sys.executable, "-c", _COMPILE_PROBE, field], env=env,
+    proc = subprocess.run([sys.executable, "-c", _COMPILE_PROBE, field, method], env=env,
                           cwd=REPO_ROOT, capture_output=True, text=True, check=True)
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     out["libraries_written"] = len(set(cache_dir.glob("*.so")) - before)
@@ -133,26 +140,28 @@ def tapp_compile_cost(field: str, cache_dir: Path) -> dict[str, float]:
 
 
 def tapp_compile_costs() -> dict[str, dict]:
-    """Cold (empty cache directory) and warm (second process) compile cost per field."""
+    """Cold (empty cache directory) and warm (second process) compile cost per field and
+    method (keys ``"<field> <method>"``)."""
     costs = {}
     with tempfile.TemporaryDirectory(prefix="tapp-bench-cache-") as tmp:
         for field in FIELDS:
-            cold = tapp_compile_cost(field, Path(tmp))
-            warm = tapp_compile_cost(field, Path(tmp))
-            assert cold["libraries_written"] == 1 and warm["libraries_written"] == 0
-            costs[field] = {"cold": cold, "warm": warm}
-            log(f"tapp compile {field}: cold {cold['compiled_s']:.2f} s, "
-                f"warm {warm['compiled_s']:.3f} s")
+            for method in METHODS:
+                cold = tapp_compile_cost(field, method, Path(tmp))
+                warm = tapp_compile_cost(field, method, Path(tmp))
+                assert cold["libraries_written"] == 1 and warm["libraries_written"] == 0
+                costs[f"{field} {method}"] = {"cold": cold, "warm": warm}
+                log(f"tapp compile {field} {method}: cold {cold['compiled_s']:.2f} s, "
+                    f"warm {warm['compiled_s']:.3f} s")
     return costs
 
 
 @dataclass(slots=True)
 class HeyokaSet:
     """heyoka integrators keyed by (field, stm, compact_mode) at TIMED_TOL, and the
-    machine-precision references keyed by field; with their JIT costs."""
+    machine-precision references keyed by (field, stm); with their JIT costs."""
 
     timed: dict[tuple[str, bool, bool], HeyokaPropagator]
-    reference: dict[str, HeyokaPropagator]
+    reference: dict[tuple[str, bool], HeyokaPropagator]
     jit: list[dict]
 
 
@@ -171,7 +180,7 @@ def build_heyoka(cache_dir: Path) -> HeyokaSet:
             system_s, system = timed_once(lambda m=model: heyoka_system(m, THETA0_rad))
             configs = [(stm, mode, TIMED_TOL) for stm in (False, True)
                        for mode in HEYOKA_MODES[field, stm]]
-            configs.append((False, True, None))
+            configs += [(False, True, None), (True, True, None)]
             for stm, mode, tol in configs:
                 def build(system=system, stm=stm, mode=mode, tol=tol):
                     return HeyokaPropagator(system, stm=stm, tol=tol, compact_mode=mode)
@@ -183,7 +192,7 @@ def build_heyoka(cache_dir: Path) -> HeyokaSet:
                             "tol": tol, "cold_s": cold_s, "warm_s": warm_s,
                             "expression_build_s": system_s})
                 if tol is None:
-                    reference[field] = prop
+                    reference[field, stm] = prop
                 else:
                     timed[field, stm, mode] = prop
                 log(f"heyoka JIT {field} {'state+STM' if stm else 'state'} "
@@ -221,14 +230,15 @@ def run_case(inc_deg: float, field: str, stm: bool, heyoka: HeyokaSet,
     grid = output_grid_s()
     model = earth_model(field)
     case: dict = {"inclination_deg": inc_deg, "field": field, "stm": stm,
-                  "label": _case_label(inc_deg, field, stm)}
+                  "label": _case_label(inc_deg, field, stm), "best_method": {}}
 
-    tapp_runs: dict[float, tuple[Timing, Trajectory]] = {}
-    for tol in (TIMED_TOL, DEFAULT_TOL):
-        prop = Propagator(model, rtol=tol, atol=tol)
-        prop.propagate(x0, grid, stm=stm, theta0_rad=THETA0_rad)  # warm-up (load, page-in)
-        tapp_runs[tol] = time_calls(lambda p=prop: p.propagate(
-            x0, grid, stm=stm, theta0_rad=THETA0_rad), REPEATS_FAST)
+    tapp_runs: dict[tuple[str, float], tuple[Timing, Trajectory]] = {}
+    for method in METHODS:
+        for tol in (TIMED_TOL, DEFAULT_TOL):
+            prop = Propagator(model, rtol=tol, atol=tol, method=method)
+            prop.propagate(x0, grid, stm=stm, theta0_rad=THETA0_rad)  # warm-up (load, page-in)
+            tapp_runs[method, tol] = time_calls(lambda p=prop: p.propagate(
+                x0, grid, stm=stm, theta0_rad=THETA0_rad), REPEATS_FAST)
 
     hy_runs: dict[bool, tuple[Timing, Run]] = {}
     for mode in HEYOKA_MODES[field, stm]:
@@ -258,11 +268,12 @@ def run_case(inc_deg: float, field: str, stm: bool, heyoka: HeyokaSet,
                                                                     hy_run.states)}
     if stm:
         case["scipy"]["stm_vs_heyoka_rel"] = max_relative_stm_diff(sp_run.stm, hy_run.stm)
+        case["heyoka_stm_vs_reference_rel"] = max_relative_stm_diff(hy_run.stm, reference.stm)
 
     case["tapp"] = {}
-    for tol, (timing, traj) in tapp_runs.items():
+    for (method, tol), (timing, traj) in tapp_runs.items():
         entry = {
-            "tol": tol, "timing": timing, "steps": traj.steps,
+            "method": method, "tol": tol, "timing": timing, "steps": traj.steps,
             "rhs_evaluations": traj.rhs_evaluations,
             "us_per_rhs": 1e6 * timing.best_s / traj.rhs_evaluations,
             "ratio_to_heyoka": timing.best_s / hy_timing.best_s,
@@ -274,21 +285,36 @@ def run_case(inc_deg: float, field: str, stm: bool, heyoka: HeyokaSet,
         }
         if stm:
             entry["stm_vs_heyoka_rel"] = max_relative_stm_diff(traj.stm, hy_run.stm)
+            entry["stm_vs_reference_rel"] = max_relative_stm_diff(traj.stm, reference.stm)
         entry["all_tools_max_m"] = max(entry["vs_heyoka_max_m"], entry["vs_scipy_max_m"],
                                        case["scipy"]["vs_heyoka_max_m"])
-        entry["targets"] = targets(field, stm, entry)
-        case["tapp"][repr(tol)] = entry
+        case["tapp"][f"{method} {tol!r}"] = entry
+    for tol in (TIMED_TOL, DEFAULT_TOL):
+        best = min(METHODS, key=lambda m, tol=tol: case["tapp"][f"{m} {tol!r}"]["timing"].best_s)
+        case["best_method"][repr(tol)] = best
+        entry = case["tapp"][f"{best} {tol!r}"]
+        entry["targets"] = targets(field, stm, tol, entry)
     return case
 
 
-def targets(field: str, stm: bool, entry: dict) -> dict[str, bool]:
-    """Each target of the issue that applies to the case, and whether it is met."""
+def best_entry(case: dict, tol: float) -> dict:
+    """tapp's entry with its faster method at ``tol`` on this case."""
+    return case["tapp"][f"{case['best_method'][repr(tol)]} {tol!r}"]
+
+
+def targets(field: str, stm: bool, tol: float, entry: dict) -> dict[str, bool]:
+    """Each target of the issues that applies to the case, and whether it is met. Issue 22's
+    ≤ 1x heyoka is defined on the 1e-12 workload (both tools at 1e-12), not at tapp's
+    tighter default."""
     met = {}
+    if tol == TIMED_TOL:
+        met[f"≤{MAX_TIME_RATIO:g}x heyoka"] = entry["ratio_to_heyoka"] <= MAX_TIME_RATIO
     if stm:
         limit = J2_STM_MAX_TIME_RATIO if field == "J2" else FIELD_5X5_STM_MAX_TIME_RATIO
-        met[f"≤{limit:g}x heyoka"] = entry["ratio_to_heyoka"] <= limit
+        met[f"≤{limit:g}x heyoka (STM)"] = entry["ratio_to_heyoka"] <= limit
+        met[f"STM <{STM_MAX_REL:g}"] = entry["stm_vs_reference_rel"] < STM_MAX_REL
     met[f"≥{SCIPY_MIN_SPEEDUP:g}x SciPy"] = entry["scipy_speedup"] >= SCIPY_MIN_SPEEDUP
-    met["<1 mm final"] = entry["vs_reference_final_mm"] < one_mm_km * 1e6
+    met["<0.1 mm final"] = entry["vs_reference_final_mm"] < tenth_mm_km * 1e6
     met["tools <1 m"] = entry["all_tools_max_m"] < one_m_km * 1e3
     return met
 
@@ -311,41 +337,52 @@ def render(data: dict) -> str:
         hy_best = case["heyoka"]["modes"]["compact" if case["heyoka"]["best_compact_mode"]
                                           else "non-compact"]
         sp = case["scipy"]
-        for e in case["tapp"].values():
+        for tol in (TIMED_TOL, DEFAULT_TOL):
+            e = best_entry(case, tol)
+            dop = case["tapp"][f"dop853 {tol!r}"]
             main_rows.append([
-                case["label"], f"{e['tol']:.0e}", _ms(e["timing"]),
-                _ms(hy_best["timing"]), _ms(sp["timing"]), f"{e['ratio_to_heyoka']:.2f}",
+                case["label"], f"{tol:.0e}", e["method"], _ms(e["timing"]),
+                _ms(dop["timing"]), _ms(hy_best["timing"]), _ms(sp["timing"]),
+                f"{e['ratio_to_heyoka']:.2f}", f"{dop['ratio_to_heyoka']:.2f}",
                 f"{e['scipy_speedup']:.0f}", f"{e['vs_heyoka_max_m']:.1e}",
-                f"{e['vs_reference_final_mm']:.3f}", e["steps"], _met(e["targets"])])
-        e = case["tapp"][repr(TIMED_TOL)]
+                f"{e['vs_reference_final_mm']:.4f}",
+                f"{e['steps']} / {e['rhs_evaluations']}",
+                f"{dop['steps']} / {dop['rhs_evaluations']}", hy_best["steps"],
+                sp["rhs_evaluations"], _met(e["targets"])])
+        e = best_entry(case, TIMED_TOL)
+        per_rhs = ", ".join(f"{m} {case['tapp'][f'{m} {TIMED_TOL!r}']['us_per_rhs']:.3f}"
+                            for m in METHODS)
         modes = " / ".join(f"{k} {v['timing'].best_ms:.3g} ms, {v['steps']} steps"
                            for k, v in case["heyoka"]["modes"].items())
         hy_us_step = 1e3 * hy_best["timing"].best_ms / hy_best["steps"]
         detail_rows.append([
             case["label"], modes, f"{hy_us_step:.1f}",
             f"{hy_best['taylor_order']} / {hy_best['decomposition_size']}",
-            f"{e['us_per_rhs']:.2f} ({e['rhs_evaluations']} RHS)",
-            f"{sp['rhs']}: {sp['rhs_evaluations']} RHS", f"{e['all_tools_max_m']:.1e}",
-            f"{case['heyoka_vs_reference_final_mm']:.3f}",
+            per_rhs, f"{sp['rhs']}: {sp['rhs_evaluations']} RHS", f"{e['all_tools_max_m']:.1e}",
+            f"{case['heyoka_vs_reference_final_mm']:.4f}",
             f"{sp['vs_reference_final_mm']:.3f}",
             f"{e['stm_vs_heyoka_rel']:.1e}" if case["stm"] else "—",
+            f"{e['stm_vs_reference_rel']:.1e}" if case["stm"] else "—",
+            f"{case['heyoka_stm_vs_reference_rel']:.1e}" if case["stm"] else "—",
             f"{sp['stm_vs_heyoka_rel']:.1e}" if case["stm"] else "—"])
     main = markdown_table(
-        ["case", "tapp tol", "tapp ms best (median)", "heyoka ms best (median)",
-         "SciPy ms best (median)", "tapp/heyoka", "SciPy/tapp",
-         "max Δr tapp–heyoka(1e-12) over grid (m)", "final Δr tapp–heyoka(eps) (mm)",
-         "tapp steps", "targets met"], main_rows)
+        ["case", "tol", "tapp method", "tapp ms best (median)", "tapp DOP853 ms",
+         "heyoka ms best (median)", "SciPy ms best (median)", "tapp/heyoka",
+         "DOP853/heyoka", "SciPy/tapp", "max Δr tapp–heyoka(1e-12) over grid (m)",
+         "final Δr tapp–heyoka(eps) (mm)", "tapp steps / RHS", "DOP853 steps / RHS",
+         "heyoka steps", "SciPy RHS", "targets met"], main_rows)
     detail = markdown_table(
         ["case", "heyoka tol 1e-12 by mode", "heyoka µs/step (best mode)",
          "heyoka Taylor order / decomposition size",
-         "tapp µs/RHS (1e-12)", "SciPy", "max Δr any two tools over grid (m)",
+         "tapp µs/RHS (1e-12, whole call)", "SciPy", "max Δr any two tools over grid (m)",
          "final Δr heyoka(1e-12)–heyoka(eps) (mm)", "final Δr SciPy–heyoka(eps) (mm)",
-         "max ‖ΔΦ‖/‖Φ‖ tapp–heyoka", "max ‖ΔΦ‖/‖Φ‖ SciPy–heyoka"], detail_rows)
+         "max ‖ΔΦ‖/‖Φ‖ tapp–heyoka", "max ‖ΔΦ‖/‖Φ‖ tapp–heyoka(eps)",
+         "max ‖ΔΦ‖/‖Φ‖ heyoka–heyoka(eps)", "max ‖ΔΦ‖/‖Φ‖ SciPy–heyoka"], detail_rows)
 
     jit_rows = []
-    for field, c in data["tapp_compile"].items():
+    for key, c in data["tapp_compile"].items():
         jit_rows.append([
-            "tapp", f"{field} (state and state+STM, one library)",
+            "tapp", f"{key} (state and state+STM, one library)",
             f"{c['cold']['compiled_s']:.2f}", f"{c['warm']['compiled_s']:.3f}",
             f"warm = CasADi equations {c['warm']['equations_s']:.3f} s + C source "
             f"{c['warm']['c_source_s']:.3f} s + hash + dlopen; no compiler call"])
@@ -368,17 +405,23 @@ def render(data: dict) -> str:
         f"θ0 = 0. Times: best (median) of {REPEATS_FAST} runs for tapp and heyoka, of "
         f"up to {REPEATS_SCIPY} for SciPy; ratios use best times. heyoka runs at tol 1e-12 in "
         "its faster compact mode (see details); its machine-precision run (tol = eps, "
-        "compact) is the accuracy reference. SciPy: solve_ivp DOP853, rtol = atol = 1e-12, "
+        "compact, with the STM for the STM rows) is the accuracy reference. SciPy: "
+        "solve_ivp DOP853, rtol = atol = 1e-12, "
         "error on every component (with the STM too), t_eval = grid. tapp controls the "
-        "step on the 6 state components only (its default).",
+        "step on the 6 state components only (its default); each row shows its faster "
+        f"method ({', '.join(METHODS)}) and DOP853 beside it; steps / RHS counts right-hand "
+        "side calls (rkn12: accelerations of the second-order form).",
         "",
         main,
         "",
-        f"Targets: state+STM J2 ≤ {J2_STM_MAX_TIME_RATIO:g}x heyoka, state+STM 5x5 ≤ "
+        f"Targets: every row ≤ {MAX_TIME_RATIO:g}x heyoka (issue 22), state+STM J2 ≤ "
+        f"{J2_STM_MAX_TIME_RATIO:g}x heyoka, state+STM 5x5 ≤ "
         f"{FIELD_5X5_STM_MAX_TIME_RATIO:g}x heyoka, ≥ {SCIPY_MIN_SPEEDUP:g}x SciPy, final "
-        "position < 1 mm from heyoka(eps), all tools within 1 m over the grid. The speed "
+        f"position < 0.1 mm from heyoka(eps), STM within {STM_MAX_REL:g} of heyoka(eps)'s "
+        "over the grid, all tools within 1 m over the grid. The speed "
         "targets are defined at 1e-12; rows at tapp's default tolerance "
-        f"({DEFAULT_TOL:.0e}) are held to the same ratios against heyoka and SciPy at 1e-12.",
+        f"({DEFAULT_TOL:.0e}) are held to the same STM and SciPy ratios against the tools at "
+        "1e-12 (not to issue 22's ≤ 1x, a 1e-12 target).",
         "",
         f"**All targets met at 1e-12: {'yes' if all_met else 'NO'}**; at tapp's default "
         f"tolerance: {'yes' if data['summary']['all_targets_met_at_default'] else 'NO'}.",
@@ -415,31 +458,34 @@ def run() -> Section:
     for inc in INCLINATIONS_deg:
         x0 = circular_state(inc)
         for field in FIELDS:
-            reference = heyoka.reference[field].propagate(x0, grid)
+            references = {stm: heyoka.reference[field, stm].propagate(x0, grid)
+                          for stm in (False, True)}
             for stm in (False, True):
                 if field == "J2":
                     rhs = ("NumPy closed-form J2", numpy_j2_rhs(j2_field, stm))
                 else:
                     rhs = ("CasADi RHS called from Python",
                            casadi_rhs(equations[field], stm, THETA0_rad))
-                case = run_case(inc, field, stm, heyoka, reference, rhs)
-                e = case["tapp"][repr(TIMED_TOL)]
-                log(f"{case['label']}: tapp {e['timing'].best_ms:.2f} ms, ratio to heyoka "
-                    f"{e['ratio_to_heyoka']:.2f}, SciPy {e['scipy_speedup']:.0f}x slower")
+                case = run_case(inc, field, stm, heyoka, references[stm], rhs)
+                e = best_entry(case, TIMED_TOL)
+                log(f"{case['label']}: tapp {e['method']} {e['timing'].best_ms:.3f} ms, ratio "
+                    f"to heyoka {e['ratio_to_heyoka']:.2f}, SciPy {e['scipy_speedup']:.0f}x "
+                    "slower")
                 cases.append(case)
 
     def all_met(tol: float) -> bool:
-        return all(all(c["tapp"][repr(tol)]["targets"].values()) for c in cases)
+        return all(all(best_entry(c, tol)["targets"].values()) for c in cases)
 
     data = {
         "workload": {"sma_km": SMA_km, "inclinations_deg": list(INCLINATIONS_deg),
                      "fields": list(FIELDS), "duration_s": DURATION_s,
                      "output_step_s": OUTPUT_STEP_s, "theta0_rad": THETA0_rad,
                      "timed_tol": TIMED_TOL, "tapp_default_tol": DEFAULT_TOL},
-        "targets": {"j2_stm_max_time_ratio": J2_STM_MAX_TIME_RATIO,
+        "targets": {"max_time_ratio": MAX_TIME_RATIO,
+                    "j2_stm_max_time_ratio": J2_STM_MAX_TIME_RATIO,
                     "5x5_stm_max_time_ratio": FIELD_5X5_STM_MAX_TIME_RATIO,
-                    "scipy_min_speedup": SCIPY_MIN_SPEEDUP, "final_position_max_mm": 1.0,
-                    "tools_agree_max_m": 1.0},
+                    "scipy_min_speedup": SCIPY_MIN_SPEEDUP, "final_position_max_mm": 0.1,
+                    "stm_max_rel": STM_MAX_REL, "tools_agree_max_m": 1.0},
         "numpy_j2_gradient_rel_error": gradient_error,
         "tapp_compile": compile_costs,
         "heyoka_jit": heyoka.jit,

@@ -1,10 +1,13 @@
-"""Shared fixtures: states built independently of tapp.frames (periapsis of a conic)."""
+"""Shared fixtures: states built independently of tapp.frames (periapsis of a conic), and
+the integration methods the propagation tests run under."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from tapp.constants import GM_EARTH_km3_s2
+from tapp.dynamics.compiled import METHODS
 
 
 def periapsis_state(a_km: float, e: float, i_deg: float, raan_deg: float = 0.0,
@@ -20,3 +23,9 @@ def periapsis_state(a_km: float, e: float, i_deg: float, raan_deg: float = 0.0,
                       -np.sin(o) * np.sin(w) + np.cos(o) * np.cos(w) * np.cos(i),
                       np.cos(w) * np.sin(i)])
     return np.concatenate([rp * p_hat, vp * q_hat])
+
+
+@pytest.fixture(params=list(METHODS))
+def method(request: pytest.FixtureRequest) -> str:
+    """Each integration method in turn: the propagation tests hold for all of them."""
+    return request.param

@@ -38,10 +38,10 @@ def _fd_stm(prop: Propagator, x0: np.ndarray, t_s: np.ndarray, **kw) -> np.ndarr
 @pytest.mark.parametrize("spec", ["J2", "5x5"])
 @pytest.mark.parametrize("i_deg", [0.0, 30.0, 98.0])
 @pytest.mark.parametrize("e", [0.0, 0.3])
-def test_stm_matches_central_differences(spec: str, i_deg: float, e: float) -> None:
+def test_stm_matches_central_differences(method: str, spec: str, i_deg: float, e: float) -> None:
     a = 6550.524 if e == 0 else 9357.89143
     x0 = periapsis_state(a, e, i_deg, raan_deg=20.0, argp_deg=40.0)
-    prop = Propagator(earth_model(spec), **TIGHT)
+    prop = Propagator(earth_model(spec), **TIGHT, method=method)
     t = np.array([0.0, 3 * 3600.0])
     phi = prop.propagate(x0, t, theta0_rad=0.7).stm[-1]
     fd = _fd_stm(prop, x0, t, theta0_rad=0.7)
@@ -49,8 +49,8 @@ def test_stm_matches_central_differences(spec: str, i_deg: float, e: float) -> N
     assert rel.max() < STM_REL, rel
 
 
-def test_stm_at_t0_is_identity_and_composes() -> None:
-    prop = Propagator(earth_model("4x4"), **TIGHT)
+def test_stm_at_t0_is_identity_and_composes(method: str) -> None:
+    prop = Propagator(earth_model("4x4"), **TIGHT, method=method)
     x0 = periapsis_state(7000.0, 0.05, 51.6)
     t1, t2 = 2000.0, 5000.0
     tr = prop.propagate(x0, [0.0, t1, t2])
@@ -63,9 +63,9 @@ def test_stm_at_t0_is_identity_and_composes() -> None:
 
 @pytest.mark.parametrize(("state_spec", "var_spec"),
                          [("J2", "J2"), ("J2", "J0"), ("5x5", "5x5"), ("5x5", "J2")])
-def test_stm_is_symplectic(state_spec: str, var_spec: str) -> None:
+def test_stm_is_symplectic(method: str, state_spec: str, var_spec: str) -> None:
     """Φᵀ Γ Φ = Γ for any Hamiltonian variational model, truncated ones included."""
-    prop = Propagator(earth_model(state_spec), earth_model(var_spec), **TIGHT)
+    prop = Propagator(earth_model(state_spec), earth_model(var_spec), **TIGHT, method=method)
     x0 = periapsis_state(6550.524, 0.0, 30.0)
     phi = prop.propagate(x0, np.linspace(0, 86400.0, 5)).stm
     gamma = np.block([[np.zeros((3, 3)), np.eye(3)], [-np.eye(3), np.zeros((3, 3))]])
@@ -81,8 +81,8 @@ def _potential(spec: str) -> ca.Function:
     return ca.Function("u", [r], [central_potential(model, r, MU, field_coefficients(model, {}))])
 
 
-def test_energy_conserved_zonal_field() -> None:
-    prop = Propagator(earth_model("J4"))
+def test_energy_conserved_zonal_field(method: str) -> None:
+    prop = Propagator(earth_model("J4"), method=method)
     x0 = periapsis_state(7278.36, 0.1, 45.0)
     tr = prop.propagate(x0, np.linspace(0, 86400.0, 97), stm=False)
     u = np.array(_potential("J4").map(tr.states.shape[0])(tr.states[:, :3].T)).ravel()
@@ -90,10 +90,10 @@ def test_energy_conserved_zonal_field() -> None:
     assert np.abs(energy / energy[0] - 1).max() < 1e-10
 
 
-def test_jacobi_integral_conserved_tesseral_field() -> None:
+def test_jacobi_integral_conserved_tesseral_field(method: str) -> None:
     """C = v²/2 - U(R3(θ) r) - ω (x v_y - y v_x) is constant in a uniformly rotating field."""
     theta0 = 1.1
-    prop = Propagator(earth_model("5x5"))
+    prop = Propagator(earth_model("5x5"), method=method)
     x0 = periapsis_state(6800.0, 0.02, 63.0, raan_deg=10.0)
     tr = prop.propagate(x0, np.linspace(0, 86400.0, 97), stm=False, theta0_rad=theta0)
     th = theta0 + OMEGA_EARTH_rad_s * tr.t_s
@@ -121,7 +121,7 @@ def _raan_argp(states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @pytest.mark.parametrize("i_deg", [30.0, 63.4, 98.0])
-def test_j2_secular_rates_match_first_order_theory(i_deg: float) -> None:
+def test_j2_secular_rates_match_first_order_theory(method: str, i_deg: float) -> None:
     """Ω̇ = -3/2 k cos i, ω̇ = 3/4 k (5 cos² i - 1), k = n J2 (R/p)² (Vallado eq. 9-41).
 
     Osculating Ω and ω are averaged over each revolution (100 samples per period), which
@@ -136,7 +136,7 @@ def test_j2_secular_rates_match_first_order_theory(i_deg: float) -> None:
     period = 2 * math.pi / n
     per_rev = 100
     t = np.arange(0.0, 10 * 86400.0, period / per_rev)
-    tr = Propagator(earth_model("J2")).propagate(x0, t, stm=False)
+    tr = Propagator(earth_model("J2"), method=method).propagate(x0, t, stm=False)
     raan, argp = _raan_argp(tr.states)
     revs = len(t) // per_rev
     windows = slice(0, revs * per_rev)
@@ -150,11 +150,11 @@ def test_j2_secular_rates_match_first_order_theory(i_deg: float) -> None:
     assert abs(argp_dot - 0.75 * k * (5 * cos_i**2 - 1)) < 0.01 * k
 
 
-def test_two_body_matches_kepler_solution() -> None:
+def test_two_body_matches_kepler_solution(method: str) -> None:
     a, e = 9357.89143, 0.3
     x0 = periapsis_state(a, e, 0.0)
     t = np.linspace(0.0, 86400.0, 49)
-    tr = Propagator(earth_model("J0"), **TIGHT).propagate(x0, t, stm=False)
+    tr = Propagator(earth_model("J0"), **TIGHT, method=method).propagate(x0, t, stm=False)
     n = math.sqrt(MU / a**3)
     ecc_anom = [brentq(lambda E, M=n * tk: E - e * math.sin(E) - M, n * tk - 1.0, n * tk + 1.0,
                        xtol=1e-15) for tk in t]
@@ -166,19 +166,19 @@ def test_two_body_matches_kepler_solution() -> None:
     assert np.abs(tr.states[:, 2]).max() == 0.0
 
 
-def test_truncated_variational_model_changes_stm_not_trajectory() -> None:
+def test_truncated_variational_model_changes_stm_not_trajectory(method: str) -> None:
     x0 = periapsis_state(6550.524, 0.0, 0.0)
     t = np.linspace(0, 86400.0, 25)
-    full = Propagator(earth_model("J2"), earth_model("J2")).propagate(x0, t)
-    trunc = Propagator(earth_model("J2"), earth_model("J0")).propagate(x0, t)
+    full = Propagator(earth_model("J2"), earth_model("J2"), method=method).propagate(x0, t)
+    trunc = Propagator(earth_model("J2"), earth_model("J0"), method=method).propagate(x0, t)
     np.testing.assert_array_equal(full.states, trunc.states)
     rel = np.abs(full.stm[-1] - trunc.stm[-1]).max() / np.abs(full.stm[-1]).max()
     assert rel > 1e-2
 
 
-def test_parameter_sensitivities_match_central_differences() -> None:
+def test_parameter_sensitivities_match_central_differences(method: str) -> None:
     params = ("GM", "J2", "C22", "S22")
-    prop = Propagator(earth_model("4x4"), params=params, **TIGHT)
+    prop = Propagator(earth_model("4x4"), params=params, **TIGHT, method=method)
     x0 = periapsis_state(7000.0, 0.1, 40.0)
     t = np.array([0.0, 4 * 3600.0])
     tr = prop.propagate(x0, t, theta0_rad=0.3)

@@ -213,6 +213,17 @@ def test_tolerances_outside_the_documented_range_are_refused() -> None:
         leo_document(model={"atol": 1e-18}))
 
 
+def test_the_integration_method_is_chosen_in_the_model_table() -> None:
+    assert leo_scenario().propagator().method == "dop853"
+    assert leo_scenario(model={"method": "rkn12"}).propagator().method == "rkn12"
+    assert _message(leo_document(model={"method": "rk4"})).startswith(
+        f"{SOURCE}: model.method: expected one of")
+    # the simulated trajectory does not depend on the method beyond the tolerance (1e-13)
+    dop, rkn = (simulate(leo_scenario(model={"method": m})).states for m in ("dop853", "rkn12"))
+    one_mm_km = 1e-6
+    assert np.abs(dop[:, :3] - rkn[:, :3]).max() < one_mm_km
+
+
 def test_a_third_body_listed_twice_is_refused() -> None:
     text = _message(leo_document(model={"third_bodies": ["sun", "moon", "sun"]}))
     assert text == (f"{SOURCE}: model.third_bodies: expected each item once ('sun' is repeated) "
