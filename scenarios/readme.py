@@ -203,8 +203,10 @@ BLOCKS: dict[str, Renderer] = {
     "tapp3-periapsis-gm-moon": _template("{tapp3.periapsis_gm_moon_m} m"),
     "tapp3-periapsis-total": _template("{tapp3.periapsis_sigma_b_dot_r_m} m"),
     "tapp3-periapsis-canberra": _template("{tapp3.periapsis_canberra_bias_m} m"),
+    "tapp3-periapsis-cr": _template("{tapp3.periapsis_cr_m} m"),
+    "tapp3-periapsis-stochastic": _template("{tapp3.periapsis_stochastic_m} m"),
     "tapp3-digits": _template("{tapp3.fewest_digits}"),
-    "tapp3-closure": _template("{tapp3.budget_closure_worst} (in the orbit's covariance at day "
+    "tapp3-closure": _template("{tapp3.budget_closure_worst} (at day "
                                "{tapp3.budget_closure_worst_day}, the most sensitive of the run; "
                                "{tapp3.budget_closure_elsewhere} elsewhere)"),
     "pipeline-day3": _template("{pipeline.day3_sigma_b_dot_r_fit_m} m fit, "
