@@ -14,6 +14,13 @@ from tapp.tracking.noise import RealNoise, covariance_block
 from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import leo_scenario
 
+#: The Monte Carlo tests of the real-world covariance (test_monte_carlo, test_stochastic):
+#: draws, drawn in chunks of CHUNK, every entry's |z| below Z_LIMIT, at these print times.
+N_DRAWS = 20_000
+CHUNK = 2_000
+Z_LIMIT = 5.0
+PRINTS = (1, 2, 3)
+
 #: A priori σ by parameter kind (km, km/s, km³/s², 1, rad, km/s biases).
 SIGMA = {"x_km": 1.0, "y_km": 1.0, "z_km": 1.0, "vx_km_s": 1e-3, "vy_km_s": 1e-3,
          "vz_km_s": 1e-3, "GM_km3_s2": 0.01, "J2": 1e-8}
@@ -77,6 +84,40 @@ def segment_factors(raw) -> list[tuple[np.ndarray, np.ndarray]]:
         m = covariance_block(raw.t_s[rows], real)
         out.append((rows, np.linalg.cholesky(m + 1e-30 * np.eye(rows.size))))
     return out
+
+
+def fit_error_moments(raw, s0: np.ndarray, fitted: list[int], chol_bar: np.ndarray,
+                      seed: int) -> dict[int, np.ndarray]:
+    """E[e eᵀ] over N_DRAWS of the fit-world estimator's error at each print time k of PRINTS.
+
+    Each draw takes δx = chol_bar ξ (the real world's a priori) and correlated noise δm per
+    segment of the raw rows (:func:`segment_factors`), forms the residuals δz = A δx + δm, and
+    the fit-world estimate from the rows up to record k with a priori information ``s0`` over
+    the ``fitted`` parameters: e = δx − μ'δz on them, e = δx on the others.
+    """
+    n_o = raw.A.shape[1]
+    wa = raw.weight[:, None] * raw.A
+    gain = {}
+    for k in PRINTS:
+        rows = raw.record <= k
+        j = raw.A[rows].T @ wa[rows]
+        gain[k] = (rows, np.linalg.inv(s0 + j[np.ix_(fitted, fitted)]))
+    factors = segment_factors(raw)
+    rng = np.random.default_rng(seed)
+    sums = {k: np.zeros((n_o, n_o)) for k in PRINTS}
+    for _ in range(N_DRAWS // CHUNK):
+        dx = rng.standard_normal((CHUNK, n_o)) @ chol_bar.T
+        dm = np.empty((CHUNK, raw.t_s.size))
+        for rows, chol in factors:
+            dm[:, rows] = rng.standard_normal((CHUNK, rows.size)) @ chol.T
+        dz = dx @ raw.A.T + dm                                   # residuals, (CHUNK, N_obs)
+        for k in PRINTS:
+            rows, lam = gain[k]
+            rhs = dz[:, rows] @ wa[rows]                          # Aᵀ W δz per draw
+            err = dx.copy()
+            err[:, fitted] -= rhs[:, fitted] @ lam.T
+            sums[k] += err.T @ err
+    return {k: sums[k] / N_DRAWS for k in PRINTS}
 
 
 def z_scores(sample: np.ndarray, c: np.ndarray, n_draws: int, skip: int | None = None

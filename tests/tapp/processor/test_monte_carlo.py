@@ -19,12 +19,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.tapp.processor.helpers import deck, leo_tape, run, segment_factors, sigmas, z_scores
-
-N_DRAWS = 20_000
-CHUNK = 2_000
-Z_LIMIT = 5.0
-PRINTS = (1, 2, 3)
+from tests.tapp.processor.helpers import (
+    N_DRAWS,
+    PRINTS,
+    Z_LIMIT,
+    deck,
+    fit_error_moments,
+    leo_tape,
+    run,
+    sigmas,
+    z_scores,
+)
 
 
 @pytest.fixture(scope="module")
@@ -49,33 +54,10 @@ def test_real_world_covariance_matches_a_monte_carlo_of_the_fit_estimator(tape):
     n_o = tape.n_o
     fitted = [i for i in range(n_o) if i != gm]
     s0 = np.diag([1.0 / fit_sigma[names[i]] ** 2 for i in fitted])
-    wa = raw.weight[:, None] * raw.A
-    gain = {}
-    for k in PRINTS:
-        rows = raw.record <= k
-        j = raw.A[rows].T @ wa[rows]
-        lam = np.linalg.inv(s0 + j[np.ix_(fitted, fitted)])
-        gain[k] = (rows, lam)
     lam_bar = np.diag([real_sigma[n] ** 2 for n in names])
-    chol_bar = np.linalg.cholesky(lam_bar)
-    factors = segment_factors(raw)
-
-    rng = np.random.default_rng(20261123)
-    sums = {k: np.zeros((n_o, n_o)) for k in PRINTS}
-    for _ in range(N_DRAWS // CHUNK):
-        dx = rng.standard_normal((CHUNK, n_o)) @ chol_bar.T
-        dm = np.empty((CHUNK, raw.t_s.size))
-        for rows, chol in factors:
-            dm[:, rows] = rng.standard_normal((CHUNK, rows.size)) @ chol.T
-        dz = dx @ raw.A.T + dm                                   # residuals, (CHUNK, N_obs)
-        for k in PRINTS:
-            rows, lam = gain[k]
-            rhs = dz[:, rows] @ wa[rows]                          # Aᵀ W δz per draw
-            err = dx.copy()
-            err[:, fitted] -= rhs[:, fitted] @ lam.T              # δx − μ'δx (GM not fitted)
-            sums[k] += err.T @ err
+    moments = fit_error_moments(raw, s0, fitted, np.linalg.cholesky(lam_bar), seed=20261123)
     for k in PRINTS:
-        z = z_scores(sums[k] / N_DRAWS, predicted[k], N_DRAWS)
+        z = z_scores(moments[k], predicted[k], N_DRAWS)
         assert np.max(z) < Z_LIMIT, (k, np.unravel_index(np.argmax(z), z.shape), np.max(z))
         # the test has power: the fit world's own covariance (GM known, white noise) fails it
-        assert np.max(z_scores(sums[k] / N_DRAWS, fit_world[k], N_DRAWS, skip=gm)) > 10 * Z_LIMIT
+        assert np.max(z_scores(moments[k], fit_world[k], N_DRAWS, skip=gm)) > 10 * Z_LIMIT

@@ -26,10 +26,13 @@ from tapp.processor.deck import Deck, bind
 from tapp.processor.sequencing import process
 from tapp.processor.tape32 import build_t32
 from tests.tapp.processor.helpers import (
+    N_DRAWS,
+    PRINTS,
+    Z_LIMIT,
     deck,
+    fit_error_moments,
     leo_tape,
     run,
-    segment_factors,
     sigmas,
     z_scores,
 )
@@ -39,10 +42,6 @@ from tests.tapp.processor.helpers import (
 STOCHASTIC = {"frame": "ric", "interval_s": 3600.0, "sigma_m_s2": 1e-5, "tau_s": 5400.0}
 SIGMA_KM_S2 = 1e-8
 TAU_S = 5400.0
-N_DRAWS = 20_000
-CHUNK = 2_000
-Z_LIMIT = 5.0
-PRINTS = (1, 2, 3)
 
 
 @pytest.fixture(scope="module")
@@ -144,8 +143,6 @@ def test_real_world_covariance_matches_a_monte_carlo_with_stochastic_acceleratio
     lam_bar = np.diag([base.get(n, 0.0) ** 2 for n in names])
     lam_bar[np.ix_(stoch, stoch)] = p
     chol_bar = np.linalg.cholesky(lam_bar)
-    factors = segment_factors(raw)
-    wa = raw.weight[:, None] * raw.A
     commands = {"print": ["cov-real o@epoch"]}
     times = {"print": list(PRINTS)}
 
@@ -159,32 +156,14 @@ def test_real_world_covariance_matches_a_monte_carlo_with_stochastic_acceleratio
         if mode == "estimate":
             at = [fitted.index(i) for i in stoch]
             s0[np.ix_(at, at)] = np.linalg.inv(p)
-        gain = {}
-        for k in PRINTS:
-            rows = raw.record <= k
-            j = raw.A[rows].T @ wa[rows]
-            gain[k] = (rows, np.linalg.inv(s0 + j[np.ix_(fitted, fitted)]))
-        rng = np.random.default_rng(20261126)
-        sums = {k: np.zeros((n_o, n_o)) for k in PRINTS}
-        for _ in range(N_DRAWS // CHUNK):
-            dx = rng.standard_normal((CHUNK, n_o)) @ chol_bar.T
-            dm = np.empty((CHUNK, raw.t_s.size))
-            for rows, chol in factors:
-                dm[:, rows] = rng.standard_normal((CHUNK, rows.size)) @ chol.T
-            dz = dx @ raw.A.T + dm
-            for k in PRINTS:
-                rows, lam = gain[k]
-                rhs = dz[:, rows] @ wa[rows]
-                err = dx.copy()
-                err[:, fitted] -= rhs[:, fitted] @ lam.T
-                sums[k] += err.T @ err
+        moments = fit_error_moments(raw, s0, fitted, chol_bar, seed=20261126)
         real = predicted(mode, "include")
         without = predicted(mode, "ignore")
         for k in PRINTS:
-            z = z_scores(sums[k] / N_DRAWS, real[k], N_DRAWS)
+            z = z_scores(moments[k], real[k], N_DRAWS)
             assert np.max(z) < Z_LIMIT, (mode, k, np.unravel_index(np.argmax(z), z.shape))
         # power: the real world without the accelerations fails the same sample
-        worst = max(np.max(z_scores(sums[k] / N_DRAWS, without[k], N_DRAWS, skip=None)
+        worst = max(np.max(z_scores(moments[k], without[k], N_DRAWS, skip=None)
                            [:6, :6]) for k in PRINTS)
         assert worst > 10 * Z_LIMIT, (mode, worst)
 
