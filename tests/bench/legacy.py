@@ -47,6 +47,9 @@ import iter as _sweeps
 for _mod in (tapp, search, _sweeps):
     if _ROOT not in Path(_mod.__file__).resolve().parents:
         raise SystemExit(f"{_mod.__name__} imported from {_mod.__file__}, not from {_ROOT}")
+# An editable install of the working tree maps every submodule the old commit lacks to the
+# working tree's (setuptools' _EditableFinder): drop it so that such an import fails instead.
+sys.meta_path[:] = [f for f in sys.meta_path if getattr(f, "__name__", "") != "_EditableFinder"]
 ARGS = json.loads(sys.argv[2])
 _spec = importlib.util.spec_from_file_location("bench_common", sys.argv[3])
 common = importlib.util.module_from_spec(_spec)
@@ -98,6 +101,17 @@ def extract(folder: Path, commit: str = NORMAL_MATRIX_COMMIT) -> tuple[Checkout 
     if missing:
         return None, f"commit {commit} has no package(s) {', '.join(missing)}"
     return Checkout(full, root), ""
+
+
+def file_at(path: str, commit: str = NORMAL_MATRIX_COMMIT) -> str | None:
+    """The text of ``path`` (from the repository root) at ``commit``, or None without git,
+    the repository, the commit or the file."""
+    git = shutil.which("git")
+    if git is None:
+        return None
+    done = subprocess.run([git, "-C", str(REPO_ROOT), "show", f"{commit}:{path}"],
+                          capture_output=True, text=True, check=False)
+    return done.stdout if done.returncode == 0 else None
 
 
 def run_child(checkout: Checkout, script: str, args: dict[str, Any], *, cache_dir: Path,

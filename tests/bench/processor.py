@@ -376,7 +376,7 @@ def _agreement(run: Run, peer: PeerResult) -> float:
 _NORMAL_FORM_CHILD = """
 from tapp.processor.deck import bind, read_deck
 from tapp.processor.sequencing import process
-from tapp.io.tape.t13_hdf5 import open_t13
+from tapp.tape.t13_hdf5 import open_t13
 
 with open_t13(ARGS["tape"]) as data:
     if data.version != 2:
