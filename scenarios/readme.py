@@ -200,11 +200,11 @@ BLOCKS: dict[str, Renderer] = {
     "approx-stm-ekf-apriori2": _template("{approx_stm.ekf_apriori2_range_rate_sigmas} σ"),
     "tapp3-day3-fit": _template("{tapp3.day3_sigma_b_dot_r_fit_m} m"),
     "tapp3-day3-real": _template("{tapp3.day3_sigma_b_dot_r_real_m} m"),
-    "tapp3-periapsis-gm-moon": _template("{tapp3.periapsis_gm_moon_m} m"),
-    "tapp3-periapsis-total": _template("{tapp3.periapsis_sigma_b_dot_r_m} m"),
-    "tapp3-periapsis-canberra": _template("{tapp3.periapsis_canberra_bias_m} m"),
     "tapp3-periapsis-cr": _template("{tapp3.periapsis_cr_m} m"),
+    "tapp3-periapsis-total": _template("{tapp3.periapsis_sigma_b_dot_r_m} m"),
     "tapp3-periapsis-stochastic": _template("{tapp3.periapsis_stochastic_m} m"),
+    "tapp3-periapsis-gm-moon": _template("{tapp3.periapsis_gm_moon_m} m"),
+    "tapp3-periapsis-canberra": _template("{tapp3.periapsis_canberra_bias_m} m"),
     "tapp3-digits": _template("{tapp3.fewest_digits}"),
     "tapp3-closure": _template("{tapp3.budget_closure_worst} (at day "
                                "{tapp3.budget_closure_worst_day}, the most sensitive of the run; "
