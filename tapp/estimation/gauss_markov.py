@@ -42,7 +42,8 @@ UNIT = "km/s^2"
 
 
 def gauss_markov_covariance(t_s: np.ndarray, sigma: float, tau_s: float) -> np.ndarray:
-    """Return P_jk = σ² exp(−|t_j − t_k| / τ), (K, K), in σ's unit squared.
+    """Return P_jk = σ² exp(−|t_j − t_k| / τ), (K, K), in σ's unit squared: the covariance
+    of a first-order Gauss-Markov (exponentially correlated) process sampled at ``t_s``.
 
     Parameters
     ----------

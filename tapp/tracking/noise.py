@@ -48,6 +48,7 @@ import numpy as np
 
 from tapp.errors import InputError
 from tapp.estimation.factors import ar1_whitened, gram
+from tapp.estimation.gauss_markov import gauss_markov_covariance
 from tapp.measurements import OBSERVABLE_UNITS, Observable
 from tapp.measurements.ddor import DDOR_KIND, DDOR_UNIT
 
@@ -165,7 +166,7 @@ def covariance_block(t_s, real: RealNoise) -> np.ndarray:
     m = np.full((t.size, t.size), real.sigma_pass_bias**2)
     m[np.diag_indices(t.size)] += real.sigma_white**2
     if real.sigma_correlated > 0:
-        m += real.sigma_correlated**2 * np.exp(-np.abs(t[:, None] - t[None, :]) / real.tau_s)
+        m += gauss_markov_covariance(t, real.sigma_correlated, real.tau_s)
     return m
 
 
