@@ -19,7 +19,13 @@ code  meaning
 2     step size underflow (stiff or singular right-hand side)
 3     non-finite state
 4     a time outside the third-body ephemeris table
+5     an event not located (more aimed steps than the driver allows)
+6     more events than the log holds
 ====  =============================================
+
+Events (:mod:`tapp.dynamics.events`): the generated ``f_event`` is compiled beside the
+right-hand sides; the driver logs each located event (time, function index, direction) into
+arrays of :data:`MAX_EVENTS` entries.
 """
 
 from __future__ import annotations
@@ -53,7 +59,13 @@ STATUS = {
     2: "step size underflow",
     3: "non-finite state",
     4: "time outside the ephemeris table",
+    5: "an integration event could not be located",
+    6: "more integration events than the log holds",
 }
+
+#: Most events one call logs: a LEO with SRP meets about 64 shadow boundaries a day, and a
+#: Harris-Priester orbit that rises and falls through the table heights a few hundred.
+MAX_EVENTS = 1_000_000
 
 _CFLAGS = ("-O3", "-fPIC", "-shared", "-fno-math-errno")
 #: A C ``double *``, passed as an address (:func:`_address`).
@@ -109,13 +121,15 @@ def _rkn12_tableau() -> str:
 _TABLEAUX = {"dop853": _dop853_tableau, "rkn12": _rkn12_tableau}
 
 
-def generate_source(f_state: ca.Function, f_var: ca.Function, method: str = "dop853") -> str:
+def generate_source(f_state: ca.Function, f_var: ca.Function, f_event: ca.Function,
+                    method: str = "dop853") -> str:
     """Return the full C source: CasADi functions, tableau, shared code and the driver of
     ``method`` (a key of :data:`METHODS`)."""
     cg = ca.CodeGenerator("tapp_rhs.c", {"with_header": False, "casadi_real": "double",
                                          "casadi_int": "long long int"})
     cg.add(f_state)
     cg.add(f_var)
+    cg.add(f_event)
     here = files("tapp.dynamics")
     return "\n".join([cg.dump(), _TABLEAUX[method](), here.joinpath("driver_common.c").read_text(),
                       here.joinpath(METHODS[method]).read_text()])
@@ -143,6 +157,16 @@ def _compile(source: str, target: Path) -> None:
 
 
 @dataclass(frozen=True, slots=True)
+class EventLog:
+    """The driver's log: times (s), indices into the event functions, and whether each g
+    fell from positive to negative in forward time."""
+
+    t_s: np.ndarray
+    index: np.ndarray
+    falling: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
 class CompiledPropagator:
     """A loaded shared library with the driver entry point ``tapp_integrate``."""
 
@@ -151,15 +175,21 @@ class CompiledPropagator:
 
     def integrate(self, which: int, y0: np.ndarray, t0_s: float, t_out_s: np.ndarray,
                   q: np.ndarray, c: np.ndarray, eph: ChebyshevTable, rtol: float, atol: float,
-                  n_err: int, max_steps: int) -> tuple[int, np.ndarray, np.ndarray]:
-        """Run the driver; return (status, y (N, ny), stats [accepted, rejected, nfev]).
+                  n_err: int, max_steps: int, n_events: int = 0
+                  ) -> tuple[int, np.ndarray, np.ndarray, EventLog]:
+        """Run the driver; return (status, y (N, ny), stats [accepted, rejected, nfev],
+        the events logged).
 
         For ``rkn12`` y is [z, z'] of the second-order form (ny = 2 n2) and ``n_err`` counts
-        components of z (and of z') in the error norm."""
+        components of z (and of z') in the error norm. ``n_events`` is the number of outputs
+        of the library's ``f_event``."""
         y0 = np.ascontiguousarray(y0, dtype=float)
         t_out_s = np.ascontiguousarray(t_out_s, dtype=float)
         y_out = np.empty((t_out_s.size, y0.size))  # every row written when status is 0
-        stats = np.zeros(3)
+        stats = np.zeros(4)
+        cap = MAX_EVENTS if n_events else 0
+        log_t, log_id, log_falling = (np.zeros(max(cap, 1)), np.zeros(max(cap, 1), np.int32),
+                                      np.zeros(max(cap, 1), np.int32))
         q = np.ascontiguousarray(q, dtype=float) if len(q) else np.zeros(1)
         c = np.ascontiguousarray(c, dtype=float)
         coeffs = np.ascontiguousarray(eph.coeffs, dtype=float)
@@ -170,8 +200,12 @@ class CompiledPropagator:
         status = self.fn(which, y0.size, float(t0_s), _address(y0), t_out_s.size,
                          _address(t_out_s), _address(y_out), _address(q), _address(c),
                          _address(coeffs), eph.n_series, eph.n_segments, eph.n_coef,
-                         eph.t0_s, eph.h_s, rtol, atol, n_err, max_steps, _address(stats))
-        return int(status), y_out, stats
+                         eph.t0_s, eph.h_s, rtol, atol, n_err, max_steps, _address(stats),
+                         n_events, cap, _address(log_t), log_id.ctypes.data,
+                         log_falling.ctypes.data)
+        n = int(stats[3])
+        return int(status), y_out, stats[:3], EventLog(log_t[:n].copy(), log_id[:n].copy(),
+                                                       log_falling[:n].astype(bool))
 
 
 @cache
@@ -182,16 +216,18 @@ def _load(path: Path) -> CompiledPropagator:
     fn.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_double, _DOUBLE_P, ctypes.c_int,
                    _DOUBLE_P, _DOUBLE_P, _DOUBLE_P, _DOUBLE_P, _DOUBLE_P, ctypes.c_int,
                    ctypes.c_int, ctypes.c_int, ctypes.c_double, ctypes.c_double,
-                   ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_long, _DOUBLE_P]
+                   ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_long, _DOUBLE_P,
+                   ctypes.c_int, ctypes.c_int, _DOUBLE_P, ctypes.c_void_p, ctypes.c_void_p]
     return CompiledPropagator(path, fn)
 
 
-def compiled_propagator(f_state: ca.Function, f_var: ca.Function, method: str = "dop853"
-                        ) -> CompiledPropagator:
-    """Return the compiled propagator of a function pair under the driver of ``method``,
-    compiling only on a cache miss. The pair must suit the method: first-order right-hand
-    sides for ``dop853``, accelerations of the second-order form for ``rkn12``."""
-    source = generate_source(f_state, f_var, method)
+def compiled_propagator(f_state: ca.Function, f_var: ca.Function, f_event: ca.Function,
+                        method: str = "dop853") -> CompiledPropagator:
+    """Return the compiled propagator of a function pair and their event function under the
+    driver of ``method``, compiling only on a cache miss. The pair must suit the method:
+    first-order right-hand sides for ``dop853``, accelerations of the second-order form for
+    ``rkn12``."""
+    source = generate_source(f_state, f_var, f_event, method)
     digest = hashlib.sha256((source + " ".join(_CFLAGS)).encode()).hexdigest()[:20]
     path = cache_dir() / f"rhs_{digest}.so"
     if not path.exists():

@@ -39,6 +39,7 @@ import casadi as ca
 import numpy as np
 
 from tapp.dynamics.empirical import empirical_acceleration
+from tapp.dynamics.events import boundaries
 from tapp.dynamics.forces import acceleration
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError
@@ -46,10 +47,16 @@ from tapp.errors import InputError
 
 @dataclass(frozen=True, slots=True)
 class Equations:
-    """The pair of CasADi functions of one (state model, variational model, parameters)."""
+    """The pair of CasADi functions of one (state model, variational model, parameters), and
+    the event function of both models (:mod:`tapp.dynamics.events`):
+    ``f_event(r, v, rb, rbd) -> (g, dg/dt)``, r, v the position and velocity (km, km/s), rb the
+    driver's series as for the right-hand sides and rbd their rates (per s), one g per name
+    of ``events`` (none: empty outputs)."""
 
     f_state: ca.Function
     f_var: ca.Function
+    f_event: ca.Function
+    events: tuple[str, ...]
     bodies: tuple[str, ...]
     params: tuple[str, ...]
     oriented: str = ""
@@ -114,7 +121,22 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
         parts.append(ca.vec(ca.mtimes(a_mat, s) + b_mat))
     f_var = ca.Function("f_var", [t, y, q, c, rb], [ca.cse(ca.vertcat(*parts))],
                         ["t", "y", "q", "c", "rb"], ["ydot"])
-    return Equations(f_state, f_var, bodies, tuple(params), oriented)
+    names, f_event = _event_function(state_model, var_model, r_bodies, rb)
+    return Equations(f_state, f_var, f_event, names, bodies, tuple(params), oriented)
+
+
+def _event_function(state_model: ForceModel, var_model: ForceModel,
+                    r_bodies: dict[str, ca.SX], rb: ca.SX) -> tuple[tuple[str, ...], ca.Function]:
+    """The events of both models (each name once: the state model moves the trajectory, the
+    variational model's Jacobian drives Φ, and every step must be smooth for both), as
+    ``f_event(r, v, rb, rbd) -> (g, dg/dt)`` with dg/dt = ∂g/∂r · v + ∂g/∂rb · rbd."""
+    r, v = ca.SX.sym("r", 3), ca.SX.sym("v", 3)
+    rbd = ca.SX.sym("rbd", rb.numel())
+    found = boundaries(state_model, r, r_bodies) | boundaries(var_model, r, r_bodies)
+    g = ca.vertcat(*found.values()) if found else ca.SX(0, 1)
+    g_dot = ca.jtimes(g, ca.vertcat(r, rb), ca.vertcat(v, rbd)) if found else ca.SX(0, 1)
+    return tuple(found), ca.Function("f_event", [r, v, rb, rbd], [ca.cse(g), ca.cse(g_dot)],
+                                     ["r", "v", "rb", "rbd"], ["g", "g_dot"])
 
 
 def initial_augmented(x0: np.ndarray, n_params: int) -> np.ndarray:
@@ -178,7 +200,7 @@ def second_order(eqs: Equations) -> Equations:
         zdd = f(t, y, q, c, rb)[vel.tolist()]
         functions.append(ca.Function(f.name(), [t, z, q, c, rb], [ca.cse(zdd)],
                                      ["t", "y", "q", "c", "rb"], ["ydot"]))
-    return Equations(*functions, eqs.bodies, eqs.params, eqs.oriented)
+    return Equations(*functions, eqs.f_event, eqs.events, eqs.bodies, eqs.params, eqs.oriented)
 
 
 def to_second_order(y: np.ndarray) -> np.ndarray:

@@ -15,7 +15,10 @@ Python callback per step. Two methods (:data:`METHODS`):
   models without velocity-dependent forces
   (:func:`tapp.dynamics.equations.velocity_dependent`); others are refused.
 
-Either way the grid does not constrain the step size.
+Either way the grid does not constrain the step size, and no step straddles a boundary where
+the force model is not smooth (a shadow's edge, a Harris-Priester table height): both drivers
+locate these integration events and restart there (:mod:`tapp.dynamics.events`); the
+trajectory lists the events it met.
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ from tapp.dynamics.equations import (
     to_second_order,
     velocity_dependent,
 )
+from tapp.dynamics.events import Events
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError, TappError
@@ -86,6 +90,8 @@ class Trajectory:
     sensitivity : (N, 6, n_q) or None, ∂x(t_k)/∂q for the parameters ``params``.
     params : names of q, in column order of ``sensitivity``.
     steps : accepted integration steps; ``rhs_evaluations`` : right-hand-side calls.
+    events : the integration events met from t0 to the last output (shadow boundaries, table
+        heights), in the order met.
     """
 
     t_s: np.ndarray
@@ -95,6 +101,7 @@ class Trajectory:
     params: tuple[str, ...]
     steps: int
     rhs_evaluations: int
+    events: Events = field(default_factory=Events.none)
 
 
 @cache
@@ -114,7 +121,7 @@ def _compiled(state_model: ForceModel, var_model: ForceModel, params: tuple[str,
               method: str) -> tuple[Equations, CompiledPropagator]:
     eqs = _equations(state_model, var_model, params)
     driven = second_order(eqs) if method == "rkn12" else eqs
-    return eqs, compiled_propagator(driven.f_state, driven.f_var, method)
+    return eqs, compiled_propagator(driven.f_state, driven.f_var, driven.f_event, method)
 
 
 @dataclass(frozen=True, slots=True)
@@ -231,9 +238,9 @@ class Propagator:
             y0 = to_second_order(y0)
         if self.method == "rkn12":  # the norm counts components of z and of z' alike
             n_err //= 2
-        status, y, stats = lib.integrate(1 if stm else 0, y0, t0_s, t_s, q,
-                                         np.array([theta0_rad]), table, self.rtol, self.atol,
-                                         n_err, self.max_steps)
+        status, y, stats, log = lib.integrate(1 if stm else 0, y0, t0_s, t_s, q,
+                                              np.array([theta0_rad]), table, self.rtol,
+                                              self.atol, n_err, self.max_steps, len(eqs.events))
         if nystrom:
             y = from_second_order(y)
         if status != 0:
@@ -243,7 +250,9 @@ class Propagator:
             states, phi, sens = split_augmented(y, len(self.params))
         else:
             states, phi, sens = y, None, None
-        return Trajectory(t_s, states, phi, sens, self.params, int(stats[0]), int(stats[2]))
+        events = Events(log.t_s, tuple(eqs.events[i] for i in log.index), log.falling)
+        return Trajectory(t_s, states, phi, sens, self.params, int(stats[0]), int(stats[2]),
+                          events)
 
     def _series(self, eqs: Equations, epoch_jd_utc: float | None,
                 orientation: EarthOrientation | None, t0_s: float, t_s: np.ndarray

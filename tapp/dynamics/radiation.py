@@ -47,8 +47,9 @@ def _clip(x, lo: float, hi: float):
     return ca.fmin(ca.fmax(x, lo), hi)
 
 
-def shadow_factor(r, r_sun, r_body, radius_body_km: float):
-    """Return the visible fraction ν ∈ [0, 1] of the solar disc (module docstring).
+def disc_geometry(r, r_sun, r_body, radius_body_km: float):
+    """Return (a, b, c), rad: the apparent radii of the Sun and of the occulting body seen from
+    the spacecraft and their apparent separation (module docstring).
 
     Parameters
     ----------
@@ -56,8 +57,8 @@ def shadow_factor(r, r_sun, r_body, radius_body_km: float):
         relative to a common origin, km, same axes.
     radius_body_km : radius of the occulting body, km.
 
-    Every branch is evaluated (CasADi ``if_else``), so arguments of asin and sqrt are
-    clipped to their domains: no NaN reaches the branch that is not taken.
+    The arguments of asin are clipped to its domain, so no NaN reaches a branch of
+    :func:`shadow_factor` that is not taken.
     """
     s = r_sun - r
     d = r_body - r
@@ -65,6 +66,16 @@ def shadow_factor(r, r_sun, r_body, radius_body_km: float):
     a = ca.asin(_clip(RADIUS_km["sun"] / s_n, 0.0, 1.0))
     b = ca.asin(_clip(radius_body_km / d_n, 0.0, 1.0))
     c = ca.atan2(ca.norm_2(ca.cross(s, d)), ca.dot(s, d))  # exact at small c, unlike acos
+    return a, b, c
+
+
+def shadow_factor(r, r_sun, r_body, radius_body_km: float):
+    """Return the visible fraction ν ∈ [0, 1] of the solar disc (module docstring).
+
+    Arguments as in :func:`disc_geometry`. Every branch is evaluated (CasADi ``if_else``), so
+    the argument of sqrt is clipped to its domain too.
+    """
+    a, b, c = disc_geometry(r, r_sun, r_body, radius_body_km)
     x = ((c - b) * (c + b) + a * a) / (2.0 * ca.fmax(c, 1e-300))
     y = ca.sqrt(ca.fmax((a - x) * (a + x), 0.0))
     area = a * a * ca.atan2(y, x) + b * b * ca.atan2(y, c - x) - c * y
@@ -72,6 +83,16 @@ def shadow_factor(r, r_sun, r_body, radius_body_km: float):
     return ca.if_else(c >= a + b, 1.0,
                       ca.if_else(c <= b - a, 0.0,
                                  ca.if_else(c <= a - b, 1.0 - (b * b) / (a * a), partial)))
+
+
+#: The boundaries between the branches of :func:`shadow_factor`, as functions of (a, b, c)
+#: that change sign there, negative on the shadow side: ν is continuous across each but its
+#: derivatives are not (integration events, :mod:`tapp.dynamics.events`).
+SHADOW_BOUNDARIES = {
+    "penumbra": lambda a, b, c: c - (a + b),
+    "umbra": lambda a, b, c: c - (b - a),
+    "annular": lambda a, b, c: c - (a - b),
+}
 
 
 def srp_acceleration(r, r_sun, occulters, c_r, area_to_mass_m2_kg: float):

@@ -214,7 +214,8 @@ def _damped() -> Equations:
     t, q, c, rb = ca.SX.sym("t"), ca.SX.sym("q", 0), ca.SX.sym("c", 1), ca.SX.sym("rb", 0)
     x = ca.SX.sym("x", 6)
     f = ca.Function("f_state", [t, x, q, c, rb], [ca.vertcat(x[3:], -x[:3] - 0.1 * x[3:])])
-    return Equations(f, f, (), ())
+    no_events = ca.Function("f_event", [ca.SX.sym("r", 3)], [ca.SX(0, 1)])
+    return Equations(f, f, no_events, (), (), ())
 
 
 def test_velocity_dependent_forces_are_detected_and_refused(monkeypatch) -> None:
