@@ -81,8 +81,9 @@ propagation. An ITER case that runs longer than its body's ``timeout_s`` (progra
 3600 s unless the sweep file says otherwise) is stopped and recorded as failed.
 
 What is left on disk: nothing new when a command fails. Outputs are written to hidden
-temporaries beside their targets and renamed over them only once all are complete
-(:class:`tapp.io.outputs.OutputSet`); on any failure the old outputs are left untouched.
+temporaries beside their targets and renamed over them only once all are complete and the
+report is printed (:func:`delivering`, :class:`tapp.io.outputs.OutputSet`); on any failure,
+standard output that cannot be written among them, the old outputs are left untouched.
 A killed run leaves the old outputs or the new ones, each complete, and possibly hidden
 ``.NAME.*.tmp`` temporaries, which the next write of the same output removes. ``tapp iter``
 checkpoints its results file (each time atomically) as cases complete, so that a killed or
@@ -628,12 +629,23 @@ def add_json(outputs: OutputSet, value: str | None, content: object) -> None:
                                                                 "utf-8"))
 
 
-def write_json(value: str | None, content: object) -> None:
-    """Deliver ``content`` where ``--json`` asks: on standard output (``-``), into its file
-    (atomically), or nowhere (not given)."""
-    if value == STDOUT:
-        print_json(content)
-    elif value is not None:
-        outputs = OutputSet()
-        add_json(outputs, value, content)
-        outputs.commit()
+@contextmanager
+def delivering(value: str | None, content: object, outputs: OutputSet | None = None
+               ) -> Iterator[bool]:
+    """Deliver a command's results: ``content`` where ``--json`` asks (on standard output
+    for ``-``, into its file, or nowhere when not given) and the command's other
+    ``outputs``, all together with the report the block prints.
+
+    Every file is written to its temporary first; then the JSON of ``--json -`` is printed,
+    the block runs (it yields False when that JSON stands in place of the report) and
+    standard output is flushed; only then are the files renamed into place. Standard output
+    that cannot be written (full, closed, or a reader gone: ``| head -1``) thus leaves no
+    new file, as any failure (:meth:`tapp.io.outputs.OutputSet.staged`).
+    """
+    outputs = OutputSet() if outputs is None else outputs
+    add_json(outputs, value, content)
+    with outputs.staged():
+        if value == STDOUT:
+            print_json(content)
+        yield value != STDOUT
+        sys.stdout.flush()

@@ -1,7 +1,7 @@
 """``tapp dc``, ``tapp ekf``, ``tapp rsig``: the approximate-STM study's estimators.
 
 Exit codes of ``tapp dc`` (the outcomes of :mod:`tapp.od.batch`; the output is printed and
-``--save-obs`` written in every case but bad input):
+``--save-obs`` written, after the DC and with its report, in each of them):
 
 = ============================================================================================
 0 converged: the RMS settled within the fit limit
@@ -54,11 +54,11 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from tapp.cli.common import (
-    STDOUT,
     EarthOrientationOpt,
     JsonOpt,
     app,
     check_grid_size,
+    delivering,
     earth_orientation_option,
     grid_samples,
     json_file,
@@ -66,7 +66,6 @@ from tapp.cli.common import (
     positive_option,
     run_guarded,
     seed_option,
-    write_json,
 )
 from tapp.errors import InputError
 
@@ -308,29 +307,28 @@ def dc(
                              seed_option("--seed", seed), orient, earth_orientation is not None)
         window = data.arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, window.t_s)
+        outputs = OutputSet()
         if save_obs is not None:
             notes = (f"observations of {orbit} for tapp dc (scenario {path.name})",
                      f"read from {obs.name}" if obs is not None else "simulated with Earth "
                      f"orientation {setup.describe_orientation(used)}")
-            outputs = OutputSet()
             outputs.add("--save-obs", save_obs, observations_file_writer(
                 save_obs, data, epoch=setup.epoch(study), spacecraft=_spacecraft(orbit),
                 comments=notes))
-            outputs.commit()
         x_start = setup.initial_estimate(x_true, setup.offset(study))
         try:
             result = differential_correction(window, prop, x_start, orientation=orient,
                                              settings=settings)
         except IllConditionedError as exc:
-            write_json(json_out, _ill_conditioned_dict(exc, used))
-            if json_out != STDOUT:
-                _print_ill_conditioned(exc, used)
+            with delivering(json_out, _ill_conditioned_dict(exc, used), outputs) as report:
+                if report:
+                    _print_ill_conditioned(exc, used)
             return EXIT_ILL_CONDITIONED
         rate = _rate(window, prop, x_true, orient)
         err_km = float(np.linalg.norm(result.x0[:3] - x_true[:3]))
         code = _exit_code(result.status)
         q = result.contraction_factor
-        write_json(json_out, {
+        content = {
             "converged": result.converged, "status": result.status, "exit_code": code,
             "reason": result.reason, "iterations": len(result.iterations),
             "converged_at": result.converged_at, "rms": result.rms,
@@ -340,10 +338,11 @@ def dc(
             "predicted_rate": None if rate is None else rate.rho,
             "eigenvalues": _eigen_json(rate), "final_elements": _elements_dict(result.x0),
             "position_error_km": err_km, "measurements": result.n_measurements,
-            "earth_orientation": used, "observations_made_under": _made_under_json(window)})
-        if json_out != STDOUT:
-            _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}), {orient.model}: "
-                      f"{result.status}", err_km, used)
+            "earth_orientation": used, "observations_made_under": _made_under_json(window)}
+        with delivering(json_out, content, outputs) as report:
+            if report:
+                _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}), {orient.model}: "
+                          f"{result.status}", err_km, used)
         return code
 
     code = run_guarded(body)
@@ -508,23 +507,23 @@ def ekf(
                                         q_km2_s3=q_km2_s3)
         per_pass = [{"range_m": p.max_abs[0] * 1e3, "range_rate_mm_s": p.max_abs[1] * 1e6}
                     for p in result.passes]
-        write_json(json_out, {"passes": [{"station": p.station, "t_start_s": p.t_start_s,
-                                          "t_end_s": p.t_end_s} for p in result.passes],
-                              "max_abs_residual_per_pass": per_pass, "earth_orientation": used,
-                              "observations_made_under": _made_under_json(data)})
-        if json_out == STDOUT:
-            return
-        table = Table(title=f"EKF {orbit}, {arc}, ({truth},{stm}), a priori {apriori}, "
-                      f"{orient.model}")
-        for col in ("pass", "station", "start (h)", "max|O-C| range (m)",
-                    "max|O-C| range-rate (mm/s)"):
-            table.add_column(col, justify="right")
-        for k, (p, r) in enumerate(zip(result.passes, per_pass, strict=True), start=1):
-            table.add_row(str(k), p.station, f"{p.t_start_s / 3600:.2f}", f"{r['range_m']:.1f}",
-                          f"{r['range_rate_mm_s']:.1f}")
-        console = Console(width=110)
-        console.print(table)
-        console.print(f"Earth orientation: {setup.describe_orientation(used)}")
+        content = {"passes": [{"station": p.station, "t_start_s": p.t_start_s,
+                               "t_end_s": p.t_end_s} for p in result.passes],
+                   "max_abs_residual_per_pass": per_pass, "earth_orientation": used,
+                   "observations_made_under": _made_under_json(data)}
+        with delivering(json_out, content) as report:
+            if report:
+                table = Table(title=f"EKF {orbit}, {arc}, ({truth},{stm}), a priori {apriori}, "
+                              f"{orient.model}")
+                for col in ("pass", "station", "start (h)", "max|O-C| range (m)",
+                            "max|O-C| range-rate (mm/s)"):
+                    table.add_column(col, justify="right")
+                for k, (p, r) in enumerate(zip(result.passes, per_pass, strict=True), start=1):
+                    table.add_row(str(k), p.station, f"{p.t_start_s / 3600:.2f}",
+                                  f"{r['range_m']:.1f}", f"{r['range_rate_mm_s']:.1f}")
+                console = Console(width=110)
+                console.print(table)
+                console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
     run_guarded(body)
 
@@ -564,16 +563,16 @@ def rsig(
         orient.check_covers(t[[0, -1]], "--hours")
         sig = r_signature(prop, x_true, t, orient)
         used = setup.orientation_record(orient, t)
-        write_json(json_out, {"t_s": sig.t_s, "R": sig.r, "earth_orientation": used})
-        if json_out == STDOUT:
-            return
-        table = Table(title=f"R(t) {orbit} ({truth},{stm}), {orient.model}")
-        table.add_column("t (h)", justify="right")
-        table.add_column("R", justify="right")
-        for k in np.linspace(0, len(t) - 1, 9).astype(int):
-            table.add_row(f"{t[k] / 3600:.1f}", f"{sig.r[k]:.6g}")
-        console = Console(width=80)
-        console.print(table)
-        console.print(f"Earth orientation: {setup.describe_orientation(used)}")
+        with delivering(json_out, {"t_s": sig.t_s, "R": sig.r, "earth_orientation": used}
+                        ) as report:
+            if report:
+                table = Table(title=f"R(t) {orbit} ({truth},{stm}), {orient.model}")
+                table.add_column("t (h)", justify="right")
+                table.add_column("R", justify="right")
+                for k in np.linspace(0, len(t) - 1, 9).astype(int):
+                    table.add_row(f"{t[k] / 3600:.1f}", f"{sig.r[k]:.6g}")
+                console = Console(width=80)
+                console.print(table)
+                console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
     run_guarded(body)

@@ -21,12 +21,11 @@ from tapp.cli.common import (
     STDOUT,
     EarthOrientationOpt,
     JsonOpt,
-    add_json,
     app,
+    delivering,
     earth_orientation_option,
     echo_error,
     json_file,
-    print_json,
     progress_bar,
     run_guarded,
 )
@@ -143,6 +142,26 @@ def _print_encounter(console: Console, miss: dict, targeting: dict | None) -> No
                       + (f" (aim {aim[name]:.10g})" if name in aim else ""))
 
 
+def _print_report(out: dict, tape: T13, oem_states: int) -> None:
+    """What ``tapp simulate`` wrote: the tape's sizes, its stations, the OEM and TDM, the
+    miss."""
+    from rich.console import Console
+
+    from tapp.cli.tape_cmd import editing_table
+
+    console = Console(width=100)
+    console.print(f"T13 tape {out['tape']} ({out['bytes'] / 1e6:.2f} MB) written in "
+                  f"{out['wall_s']:.2f} s: n_o = {tape.n_o}, n_p = {tape.n_p}, n_m = "
+                  f"{tape.n_m}, n_ts = {tape.n_ts}, n_it = {tape.n_it}; "
+                  f"{out['observations']} observations in {out['passes']} passes")
+    console.print(editing_table(out["stations"]))
+    if out["oem"] is not None:
+        console.print(f"OEM {out['oem']} ({oem_states} states)")
+    if out["tdm"] is not None:
+        console.print(f"TDM {out['tdm']} ({out['observations']} observations)")
+    _print_encounter(console, out["miss"], out["targeting"])
+
+
 @app.command()
 def simulate(
     scenario: Annotated[Path, typer.Argument(help="Scenario file (TOML).")],
@@ -165,9 +184,6 @@ def simulate(
     """
 
     def body() -> int:
-        from rich.console import Console
-
-        from tapp.cli.tape_cmd import editing_table
         from tapp.io.ccsds.oem import (
             INTERPOLATION,
             INTERPOLATION_DEGREE,
@@ -216,22 +232,9 @@ def simulate(
         out["miss"], out["targeting"] = _encounter_dict(tape)
         # the JSON is written after the tape's temporary, whose size it then holds
         outputs = _outputs(output, sim, oem, oem_text, tdm, tdm_text, sizes=out)
-        add_json(outputs, json_out, out)
-        outputs.commit()
-        if json_out == STDOUT:
-            print_json(out)
-            return 0
-        console = Console(width=100)
-        console.print(f"T13 tape {output} ({out['bytes'] / 1e6:.2f} MB) written in "
-                      f"{wall_s:.2f} s: n_o = {tape.n_o}, n_p = {tape.n_p}, n_m = {tape.n_m}, "
-                      f"n_ts = {tape.n_ts}, n_it = {tape.n_it}; {out['observations']} "
-                      f"observations in {out['passes']} passes")
-        console.print(editing_table(out["stations"]))
-        if oem is not None:
-            console.print(f"OEM {oem} ({oem_states} states)")
-        if tdm is not None:
-            console.print(f"TDM {tdm} ({out['observations']} observations)")
-        _print_encounter(console, out["miss"], out["targeting"])
+        with delivering(json_out, out, outputs) as report:
+            if report:
+                _print_report(out, tape, oem_states)
         return 0
 
     code = run_guarded(body)

@@ -17,7 +17,8 @@ from __future__ import annotations
 import json
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -99,9 +100,22 @@ def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | No
     WriteError
         ``out_dir`` could not be written for want of room, or a device error.
     """
+    with running_pipeline(pipeline, out_dir, execution=execution, plots=plots,
+                          progress=progress) as result:
+        return result
+
+
+@contextmanager
+def running_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | None = None,
+                     plots: bool = True, progress: Progress = _nothing
+                     ) -> Iterator[PipelineResult]:
+    """Run the three steps into a hidden directory beside ``out_dir`` (new or empty), yield
+    the result and rename the directory to ``out_dir`` once the block has run (the report
+    of the run printed): :func:`run_pipeline` with a block before the directory appears.
+    If the block raises, no ``out_dir`` appears. Raises as :func:`run_pipeline`.
+    """
     with new_directory(out_dir, "-o/--output", _NEVER_OVERWRITES) as work:
-        result = _run(pipeline, work, execution, plots, progress)
-    return replace(result, directory=out_dir)
+        yield replace(_run(pipeline, work, execution, plots, progress), directory=out_dir)
 
 
 def bind_parts(pipeline: Pipeline) -> tuple[Scenario, Deck, GuideFile]:
