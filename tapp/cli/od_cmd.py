@@ -387,15 +387,20 @@ def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float, use
 
 def _noise_model_line(result: DCResult) -> str:
     """The last RMS against the noise model's bound, and the verdict where there is an
-    estimate to judge (the RMS settled: :mod:`tapp.od.batch`)."""
+    estimate to judge (the RMS settled within the fit limit: :mod:`tapp.od.batch`).
+
+    A stalled DC's RMS settled too, above the fit limit: its one verdict is its outcome
+    (the data are not fitted), and the line gives the numbers only.
+    """
     from tapp.od.batch import N_STATE, NOISE_MODEL_PROBABILITY, DCOutcome
 
-    verdict = {DCOutcome.CONVERGED: "consistent with the noise model",
-               DCOutcome.INCONSISTENT: "inconsistent with the noise model"}.get(
-        DCOutcome(result.status), f"not judged ({result.status}: no settled estimate)")
+    verdict = {DCOutcome.CONVERGED: ": consistent with the noise model",
+               DCOutcome.INCONSISTENT: ": inconsistent with the noise model",
+               DCOutcome.STALLED: ""}.get(
+        DCOutcome(result.status), f": not judged ({result.status}: no settled estimate)")
     return (f"residuals: RMS {result.rms[-1]:.5g} against {result.rms_bound:.5g}, the "
             f"{100 * NOISE_MODEL_PROBABILITY:g} % χ² bound of {result.n_measurements} "
-            f"residuals and {N_STATE} estimated parameters: {verdict}")
+            f"residuals and {N_STATE} estimated parameters{verdict}")
 
 
 def _ill_conditioned_dict(exc: IllConditionedError, used: dict) -> dict:

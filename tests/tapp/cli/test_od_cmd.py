@@ -71,6 +71,23 @@ def test_dc_text_output_shows_outcome_and_rates() -> None:
         res.stdout.split())
 
 
+def test_dc_that_stalls_gives_one_verdict(tmp_path: Path) -> None:
+    """A fit limit below the RMS the fit settles at (1.005): stalled, exit 5. The residual
+    line gives the numbers and no verdict of its own (issue 28: "RMS settled ... > 3" and
+    then "not judged (stalled: no settled estimate)")."""
+    study = (EXAMPLES / "approx_stm.toml").read_text()
+    assert "rms_fit_limit = 3.0" in study
+    scenario = tmp_path / "study.toml"
+    scenario.write_text(study.replace("rms_fit_limit = 3.0", "rms_fit_limit = 0.5"))
+    res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--scenario",
+                              str(scenario)])
+    assert res.exit_code == 5, res.output
+    text = " ".join(res.stdout.split())
+    assert "stalled: RMS settled (changed by less than 0.001, relative) at iteration 4, " \
+        "settling at 1.005 > 0.5 residuals: RMS 1.0054 against 1.1186, the 99.9 % χ² bound " \
+        "of 294 residuals and 6 estimated parameters predicted rate" in text
+
+
 def test_dc_ill_conditioned_normal_matrix_exits_4_with_the_diagnosis() -> None:
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "10m", "--json", "-"])
     assert res.exit_code == 4, res.output
