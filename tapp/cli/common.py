@@ -572,8 +572,17 @@ def progress_bar(*columns: ProgressColumn | str, quiet: bool) -> Progress:
 
 def echo_error(exc: BaseException) -> None:
     """Write ``error: MESSAGE`` on stderr, the message on one line."""
-    message = " ".join(str(exc).split())
-    typer.echo(f"error: {message}", err=True)
+    _echo_line("error", str(exc))
+
+
+def echo_warning(message: str) -> None:
+    """Write ``warning: MESSAGE`` on stderr, the message on one line: something the run
+    goes on with, which the user may not have meant (it is in the command's JSON too)."""
+    _echo_line("warning", message)
+
+
+def _echo_line(kind: str, message: str) -> None:
+    typer.echo(f"{kind}: {' '.join(message.split())}", err=True)
 
 
 def _to_jsonable(obj: object) -> object:

@@ -26,6 +26,7 @@ from tapp.cli.common import (
     app,
     delivering,
     earth_orientation_option,
+    echo_warning,
     execution_options,
     json_file,
     progress_bar,
@@ -88,12 +89,15 @@ def pipeline_cmd(
                     raise scheduler_error(exc) from None
             numbers = trade_outputs(result)
             with delivering(json_out, {"directory": str(output), **numbers,
-                                       "wall_s": result.wall_s}) as report:
+                                       "wall_s": result.wall_s,
+                                       "warnings": list(result.warnings)}) as report:
                 if report:
                     console = Console(width=100)
                     console.print(f"pipeline {pipeline} -> {output}/{OUTPUTS['report']} ("
                                   + ", ".join(f"{k} {v:.1f} s" for k, v in
                                               result.wall_s.items()) + ")")
                     console.print(", ".join(f"{k} = {v:.4g}" for k, v in numbers.items()))
+        for warning in result.warnings:  # last: a failed run's one line is its error
+            echo_warning(warning)
 
     run_guarded(body)

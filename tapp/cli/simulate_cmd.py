@@ -3,7 +3,9 @@
 Bad input (scenario file or field, an unreadable or corrupt tape, an output path that is the
 scenario or the other output) is one line on stderr naming the file and the field or dataset,
 or the option, exit code 2 (1 for other failures; see :mod:`tapp.cli.common`). The tape, the
-OEM and the TDM are written together or not at all (:class:`tapp.io.outputs.OutputSet`).
+OEM and the TDM are written together or not at all (:class:`tapp.io.outputs.OutputSet`). A
+station that yields no observation while others do is a ``warning:`` line on stderr naming
+the file and ``tracking.stations[i]``, and in the JSON's ``warnings``; the tape is written.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from tapp.cli.common import (
     delivering,
     earth_orientation_option,
     echo_error,
+    echo_warning,
     json_file,
     progress_bar,
     run_guarded,
@@ -228,13 +231,16 @@ def simulate(
                "observations": int(tape.pairs.n_obs.sum()),
                "stations": summary(tape)["stations"], "raw": raw,
                "oem": None if oem is None else str(oem),
-               "tdm": None if tdm is None else str(tdm), "wall_s": wall_s}
+               "tdm": None if tdm is None else str(tdm), "wall_s": wall_s,
+               "warnings": list(sim.warnings)}
         out["miss"], out["targeting"] = _encounter_dict(tape)
         # the JSON is written after the tape's temporary, whose size it then holds
         outputs = _outputs(output, sim, oem, oem_text, tdm, tdm_text, sizes=out)
         with delivering(json_out, out, outputs) as report:
             if report:
                 _print_report(out, tape, oem_states)
+        for warning in sim.warnings:  # last: a failed run's one line is its error
+            echo_warning(warning)
         return 0
 
     code = run_guarded(body)

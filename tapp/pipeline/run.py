@@ -61,13 +61,15 @@ Progress = Callable[[str, int, int], None]
 
 @dataclass(frozen=True, slots=True)
 class PipelineResult:
-    """What a pipeline run produced (paths are inside the run's directory)."""
+    """What a pipeline run produced (paths are inside the run's directory); ``warnings``:
+    TAPP I's (:attr:`tapp.tracking.simulate.Simulation.warnings`)."""
 
     directory: Path
     observations: int
     process: dict
     guidance: GuidanceResult
     wall_s: dict[str, float]
+    warnings: tuple[str, ...] = ()
 
 
 def _nothing(stage: str, done: int, total: int) -> None:
@@ -173,7 +175,7 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
     (work / OUTPUTS["guide_md"]).write_text(guidance_markdown(guidance), "utf-8")
     observations = int(sim.tape.pairs.n_obs.sum())
     write_report(work, pipeline, run, header, content, guidance, observations, wall, plots)
-    return PipelineResult(work, observations, content, guidance, wall)
+    return PipelineResult(work, observations, content, guidance, wall, sim.warnings)
 
 
 def check_tracking_case(pipeline: str, data_interval_s: float, network: float,
