@@ -35,7 +35,7 @@ from tapp.io.tape.t13_hdf5 import t13_file_writer
 from tapp.io.tape.t32_hdf5 import read_t32, t32_file_writer
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
 from tapp.pipeline.steps import process_tape
-from tapp.processor.deck import Deck
+from tapp.processor.deck import Deck, observations_used
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.tracking.scenario import Scenario, parse_scenario
@@ -61,11 +61,14 @@ Progress = Callable[[str, int, int], None]
 
 @dataclass(frozen=True, slots=True)
 class PipelineResult:
-    """What a pipeline run produced (paths are inside the run's directory); ``warnings``:
-    TAPP I's (:attr:`tapp.tracking.simulate.Simulation.warnings`)."""
+    """What a pipeline run produced (paths are inside the run's directory): the scalar
+    observations TAPP I simulated and those TAPP III used (the deck's time-station flags
+    leave some out), and TAPP I's ``warnings``
+    (:attr:`tapp.tracking.simulate.Simulation.warnings`)."""
 
     directory: Path
-    observations: int
+    observations_simulated: int
+    observations_used: int
     process: dict
     guidance: GuidanceResult
     wall_s: dict[str, float]
@@ -173,9 +176,12 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
 
     (work / OUTPUTS["guide_json"]).write_text(json.dumps(guidance_dict(guidance)), "utf-8")
     (work / OUTPUTS["guide_md"]).write_text(guidance_markdown(guidance), "utf-8")
-    observations = int(sim.tape.pairs.n_obs.sum())
+    pairs = sim.tape.pairs
+    observations = int(pairs.n_obs.sum())
     write_report(work, pipeline, run, header, content, guidance, observations, wall, plots)
-    return PipelineResult(work, observations, content, guidance, wall, sim.warnings)
+    return PipelineResult(work, observations,
+                          observations_used(plan, pairs.k, pairs.station, pairs.n_obs),
+                          content, guidance, wall, sim.warnings)
 
 
 def check_tracking_case(pipeline: str, data_interval_s: float, network: float,
@@ -241,7 +247,7 @@ def tracking_case(pipeline: str, data_interval_s: float, network: float, network
 
     Outputs: σ of each final-miss component (Monte Carlo) and the semi-axes of the 1σ
     B-plane dispersion ellipse, the 99 % and mean total ΔV (m/s), the fraction outside the
-    corridor, and the observations simulated.
+    corridor, and the observations simulated and those used (the network's).
     """
     pipe = check_tracking_case(pipeline, data_interval_s, network, networks, samples, seed)
     with tempfile.TemporaryDirectory() as tmp:
@@ -255,10 +261,13 @@ def trade_outputs(result: PipelineResult) -> dict[str, float]:
 
     σ of each final-miss component (``sigma_<name>``), the 1σ B-plane ellipse's semi-axes
     (km), the mean and 99 % total ΔV, the fraction of samples outside the corridor (NaN
-    without one) and the observations simulated.
+    without one), the scalar observations TAPP I simulated (``observations_simulated``) and
+    those TAPP III used (``observations_used``: the deck's time-station flags, a sweep's
+    network, leave the others out).
     """
     mc = result.guidance.monte_carlo
-    out = {"observations": float(result.observations)}
+    out = {"observations_simulated": float(result.observations_simulated),
+           "observations_used": float(result.observations_used)}
     for i, name in enumerate(result.guidance.miss_name):
         out[f"sigma_{name}"] = float(np.sqrt(mc.miss_cov[i, i]))
     if mc.ellipse is not None:

@@ -866,9 +866,24 @@ def bind(deck: Deck, header, source: str) -> Plan:
     return _Binder(deck, header, source).plan()
 
 
+def observations_used(plan: Plan, k: np.ndarray, station: np.ndarray, n_obs: np.ndarray
+                      ) -> int:
+    """Return the scalar observations TAPP III reads of a tape's (record, station) pairs:
+    those in no window of the plan's time-station flags Δ_TS(k, s) = 0 (seed §4.3.4), which
+    leave a pair out whole (``Processor._keep`` of :mod:`tapp.processor.sequencing`).
+
+    ``k`` (1-based records), ``station`` (tape numbers) and ``n_obs`` are the tape's
+    ``pairs/`` datasets, each (n_pairs,).
+    """
+    off = np.zeros(np.shape(k), dtype=bool)
+    for flag in plan.stations_off:
+        off |= (station == flag.station) & (k >= flag.k_first) & (k <= flag.k_last)
+    return int(np.sum(np.asarray(n_obs)[~off]))
+
+
 def deck_json(deck: Deck) -> str:
     """The deck as JSON (provenance on the T32 tape)."""
     return json.dumps(deck.model_dump(mode="json"), sort_keys=True)
 
 
-__all__ = ["Deck", "ISOLATED_SETS", "bind", "deck_json", "read_deck"]
+__all__ = ["Deck", "ISOLATED_SETS", "bind", "deck_json", "observations_used", "read_deck"]
