@@ -343,10 +343,6 @@ class _Binder:
         self.stochastic = getattr(header, "stochastic", None)
         self.stochastic_names = tuple(n for n, kind in zip(self.names, header.parameters.kind,
                                                            strict=True) if kind == STOCHASTIC)
-        for world, on in (("fit", "estimate"), ("real", "include")):
-            if getattr(deck, world).stochastic == on and not self.stochastic_names:
-                raise self.fail(f"{world}.stochastic", "\"ignore\" (the tape has no "
-                                "stochastic accelerations)", on)
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -809,7 +805,10 @@ class _Binder:
                             "commands + recycles x recycle commands)",
                             f"{entities:,} entities, {size:,} numbers")
 
-    def plan(self) -> Plan:
+    def _check_tape(self) -> None:
+        """Refuse a deck written for another tape, by what its [tape] table says of it (the
+        first check: a deck for another tape is wrong there first, whatever else does not
+        fit), then world modes the tape has nothing for."""
         d = self.deck
         if d.tape.iden is not None and d.tape.iden != self.h.iden:
             raise self.fail("tape.iden", f"the tape's iden {self.h.iden!r}", d.tape.iden)
@@ -823,6 +822,14 @@ class _Binder:
             raise self.fail("tape.parameters", f"the tape's {self.n_o} parameter names in "
                             f"order (position {i + 1}: {tape_has})",
                             given[i] if i < len(given) else "none (the list ends)")
+        for world, on in (("fit", "estimate"), ("real", "include")):
+            if getattr(d, world).stochastic == on and not self.stochastic_names:
+                raise self.fail(f"{world}.stochastic", "\"ignore\" (the tape has no "
+                                "stochastic accelerations)", on)
+
+    def plan(self) -> Plan:
+        d = self.deck
+        self._check_tape()
         systems, s0, lam0 = self.systems()
         self._check_positions()
         prints = (0, *self.time_list(d.times.print, "times.print", first=0))
