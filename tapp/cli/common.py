@@ -44,7 +44,8 @@ Exit codes (every command keeps this contract)
     Anything else: a computation that could not be completed (``tapp search``, or the
     ``[targeting]`` of ``tapp simulate``: a trajectory that misses the target's sphere of
     influence, or a conic first guess that cannot be formed; ``tapp dc``, ``tapp ekf``: too
-    few measurements in the arc; ``tapp iter``: every case of the sweep failed, the message
+    few measurements in the data (an arc too short for them, where a longer one would do, is
+    bad input: 2, naming ``--arc``); ``tapp iter``: every case of the sweep failed, the message
     giving the first case's error, after the summary is printed and the results file, which
     records every failure, is written), or an internal failure (a bug; out of memory). Also
     one line on stderr.

@@ -37,10 +37,12 @@ note on stderr. JSON: ``observations_made_under`` (null when the file states not
 
 Bad input (2) includes an ``--arc`` without its unit (a duration is a number and one of
 s, m, h, d: ``24h``, ``90m``, ``3600s``, ``2d``; a bare ``24`` is refused, naming those
-forms), an arc longer than the data span (``--arc`` and the span named), an unknown
-``--earth-orientation`` and an epoch or span outside the EOP table; no measurement in the
-arc fails like any computation that cannot start (1, "too few measurements"), for ``tapp
-ekf`` too. Observation files (``--obs``, ``--save-obs``): HDF5,
+forms), an arc longer than the data span (``--arc`` and the span named), an arc too short
+to hold the measurements the estimator needs (``tapp dc`` 6, ``tapp ekf`` 1) where a longer
+one would (``--arc`` and the time by which the data hold them named), an unknown
+``--earth-orientation`` and an epoch or span outside the EOP table; data that hold too few
+measurements in all fail like any computation that cannot start (1, "too few
+measurements"). Observation files (``--obs``, ``--save-obs``): HDF5,
 CSV, or a CCSDS TDM in KVN (``.tdm``; :mod:`tapp.io.obsfile`, :mod:`tapp.io.ccsds.tdm`).
 """
 
@@ -67,7 +69,7 @@ from tapp.cli.common import (
     run_guarded,
     seed_option,
 )
-from tapp.errors import InputError
+from tapp.errors import InputError, TooFewMeasurementsError
 
 if TYPE_CHECKING:
     import numpy as np
@@ -122,6 +124,22 @@ def parse_duration_s(text: str, option: str = "--arc") -> float:
     if not float(m.group(1)) > 0:
         raise InputError(option, "value", f"a duration > 0 with a unit: {DURATION_FORMS}", text)
     return float(m.group(1)) * _UNIT_S[m.group(2)]
+
+
+def _short_arc(exc: TooFewMeasurementsError, data: Observations, arc: str
+               ) -> InputError | TooFewMeasurementsError:
+    """The error of an arc (``--arc`` as typed: ``arc``) of ``data`` holding fewer
+    measurements than the estimator needs (``exc``): the option's (exit 2), naming the time
+    by which the data hold enough, when they do; else ``exc`` (exit 1)."""
+    import numpy as np
+
+    if data.count < exc.need:
+        return exc
+    rows = math.ceil(exc.need / len(data.kinds))  # a row holds one value of each kind
+    enough_s = float(np.sort(data.t_s)[rows - 1])
+    return InputError("--arc", "value", f"an arc holding at least {exc.need} measurement"
+                      f"{'s' if exc.need > 1 else ''} (it holds {exc.got}; these data hold "
+                      f"them by t = {enough_s:.0f} s)", arc)
 
 
 def _scenario(scenario: Path | None) -> Path:
@@ -319,6 +337,8 @@ def dc(
         try:
             result = differential_correction(window, prop, x_start, orientation=orient,
                                              settings=settings)
+        except TooFewMeasurementsError as exc:
+            raise _short_arc(exc, data, arc) from None
         except IllConditionedError as exc:
             with delivering(json_out, _ill_conditioned_dict(exc, used), outputs) as report:
                 if report:
@@ -503,13 +523,16 @@ def ekf(
         prop = _model_pair(truth, stm, orient)
         p0 = _apriori(apriori, study)
         q_km2_s3 = nonnegative_option("--process-noise", process_noise)
-        data = _observations(x_true, truth, stations, obs, study,
-                             seed_option("--seed", seed), orient,
-                             earth_orientation is not None).arc(arc_s, "--arc", got=arc)
+        every = _observations(x_true, truth, stations, obs, study,
+                              seed_option("--seed", seed), orient, earth_orientation is not None)
+        data = every.arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, data.t_s)
         x_start = setup.initial_estimate(x_true, setup.offset(study))
-        result = extended_kalman_filter(data, prop, x_start, p0, orientation=orient,
-                                        q_km2_s3=q_km2_s3)
+        try:
+            result = extended_kalman_filter(data, prop, x_start, p0, orientation=orient,
+                                            q_km2_s3=q_km2_s3)
+        except TooFewMeasurementsError as exc:
+            raise _short_arc(exc, every, arc) from None
         per_pass = [{"range_m": p.max_abs[0] * 1e3, "range_rate_mm_s": p.max_abs[1] * 1e6}
                     for p in result.passes]
         content = {"passes": [{"station": p.station, "t_start_s": p.t_start_s,
