@@ -52,6 +52,11 @@ Exit codes (every command keeps this contract)
 130
     Interrupted (Ctrl-C).
 
+Warnings (the run goes on: an old tape without checksums, a station that yields no
+observation) are one line each on stderr, ``warning: SOURCE: FIELD: what`` like the errors
+(:func:`echo_warning`, :func:`one_line_warnings`); a command's own (not a library's) come
+last, once its outputs are written, so that a failed run's one line is its error.
+
 Limits checked before allocating: output grids of at most :data:`MAX_GRID_SAMPLES` samples
 (``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases (the product of
 the loops' ``sets``), TAPP II Monte Carlos of ``tapp.guidance.study.MIN_SAMPLES`` to
@@ -113,6 +118,7 @@ import shutil
 import signal
 import sys
 import tempfile
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -168,7 +174,8 @@ class Group(TyperGroup):
 
 class _OneLineErrors(Group):
     """The root group, the CLI's edge: a usage error (a bad or missing option) is one line,
-    exit 2; help text is shown as written (no square bracket taken for rich markup); SIGINT
+    exit 2; a warning is one line (:func:`one_line_warnings`); help text is shown as written
+    (no square bracket taken for rich markup); SIGINT
     and SIGTERM stop the run with one line (exit 130 and 143, :class:`Interrupted`); standard
     output that cannot be written is one line, exit 1; the run's temporaries live in a
     private folder removed at the end (:func:`run_folder`)."""
@@ -184,7 +191,7 @@ class _OneLineErrors(Group):
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
         _hold_standard_output()
         try:
-            with stopping_on_signals(), run_folder():
+            with stopping_on_signals(), run_folder(), one_line_warnings():
                 code = super().main(args, prog_name, complete_var, False, **extra)
                 sys.stdout.flush()  # here, where a failure is one line, not at exit
         except InputError as exc:  # from an option's own check while the line is parsed
@@ -208,6 +215,26 @@ class _OneLineErrors(Group):
             echo_error(exc)
             code = EXIT_FAILURE
         sys.exit(code if isinstance(code, int) else 0)
+
+
+@contextmanager
+def one_line_warnings() -> Iterator[None]:
+    """Within: a Python warning the library gives (an old tape's: no checksums, normal
+    matrices; an old results file's) is written as one ``warning: MESSAGE`` line on stderr,
+    not as Python's lines with the source path, line number and code. Which warnings are
+    shown, and where, is left to the filters (``-W``, ``PYTHONWARNINGS``) and to whoever
+    records them (``warnings.catch_warnings(record=True)``): only their text changes."""
+    saved = warnings.formatwarning
+    warnings.formatwarning = _one_line_warning
+    try:
+        yield
+    finally:
+        warnings.formatwarning = saved
+
+
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, line: str | None = None) -> str:
+    return _line("warning", str(message)) + "\n"
 
 
 #: The signals that stop a run cleanly (:class:`Interrupted`).
@@ -573,17 +600,18 @@ def progress_bar(*columns: ProgressColumn | str, quiet: bool) -> Progress:
 
 def echo_error(exc: BaseException) -> None:
     """Write ``error: MESSAGE`` on stderr, the message on one line."""
-    _echo_line("error", str(exc))
+    typer.echo(_line("error", str(exc)), err=True)
 
 
 def echo_warning(message: str) -> None:
     """Write ``warning: MESSAGE`` on stderr, the message on one line: something the run
     goes on with, which the user may not have meant (it is in the command's JSON too)."""
-    _echo_line("warning", message)
+    typer.echo(_line("warning", message), err=True)
 
 
-def _echo_line(kind: str, message: str) -> None:
-    typer.echo(f"{kind}: {' '.join(message.split())}", err=True)
+def _line(kind: str, message: str) -> str:
+    """``KIND: MESSAGE``, the message's whitespace (line breaks too) made single spaces."""
+    return f"{kind}: {' '.join(message.split())}"
 
 
 def _to_jsonable(obj: object) -> object:
