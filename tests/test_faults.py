@@ -147,6 +147,27 @@ def test_a_full_standard_output_is_one_line_exit_1(temporary: Path, leo_tape: Pa
     assert names(temporary) == []
 
 
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+@pytest.mark.parametrize("args", [
+    ["simulate", LEO, "-o", "{out}/run.t13.h5", "--oem", "{out}/new/run.oem"],
+    ["examples", "{out}/examples", "--json", "{out}/examples.json"],
+    ["tape", "info", "{tape}", "--json", "{out}/info.json"],
+])
+def test_a_report_that_cannot_be_printed_leaves_no_new_output(
+        temporary: Path, tmp_path: Path, leo_tape: Path, args: list[object]) -> None:
+    """The report is printed before the outputs are renamed into place (issue 28:
+    ``tapp simulate -o p.t13.h5 | head -1`` exited 1 and left p.t13.h5)."""
+    out = tmp_path / "out"
+    out.mkdir()
+    with open("/dev/full", "w") as stdout:
+        res = run_tapp(temporary, *(str(a).format(out=out, tape=leo_tape) for a in args),
+                       stdout=stdout)
+    assert res.returncode == 1
+    assert one_line(res.stderr) == f"error: standard output: {NO_SPACE}"
+    assert names(out) == []
+    assert names(temporary) == []
+
+
 def test_a_closed_standard_output_is_one_line_exit_1(temporary: Path, tmp_path: Path) -> None:
     tape = tmp_path / "leo.t13.h5"
     res = subprocess.run(["sh", "-c", 'exec "$@" >&-', "sh",

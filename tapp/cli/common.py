@@ -44,12 +44,18 @@ Exit codes (every command keeps this contract)
     Anything else: a computation that could not be completed (``tapp search``, or the
     ``[targeting]`` of ``tapp simulate``: a trajectory that misses the target's sphere of
     influence, or a conic first guess that cannot be formed; ``tapp dc``, ``tapp ekf``: too
-    few measurements in the arc; ``tapp iter``: every case of the sweep failed, the message
+    few measurements in the data (an arc too short for them, where a longer one would do, is
+    bad input: 2, naming ``--arc``); ``tapp iter``: every case of the sweep failed, the message
     giving the first case's error, after the summary is printed and the results file, which
     records every failure, is written), or an internal failure (a bug; out of memory). Also
     one line on stderr.
 130
     Interrupted (Ctrl-C).
+
+Warnings (the run goes on: an old tape without checksums, a station that yields no
+observation) are one line each on stderr, ``warning: SOURCE: FIELD: what`` like the errors
+(:func:`echo_warning`, :func:`one_line_warnings`); a command's own (not a library's) come
+last, once its outputs are written, so that a failed run's one line is its error.
 
 Limits checked before allocating: output grids of at most :data:`MAX_GRID_SAMPLES` samples
 (``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases (the product of
@@ -81,8 +87,9 @@ propagation. An ITER case that runs longer than its body's ``timeout_s`` (progra
 3600 s unless the sweep file says otherwise) is stopped and recorded as failed.
 
 What is left on disk: nothing new when a command fails. Outputs are written to hidden
-temporaries beside their targets and renamed over them only once all are complete
-(:class:`tapp.io.outputs.OutputSet`); on any failure the old outputs are left untouched.
+temporaries beside their targets and renamed over them only once all are complete and the
+report is printed (:func:`delivering`, :class:`tapp.io.outputs.OutputSet`); on any failure,
+standard output that cannot be written among them, the old outputs are left untouched.
 A killed run leaves the old outputs or the new ones, each complete, and possibly hidden
 ``.NAME.*.tmp`` temporaries, which the next write of the same output removes. ``tapp iter``
 checkpoints its results file (each time atomically) as cases complete, so that a killed or
@@ -111,6 +118,7 @@ import shutil
 import signal
 import sys
 import tempfile
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -166,7 +174,8 @@ class Group(TyperGroup):
 
 class _OneLineErrors(Group):
     """The root group, the CLI's edge: a usage error (a bad or missing option) is one line,
-    exit 2; help text is shown as written (no square bracket taken for rich markup); SIGINT
+    exit 2; a warning is one line (:func:`one_line_warnings`); help text is shown as written
+    (no square bracket taken for rich markup); SIGINT
     and SIGTERM stop the run with one line (exit 130 and 143, :class:`Interrupted`); standard
     output that cannot be written is one line, exit 1; the run's temporaries live in a
     private folder removed at the end (:func:`run_folder`)."""
@@ -182,7 +191,7 @@ class _OneLineErrors(Group):
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
         _hold_standard_output()
         try:
-            with stopping_on_signals(), run_folder():
+            with stopping_on_signals(), run_folder(), one_line_warnings():
                 code = super().main(args, prog_name, complete_var, False, **extra)
                 sys.stdout.flush()  # here, where a failure is one line, not at exit
         except InputError as exc:  # from an option's own check while the line is parsed
@@ -206,6 +215,26 @@ class _OneLineErrors(Group):
             echo_error(exc)
             code = EXIT_FAILURE
         sys.exit(code if isinstance(code, int) else 0)
+
+
+@contextmanager
+def one_line_warnings() -> Iterator[None]:
+    """Within: a Python warning the library gives (an old tape's: no checksums, normal
+    matrices; an old results file's) is written as one ``warning: MESSAGE`` line on stderr,
+    not as Python's lines with the source path, line number and code. Which warnings are
+    shown, and where, is left to the filters (``-W``, ``PYTHONWARNINGS``) and to whoever
+    records them (``warnings.catch_warnings(record=True)``): only their text changes."""
+    saved = warnings.formatwarning
+    warnings.formatwarning = _one_line_warning
+    try:
+        yield
+    finally:
+        warnings.formatwarning = saved
+
+
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, line: str | None = None) -> str:
+    return _line("warning", str(message)) + "\n"
 
 
 #: The signals that stop a run cleanly (:class:`Interrupted`).
@@ -571,8 +600,18 @@ def progress_bar(*columns: ProgressColumn | str, quiet: bool) -> Progress:
 
 def echo_error(exc: BaseException) -> None:
     """Write ``error: MESSAGE`` on stderr, the message on one line."""
-    message = " ".join(str(exc).split())
-    typer.echo(f"error: {message}", err=True)
+    typer.echo(_line("error", str(exc)), err=True)
+
+
+def echo_warning(message: str) -> None:
+    """Write ``warning: MESSAGE`` on stderr, the message on one line: something the run
+    goes on with, which the user may not have meant (it is in the command's JSON too)."""
+    typer.echo(_line("warning", message), err=True)
+
+
+def _line(kind: str, message: str) -> str:
+    """``KIND: MESSAGE``, the message's whitespace (line breaks too) made single spaces."""
+    return f"{kind}: {' '.join(message.split())}"
 
 
 def _to_jsonable(obj: object) -> object:
@@ -628,12 +667,23 @@ def add_json(outputs: OutputSet, value: str | None, content: object) -> None:
                                                                 "utf-8"))
 
 
-def write_json(value: str | None, content: object) -> None:
-    """Deliver ``content`` where ``--json`` asks: on standard output (``-``), into its file
-    (atomically), or nowhere (not given)."""
-    if value == STDOUT:
-        print_json(content)
-    elif value is not None:
-        outputs = OutputSet()
-        add_json(outputs, value, content)
-        outputs.commit()
+@contextmanager
+def delivering(value: str | None, content: object, outputs: OutputSet | None = None
+               ) -> Iterator[bool]:
+    """Deliver a command's results: ``content`` where ``--json`` asks (on standard output
+    for ``-``, into its file, or nowhere when not given) and the command's other
+    ``outputs``, all together with the report the block prints.
+
+    Every file is written to its temporary first; then the JSON of ``--json -`` is printed,
+    the block runs (it yields False when that JSON stands in place of the report) and
+    standard output is flushed; only then are the files renamed into place. Standard output
+    that cannot be written (full, closed, or a reader gone: ``| head -1``) thus leaves no
+    new file, as any failure (:meth:`tapp.io.outputs.OutputSet.staged`).
+    """
+    outputs = OutputSet() if outputs is None else outputs
+    add_json(outputs, value, content)
+    with outputs.staged():
+        if value == STDOUT:
+            print_json(content)
+        yield value != STDOUT
+        sys.stdout.flush()

@@ -3,23 +3,27 @@
 from __future__ import annotations
 
 import shutil
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from tapp.cli.common import STDOUT, JsonOpt, app, json_file, run_guarded, write_json
+from tapp.cli.common import JsonOpt, app, delivering, json_file, run_guarded
 
 
-def copy_examples(out_dir: Path, option: str = "DIR") -> tuple[Path, ...]:
+@contextmanager
+def copying_examples(out_dir: Path, option: str = "DIR") -> Iterator[tuple[Path, ...]]:
     """Copy every shipped file (:data:`tapp.examples.FILES`) into ``out_dir``, a new or empty
     folder.
 
     The files are written into a hidden folder beside ``out_dir`` and renamed to it once
-    all are there: nothing is left half-copied.
+    the block has run (the report of the copies printed): nothing is left half-copied, and
+    nothing at all if the block raises.
 
-    Returns
-    -------
+    Yields
+    ------
     tuple of Path
         The copies, in the order of :data:`tapp.examples.FILES`.
 
@@ -35,7 +39,7 @@ def copy_examples(out_dir: Path, option: str = "DIR") -> tuple[Path, ...]:
                        "never over files") as work:
         for name in FILES:
             shutil.copyfile(FOLDER / name, work / name)
-    return tuple(Path(out_dir) / name for name in FILES)
+        yield tuple(Path(out_dir) / name for name in FILES)
 
 
 @app.command("examples")
@@ -50,14 +54,13 @@ def examples_cmd(
 
     def body() -> None:
         check_paths({}, {"--json": json_file(json_out)})
-        copied = copy_examples(directory)
-        write_json(json_out, {"directory": str(directory), "files": [
-            {"kind": FILES[path.name], "path": str(path)} for path in copied]})
-        if json_out == STDOUT:
-            return
-        width = max(len(kind) for kind in FILES.values())
-        typer.echo(f"{len(copied)} example files copied into {directory}:")
-        for path in copied:
-            typer.echo(f"  {FILES[path.name]:<{width}}  {path}")
+        with copying_examples(directory) as copied:
+            files = [{"kind": FILES[path.name], "path": str(path)} for path in copied]
+            with delivering(json_out, {"directory": str(directory), "files": files}) as report:
+                if report:
+                    width = max(len(kind) for kind in FILES.values())
+                    typer.echo(f"{len(copied)} example files copied into {directory}:")
+                    for path in copied:
+                        typer.echo(f"  {FILES[path.name]:<{width}}  {path}")
 
     run_guarded(body)

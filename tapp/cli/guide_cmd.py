@@ -27,11 +27,10 @@ from tapp.cli.common import (
     SchedulerOpt,
     SerialOpt,
     WorkersOpt,
-    add_json,
     app,
+    delivering,
     execution_options,
     json_file,
-    print_json,
     progress_bar,
     run_guarded,
     scheduler_error,
@@ -119,7 +118,6 @@ def guide_cmd(
                         quiet=json_out == STDOUT)
         content = guidance_dict(result)
         outputs = OutputSet()
-        add_json(outputs, json_out, content)
         if plots is not None:
             title = f"{result.tape_iden}: {result.title}" if result.title else result.tape_iden
             if bplane_rows(result.miss_name) is not None:
@@ -127,10 +125,8 @@ def guide_cmd(
                     result, tmp, f"{title}: final B-plane miss"))
             outputs.add("--plots", plots / HISTOGRAM_PNG, lambda tmp: plot_dv_histograms(
                 result, tmp, f"{title}: ΔV per manoeuvre"))
-        outputs.commit()
-        if json_out == STDOUT:
-            print_json(content)
-        else:
-            typer.echo(guidance_markdown(result), nl=False)
+        with delivering(json_out, content, outputs) as report:
+            if report:
+                typer.echo(guidance_markdown(result), nl=False)
 
     run_guarded(body)

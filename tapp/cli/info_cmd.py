@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from tapp.cli.common import STDOUT, JsonOpt, app, json_file, run_guarded, write_json
+from tapp.cli.common import JsonOpt, app, delivering, json_file, run_guarded
 
 _PACKAGES = ("numpy", "scipy", "casadi", "h5py", "filterpy", "jplephem", "skyfield-data",
              "pyerfa", "astropy-iers-data", "dask", "typer")
@@ -52,22 +52,21 @@ def info(json_out: JsonOpt = None) -> None:
              f"{_date(eop.mjd[-1])} (predicted from {_date(eop.predicted_from_mjd)})",
              eop.source),
             ("compiled propagators", "cache", str(cache_dir()))]
-        write_json(json_out, {"versions": versions, "data": [
-            {"table": t, "coverage": c, "source": s} for t, c, s in data]})
-        if json_out == STDOUT:
-            return
-        console = Console(width=110)
-        table = Table(title="versions")
-        table.add_column("package")
-        table.add_column("version")
-        for name, value in versions.items():
-            table.add_row(name, value)
-        console.print(table)
-        table = Table(title="bundled data")
-        for col in ("table", "coverage", "source"):
-            table.add_column(col)
-        for row in data:
-            table.add_row(*row)
-        console.print(table)
+        with delivering(json_out, {"versions": versions, "data": [
+                {"table": t, "coverage": c, "source": s} for t, c, s in data]}) as report:
+            if report:
+                console = Console(width=110)
+                table = Table(title="versions")
+                table.add_column("package")
+                table.add_column("version")
+                for name, value in versions.items():
+                    table.add_row(name, value)
+                console.print(table)
+                table = Table(title="bundled data")
+                for col in ("table", "coverage", "source"):
+                    table.add_column(col)
+                for row in data:
+                    table.add_row(*row)
+                console.print(table)
 
     run_guarded(body)

@@ -30,10 +30,10 @@ from tapp.cli.common import (
     SerialOpt,
     WorkersOpt,
     app,
+    delivering,
     json_file,
     run_guarded,
     scheduler_error,
-    write_json,
 )
 from tapp.errors import InputError, TappError
 
@@ -100,9 +100,9 @@ def iter_command(
                        *(make_folders(csv.parent) if csv is not None else ())]
             result = run_sweep(sweep, output_h5=h5_path, output_csv=csv, execution=execution,
                                progress=json_out != STDOUT)
-            write_json(json_out, _summary_dict(result))
-            if json_out != STDOUT:
-                _print_summary(result)
+            with delivering(json_out, _summary_dict(result)) as report:
+                if report:
+                    _print_summary(result)
             result.raise_if_all_failed()
         except SweepInputError as exc:
             source = "command line" if exc.source == "options" else exc.source

@@ -1,7 +1,7 @@
 """``tapp dc``, ``tapp ekf``, ``tapp rsig``: the approximate-STM study's estimators.
 
 Exit codes of ``tapp dc`` (the outcomes of :mod:`tapp.od.batch`; the output is printed and
-``--save-obs`` written in every case but bad input):
+``--save-obs`` written, after the DC and with its report, in each of them):
 
 = ============================================================================================
 0 converged: the RMS settled within the fit limit
@@ -37,10 +37,12 @@ note on stderr. JSON: ``observations_made_under`` (null when the file states not
 
 Bad input (2) includes an ``--arc`` without its unit (a duration is a number and one of
 s, m, h, d: ``24h``, ``90m``, ``3600s``, ``2d``; a bare ``24`` is refused, naming those
-forms), an arc longer than the data span (``--arc`` and the span named), an unknown
-``--earth-orientation`` and an epoch or span outside the EOP table; no measurement in the
-arc fails like any computation that cannot start (1, "too few measurements"), for ``tapp
-ekf`` too. Observation files (``--obs``, ``--save-obs``): HDF5,
+forms), an arc longer than the data span (``--arc`` and the span named), an arc too short
+to hold the measurements the estimator needs (``tapp dc`` 6, ``tapp ekf`` 1) where a longer
+one would (``--arc`` and the time by which the data hold them named), an unknown
+``--earth-orientation`` and an epoch or span outside the EOP table; data that hold too few
+measurements in all fail like any computation that cannot start (1, "too few
+measurements"). Observation files (``--obs``, ``--save-obs``): HDF5,
 CSV, or a CCSDS TDM in KVN (``.tdm``; :mod:`tapp.io.obsfile`, :mod:`tapp.io.ccsds.tdm`).
 """
 
@@ -54,11 +56,11 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from tapp.cli.common import (
-    STDOUT,
     EarthOrientationOpt,
     JsonOpt,
     app,
     check_grid_size,
+    delivering,
     earth_orientation_option,
     grid_samples,
     json_file,
@@ -66,9 +68,8 @@ from tapp.cli.common import (
     positive_option,
     run_guarded,
     seed_option,
-    write_json,
 )
-from tapp.errors import InputError
+from tapp.errors import InputError, TooFewMeasurementsError
 
 if TYPE_CHECKING:
     import numpy as np
@@ -123,6 +124,22 @@ def parse_duration_s(text: str, option: str = "--arc") -> float:
     if not float(m.group(1)) > 0:
         raise InputError(option, "value", f"a duration > 0 with a unit: {DURATION_FORMS}", text)
     return float(m.group(1)) * _UNIT_S[m.group(2)]
+
+
+def _short_arc(exc: TooFewMeasurementsError, data: Observations, arc: str
+               ) -> InputError | TooFewMeasurementsError:
+    """The error of an arc (``--arc`` as typed: ``arc``) of ``data`` holding fewer
+    measurements than the estimator needs (``exc``): the option's (exit 2), naming the time
+    by which the data hold enough, when they do; else ``exc`` (exit 1)."""
+    import numpy as np
+
+    if data.count < exc.need:
+        return exc
+    rows = math.ceil(exc.need / len(data.kinds))  # a row holds one value of each kind
+    enough_s = float(np.sort(data.t_s)[rows - 1])
+    return InputError("--arc", "value", f"an arc holding at least {exc.need} measurement"
+                      f"{'s' if exc.need > 1 else ''} (it holds {exc.got}; these data hold "
+                      f"them by t = {enough_s:.0f} s)", arc)
 
 
 def _scenario(scenario: Path | None) -> Path:
@@ -308,29 +325,30 @@ def dc(
                              seed_option("--seed", seed), orient, earth_orientation is not None)
         window = data.arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, window.t_s)
+        outputs = OutputSet()
         if save_obs is not None:
             notes = (f"observations of {orbit} for tapp dc (scenario {path.name})",
                      f"read from {obs.name}" if obs is not None else "simulated with Earth "
                      f"orientation {setup.describe_orientation(used)}")
-            outputs = OutputSet()
             outputs.add("--save-obs", save_obs, observations_file_writer(
                 save_obs, data, epoch=setup.epoch(study), spacecraft=_spacecraft(orbit),
                 comments=notes))
-            outputs.commit()
         x_start = setup.initial_estimate(x_true, setup.offset(study))
         try:
             result = differential_correction(window, prop, x_start, orientation=orient,
                                              settings=settings)
+        except TooFewMeasurementsError as exc:
+            raise _short_arc(exc, data, arc) from None
         except IllConditionedError as exc:
-            write_json(json_out, _ill_conditioned_dict(exc, used))
-            if json_out != STDOUT:
-                _print_ill_conditioned(exc, used)
+            with delivering(json_out, _ill_conditioned_dict(exc, used), outputs) as report:
+                if report:
+                    _print_ill_conditioned(exc, used)
             return EXIT_ILL_CONDITIONED
         rate = _rate(window, prop, x_true, orient)
         err_km = float(np.linalg.norm(result.x0[:3] - x_true[:3]))
         code = _exit_code(result.status)
         q = result.contraction_factor
-        write_json(json_out, {
+        content = {
             "converged": result.converged, "status": result.status, "exit_code": code,
             "reason": result.reason, "iterations": len(result.iterations),
             "converged_at": result.converged_at, "rms": result.rms,
@@ -340,10 +358,11 @@ def dc(
             "predicted_rate": None if rate is None else rate.rho,
             "eigenvalues": _eigen_json(rate), "final_elements": _elements_dict(result.x0),
             "position_error_km": err_km, "measurements": result.n_measurements,
-            "earth_orientation": used, "observations_made_under": _made_under_json(window)})
-        if json_out != STDOUT:
-            _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}), {orient.model}: "
-                      f"{result.status}", err_km, used)
+            "earth_orientation": used, "observations_made_under": _made_under_json(window)}
+        with delivering(json_out, content, outputs) as report:
+            if report:
+                _print_dc(result, rate, f"DC {orbit}, {arc}, ({truth},{stm}), {orient.model}: "
+                          f"{result.status}", err_km, used)
         return code
 
     code = run_guarded(body)
@@ -388,15 +407,20 @@ def _print_dc(result, rate: PredictedRate | None, title: str, err_km: float, use
 
 def _noise_model_line(result: DCResult) -> str:
     """The last RMS against the noise model's bound, and the verdict where there is an
-    estimate to judge (the RMS settled: :mod:`tapp.od.batch`)."""
+    estimate to judge (the RMS settled within the fit limit: :mod:`tapp.od.batch`).
+
+    A stalled DC's RMS settled too, above the fit limit: its one verdict is its outcome
+    (the data are not fitted), and the line gives the numbers only.
+    """
     from tapp.od.batch import N_STATE, NOISE_MODEL_PROBABILITY, DCOutcome
 
-    verdict = {DCOutcome.CONVERGED: "consistent with the noise model",
-               DCOutcome.INCONSISTENT: "inconsistent with the noise model"}.get(
-        DCOutcome(result.status), f"not judged ({result.status}: no settled estimate)")
+    verdict = {DCOutcome.CONVERGED: ": consistent with the noise model",
+               DCOutcome.INCONSISTENT: ": inconsistent with the noise model",
+               DCOutcome.STALLED: ""}.get(
+        DCOutcome(result.status), f": not judged ({result.status}: no settled estimate)")
     return (f"residuals: RMS {result.rms[-1]:.5g} against {result.rms_bound:.5g}, the "
             f"{100 * NOISE_MODEL_PROBABILITY:g} % χ² bound of {result.n_measurements} "
-            f"residuals and {N_STATE} estimated parameters: {verdict}")
+            f"residuals and {N_STATE} estimated parameters{verdict}")
 
 
 def _ill_conditioned_dict(exc: IllConditionedError, used: dict) -> dict:
@@ -499,32 +523,35 @@ def ekf(
         prop = _model_pair(truth, stm, orient)
         p0 = _apriori(apriori, study)
         q_km2_s3 = nonnegative_option("--process-noise", process_noise)
-        data = _observations(x_true, truth, stations, obs, study,
-                             seed_option("--seed", seed), orient,
-                             earth_orientation is not None).arc(arc_s, "--arc", got=arc)
+        every = _observations(x_true, truth, stations, obs, study,
+                              seed_option("--seed", seed), orient, earth_orientation is not None)
+        data = every.arc(arc_s, "--arc", got=arc)
         used = setup.orientation_record(orient, data.t_s)
         x_start = setup.initial_estimate(x_true, setup.offset(study))
-        result = extended_kalman_filter(data, prop, x_start, p0, orientation=orient,
-                                        q_km2_s3=q_km2_s3)
+        try:
+            result = extended_kalman_filter(data, prop, x_start, p0, orientation=orient,
+                                            q_km2_s3=q_km2_s3)
+        except TooFewMeasurementsError as exc:
+            raise _short_arc(exc, every, arc) from None
         per_pass = [{"range_m": p.max_abs[0] * 1e3, "range_rate_mm_s": p.max_abs[1] * 1e6}
                     for p in result.passes]
-        write_json(json_out, {"passes": [{"station": p.station, "t_start_s": p.t_start_s,
-                                          "t_end_s": p.t_end_s} for p in result.passes],
-                              "max_abs_residual_per_pass": per_pass, "earth_orientation": used,
-                              "observations_made_under": _made_under_json(data)})
-        if json_out == STDOUT:
-            return
-        table = Table(title=f"EKF {orbit}, {arc}, ({truth},{stm}), a priori {apriori}, "
-                      f"{orient.model}")
-        for col in ("pass", "station", "start (h)", "max|O-C| range (m)",
-                    "max|O-C| range-rate (mm/s)"):
-            table.add_column(col, justify="right")
-        for k, (p, r) in enumerate(zip(result.passes, per_pass, strict=True), start=1):
-            table.add_row(str(k), p.station, f"{p.t_start_s / 3600:.2f}", f"{r['range_m']:.1f}",
-                          f"{r['range_rate_mm_s']:.1f}")
-        console = Console(width=110)
-        console.print(table)
-        console.print(f"Earth orientation: {setup.describe_orientation(used)}")
+        content = {"passes": [{"station": p.station, "t_start_s": p.t_start_s,
+                               "t_end_s": p.t_end_s} for p in result.passes],
+                   "max_abs_residual_per_pass": per_pass, "earth_orientation": used,
+                   "observations_made_under": _made_under_json(data)}
+        with delivering(json_out, content) as report:
+            if report:
+                table = Table(title=f"EKF {orbit}, {arc}, ({truth},{stm}), a priori {apriori}, "
+                              f"{orient.model}")
+                for col in ("pass", "station", "start (h)", "max|O-C| range (m)",
+                            "max|O-C| range-rate (mm/s)"):
+                    table.add_column(col, justify="right")
+                for k, (p, r) in enumerate(zip(result.passes, per_pass, strict=True), start=1):
+                    table.add_row(str(k), p.station, f"{p.t_start_s / 3600:.2f}",
+                                  f"{r['range_m']:.1f}", f"{r['range_rate_mm_s']:.1f}")
+                console = Console(width=110)
+                console.print(table)
+                console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
     run_guarded(body)
 
@@ -564,16 +591,16 @@ def rsig(
         orient.check_covers(t[[0, -1]], "--hours")
         sig = r_signature(prop, x_true, t, orient)
         used = setup.orientation_record(orient, t)
-        write_json(json_out, {"t_s": sig.t_s, "R": sig.r, "earth_orientation": used})
-        if json_out == STDOUT:
-            return
-        table = Table(title=f"R(t) {orbit} ({truth},{stm}), {orient.model}")
-        table.add_column("t (h)", justify="right")
-        table.add_column("R", justify="right")
-        for k in np.linspace(0, len(t) - 1, 9).astype(int):
-            table.add_row(f"{t[k] / 3600:.1f}", f"{sig.r[k]:.6g}")
-        console = Console(width=80)
-        console.print(table)
-        console.print(f"Earth orientation: {setup.describe_orientation(used)}")
+        with delivering(json_out, {"t_s": sig.t_s, "R": sig.r, "earth_orientation": used}
+                        ) as report:
+            if report:
+                table = Table(title=f"R(t) {orbit} ({truth},{stm}), {orient.model}")
+                table.add_column("t (h)", justify="right")
+                table.add_column("R", justify="right")
+                for k in np.linspace(0, len(t) - 1, 9).astype(int):
+                    table.add_row(f"{t[k] / 3600:.1f}", f"{sig.r[k]:.6g}")
+                console = Console(width=80)
+                console.print(table)
+                console.print(f"Earth orientation: {setup.describe_orientation(used)}")
 
     run_guarded(body)

@@ -24,13 +24,14 @@ from tapp.cli.common import (
     SerialOpt,
     WorkersOpt,
     app,
+    delivering,
     earth_orientation_option,
+    echo_warning,
     execution_options,
     json_file,
     progress_bar,
     run_guarded,
     scheduler_error,
-    write_json,
 )
 
 
@@ -53,6 +54,7 @@ def pipeline_cmd(
     """
 
     def body() -> None:
+        from contextlib import ExitStack
         from dataclasses import replace
 
         from rich.console import Console
@@ -60,7 +62,7 @@ def pipeline_cmd(
 
         from iter import SchedulerError
         from tapp.io.outputs import check_paths
-        from tapp.pipeline.run import OUTPUTS, check_out_dir, run_pipeline, trade_outputs
+        from tapp.pipeline.run import OUTPUTS, check_out_dir, running_pipeline, trade_outputs
         from tapp.pipeline.spec import read_pipeline
 
         check_paths({"PIPELINE": pipeline}, {"--json": json_file(json_out)})
@@ -72,23 +74,30 @@ def pipeline_cmd(
         execution = execution_options(scheduler, workers, connect_timeout_s, serial)
         columns = (TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(),
                    TimeElapsedColumn())
-        with progress_bar(*columns, quiet=json_out == STDOUT) as bar:
-            task = bar.add_task("pipeline", total=None)
+        # the directory appears when the stack closes: after the report, as the --json file
+        with ExitStack() as stack:
+            with progress_bar(*columns, quiet=json_out == STDOUT) as bar:
+                task = bar.add_task("pipeline", total=None)
 
-            def progress(stage: str, done: int, total: int) -> None:
-                bar.update(task, description=stage, completed=done, total=total)
+                def progress(stage: str, done: int, total: int) -> None:
+                    bar.update(task, description=stage, completed=done, total=total)
 
-            try:
-                result = run_pipeline(pipe, output, execution=execution, progress=progress)
-            except SchedulerError as exc:
-                raise scheduler_error(exc) from None
-        numbers = trade_outputs(result)
-        write_json(json_out, {"directory": str(output), **numbers, "wall_s": result.wall_s})
-        if json_out == STDOUT:
-            return
-        console = Console(width=100)
-        console.print(f"pipeline {pipeline} -> {output}/{OUTPUTS['report']} ("
-                      + ", ".join(f"{k} {v:.1f} s" for k, v in result.wall_s.items()) + ")")
-        console.print(", ".join(f"{k} = {v:.4g}" for k, v in numbers.items()))
+                try:
+                    result = stack.enter_context(running_pipeline(
+                        pipe, output, execution=execution, progress=progress))
+                except SchedulerError as exc:
+                    raise scheduler_error(exc) from None
+            numbers = trade_outputs(result)
+            with delivering(json_out, {"directory": str(output), **numbers,
+                                       "wall_s": result.wall_s,
+                                       "warnings": list(result.warnings)}) as report:
+                if report:
+                    console = Console(width=100)
+                    console.print(f"pipeline {pipeline} -> {output}/{OUTPUTS['report']} ("
+                                  + ", ".join(f"{k} {v:.1f} s" for k, v in
+                                              result.wall_s.items()) + ")")
+                    console.print(", ".join(f"{k} = {v:.4g}" for k, v in numbers.items()))
+        for warning in result.warnings:  # last: a failed run's one line is its error
+            echo_warning(warning)
 
     run_guarded(body)

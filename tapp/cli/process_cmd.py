@@ -18,10 +18,9 @@ import typer
 from tapp.cli.common import (
     STDOUT,
     JsonOpt,
-    add_json,
     app,
+    delivering,
     json_file,
-    print_json,
     progress_bar,
     run_guarded,
 )
@@ -107,7 +106,6 @@ def process_cmd(
             written.append(f"O3 printout {print_path}")
         elif json_out != STDOUT:
             written.append("O3 printout on standard output")
-        add_json(outputs, json_out, content)
         if json_out is not None:
             written.append(f"JSON {'on standard output' if json_out == STDOUT else json_out}")
         if tape_out is not None:
@@ -142,12 +140,10 @@ def process_cmd(
                 n_plots += 1
             written.append(f"plots into {plots} ({n_plots} PNG"
                            + (f", {RIC_CSV})" if ric_rows(run.history) else ")"))
-        outputs.commit()
-        if json_out == STDOUT:
-            print_json(content)
-        elif print_path is None:
-            typer.echo(text, nl=False)
-        typer.echo(summary_line(written, largest_sigma_ratio(run, tuple(header.miss.name))),
-                   err=print_path is None or json_out == STDOUT)
+        with delivering(json_out, content, outputs) as report:
+            if report and print_path is None:
+                typer.echo(text, nl=False)
+            typer.echo(summary_line(written, largest_sigma_ratio(run, tuple(header.miss.name))),
+                       err=print_path is None or json_out == STDOUT)
 
     run_guarded(body)

@@ -9,17 +9,16 @@ from typing import Annotated
 import typer
 
 from tapp.cli.common import (
-    STDOUT,
     EarthOrientationOpt,
     JsonOpt,
     app,
     check_grid_size,
+    delivering,
     earth_orientation_option,
     grid_samples,
     json_file,
     positive_option,
     run_guarded,
-    write_json,
 )
 from tapp.errors import InputError
 
@@ -113,20 +112,20 @@ def propagate(
         orientation.check_covers(np.array([0.0, arc_s]), "--epoch/--hours")
         traj = prop.propagate(x0, t, epoch_jd_utc=ep.jd, orientation=orientation)
         elapsed = time.perf_counter() - start
-        write_json(json_out, {"t_s": traj.t_s, "state": traj.states, "stm": traj.stm})
-        if json_out == STDOUT:
-            return
-        table = Table(title=f"{orbit}: truth {truth}, STM {stm}, {hours:g} h, Earth "
-                      f"orientation {model}")
-        for col in ("t (s)", "x (km)", "y (km)", "z (km)", "vx (km/s)", "vy (km/s)",
-                    "vz (km/s)", "|Φ|max"):
-            table.add_column(col, justify="right")
-        for k in sorted({0, len(t) // 2, len(t) - 1}):
-            table.add_row(f"{t[k]:.0f}", *(f"{v:.6f}" for v in traj.states[k]),
-                          f"{np.abs(traj.stm[k]).max():.4g}")
-        console = Console(width=130)
-        console.print(table)
-        console.print(f"{method}: {traj.steps} steps, {traj.rhs_evaluations} RHS "
-                      f"evaluations, {elapsed * 1e3:.1f} ms")
+        with delivering(json_out, {"t_s": traj.t_s, "state": traj.states, "stm": traj.stm}
+                        ) as report:
+            if report:
+                table = Table(title=f"{orbit}: truth {truth}, STM {stm}, {hours:g} h, Earth "
+                              f"orientation {model}")
+                for col in ("t (s)", "x (km)", "y (km)", "z (km)", "vx (km/s)", "vy (km/s)",
+                            "vz (km/s)", "|Φ|max"):
+                    table.add_column(col, justify="right")
+                for k in sorted({0, len(t) // 2, len(t) - 1}):
+                    table.add_row(f"{t[k]:.0f}", *(f"{v:.6f}" for v in traj.states[k]),
+                                  f"{np.abs(traj.stm[k]).max():.4g}")
+                console = Console(width=130)
+                console.print(table)
+                console.print(f"{method}: {traj.steps} steps, {traj.rhs_evaluations} RHS "
+                              f"evaluations, {elapsed * 1e3:.1f} ms")
 
     run_guarded(body)

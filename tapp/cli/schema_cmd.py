@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from tapp.cli.common import STDOUT, JsonOpt, app, json_file, run_guarded, write_json
+from tapp.cli.common import JsonOpt, app, delivering, json_file, run_guarded
 
 
 @app.command("schema")
@@ -26,12 +26,9 @@ def schema_cmd(
     def body() -> None:
         check_paths({}, {"--json": json_file(json_out)})
         reference.check_kind(kind)
-        write_json(json_out, reference.json_schema(kind))
-        if json_out == STDOUT:
-            return
-        if markdown:
-            typer.echo(reference.markdown(kind), nl=False)
-        else:
-            typer.echo(json.dumps(reference.json_schema(kind), indent=2, ensure_ascii=False))
+        with delivering(json_out, reference.json_schema(kind)) as report:
+            if report:
+                typer.echo(reference.markdown(kind) if markdown else json.dumps(
+                    reference.json_schema(kind), indent=2, ensure_ascii=False) + "\n", nl=False)
 
     run_guarded(body)

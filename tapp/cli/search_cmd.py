@@ -28,14 +28,13 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from tapp.cli.common import (
-    STDOUT,
     EarthOrientationOpt,
     JsonOpt,
     app,
+    delivering,
     earth_orientation_option,
     json_file,
     run_guarded,
-    write_json,
 )
 from tapp.errors import InputError
 
@@ -219,8 +218,7 @@ def search_command(
         import time
 
         from search import format_report
-        from tapp.io.atomic import atomic_write
-        from tapp.io.outputs import check_paths
+        from tapp.io.outputs import OutputSet, check_paths
         from tapp.io.tomlfile import read_toml
         from tapp.targeting.program import run_search
 
@@ -238,20 +236,21 @@ def search_command(
         start = time.perf_counter()
         run = run_search(problem, analytic_partials=analytic)
         elapsed = time.perf_counter() - start
-        write_json(json_out, _json(scenario, problem, run, analytic, elapsed))
-        if json_out != STDOUT:
-            labels = (tuple(_X_LABELS[i] for i in problem.vary),
-                      tuple(_Y_LABELS[i] for i in problem.targeted))
-            typer.echo(format_report(run.result, *labels), nl=False)
-            typer.echo(_summary(problem, run, analytic, elapsed), nl=False)
-        if write_scenario is not None:
-            if run.result.status == "converged":
-                text = _written_scenario(scenario, data, problem, run)
-                atomic_write(write_scenario, lambda tmp: tmp.write_text(text, encoding="utf-8"),
-                             option="--write-scenario")
-            else:
-                typer.echo(f"note: --write-scenario {write_scenario} not written: SEARCH "
-                           f"{run.result.status}", err=True)
+        outputs = OutputSet()
+        if write_scenario is not None and run.result.status == "converged":
+            text = _written_scenario(scenario, data, problem, run)
+            outputs.add("--write-scenario", write_scenario,
+                        lambda tmp: tmp.write_text(text, encoding="utf-8"))
+        with delivering(json_out, _json(scenario, problem, run, analytic, elapsed),
+                        outputs) as report:
+            if report:
+                labels = (tuple(_X_LABELS[i] for i in problem.vary),
+                          tuple(_Y_LABELS[i] for i in problem.targeted))
+                typer.echo(format_report(run.result, *labels), nl=False)
+                typer.echo(_summary(problem, run, analytic, elapsed), nl=False)
+        if write_scenario is not None and run.result.status != "converged":
+            typer.echo(f"note: --write-scenario {write_scenario} not written: SEARCH "
+                       f"{run.result.status}", err=True)
         return exit_code(run.result.status)
 
     code = run_guarded(body)

@@ -3,7 +3,9 @@
 Bad input (scenario file or field, an unreadable or corrupt tape, an output path that is the
 scenario or the other output) is one line on stderr naming the file and the field or dataset,
 or the option, exit code 2 (1 for other failures; see :mod:`tapp.cli.common`). The tape, the
-OEM and the TDM are written together or not at all (:class:`tapp.io.outputs.OutputSet`).
+OEM and the TDM are written together or not at all (:class:`tapp.io.outputs.OutputSet`). A
+station that yields no observation while others do is a ``warning:`` line on stderr naming
+the file and ``tracking.stations[i]``, and in the JSON's ``warnings``; the tape is written.
 """
 
 from __future__ import annotations
@@ -21,12 +23,12 @@ from tapp.cli.common import (
     STDOUT,
     EarthOrientationOpt,
     JsonOpt,
-    add_json,
     app,
+    delivering,
     earth_orientation_option,
     echo_error,
+    echo_warning,
     json_file,
-    print_json,
     progress_bar,
     run_guarded,
 )
@@ -143,6 +145,26 @@ def _print_encounter(console: Console, miss: dict, targeting: dict | None) -> No
                       + (f" (aim {aim[name]:.10g})" if name in aim else ""))
 
 
+def _print_report(out: dict, tape: T13, oem_states: int) -> None:
+    """What ``tapp simulate`` wrote: the tape's sizes, its stations, the OEM and TDM, the
+    miss."""
+    from rich.console import Console
+
+    from tapp.cli.tape_cmd import editing_table
+
+    console = Console(width=100)
+    console.print(f"T13 tape {out['tape']} ({out['bytes'] / 1e6:.2f} MB) written in "
+                  f"{out['wall_s']:.2f} s: n_o = {tape.n_o}, n_p = {tape.n_p}, n_m = "
+                  f"{tape.n_m}, n_ts = {tape.n_ts}, n_it = {tape.n_it}; "
+                  f"{out['observations']} observations in {out['passes']} passes")
+    console.print(editing_table(out["stations"]))
+    if out["oem"] is not None:
+        console.print(f"OEM {out['oem']} ({oem_states} states)")
+    if out["tdm"] is not None:
+        console.print(f"TDM {out['tdm']} ({out['observations']} observations)")
+    _print_encounter(console, out["miss"], out["targeting"])
+
+
 @app.command()
 def simulate(
     scenario: Annotated[Path, typer.Argument(help="Scenario file (TOML).")],
@@ -165,9 +187,6 @@ def simulate(
     """
 
     def body() -> int:
-        from rich.console import Console
-
-        from tapp.cli.tape_cmd import editing_table
         from tapp.io.ccsds.oem import (
             INTERPOLATION,
             INTERPOLATION_DEGREE,
@@ -212,26 +231,16 @@ def simulate(
                "observations": int(tape.pairs.n_obs.sum()),
                "stations": summary(tape)["stations"], "raw": raw,
                "oem": None if oem is None else str(oem),
-               "tdm": None if tdm is None else str(tdm), "wall_s": wall_s}
+               "tdm": None if tdm is None else str(tdm), "wall_s": wall_s,
+               "warnings": list(sim.warnings)}
         out["miss"], out["targeting"] = _encounter_dict(tape)
         # the JSON is written after the tape's temporary, whose size it then holds
         outputs = _outputs(output, sim, oem, oem_text, tdm, tdm_text, sizes=out)
-        add_json(outputs, json_out, out)
-        outputs.commit()
-        if json_out == STDOUT:
-            print_json(out)
-            return 0
-        console = Console(width=100)
-        console.print(f"T13 tape {output} ({out['bytes'] / 1e6:.2f} MB) written in "
-                      f"{wall_s:.2f} s: n_o = {tape.n_o}, n_p = {tape.n_p}, n_m = {tape.n_m}, "
-                      f"n_ts = {tape.n_ts}, n_it = {tape.n_it}; {out['observations']} "
-                      f"observations in {out['passes']} passes")
-        console.print(editing_table(out["stations"]))
-        if oem is not None:
-            console.print(f"OEM {oem} ({oem_states} states)")
-        if tdm is not None:
-            console.print(f"TDM {tdm} ({out['observations']} observations)")
-        _print_encounter(console, out["miss"], out["targeting"])
+        with delivering(json_out, out, outputs) as report:
+            if report:
+                _print_report(out, tape, oem_states)
+        for warning in sim.warnings:  # last: a failed run's one line is its error
+            echo_warning(warning)
         return 0
 
     code = run_guarded(body)

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from tapp.cli.common import STDOUT, Group, JsonOpt, app, json_file, run_guarded, write_json
+from tapp.cli.common import Group, JsonOpt, app, delivering, json_file, run_guarded
 
 if TYPE_CHECKING:
     from rich.table import Table
@@ -89,6 +89,24 @@ def _print_t13(info: dict) -> None:
                       "cases) to " + ", ".join(f"{n} = {v:g}" for n, v in record["aim"].items()))
 
 
+def _print_info(info: dict) -> None:
+    """The summary of a tape, its format's (:func:`tapp.io.tape.files.describe`)."""
+    from rich.console import Console
+
+    from tapp.io.tape.t32 import format_t32_summary
+
+    if info["format"] == "T13":
+        _print_t13(info)
+    elif info["format"] == "T32":
+        typer.echo(format_t32_summary(info))
+    else:
+        console = Console(width=110)
+        console.print(f"format {info['format']}: "
+                      + ", ".join(f"{k} = {v}" for k, v in info["attributes"].items()))
+        for name, d in info["datasets"].items():
+            console.print(f"  {name}  {tuple(d['shape'])}  {d['dtype']}")
+
+
 @tape_app.command("info")
 def tape_info(
     path: Annotated[Path, typer.Argument(help="Tape file (HDF5).")],
@@ -97,26 +115,13 @@ def tape_info(
     """Summarise a tape: dimensions, parameters, stations, passes, observations, epochs."""
 
     def body() -> None:
-        from rich.console import Console
-
         from tapp.io.outputs import check_paths
         from tapp.io.tape.files import describe
-        from tapp.io.tape.t32 import format_t32_summary
 
         check_paths({"PATH": path}, {"--json": json_file(json_out)})
         info = describe(path)
-        write_json(json_out, info)
-        if json_out == STDOUT:
-            return
-        if info["format"] == "T13":
-            _print_t13(info)
-        elif info["format"] == "T32":
-            typer.echo(format_t32_summary(info))
-        else:
-            console = Console(width=110)
-            console.print(f"format {info['format']}: "
-                          + ", ".join(f"{k} = {v}" for k, v in info["attributes"].items()))
-            for name, d in info["datasets"].items():
-                console.print(f"  {name}  {tuple(d['shape'])}  {d['dtype']}")
+        with delivering(json_out, info) as report:
+            if report:
+                _print_info(info)
 
     run_guarded(body)

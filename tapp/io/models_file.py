@@ -38,6 +38,7 @@ from pydantic import AfterValidator, Field
 
 from tapp.constants import MAX_DEGREE
 from tapp.dynamics.compiled import METHODS
+from tapp.dynamics.propagate import Propagator
 from tapp.dynamics.spec import (
     ATMOSPHERES,
     BODIES,
@@ -182,6 +183,24 @@ class ModelTable(Schema):
                               else self.var_atmosphere,
                               self.shadows if self.var_shadows is None else self.var_shadows))
         return state, var
+
+    def propagator(self, source: str, state_model: ForceModel, var_model: ForceModel,
+                   params: tuple[str, ...] = ()) -> Propagator:
+        """The propagator of the table's models (:meth:`force_models`), tolerances and
+        method, with the sensitivities to ``params``.
+
+        Raises
+        ------
+        InputError
+            Naming ``source`` and ``model.method``: "rkn12" for forces that depend on the
+            velocity (drag, or ``params`` whose partials do: stochastic accelerations in RIC
+            axes).
+        """
+        try:
+            return Propagator(state_model, var_model, params, rtol=self.rtol, atol=self.atol,
+                              method=self.method)
+        except InputError as exc:  # named after the Propagator, not the file
+            raise InputError(source, f"model.{exc.field}", exc.expected, exc.got) from None
 
     def _surface(self, source: str, srp: bool, atmosphere: str, shadows: bool
                  ) -> SurfaceForces | None:

@@ -20,6 +20,8 @@ Two mechanisms, used by every command that writes files:
   or a device error is a :class:`~tapp.errors.WriteError`). Temporaries of the same target
   left behind by an earlier run that was killed are removed before writing; so are hidden
   temporary folders (``tapp pipeline``'s, :func:`temporary_name`), whole.
+  :meth:`OutputSet.staged` runs a block (a command's report) between the writing and the
+  renaming: if the block fails, nothing is renamed.
 
 :func:`tapp.io.atomic.atomic_write` is the one-output use of :class:`OutputSet`.
 
@@ -341,6 +343,20 @@ class OutputSet:
             Whatever a ``write`` raises; then no output has been replaced, and no temporary
             and no folder made for the outputs is left.
         """
+        with self.staged() as paths:
+            return paths
+
+    @contextmanager
+    def staged(self) -> Iterator[tuple[Path, ...]]:
+        """Write every output to its temporary, run the block, then rename them all over
+        their targets: :meth:`commit` with a block between the writing and the renaming.
+
+        The block runs once every output is complete and none is in place yet: what it does
+        (print the report that says the outputs are written) can still fail, and then, as
+        when a ``write`` fails, no output is replaced, and no temporary and no folder made
+        for the outputs is left. Yields the outputs' paths, in the order added; raises as
+        :meth:`commit`, and whatever the block raises.
+        """
         written: list[tuple[_Output, Path]] = []
         created: list[Path] = []
         current = None
@@ -355,15 +371,17 @@ class OutputSet:
                 written.append((out, tmp))
                 out.write(tmp)
                 os.chmod(tmp, FILE_MODE)
+            current = None  # what the block raises is its own, not an output's
+            yield tuple(out.path for out, _ in written)
             for out, tmp in written:
                 current = out
                 os.replace(tmp, out.path)
         except OSError as exc:
-            assert current is not None
+            if current is None:
+                raise
             raise unwritable(current.option, current.path, exc) from None
         finally:
             for _, tmp in written:
                 tmp.unlink(missing_ok=True)
             remove_empty_folders(created)  # those of outputs written hold them: kept
             self._outputs.clear()
-        return tuple(out.path for out, _ in written)

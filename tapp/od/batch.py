@@ -60,11 +60,12 @@ standard result of linear least squares, e.g. Seber & Lee, *Linear Regression An
 (SciPy's ``chi2.ppf``). n = 6 (the epoch state); with an a priori, whose six
 pseudo-measurements balance the six parameters, ν = m, a bound on the data's part of the
 sum. With ν = 0 the fit interpolates the data and the bound is 0. The test is applied only
-where the RMS settled: a diverged, stalled (the default ``rms_fit_limit`` 3 is above every
-bound: the largest, at m = 12, is 1.37) or still converging DC has no estimate to judge; the
-bound is reported with every outcome. A fit whose STM is truncated (J_M ≠ J_N) settles where
-H̃ᵀWy = 0, not at the least-squares estimate (HᵀWy = 0): its RMS is at or above the minimum,
-and the test judges the estimate it returns.
+where the RMS settled within the fit limit: a stalled DC, settled above it, has its verdict
+already (the data are not fitted; the default ``rms_fit_limit`` 3 is above every bound: the
+largest, at m = 12, is 1.37), and a diverged or still converging one has no estimate to
+judge; the bound is reported with every outcome. A fit whose STM is truncated (J_M ≠ J_N)
+settles where H̃ᵀWy = 0, not at the least-squares estimate (HᵀWy = 0): its RMS is at or above
+the minimum, and the test judges the estimate it returns.
 
 The observed contraction factor q is measured on the corrections, not on the RMS: near the
 solution the DC with a truncated STM is the fixed-point iteration e_{k+1} = M e_k,

@@ -17,7 +17,8 @@ from __future__ import annotations
 import json
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -34,7 +35,7 @@ from tapp.io.tape.t13_hdf5 import t13_file_writer
 from tapp.io.tape.t32_hdf5 import read_t32, t32_file_writer
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
 from tapp.pipeline.steps import process_tape
-from tapp.processor.deck import Deck
+from tapp.processor.deck import Deck, observations_used
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.tracking.scenario import Scenario, parse_scenario
@@ -60,13 +61,18 @@ Progress = Callable[[str, int, int], None]
 
 @dataclass(frozen=True, slots=True)
 class PipelineResult:
-    """What a pipeline run produced (paths are inside the run's directory)."""
+    """What a pipeline run produced (paths are inside the run's directory): the scalar
+    observations TAPP I simulated and those TAPP III used (the deck's time-station flags
+    leave some out), and TAPP I's ``warnings``
+    (:attr:`tapp.tracking.simulate.Simulation.warnings`)."""
 
     directory: Path
-    observations: int
+    observations_simulated: int
+    observations_used: int
     process: dict
     guidance: GuidanceResult
     wall_s: dict[str, float]
+    warnings: tuple[str, ...] = ()
 
 
 def _nothing(stage: str, done: int, total: int) -> None:
@@ -99,9 +105,22 @@ def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | No
     WriteError
         ``out_dir`` could not be written for want of room, or a device error.
     """
+    with running_pipeline(pipeline, out_dir, execution=execution, plots=plots,
+                          progress=progress) as result:
+        return result
+
+
+@contextmanager
+def running_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | None = None,
+                     plots: bool = True, progress: Progress = _nothing
+                     ) -> Iterator[PipelineResult]:
+    """Run the three steps into a hidden directory beside ``out_dir`` (new or empty), yield
+    the result and rename the directory to ``out_dir`` once the block has run (the report
+    of the run printed): :func:`run_pipeline` with a block before the directory appears.
+    If the block raises, no ``out_dir`` appears. Raises as :func:`run_pipeline`.
+    """
     with new_directory(out_dir, "-o/--output", _NEVER_OVERWRITES) as work:
-        result = _run(pipeline, work, execution, plots, progress)
-    return replace(result, directory=out_dir)
+        yield replace(_run(pipeline, work, execution, plots, progress), directory=out_dir)
 
 
 def bind_parts(pipeline: Pipeline) -> tuple[Scenario, Deck, GuideFile]:
@@ -157,9 +176,12 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
 
     (work / OUTPUTS["guide_json"]).write_text(json.dumps(guidance_dict(guidance)), "utf-8")
     (work / OUTPUTS["guide_md"]).write_text(guidance_markdown(guidance), "utf-8")
-    observations = int(sim.tape.pairs.n_obs.sum())
+    pairs = sim.tape.pairs
+    observations = int(pairs.n_obs.sum())
     write_report(work, pipeline, run, header, content, guidance, observations, wall, plots)
-    return PipelineResult(work, observations, content, guidance, wall)
+    return PipelineResult(work, observations,
+                          observations_used(plan, pairs.k, pairs.station, pairs.n_obs),
+                          content, guidance, wall, sim.warnings)
 
 
 def check_tracking_case(pipeline: str, data_interval_s: float, network: float,
@@ -225,7 +247,7 @@ def tracking_case(pipeline: str, data_interval_s: float, network: float, network
 
     Outputs: σ of each final-miss component (Monte Carlo) and the semi-axes of the 1σ
     B-plane dispersion ellipse, the 99 % and mean total ΔV (m/s), the fraction outside the
-    corridor, and the observations simulated.
+    corridor, and the observations simulated and those used (the network's).
     """
     pipe = check_tracking_case(pipeline, data_interval_s, network, networks, samples, seed)
     with tempfile.TemporaryDirectory() as tmp:
@@ -239,10 +261,13 @@ def trade_outputs(result: PipelineResult) -> dict[str, float]:
 
     σ of each final-miss component (``sigma_<name>``), the 1σ B-plane ellipse's semi-axes
     (km), the mean and 99 % total ΔV, the fraction of samples outside the corridor (NaN
-    without one) and the observations simulated.
+    without one), the scalar observations TAPP I simulated (``observations_simulated``) and
+    those TAPP III used (``observations_used``: the deck's time-station flags, a sweep's
+    network, leave the others out).
     """
     mc = result.guidance.monte_carlo
-    out = {"observations": float(result.observations)}
+    out = {"observations_simulated": float(result.observations_simulated),
+           "observations_used": float(result.observations_used)}
     for i, name in enumerate(result.guidance.miss_name):
         out[f"sigma_{name}"] = float(np.sqrt(mc.miss_cov[i, i]))
     if mc.ellipse is not None:

@@ -343,10 +343,6 @@ class _Binder:
         self.stochastic = getattr(header, "stochastic", None)
         self.stochastic_names = tuple(n for n, kind in zip(self.names, header.parameters.kind,
                                                            strict=True) if kind == STOCHASTIC)
-        for world, on in (("fit", "estimate"), ("real", "include")):
-            if getattr(deck, world).stochastic == on and not self.stochastic_names:
-                raise self.fail(f"{world}.stochastic", "\"ignore\" (the tape has no "
-                                "stochastic accelerations)", on)
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -809,7 +805,10 @@ class _Binder:
                             "commands + recycles x recycle commands)",
                             f"{entities:,} entities, {size:,} numbers")
 
-    def plan(self) -> Plan:
+    def _check_tape(self) -> None:
+        """Refuse a deck written for another tape, by what its [tape] table says of it (the
+        first check: a deck for another tape is wrong there first, whatever else does not
+        fit), then world modes the tape has nothing for."""
         d = self.deck
         if d.tape.iden is not None and d.tape.iden != self.h.iden:
             raise self.fail("tape.iden", f"the tape's iden {self.h.iden!r}", d.tape.iden)
@@ -823,6 +822,14 @@ class _Binder:
             raise self.fail("tape.parameters", f"the tape's {self.n_o} parameter names in "
                             f"order (position {i + 1}: {tape_has})",
                             given[i] if i < len(given) else "none (the list ends)")
+        for world, on in (("fit", "estimate"), ("real", "include")):
+            if getattr(d, world).stochastic == on and not self.stochastic_names:
+                raise self.fail(f"{world}.stochastic", "\"ignore\" (the tape has no "
+                                "stochastic accelerations)", on)
+
+    def plan(self) -> Plan:
+        d = self.deck
+        self._check_tape()
         systems, s0, lam0 = self.systems()
         self._check_positions()
         prints = (0, *self.time_list(d.times.print, "times.print", first=0))
@@ -866,9 +873,24 @@ def bind(deck: Deck, header, source: str) -> Plan:
     return _Binder(deck, header, source).plan()
 
 
+def observations_used(plan: Plan, k: np.ndarray, station: np.ndarray, n_obs: np.ndarray
+                      ) -> int:
+    """Return the scalar observations TAPP III reads of a tape's (record, station) pairs:
+    those in no window of the plan's time-station flags Δ_TS(k, s) = 0 (seed §4.3.4), which
+    leave a pair out whole (``Processor._keep`` of :mod:`tapp.processor.sequencing`).
+
+    ``k`` (1-based records), ``station`` (tape numbers) and ``n_obs`` are the tape's
+    ``pairs/`` datasets, each (n_pairs,).
+    """
+    off = np.zeros(np.shape(k), dtype=bool)
+    for flag in plan.stations_off:
+        off |= (station == flag.station) & (k >= flag.k_first) & (k <= flag.k_last)
+    return int(np.sum(np.asarray(n_obs)[~off]))
+
+
 def deck_json(deck: Deck) -> str:
     """The deck as JSON (provenance on the T32 tape)."""
     return json.dumps(deck.model_dump(mode="json"), sort_keys=True)
 
 
-__all__ = ["Deck", "ISOLATED_SETS", "bind", "deck_json", "read_deck"]
+__all__ = ["Deck", "ISOLATED_SETS", "bind", "deck_json", "observations_used", "read_deck"]

@@ -13,9 +13,19 @@ orbit at the program epoch t_j and the TAPP I constants). The transformation acc
 is the system chain (links, :mod:`tapp.processor.links`, Table B-3) times the orbit link
 ∂x^{τ,1}/∂x = [[∂p^τ/∂p, ∂p^τ/∂q], [0, I]] (3-14); for μ = 1 every factor is adjointed in
 place, (AB)* = A* B*. The orbit link's adjoint (3-15) is [[P*, 0], [−Qᵀ P*, I]] with
-P* = Γ P Γᵀ (3-13), exact for the symplectic transition of a Hamiltonian flow (gravity and
-third bodies: the force models of TAPP I); a block that is not symplectic (checked against
-:data:`SYMPLECTIC_TOL`) is adjointed by an LU solve instead.
+P* = P⁻ᵀ, the exact inverse of the tape's P rounded to a double-double
+(:func:`tapp.estimation.factors.accurate_inverse`), not the seed's Γ P Γᵀ (3-13): that is the
+inverse of the symplectic transition of a Hamiltonian flow, and the tape's P, an STM computed
+in floating point, is symplectic only to its rounding. After the deep-space lunar swing-by
+(cond P = 4.5e13, |PᵀΓP − Γ| = 1.0e-4) the information mapped by Γ P Γᵀ and the real-world
+covariance mapped by P itself (the forward map, 3-9 with μ = 0) were two different
+transitions: the printed covariances after the periapsis epoch were 2.7e-7 (periapsis) to
+2.8e-6 (day 30, the real-world miss) off the exact answer computed with forward maps only,
+of their scale √(C_ii C_jj); with P⁻ᵀ as a double-double they are within 9e-12 of it, and
+with P⁻ᵀ correctly rounded but without its remainder within 6.7e-7 only (ε cond P of the
+terms). The alternative that needs no inverse, every factor referred to the injection epoch
+by forward maps (as a batch does), held 1.0e-8 at day 30: the covariances at the current time
+are then maps of the injection's through that ill-conditioned transition.
 
 The partials accumulator (μ, τ, ρ| (3-30) is rows t..h of ⟨μ, τ, χ⟩ for a system partition
 ρ of system χ, and rows t..h of a stored matrix (I, U, V, W, B: the orbit at epoch, current
@@ -49,14 +59,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tapp.errors import InputError
-from tapp.estimation.factors import accurate_matmul
+from tapp.estimation.factors import accurate_inverse, accurate_matmul
 from tapp.processor.links import Constraint, Link, Permutation
-
-#: Largest |PᵀΓP − Γ| (entrywise) under which the orbit link is adjointed by (3-13): with
-#: PᵀΓP = Γ + Δ, ΓPΓᵀ = P⁻ᵀ(I + ΔΓᵀ), so Δ is the relative error of the result. The bound
-#: widens only to the rounding of the check itself, 100 ε ‖P‖², which is also the accuracy an
-#: LU solve of such a P reaches (ε cond P).
-SYMPLECTIC_TOL = 1e-8
 
 ORBIT_SETS = {0: "epoch", 1: "current", 2: "recycle", 3: "injection", 4: "miss2", 5: "miss3"}
 SYSTEMS = {1: "standard", 2: "common-intermediate", 3: "common", 4: "fit",
@@ -176,64 +180,54 @@ def apply_chain(links: tuple[Link, ...], m: np.ndarray, adjoint: bool) -> np.nda
     return m
 
 
-_GAMMA6 = np.block([[np.zeros((3, 3)), np.eye(3)], [-np.eye(3), np.zeros((3, 3))]])
-
-
-def _gamma(n: int) -> np.ndarray:
-    h = n // 2
-    return _GAMMA6 if n == 6 else np.block([[np.zeros((h, h)), np.eye(h)],
-                                             [-np.eye(h), np.zeros((h, h))]])
-
-
-def orbit_block_adjoint(p: np.ndarray) -> np.ndarray:
-    """Return P* = (P⁻¹)ᵀ of an orbit block (n_p, n_p): Γ P Γᵀ if P is symplectic (3-13)."""
-    g = _gamma(p.shape[0])
-    rounding = 100.0 * np.finfo(float).eps * float(np.max(np.abs(p))) ** 2
-    if np.max(np.abs(p.T @ g @ p - g)) <= max(SYMPLECTIC_TOL, rounding):
-        return g @ p @ g.T
-    return np.linalg.solve(p, np.eye(p.shape[0])).T
-
-
 def orbit_link(partials: np.ndarray, n_o: int, adjoint: bool) -> np.ndarray:
     """Return the orbit link ∂x^{τ,1}/∂x (3-14) or its adjoint (3-15), (n_o, n_o).
 
-    The adjoint's block −Qᵀ P* is formed in twice the working precision and rounded once
-    (:func:`tapp.estimation.factors.accurate_matmul`; :func:`orbit_link_remainder` is what
-    the rounding left out): after a lunar swing-by P* has entries of 1e6 and a condition
-    number of 1e13, its products with the sensitivities Q cancel, and the plain product's
-    rounding moved the covariances after an epoch change by 1e-7.
+    The adjoint is the double-double :func:`orbit_link_adjoint` rounded (its ``hi``).
 
     Parameters
     ----------
     partials : (n_p, n_o) ∂p^τ/∂x = [P, Q].
     """
-    n_p = partials.shape[0]
+    if adjoint:
+        return orbit_link_adjoint(partials, n_o)[0]
     out = np.eye(n_o)
-    p, q = partials[:, :n_p], partials[:, n_p:]
-    if not adjoint:
-        out[:n_p] = partials
-        return out
-    p_star = orbit_block_adjoint(p)
-    out[:n_p, :n_p] = p_star
-    out[n_p:, :n_p] = -accurate_matmul(q.T, p_star)
+    out[:partials.shape[0]] = partials
     return out
 
 
-def orbit_link_remainder(partials: np.ndarray, n_o: int) -> np.ndarray:
-    """Return the rounding remainder of :func:`orbit_link`'s adjoint, (n_o, n_o): its block
-    −Qᵀ P* minus that block as rounded, to about ε² (zero elsewhere; P* = Γ P Γᵀ is exact).
+def orbit_link_adjoint(partials: np.ndarray, n_o: int) -> tuple[np.ndarray, np.ndarray]:
+    """Return the orbit link's adjoint (3-15) [[P*, 0], [−Qᵀ P*, I]] as a double-double
+    (hi, lo), (n_o, n_o) each: hi rounded, lo its remainder (zero on the unit rows).
 
-    A factor mapped through the adjoint with it (:func:`tapp.estimation.factors.accurate_map`)
-    is mapped through the exact adjoint of the tape's U: after the deep-space periapsis the
-    rounding of that block alone moved the information of the last record by 2e-11 of its
-    scale, and the covariances by 1e-9.
+    P* = P⁻ᵀ from :func:`tapp.estimation.factors.accurate_inverse` (module docstring), and
+    −Qᵀ P* by :func:`tapp.estimation.factors.accurate_matmul` from both parts of P*: after a
+    lunar swing-by P* has entries of 1e6 and a condition number of 1e13, its products with
+    the sensitivities Q cancel, and the plain product's rounding moved the covariances after
+    an epoch change by 1e-7. A factor mapped through hi + lo
+    (:func:`tapp.estimation.factors.accurate_map`) is mapped through the inverse of the tape's
+    own transition to about ε² of the terms: after the deep-space periapsis the rounding of
+    −Qᵀ P* alone moved the information of the last record by 2e-11 of its scale and the
+    covariances by 1e-9.
+
+    Parameters
+    ----------
+    partials : (n_p, n_o) ∂p^τ/∂x = [P, Q].
+
+    Raises
+    ------
+    SingularMatrixError
+        If P is singular.
     """
     n_p = partials.shape[0]
-    out = np.zeros((n_o, n_o))
+    hi, lo = np.eye(n_o), np.zeros((n_o, n_o))
     p, q = partials[:, :n_p], partials[:, n_p:]
-    p_star = orbit_block_adjoint(p)
-    out[n_p:, :n_p] = -accurate_matmul(q.T, p_star, split=True)[1]
-    return out
+    inv_hi, inv_lo = accurate_inverse(p)
+    hi[:n_p, :n_p], lo[:n_p, :n_p] = inv_hi.T, inv_lo.T
+    hi[n_p:, :n_p], lo[n_p:, :n_p] = accurate_matmul(np.hstack([-q.T, -q.T]),
+                                                     np.vstack([inv_hi.T, inv_lo.T]),
+                                                     split=True)
+    return hi, lo
 
 
 @dataclass(slots=True)
@@ -277,26 +271,36 @@ class Accumulator:
         """Forget cached transformations (after U, V, W or B changed)."""
         self._cache.clear()
 
+    def _adjoint(self, tau: int) -> tuple[np.ndarray, np.ndarray]:
+        """The orbit link's adjoint of orbit set τ as a double-double (one exact inverse of
+        its P per τ until :meth:`invalidate`)."""
+        key = ("adjoint", tau)
+        if key not in self._cache:
+            self._cache[key] = orbit_link_adjoint(self.stored.orbit_set(tau), self.systems.n_o)
+        return self._cache[key]
+
     def transformation(self, mu: int, tau: int, chi: int) -> np.ndarray:
         """Return ⟨μ, τ, χ⟩ (3-9), (n_o, n_o)."""
         key = (mu, tau, chi)
         if key not in self._cache:
-            n_o = self.systems.n_o
-            link = orbit_link(self.stored.orbit_set(tau), n_o, adjoint=mu == 1)
+            if mu == 1:
+                link = self._adjoint(tau)[0]
+            else:
+                link = orbit_link(self.stored.orbit_set(tau), self.systems.n_o, adjoint=False)
             self._cache[key] = apply_chain(self.systems.chain(chi), link, adjoint=mu == 1)
         return self._cache[key]
 
     def remainder(self, mu: int, tau: int | None, rho: str) -> np.ndarray | None:
         """Return the rounding remainder of (μ, τ, ρ| for μ = 1 and a system partition (the
-        orbit link adjoint's, :func:`orbit_link_remainder`, through the system chain), rows
-        t..h; None where there is none (μ = 0, isolated sets)."""
+        ``lo`` of :func:`orbit_link_adjoint`, through the system chain), rows t..h; None
+        where there is none (μ = 0, isolated sets)."""
         chi, t, h = self.systems.bounds(rho)
         if mu != 1 or chi == 0:
             return None
         key = ("remainder", tau, chi)
         if key not in self._cache:
-            lo = orbit_link_remainder(self.stored.orbit_set(tau), self.systems.n_o)
-            self._cache[key] = apply_chain(self.systems.chain(chi), lo, adjoint=True)
+            self._cache[key] = apply_chain(self.systems.chain(chi), self._adjoint(tau)[1],
+                                           adjoint=True)
         return self._cache[key][t:h]
 
     def partials(self, mu: int, tau: int | None, rho: str) -> np.ndarray:

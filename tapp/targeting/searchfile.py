@@ -251,8 +251,7 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     orientation = orientation_for(doc.earth_orientation, epoch, doc.eop,
                                   Path(source).parent, source)
     state_model, var_model = mod.force_models(source, orientation.model)
-    propagator = Propagator(state_model, var_model, rtol=mod.rtol, atol=mod.atol,
-                            method=mod.method)
+    propagator = mod.propagator(source, state_model, var_model)
 
     tgt = doc.target
     if tgt.body not in bodies:

@@ -34,6 +34,7 @@ import math
 from dataclasses import dataclass
 from typing import Annotated, NoReturn
 
+import numpy as np
 from pydantic import Field
 
 from tapp.constants import C_LIGHT_km_s
@@ -41,6 +42,7 @@ from tapp.errors import InputError
 from tapp.io.noise_file import NonNegative, Positive
 from tapp.io.schema import Schema
 from tapp.measurements.ddor import DDOR_KIND
+from tapp.measurements.stations import Station
 from tapp.tracking.noise import FitNoise, RealNoise
 
 #: Factors from the edge units to the noise units: ns -> km (× c), nrad -> rad.
@@ -148,17 +150,17 @@ def _noise(source: str, table: DdorTable) -> tuple[FitNoise, RealNoise, bool]:
                       (0.0 if bias is None else bias) * factor), per_nrad)
 
 
-def tracking_baselines(source: str, table: DdorTable | None, stations: tuple[str, ...],
+def tracking_baselines(source: str, table: DdorTable | None, stations: tuple[Station, ...],
                        data_interval_s: float) -> tuple[TrackingBaseline, ...]:
     """Build the baselines of a ``[ddor]`` table (none without one), numbered after the
-    ``stations`` (the names of tracking.stations, in order).
+    ``stations`` (those of tracking.stations, in order).
 
     Raises
     ------
     InputError
-        A station not in tracking.stations, a baseline of one station, a baseline given
-        twice (in either order), noise in neither or both units (or mixed between fit and
-        real), an interval that is not a multiple of the data interval.
+        A station not in tracking.stations, a baseline of one station or of two at the same
+        place, a baseline given twice (in either order), noise in neither or both units (or
+        mixed between fit and real), an interval that is not a multiple of the data interval.
     """
     if table is None:
         return ()
@@ -169,22 +171,26 @@ def tracking_baselines(source: str, table: DdorTable | None, stations: tuple[str
         if ratio < 1 - 1e-12 or abs(ratio - round(ratio)) > 1e-9 * ratio:
             _fail(source, "ddor.interval_s", "a multiple of tracking.data_interval_s = "
                   f"{data_interval_s:g} s (the points fall on the tracking grid)", interval)
+    names = tuple(station.name for station in stations)
     out: list[TrackingBaseline] = []
     seen: set[frozenset[str]] = set()
     for i, (a, b) in enumerate(table.baselines):
         field = f"ddor.baselines[{i}]"
         for name in (a, b):
-            if name not in stations:
-                _fail(source, field, f"stations of tracking.stations ({', '.join(stations)})",
+            if name not in names:
+                _fail(source, field, f"stations of tracking.stations ({', '.join(names)})",
                       name)
         if a == b:
             _fail(source, field, "two different stations", [a, b])
+        if np.array_equal(*(stations[names.index(name)].r_ecef_km for name in (a, b))):
+            _fail(source, field, "two stations at different places (a baseline of zero "
+                  "length measures nothing)", [a, b])
         if frozenset((a, b)) in seen:
             _fail(source, field, "each baseline once (in either order)", [a, b])
         seen.add(frozenset((a, b)))
         out.append(TrackingBaseline(
-            number=len(stations) + i + 1, station_a=stations.index(a) + 1,
-            station_b=stations.index(b) + 1, name=f"{a}-{b}", kinds=(DDOR_KIND,), fit=(fit,),
+            number=len(names) + i + 1, station_a=names.index(a) + 1,
+            station_b=names.index(b) + 1, name=f"{a}-{b}", kinds=(DDOR_KIND,), fit=(fit,),
             real=(real,), per_nrad=per_nrad, interval_s=interval,
             min_window_s=table.min_window_s,
             separation_rad=math.radians(table.quasar_separation_deg),

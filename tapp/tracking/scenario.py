@@ -864,11 +864,13 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     orientation.check_covers(np.array([0.0, last_s, schedule.end_s]), source)
     document = json.dumps(data, default=str, sort_keys=True)
     x0.setflags(write=False)
-    targeting = _targeting(p, doc, miss, values, x0, Propagator(state_model, var_model, rtol=rtol,
-                                                                  atol=atol,
-                                                                  method=doc.model.method),
-                           orientation)
-    baselines = tracking_baselines(source, doc.ddor, tuple(doc.tracking.stations),
+    # TAPP I's propagator, with every parameter TAPP I differentiates: a method its forces
+    # refuse is the file's model.method, not found when the simulation starts
+    doc.model.propagator(source, state_model, var_model,
+                         dynamic + (() if stochastic is None else stochastic.model_parameters))
+    targeting = _targeting(p, doc, miss, values, x0,
+                           doc.model.propagator(source, state_model, var_model), orientation)
+    baselines = tracking_baselines(source, doc.ddor, tuple(ts.station for ts in stations),
                                    schedule.data_interval_s)
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,

@@ -156,12 +156,16 @@ class Simulation:
     states : (N, 6) states, km and km/s, Earth-centred, inertial: GCRS under the iau2006
         Earth orientation, EME2000 under gmst.
     scenario : the scenario simulated (its injection state is ``states[0]``).
+    warnings : one line each, ``SOURCE: FIELD: what``: a station that yields no
+        observation while others do (it never sees the spacecraft above its mask, outside its
+        blackouts, for min_pass_s), with the samples each editing rule removed.
     """
 
     tape: T13
     t_s: np.ndarray
     states: np.ndarray
     scenario: Scenario
+    warnings: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -201,6 +205,11 @@ class _Editing:
     removed_passes: tuple[int, ...]
     added_passes: int
     scheduled: int
+
+
+def _removed(counts) -> str:
+    """``RULE N, ...``: samples removed by each editing rule (:data:`EDITING_RULES`)."""
+    return ", ".join(f"{rule} {n}" for rule, n in zip(EDITING_RULES, counts, strict=True))
 
 
 def equinoctial_elements(state, mu_km3_s2: float) -> np.ndarray:
@@ -745,8 +754,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                              "masks, outside their blackouts, at some ΔDOR point (check the "
                              "masks, min_window_s, interval_s)",
                              f"0 points on {bl.name} of {e.scheduled} asked for; removed: "
-                             + ", ".join(f"{rule} {n}" for rule, n in
-                                         zip(EDITING_RULES, e.removed_samples, strict=True)))
+                             + _removed(e.removed_samples))
         data.append(d)
         editing.append(e)
         tick(f"observations {bl.name}")
@@ -756,9 +764,12 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                          "a schedule that yields at least one observation (check the stations, "
                          "their masks and blackouts, start/end, data_interval_s, min_pass_s)",
                          f"0 observations from {n_scheduled} sample times per station; "
-                         "samples removed over the stations: " + ", ".join(
-                             f"{rule} {n}" for rule, n in zip(EDITING_RULES, removed,
-                                                              strict=True)))
+                         "samples removed over the stations: " + _removed(removed))
+    warnings = tuple(  # the stations' (the baselines' data and editing follow theirs)
+        f"{scenario.source}: tracking.stations[{i}]: {ts.station.name} yields no observation "
+        f"while other stations do (0 of its {e.scheduled} sample times kept; removed: "
+        f"{_removed(e.removed_samples)})" for i, (ts, d, e) in enumerate(zip(
+            scenario.stations, data, editing, strict=False)) if d is None)
 
     pair_rows = []
     with threadpool_limits(limits=1, user_api="blas"):  # many small QRs: threads only cost
@@ -817,7 +828,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     )
     t_out = np.concatenate([[0.0], arc.t_s])
     states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])
-    return Simulation(tape, t_out, states, scenario)
+    return Simulation(tape, t_out, states, scenario, warnings)
 
 
 def _pass_table(stations: tuple[TrackingStation | TrackingBaseline, ...],

@@ -5,6 +5,7 @@ one BLAS thread (the conventions of :mod:`tapp.cli.common`). Start-up times are 
 from __future__ import annotations
 
 import json
+import os
 import re
 import subprocess
 import sys
@@ -19,6 +20,8 @@ from typer.testing import CliRunner
 from iter.execute import available_cores
 from tapp.cli import app
 from tapp.cli.common import EXIT_INPUT, JsonOpt, run_guarded
+from tests.tapp.io.tape.legacy import write_t13_version
+from tests.tapp.processor.helpers import leo_tape
 
 runner = CliRunner()
 #: Modules a help or ``--version`` must not wait for: each costs 0.1-0.7 s to import.
@@ -184,3 +187,19 @@ def test_commands_run_on_one_blas_thread():
         assert _blas_threads() == {2}  # what a command would have without the limit
         assert run_guarded(_blas_threads) == {1}
         assert _blas_threads() == {2}  # and the limit ends with the command
+
+
+def test_a_library_warning_is_one_line(tmp_path: Path):
+    """A version-1 T13 tape's two warnings (no checksums; normal matrices), each one
+    ``warning:`` line (issue 28: Python's lines, with the source path and the code line)."""
+    tape = write_t13_version(tmp_path / "v1.t13.h5", leo_tape(), 1)
+    # a process of its own: in this one, pytest records warnings (the suite makes them errors)
+    res = subprocess.run([sys.executable, "-m", "tapp.cli", "tape", "info", str(tape), "--json",
+                          "-"], capture_output=True, text=True, check=False, timeout=120,
+                         env={**os.environ, "PYTHONWARNINGS": "default"})
+    assert res.returncode == 0, res.stderr
+    assert res.stderr.splitlines() == [
+        f"warning: {tape}: T13 version 1 carries no checksums: corruption cannot be detected",
+        f"warning: {tape}: T13 version 1 carries normal matrices, not square-root information: "
+        "its factors are formed from them and hold only the digits they kept (about 16 - 2 "
+        "log10 of the condition number of the data); simulate it again for version 3"]

@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 
 import tapp.cli  # noqa: F401  (registers every command)
 from tapp.cli.common import app
+from tapp.examples import FOLDER as EXAMPLES
 from tapp.io.tape.t13_hdf5 import write_t13
 from tapp.io.tape.t32_hdf5 import read_t32
 from tests.tapp.processor.helpers import leo_tape, sigmas
@@ -167,6 +168,15 @@ def test_bad_decks_are_one_line_exit_2_and_write_nothing(tmp_path, files, edit, 
     assert len(err.strip().splitlines()) == 1 and fragment in err, err
     assert "bad.toml" in err
     assert new == []
+
+
+def test_a_deck_for_another_tape_is_refused_for_the_tape_first(tmp_path, files):
+    """The shipped deep-space deck on the LEO test tape: wrong in many ways, refused for the
+    first, its [tape] iden (issue 28: for its real.stochastic = "include")."""
+    code, err, new = _bad(tmp_path, files, (EXAMPLES / "tapp3_deep_space.toml").read_text())
+    assert (code, new) == (2, [])
+    assert err.splitlines() == [f"error: {tmp_path / 'bad.toml'}: tape.iden: expected the "
+                                "tape's iden 'TEST-LEO' (got 'DSN-LUNAR-2026-03-10')"]
 
 
 def test_a_fit_normal_matrix_that_cannot_be_inverted_is_bad_input(tmp_path, files):

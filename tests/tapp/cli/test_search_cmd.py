@@ -93,6 +93,8 @@ def test_one_set_of_one_iteration_cannot_converge_exit_3(tmp_path: Path) -> None
     ("vz_km_s = 1e-5", "vz_km_s = 0.0", "search.increments.vz_km_s"),
     ('epoch = "2026-03-10T12:00:00"', 'epoch = "tomorrow"', "epoch"),
     ("[injection]", "[injection]\nmass_kg = 1000.0", "injection.mass_kg"),
+    ("[model]", '[model]\nmethod = "rkn12"\natmosphere = "exponential"\n'
+     "area_to_mass_m2_kg = 0.01", "model.method"),  # was "propagator: method: ..."
 ])
 def test_bad_field_one_line_naming_file_and_field(tmp_path: Path, old: str, new: str,
                                                   field: str) -> None:

@@ -29,7 +29,7 @@ from tests.tapp.tracking.encounter_reference import (
     Reference,
     moved_deep_space,
 )
-from tests.tapp.tracking.helpers import geo_document, leo_document
+from tests.tapp.tracking.helpers import NORTH, geo_document, leo_document
 
 SCENARIOS = EXAMPLES
 LEO = SCENARIOS / "leo_equatorial.toml"
@@ -166,6 +166,19 @@ def test_geo_track_counts_printed_and_on_the_tape_add_up(tmp_path: Path) -> None
         # name, scheduled, kept, removed by each rule, passes (+ added by splitting)
         assert rows == [[name, "144", "144", "0", "0", "0", "0", "2 (+1)"]
                         for name in ("UNDER", "EAST")]
+
+
+def test_a_station_without_data_is_one_warning_line_and_in_the_json(tmp_path: Path) -> None:
+    """Issue 28: a station that never sees the spacecraft while others do was silent."""
+    scenario, out = tmp_path / "north.toml", tmp_path / "north.t13.h5"
+    scenario.write_text(tomli_w.dumps(leo_document(**NORTH)))
+    res = runner.invoke(app, ["simulate", str(scenario), "-o", str(out), "--json", "-"])
+    assert res.exit_code == 0, res.output
+    warning = (f"{scenario}: tracking.stations[3]: NORTH yields no observation while other "
+               "stations do (0 of its 541 sample times kept; removed: outside_tape 1, "
+               "elevation_mask 540, blackout 0, min_pass 0)")
+    assert res.stderr.splitlines() == [f"warning: {warning}"]
+    assert json.loads(res.stdout)["warnings"] == [warning]
 
 
 # OEM states are printed to 1e-9 km and 1e-12 km/s: rounding of half of that.

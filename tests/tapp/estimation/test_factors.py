@@ -1,5 +1,6 @@
 """The factor algebra: QR stacking, Gram products, factors of given matrices, the AR(1)
-whitening, and the twice-precision products, each against an independent computation."""
+whitening, the twice-precision products and inverse, and the growth of a map, each against
+an independent computation."""
 
 from __future__ import annotations
 
@@ -9,12 +10,16 @@ import mpmath
 import numpy as np
 import pytest
 
+from tapp.errors import SingularMatrixError
 from tapp.estimation.factors import (
+    accurate_inverse,
     accurate_map,
     accurate_matmul,
     ar1_whitened,
     digits_held,
     gram,
+    map_growth,
+    product_unit,
     psd_factor,
     triangularize,
 )
@@ -126,3 +131,67 @@ def test_digits_held_is_capped_by_the_working_precision():
     assert digits_held(1e-9) == pytest.approx(9.0)
     assert digits_held(0.0) == pytest.approx(-math.log10(np.finfo(float).eps))
     assert digits_held(5.0) == 0.0
+
+
+#: A double-double rounded twice from the exact value: within 2 ulps of ulps, relative
+#: (ε² = 4.9e-32; the remainder's own rounding is half an ulp of an ulp).
+DOUBLE_DOUBLE = 2.0 * np.finfo(float).eps ** 2
+
+
+def _ill_conditioned_block(rng: np.random.Generator) -> np.ndarray:
+    """A 6 x 6 matrix of condition ~1e13 with rows scaled from 1e-3 to 1e3 (a transition's
+    orbit block after a swing-by has cond 4.5e13 and entries up to 4.7e6)."""
+    u, _ = np.linalg.qr(rng.standard_normal((6, 6)))
+    v, _ = np.linalg.qr(rng.standard_normal((6, 6)))
+    return np.logspace(-3, 3, 6)[:, None] * (u @ np.diag(np.logspace(4, -4, 6)) @ v.T)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_accurate_inverse_is_the_exact_inverse_rounded_to_a_double_double(seed):
+    """Against mpmath at 80 digits (the inverse of the rounded matrix, taken as exact): hi is
+    the correctly rounded inverse and hi + lo holds it to ε² of each entry; the correctly
+    rounded inverse alone leaves |A hi − I| of ε cond A, the double-double ~ε² cond A."""
+    a = _ill_conditioned_block(np.random.default_rng(seed))
+    assert np.linalg.cond(a) > 1e11
+    hi, lo = accurate_inverse(a)
+    with mpmath.workdps(80):
+        exact = mpmath.inverse(mpmath.matrix(a.tolist()))
+        err = max(float(abs(exact[i, j] - mpmath.mpf(hi[i, j]) - mpmath.mpf(lo[i, j])
+                            ) / abs(exact[i, j])) for i in range(6) for j in range(6))
+        assert all(hi[i, j] == float(exact[i, j]) for i in range(6) for j in range(6))
+    assert err <= DOUBLE_DOUBLE
+    eye = np.eye(6)
+    residual_hi = np.max(np.abs(accurate_matmul(a, hi, -eye)))
+    residual_dd = np.max(np.abs(accurate_matmul(np.hstack([a, a]), np.vstack([hi, lo]), -eye)))
+    assert residual_hi > 1e-6 and residual_dd < 1e-14
+
+
+def test_accurate_inverse_of_exact_cases_and_a_singular_matrix():
+    hi, lo = accurate_inverse(np.diag([4.0, -0.5, 1e300]))
+    np.testing.assert_array_equal(hi, np.diag([0.25, -2.0, 1e-300]))
+    assert not np.any(lo[[0, 1], [0, 1]])
+    with pytest.raises(SingularMatrixError, match="singular"):
+        accurate_inverse(np.array([[1.0, 2.0], [2.0, 4.0]]))
+    with pytest.raises(SingularMatrixError, match="not finite"):
+        accurate_inverse(np.array([[np.nan, 0.0], [0.0, 1.0]]))
+
+
+def test_map_growth_is_one_for_an_orthogonal_map_and_the_cancellation_of_a_shear():
+    rng = np.random.default_rng(8)
+    k = rng.standard_normal((5, 4))
+    norms = np.linalg.norm(k, axis=0)
+    q, _ = np.linalg.qr(rng.standard_normal((4, 4)))
+    m = k @ q.T
+    # orthogonal: Σ_i ‖K_:i‖ |Q_ji| ≥ ‖M_:j‖, equal to 1 only for a permutation, ≤ √n here
+    assert 1.0 <= map_growth(norms, q, np.linalg.norm(m, axis=0)) <= 2.0
+    # a shear that cancels to 1e-6: (1 + 1 − 1e-6) / 1e-6
+    k2 = np.array([[1.0, 1.0 - 1e-6]])
+    x = np.array([[1.0, -1.0]])
+    assert map_growth(np.abs(k2[0]), x, np.abs(k2 @ x.T)[0]) == pytest.approx(2e6 - 1, rel=1e-9)
+    assert map_growth(np.zeros(2), x, np.zeros(1)) == 0.0
+
+
+def test_product_unit_is_gamma_n_and_its_square():
+    u = np.finfo(float).eps / 2
+    assert product_unit(10, accurate=False) == pytest.approx(10 * u / (1 - 10 * u))
+    assert product_unit(10, accurate=True) == pytest.approx((10 * u / (1 - 10 * u)) ** 2)

@@ -87,6 +87,23 @@ def test_a_failed_write_leaves_every_old_output_and_no_temporary(tmp_path: Path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.oem", "run.t13.h5"]
 
 
+def test_what_fails_between_writing_and_renaming_leaves_every_old_output(
+        tmp_path: Path) -> None:
+    """The block of ``staged`` (a command's report on standard output) fails after every
+    temporary is complete: no output is replaced or made, no temporary and no folder made
+    is left (issue 28: ``tapp simulate -o p.t13.h5 | head -1`` left p.t13.h5)."""
+    tape, oem = tmp_path / "run.t13.h5", tmp_path / "new" / "run.oem"
+    tape.write_text("old tape")
+    outputs = OutputSet()
+    outputs.add("-o/--output", tape, lambda tmp: tmp.write_text("new tape"))
+    outputs.add("--oem", oem, lambda tmp: tmp.write_text("new oem"))
+    with pytest.raises(BrokenPipeError), outputs.staged() as paths:
+        assert paths == (tape, oem) and tape.read_text() == "old tape"
+        raise BrokenPipeError(errno.EPIPE, "Broken pipe")  # an OSError, yet not an output's
+    assert tape.read_text() == "old tape"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.t13.h5"]
+
+
 def test_os_errors_name_the_requested_path_and_option_not_the_temporary(tmp_path: Path) -> None:
     def unwritable(tmp: Path) -> None:
         raise PermissionError(13, "Permission denied", str(tmp))

@@ -8,7 +8,7 @@ import numpy as np
 
 from tapp.io.schema import validate
 from tapp.io.tape.t13 import T13, memory_pairs
-from tapp.processor.deck import Deck, bind
+from tapp.processor.deck import Deck, bind, observations_used
 from tapp.processor.sequencing import Run, process
 from tapp.tracking.noise import RealNoise, covariance_block
 from tapp.tracking.simulate import simulate
@@ -57,6 +57,13 @@ def run(tape: T13, doc: Mapping, source: str = "deck.toml") -> Run:
     data = memory_pairs(tape)
     plan = bind(validate(Deck, doc, source), data.header, source)
     return process(data, plan, source=source)
+
+
+def used(tape: T13, doc: Mapping) -> int:
+    """The scalar observations of ``tape`` that a run with the deck document ``doc`` reads
+    (:func:`tapp.processor.deck.observations_used`)."""
+    plan = bind(validate(Deck, doc, "deck.toml"), memory_pairs(tape).header, "deck.toml")
+    return observations_used(plan, tape.pairs.k, tape.pairs.station, tape.pairs.n_obs)
 
 
 def final(run_: Run, alias: str) -> np.ndarray:

@@ -1,15 +1,29 @@
-"""TAPP III in 40-digit arithmetic: the reference the square-root processor is checked against.
+"""TAPP III in extended-precision arithmetic: the reference the square-root processor is
+checked against, by two exact routes.
 
 The seed's sequence (§4.3) and regression (§2.5) in their textbook normal-matrix form, every
-operation in mpmath at :data:`DPS` significant digits, from a T13 tape whose factors are taken
-as exact: J = Σ RᵀR and J̃ = Σ R̃ᵀR̃ by exact-product dot sums, the orbit link on an epoch
-change adjointed by the seed's (3-13), P* = Γ P Γᵀ (exact arithmetic on the tape's U: the
-inverse of the symplectic transition it represents; the exact inverse of the rounded U itself
-would carry that rounding times cond P, 4.5e13 at the periapsis of the deep-space tape), and
-¹S₁₁⁻¹ by Gaussian elimination. Forming normal matrices squares the condition number
-(up to ~1e12 after scaling on the deep-space tape), which costs at most ~24 of the 40
-digits; :func:`reference` is also run at a higher precision in the test to show that the
-digits it keeps are right.
+operation in mpmath at ``dps`` significant digits, from a T13 tape whose factors and partials
+are taken as exact: J = Σ RᵀR and J̃ = Σ R̃ᵀR̃ by exact-product dot sums, ¹S₁₁⁻¹ by Gaussian
+elimination. The two routes differ in where they keep the statistics:
+
+* **forward** (:attr:`References.forward`, the answer): every matrix is referred to the
+  injection epoch, as a batch does, and only forward maps are formed: the transition
+  G = ∂x^j/∂x⁰ is the product of the tape's orbit links, the information of the records of
+  epoch j enters as Gᵀ J G, and an entity X is X G. No transition is inverted, so the answer
+  is that of the tape's own transitions, whatever their rounding.
+* **adjoint** (:attr:`References.adjoint`, the processor's sequence): on an epoch change the
+  information is mapped by the adjoint of the orbit link, the covariance by the link, the
+  miss partials by its inverse (the update commands). The adjoint is the exact inverse of the
+  tape's link, transposed, to the working precision: the seed's (3-13), P* = Γ P Γᵀ, is the
+  inverse of a symplectic P, and the tape's P (cond 4.5e13 after the deep-space periapsis) is
+  symplectic only to its rounding, |PᵀΓP − Γ| = 1.0e-4: with Γ P Γᵀ this route was 2.7e-7
+  (periapsis) to 7.9e-6 (day 30) off the forward one. Both routes agree to the precision of
+  the arithmetic: a cross-check of the sequencing, which only this route mirrors.
+
+Forming normal matrices squares the condition number (up to ~1e12 after scaling on the
+deep-space tape, more at the injection epoch of the forward route), which costs a share of
+the digits; the tests also run the reference at a higher precision to show that the digits
+it keeps are right.
 
 Scope: the print entities of covariances (Λ̄, Λ', Λ̄', Σ) on system partitions at the epoch
 or current orbit set (τ = 0, 1) and on the isolated sets pk and m, and the recycle
@@ -28,8 +42,9 @@ from tapp.processor.commands import Command, Side
 from tapp.processor.plan import Plan
 from tapp.processor.representations import ISOLATED_SETS
 
-#: Working precision, significant decimal digits.
-DPS = 40
+#: Working precision, significant decimal digits: the forward route's normal matrices at the
+#: injection epoch hold the information of the periapsis through G (cond 4.5e13).
+DPS = 60
 
 
 def _mp(a: np.ndarray) -> mpmath.matrix:
@@ -65,6 +80,49 @@ class ReferenceRun:
     recycles: dict[int, dict[str, np.ndarray]]
 
 
+@dataclass(frozen=True)
+class References:
+    """The two exact routes of one run (module docstring)."""
+
+    forward: ReferenceRun
+    adjoint: ReferenceRun
+
+
+class _Route:
+    """The statistics of one route, in its representation: x^j (adjoint) or x⁰ (forward,
+    with G = ∂x^j/∂x⁰)."""
+
+    def __init__(self, n_o: int, miss_b: mpmath.matrix, forward: bool):
+        self.forward = forward
+        self.J, self.Jt = _zeros(n_o), _zeros(n_o)
+        self.S = self.Lb = None
+        self.B = miss_b
+        self.G = mpmath.eye(n_o)
+        self.prints: dict[tuple[int, Command], np.ndarray] = {}
+        self.recycles: dict[int, dict[str, np.ndarray]] = {}
+
+    def add(self, j: mpmath.matrix, jt: mpmath.matrix) -> None:
+        """Add information of the current epoch."""
+        self.J += self.G.T * j * self.G
+        self.Jt += self.G.T * jt * self.G
+
+    def update(self, link: mpmath.matrix) -> None:
+        """Re-refer to the current time: the forward route composes G, the adjoint maps by
+        the inverse of the link (the update commands)."""
+        if self.forward:
+            self.G = link * self.G
+            return
+        inv = mpmath.inverse(link)
+        self.J = inv.T * self.J * inv
+        self.Jt = inv.T * self.Jt * inv
+        self.S = inv.T * self.S * inv
+        self.Lb = link * self.Lb * link.T
+        self.B = self.B * inv
+
+    def run(self) -> ReferenceRun:
+        return ReferenceRun(self.prints, self.recycles)
+
+
 class _Machine:
     def __init__(self, tape, plan: Plan):
         self.tape, self.plan = tape, plan
@@ -75,9 +133,8 @@ class _Machine:
         self.E1 = (mpmath.inverse(d_fit))[:, :self.n_f1]
         self.D1 = d_fit[:self.n_f1, :]
         self.E3 = (mpmath.inverse(self.chain[6]))[:, :self.n_r1]
-        self.J, self.Jt = _zeros(self.n_o), _zeros(self.n_o)
-        self.S = self.Lb = None
-        self.B = _mp(tape.miss.B)
+        self.routes = (_Route(self.n_o, _mp(tape.miss.B), forward=True),
+                       _Route(self.n_o, _mp(tape.miss.B), forward=False))
         self.U = self._identity_rows()
         self.pending: list[np.ndarray] = []
         self.pending_t: list[np.ndarray] = []
@@ -110,75 +167,75 @@ class _Machine:
 
     def flush(self) -> None:
         if self.pending:
-            self.J += _gram(np.concatenate(self.pending))
-            self.Jt += _gram(np.concatenate(self.pending_t))
+            j, jt = _gram(np.concatenate(self.pending)), _gram(np.concatenate(self.pending_t))
+            for route in self.routes:
+                route.add(j, jt)
         self.pending, self.pending_t = [], []
-
-    def adjoint_link(self) -> mpmath.matrix:
-        """(∂x/∂x^k)ᵀ = T⁻ᵀ of the orbit link: [[P*, 0], [−Qᵀ P*, I]] with P* = Γ P Γᵀ, the
-        seed's (3-13) (exact for a symplectic P: a signed permutation of its entries)."""
-        n_p, h = self.n_p, self.n_p // 2
-        out = mpmath.eye(self.n_o)
-        for i in range(n_p):
-            for j in range(n_p):
-                # (Γ P Γᵀ)_ij with Γ = [[0, I], [−I, 0]]
-                si, pi = (1, i + h) if i < h else (-1, i - h)
-                sj, pj = (1, j + h) if j < h else (-1, j - h)
-                out[i, j] = si * sj * self.U[pi, pj]
-        p_star = out[:n_p, :n_p]
-        q = self.U[:, n_p:]
-        lower = -(q.T * p_star)
-        for i in range(self.n_o - n_p):
-            for j in range(n_p):
-                out[n_p + i, j] = lower[i, j]
-        return out
 
     def update(self) -> None:
         """Re-refer everything to the current time (the UPC commands)."""
         self.flush()
-        t = self.orbit_link()
-        t_inv = self.adjoint_link().T
-        self.J = t_inv.T * self.J * t_inv
-        self.Jt = t_inv.T * self.Jt * t_inv
-        self.S = t_inv.T * self.S * t_inv
-        self.Lb = t * self.Lb * t.T
-        self.B = self.B * t_inv
+        link = self.orbit_link()
+        for route in self.routes:
+            route.update(link)
         self.U = self._identity_rows()
 
-    def statistics(self, k: int) -> dict[str, mpmath.matrix | None]:
-        self.flush()
+    def statistics(self, route: _Route, k: int) -> dict[str, mpmath.matrix | None]:
         if k == 0:
-            self.S = self.D1.T * _mp(self.plan.S0) * self.D1
-            self.Lb = self.E3 * _mp(self.plan.Lambda0) * self.E3.T
-            s11 = self.E1.T * self.S * self.E1
+            route.S = self.D1.T * _mp(self.plan.S0) * self.D1
+            route.Lb = self.E3 * _mp(self.plan.Lambda0) * self.E3.T
+            s11 = self.E1.T * route.S * self.E1
             fit = self.E1 * mpmath.inverse(s11) * self.E1.T if mpmath.det(s11) != 0 else None
-            return {"S'": self.S, "L'": fit, "Lb'": self.Lb, "Sigma": _zeros(self.n_o)}
-        s1 = self.S + self.J
+            return {"S'": route.S, "L'": fit, "Lb'": route.Lb, "Sigma": _zeros(self.n_o)}
+        s1 = route.S + route.J
         lam = self.E1 * mpmath.inverse(self.E1.T * s1 * self.E1) * self.E1.T
-        big_l = mpmath.eye(self.n_o) - lam * self.J
-        sigma = lam * self.Jt * lam
-        return {"S'": s1, "L'": lam, "Lb'": big_l * self.Lb * big_l.T + sigma, "Sigma": sigma}
+        big_l = mpmath.eye(self.n_o) - lam * route.J
+        sigma = lam * route.Jt * lam
+        return {"S'": s1, "L'": lam, "Lb'": big_l * route.Lb * big_l.T + sigma, "Sigma": sigma}
 
-    def side(self, side: Side) -> mpmath.matrix:
-        """(0, τ, ρ| for τ = 0, 1 and the isolated sets pk, m."""
+    def side(self, route: _Route, side: Side) -> mpmath.matrix:
+        """(0, τ, ρ| for τ = 0, 1 and the isolated sets pk, m, in the route's representation."""
         if side.mu != 0:
             raise NotImplementedError("the reference evaluates covariances (parity 0) only")
         chi, t, h = self.plan.systems.bounds(side.rho)
         if chi == 0:
-            stored = {"U": self.U, "B": self.B}[ISOLATED_SETS[side.rho]]
-            return stored[t:h, :]
+            if ISOLATED_SETS[side.rho] == "B":
+                return route.B[t:h, :]
+            return (self.U * route.G)[t:h, :]
         if side.tau not in (0, 1):
             raise NotImplementedError("the reference has the orbit sets τ = 0, 1 only")
         link = mpmath.eye(self.n_o) if side.tau == 0 else self.orbit_link()
-        return (self.chain[chi] * link)[t:h, :]
+        return (self.chain[chi] * link * route.G)[t:h, :]
+
+    def outputs(self, route: _Route, k: int) -> None:
+        """Statistics at k on one route: the print entities, the recycle's T32 covariances
+        and the recycle itself."""
+        plan = self.plan
+        stats = self.statistics(route, k)
+        if k in plan.print_k and plan.print_statistics:
+            for cmd in plan.print_commands:
+                if not cmd.is_covariance or stats.get(cmd.sigma, 0) is None:
+                    continue
+                matrix = {"Lb": route.Lb, "L'": stats["L'"], "Lb'": stats["Lb'"],
+                          "Sigma": stats["Sigma"]}[cmd.sigma]
+                x1, x2 = self.side(route, cmd.rows), self.side(route, cmd.cols)
+                route.prints[(k, cmd)] = to_float(x1 * matrix * x2.T)
+        if k == 0 or k in plan.recycle_k:
+            if k != 0:
+                t = self.orbit_link() * route.G
+                route.recycles[k] = {name: to_float(t * stats[key] * t.T) for name, key in
+                                     (("Lambda_fit", "L'"), ("Lambda_real", "Lb'"),
+                                      ("Sigma", "Sigma"))}
+            route.S, route.Lb = stats["S'"], stats["Lb'"]
+            route.J, route.Jt = _zeros(self.n_o), _zeros(self.n_o)
 
 
-def reference(tape, plan: Plan, dps: int = DPS) -> ReferenceRun:
+def reference(tape, plan: Plan, dps: int = DPS) -> References:
     """Run TAPP III on ``tape`` (a T13 in memory, with its pair factors) in ``dps``-digit
-    arithmetic: the covariance print entities and the T32 recycle covariances."""
+    arithmetic by both routes: the covariance print entities and the T32 recycle
+    covariances."""
     with mpmath.workdps(dps):
         m = _Machine(tape, plan)
-        prints, recycles = {}, {}
         j_rec = tape.records.j
         n_it = tape.n_it
         j = -1
@@ -188,23 +245,10 @@ def reference(tape, plan: Plan, dps: int = DPS) -> ReferenceRun:
                     m.update()
                 j = k
             if k in plan.print_k or k in plan.recycle_k or k == 0:
-                stats = m.statistics(k)
-                if k in plan.print_k and plan.print_statistics:
-                    for cmd in plan.print_commands:
-                        if not cmd.is_covariance or stats.get(cmd.sigma, 0) is None:
-                            continue
-                        matrix = {"Lb": m.Lb, "L'": stats["L'"], "Lb'": stats["Lb'"],
-                                  "Sigma": stats["Sigma"]}[cmd.sigma]
-                        x1, x2 = m.side(cmd.rows), m.side(cmd.cols)
-                        prints[(k, cmd)] = to_float(x1 * matrix * x2.T)
-                if k == 0 or k in plan.recycle_k:
-                    if k != 0:
-                        t = m.orbit_link()
-                        recycles[k] = {name: to_float(t * stats[key] * t.T) for name, key in
-                                       (("Lambda_fit", "L'"), ("Lambda_real", "Lb'"),
-                                        ("Sigma", "Sigma"))}
-                    m.S, m.Lb = stats["S'"], stats["Lb'"]
-                    m.J, m.Jt = _zeros(m.n_o), _zeros(m.n_o)
+                m.flush()
+                for route in m.routes:
+                    m.outputs(route, k)
             if k < n_it:
                 m.read(k + 1)
-        return ReferenceRun(prints, recycles)
+        forward, adjoint = (route.run() for route in m.routes)
+        return References(forward, adjoint)

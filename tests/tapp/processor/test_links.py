@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import mpmath
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -13,11 +14,14 @@ from tapp.processor.representations import (
     Accumulator,
     Stored,
     Systems,
-    orbit_block_adjoint,
     orbit_link,
+    orbit_link_adjoint,
 )
 
 N_P, N_O = 6, 14
+#: A double-double from the exact value, rounded twice, and Dot2 for −Qᵀ P*: within a few
+#: ε² of each entry (ε² = 4.9e-32).
+TWO_ULPS_OF_ULPS = 4.0 * np.finfo(float).eps ** 2
 
 
 @st.composite
@@ -82,12 +86,13 @@ def _kepler_stm(dt: float) -> np.ndarray:
     return expm(dt * gamma @ h)  # Φ = exp(t Γ H), symplectic for symmetric H
 
 
-def test_orbit_link_adjoint_by_the_poisson_bracket_formula_is_the_inverse_transpose():
+def test_orbit_link_adjoint_of_a_symplectic_transition_is_the_inverse_transpose():
     phi = _kepler_stm(0.7)
-    assert np.allclose(orbit_block_adjoint(phi), np.linalg.inv(phi).T, rtol=0, atol=1e-10)
     partials = np.hstack([phi, np.random.default_rng(2).standard_normal((6, 4))])
     link, adj = orbit_link(partials, 10, False), orbit_link(partials, 10, True)
     assert np.allclose(adj, np.linalg.inv(link).T, rtol=0, atol=1e-10)
+    gamma = np.block([[np.zeros((3, 3)), np.eye(3)], [-np.eye(3), np.zeros((3, 3))]])
+    assert np.allclose(adj[:6, :6], gamma @ phi @ gamma.T, rtol=0, atol=1e-10)  # (3-13)
 
 
 def _systems() -> Systems:
@@ -158,10 +163,32 @@ def test_miss_sets_as_orbit_sets_need_the_rows_and_transform_like_orbits():
         short.transformation(0, 4, 1)
 
 
-def test_a_large_block_that_is_not_symplectic_is_adjointed_by_a_solve():
-    """P = 2S with S symplectic and ‖S‖ = 1e4: PᵀΓP = 4Γ, so ΓPΓᵀ would be 4x too large."""
+def test_the_adjoint_of_a_rounded_ill_conditioned_transition_is_its_exact_inverse():
+    """A symplectic transition of condition ~1e13 rounded to float64 (as the tape's U is) is
+    symplectic only to its rounding, so Γ P Γᵀ (3-13) is not its inverse: the adjoint is the
+    exact inverse of the rounded [[P, Q], [0, I]], transposed, as a double-double (against
+    mpmath at 80 digits: P* within a few ε² of each entry, −Qᵀ P* of its terms |Q|ᵀ|P*|),
+    which Γ P Γᵀ misses by far more.
+    Also a block that is not symplectic at all (2 S)."""
+    phi = _kepler_stm(9.0)
+    assert np.linalg.cond(phi) > 1e10
+    partials = np.hstack([phi, 1e3 * np.random.default_rng(4).standard_normal((6, 4))])
+    hi, lo = orbit_link_adjoint(partials, 10)
+    q = partials[:, 6:]
+    gamma = np.block([[np.zeros((3, 3)), np.eye(3)], [-np.eye(3), np.zeros((3, 3))]])
+    poisson = gamma @ phi @ gamma.T
+    with mpmath.workdps(80):
+        exact = mpmath.inverse(mpmath.matrix(orbit_link(partials, 10, False).tolist())).T
+        err = np.array([[float(abs(exact[i, j] - mpmath.mpf(hi[i, j]) - mpmath.mpf(lo[i, j])))
+                         for j in range(10)] for i in range(10)])
+        p_star = np.array([[float(abs(exact[i, j])) for j in range(6)] for i in range(6)])
+        err_poisson = max(float(abs(exact[i, j] - mpmath.mpf(poisson[i, j])) / abs(exact[i, j]))
+                          for i in range(6) for j in range(6))
+    assert np.all(err[:6, :6] <= TWO_ULPS_OF_ULPS * p_star)
+    assert np.all(err[6:, :6] <= TWO_ULPS_OF_ULPS * (np.abs(q.T) @ p_star))  # Dot2 of −Qᵀ P*
+    assert not np.any(err[:, 6:])
+    assert err_poisson > 1e6 * TWO_ULPS_OF_ULPS
     s = np.eye(6)
     s[:3, 3:] = 1e4 * np.eye(3)
-    p = 2.0 * s
-    assert np.allclose(orbit_block_adjoint(p), np.linalg.inv(p).T, rtol=1e-12, atol=0)
-    assert np.allclose(orbit_block_adjoint(s), np.linalg.inv(s).T, rtol=1e-12, atol=0)
+    for p in (2.0 * s, s):
+        assert np.allclose(orbit_link(p, 6, True), np.linalg.inv(p).T, rtol=1e-12, atol=0)

@@ -15,6 +15,7 @@ from tests.tapp.processor.helpers import (
     run,
     scaled_err,
     sigmas,
+    used,
 )
 
 #: Covariances from two routes through the same normal matrices (products and one Cholesky
@@ -115,9 +116,12 @@ def test_dropping_a_station_with_flags_equals_simulating_without_it():
     assert all3.n_o == two.n_o
     doc = deck(all3, times={"print": [3]}, commands={"print": OUT[:2]})
     reference = run(two, doc)
-    flagged = run(all3, {**doc, "stations_off": [{"station": "KOUROU"}]})
+    off = {**doc, "stations_off": [{"station": "KOUROU"}]}
+    flagged = run(all3, off)
     for alias in OUT[:2]:
         assert scaled_err(final(flagged, alias), final(reference, alias)) < ROUNDING
+    # and the observations it uses are the other tape's (issue 28: a trade study counted all)
+    assert used(all3, off) == two.pairs.n_obs.sum() < all3.pairs.n_obs.sum() == used(all3, doc)
     unflagged = run(all3, doc)
     assert scaled_err(final(unflagged, OUT[0]), final(reference, OUT[0])) > 1e-3
 
@@ -128,11 +132,12 @@ def test_a_time_window_flag_equals_a_blackout_of_the_same_records():
     blacked = leo_tape(parameters=params,
                        tracking={"station": {"QUITO": {"blackouts": [[3600.5, 7200.0]]}}})
     doc = deck(full, times={"print": [3]}, commands={"print": OUT[:2]})
-    flagged = run(full, {**doc, "stations_off": [{"station": "QUITO", "start": 3600.0,
-                                                   "end": 7200.0}]})
+    off = {**doc, "stations_off": [{"station": "QUITO", "start": 3600.0, "end": 7200.0}]}
+    flagged = run(full, off)
     reference = run(blacked, doc)
     for alias in OUT[:2]:
         assert scaled_err(final(flagged, alias), final(reference, alias)) < ROUNDING
+    assert used(full, off) == blacked.pairs.n_obs.sum() < full.pairs.n_obs.sum()
 
 
 def _closures(out) -> list[tuple[int, float]]:

@@ -69,6 +69,13 @@ def leo_document(**tables) -> dict:
     return doc
 
 
+#: :func:`leo_document` changes: a fourth station, 70° north, which the 2°-inclined LEO never
+#: rises above.
+NORTH = {"stations": {"NORTH": {"lat_deg": 70.0, "lon_deg": 0.0, "h_km": 0.0,
+                                "elev_mask_deg": 5.0}},
+         "tracking": {"stations": ["QUITO", "KOUROU", "MALINDI", "NORTH"]}}
+
+
 def leo_scenario(**tables) -> Scenario:
     """Return the parsed base scenario with :func:`leo_document` changes."""
     return parse_scenario(leo_document(**tables), SOURCE)

@@ -142,6 +142,19 @@ def test_scenario_errors(ddor: dict, field: str, expected: str) -> None:
     assert err.value.field == field
 
 
+def test_a_baseline_of_two_stations_at_one_place_names_the_file_and_the_baseline() -> None:
+    """Two names for one antenna: a baseline of zero length, refused where the file is read
+    (issue 28: "DdorModel: station_b: ..." once the simulation started)."""
+    doc = _document(baselines=[["EAST", "TWIN"]])
+    doc["stations"]["TWIN"] = dict(doc["stations"]["EAST"])
+    doc["tracking"]["stations"].append("TWIN")
+    with pytest.raises(InputError) as err:
+        parse_scenario(doc, SOURCE)
+    assert str(err.value) == (f"{SOURCE}: ddor.baselines[0]: expected two stations at different "
+                              "places (a baseline of zero length measures nothing) (got "
+                              "['EAST', 'TWIN'])")
+
+
 def test_a_baseline_that_never_sees_the_spacecraft_is_an_error() -> None:
     """LEO at 170 km: Quito and Malindi (119 deg apart) never see it together."""
     doc = leo_document(ddor={"baselines": [["QUITO", "MALINDI"]], "fit": {"sigma_ns": 1.0}})

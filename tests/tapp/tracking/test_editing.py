@@ -15,6 +15,7 @@ from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import EDITING_RULES, simulate
 from tests.tapp.tracking.helpers import (
     GEO_BIAS_M,
+    NORTH,
     geo_document,
     leo_document,
     leo_scenario,
@@ -145,3 +146,15 @@ def test_a_schedule_with_no_observation_left_says_what_removed_them() -> None:
     assert "0 observations from 541 sample times per station" in message
     # 3 stations: t = 0 outside the tape; every sample above a mask blacked out
     assert "outside_tape 3, elevation_mask" in message and "min_pass 0" in message
+
+
+def test_a_station_that_never_sees_the_spacecraft_is_a_warning_saying_what_removed_them(
+        ) -> None:
+    """The others have data: the run goes on, and says so (issue 28: it was silent), as a
+    ΔDOR baseline with no point does (an error there: a baseline is asked for its points)."""
+    sim = simulate(leo_scenario(**NORTH))
+    assert sim.warnings == (
+        "test_scenario.toml: tracking.stations[3]: NORTH yields no observation while other "
+        "stations do (0 of its 541 sample times kept; removed: outside_tape 1, elevation_mask "
+        "540, blackout 0, min_pass 0)",)
+    assert simulate(leo_scenario()).warnings == ()

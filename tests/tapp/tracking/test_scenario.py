@@ -224,6 +224,18 @@ def test_the_integration_method_is_chosen_in_the_model_table() -> None:
     assert np.abs(dop[:, :3] - rkn[:, :3]).max() < one_mm_km
 
 
+def test_rkn12_with_forces_that_depend_on_the_velocity_names_the_model_method() -> None:
+    """Drag, and stochastic accelerations in RIC axes, depend on the velocity, which rkn12
+    does not integrate: the file's model.method is at fault (issue 28: "propagator: method"
+    once the simulation started, or no message at all before it)."""
+    expected = (f"{SOURCE}: model.method: expected 'dop853' for a model with velocity-"
+                "dependent forces ('rkn12' integrates r'' = a(t, r) only) (got 'rkn12')")
+    assert _message(leo_document(model={"method": "rkn12", "area_to_mass_m2_kg": 0.01,
+                                        "atmosphere": "exponential"})) == expected
+    assert _message(leo_document(model={"method": "rkn12"}, stochastic={
+        "frame": "ric", "interval_s": 3600.0, "sigma_m_s2": 1e-6, "tau_s": 7200.0})) == expected
+
+
 def test_a_third_body_listed_twice_is_refused() -> None:
     text = _message(leo_document(model={"third_bodies": ["sun", "moon", "sun"]}))
     assert text == (f"{SOURCE}: model.third_bodies: expected each item once ('sun' is repeated) "
