@@ -40,10 +40,10 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from tapp.dynamics.atmosphere import HP_HEIGHT_km, height_km
-from tapp.dynamics.radiation import SHADOW_BOUNDARIES, SHADOW_BODIES, disc_geometry
-from tapp.dynamics.spec import ForceModel
 from tapp.constants import RADIUS_km
+from tapp.dynamics.atmosphere import HP_HEIGHT_km, height_km
+from tapp.dynamics.radiation import SHADOW_BODIES, SHADOW_BOUNDARIES, disc_geometry
+from tapp.dynamics.spec import ForceModel
 
 
 def boundaries(model: ForceModel, r: ca.SX, r_bodies: Mapping[str, ca.SX]

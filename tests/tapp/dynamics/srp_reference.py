@@ -20,11 +20,30 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 
-from tapp.constants import AU_km, GM_EARTH_km3_s2, RADIUS_km, R_EARTH_km, egm96_coefficients
+from tapp.constants import AU_km, GM_EARTH_km3_s2, R_EARTH_km, RADIUS_km, egm96_coefficients
 from tapp.dynamics.ephemeris import position_km, utc_to_tdb_jd
 
 P_SUN_N_m2 = 4.56e-6  # Montenbruck & Gill (2000) §3.4.1, at 1 AU
 J2 = -math.sqrt(5.0) * egm96_coefficients()[0][2, 0]
+
+
+def cone_state(r: np.ndarray, r_sun: np.ndarray) -> int:
+    """0 lit, 1 penumbra, 2 umbra: Vallado (2013) Algorithm 34 (shadow cones of the Earth),
+    at r with the Sun at r_sun (km, Earth-centred)."""
+    re, rs = RADIUS_km["earth"], RADIUS_km["sun"]
+    d_sun = np.linalg.norm(r_sun)
+    alpha_pen = math.asin((rs + re) / d_sun)
+    alpha_umb = math.asin((rs - re) / d_sun)
+    axis = -r_sun / d_sun
+    horiz = np.dot(r, axis)  # along the shadow axis, behind the Earth when > 0
+    if horiz <= 0.0:
+        return 0
+    vert = np.linalg.norm(r - horiz * axis)
+    pen_vert = math.tan(alpha_pen) * (re / math.sin(alpha_pen) + horiz)
+    if vert > pen_vert:
+        return 0
+    umb_vert = math.tan(alpha_umb) * (re / math.sin(alpha_umb) - horiz)
+    return 2 if vert <= umb_vert else 1
 
 
 @dataclass(frozen=True)
@@ -92,10 +111,26 @@ class SrpOrbit:
         return [penumbra, umbra]
 
 
+@dataclass(frozen=True)
+class Solution:
+    """The reference trajectory: states (N, 6) on the requested grid, the boundary crossings
+    (s), and the state at any time through the pieces' dense outputs."""
+
+    states: np.ndarray
+    crossings: np.ndarray
+    pieces: tuple
+
+    def state_at(self, t_s: float) -> np.ndarray:
+        for start, end, sol in self.pieces:
+            if start <= t_s <= end:
+                return sol(t_s)
+        raise ValueError(f"t = {t_s} s outside the reference")
+
+
 def integrate(orbit: SrpOrbit, x0: np.ndarray, t_s: np.ndarray, tol: float = 1e-13
-              ) -> tuple[np.ndarray, np.ndarray]:
-    """States (N, 6) at the increasing times ``t_s`` (from 0) and the boundary crossing
-    times, restarting at each boundary (module docstring).
+              ) -> Solution:
+    """The reference from t = 0 through the increasing times ``t_s``, restarting at each
+    boundary (module docstring).
 
     After a crossing the function just crossed sits at zero to rounding, so it watches only
     for the opposite crossing until another one is met (SciPy's ``direction``).
@@ -103,7 +138,7 @@ def integrate(orbit: SrpOrbit, x0: np.ndarray, t_s: np.ndarray, tol: float = 1e-
     kw = dict(method="DOP853", rtol=tol, atol=tol)
     out = np.full((t_s.size, 6), np.nan)
     t, y = 0.0, np.asarray(x0, dtype=float)
-    crossings = []
+    crossings, pieces = [], []
     events = orbit.boundaries()
     for g in events:
         g.terminal, g.direction = True, 0.0
@@ -112,7 +147,8 @@ def integrate(orbit: SrpOrbit, x0: np.ndarray, t_s: np.ndarray, tol: float = 1e-
         if sol.status != 1:  # reached the end
             todo = t_s > t if crossings else t_s >= t
             out[todo] = sol.sol(t_s[todo]).T
-            return out, np.array(crossings)
+            pieces.append((t, t_s[-1], sol.sol))
+            return Solution(out, np.array(crossings), tuple(pieces))
         i = min((k for k, te in enumerate(sol.t_events) if te.size),
                 key=lambda k: sol.t_events[k][0])
         t_event, start = sol.t_events[i][0], sol.t[-2]  # -2: the last step before the crossing
@@ -122,6 +158,7 @@ def integrate(orbit: SrpOrbit, x0: np.ndarray, t_s: np.ndarray, tol: float = 1e-
             out[early] = sol.sol(t_s[early]).T
         if late.any():
             out[late] = clean.sol(t_s[late]).T
+        pieces += [(t, start, sol.sol), (start, t_event, clean.sol)]
         for g in events:
             g.direction = 0.0
         events[i].direction = 1.0 if events[i](start, sol.y[:, -2]) > 0 else -1.0

@@ -19,6 +19,7 @@ from tapp.dynamics.equations import build_equations
 from tapp.dynamics.radiation import shadow_factor, srp_acceleration
 from tapp.dynamics.spec import SurfaceForces, earth_model
 from tests.tapp.dynamics.conftest import periapsis_state
+from tests.tapp.dynamics.srp_reference import cone_state
 
 JD_2026 = 2461041.5  # 2026-01-01T00:00 UTC
 P_SUN_N_m2 = 4.56e-6  # Montenbruck & Gill (2000) §3.4.1, at 1 AU
@@ -119,24 +120,6 @@ def test_srp_through_the_state_equations_uses_the_ephemeris_sun_and_moon() -> No
         assert np.linalg.norm(srp - ref) <= 1e-8 * 6e-9
 
 
-def _vallado_state(r: np.ndarray, r_sun: np.ndarray) -> int:
-    """0 lit, 1 penumbra, 2 umbra: Vallado (2013) Algorithm 34 (shadow cones of the Earth)."""
-    re, rs = RADIUS_km["earth"], RADIUS_km["sun"]
-    d_sun = np.linalg.norm(r_sun)
-    alpha_pen = math.asin((rs + re) / d_sun)
-    alpha_umb = math.asin((rs - re) / d_sun)
-    axis = -r_sun / d_sun
-    horiz = np.dot(r, axis)  # along the shadow axis, behind the Earth when > 0
-    if horiz <= 0.0:
-        return 0
-    vert = np.linalg.norm(r - horiz * axis)
-    pen_vert = math.tan(alpha_pen) * (re / math.sin(alpha_pen) + horiz)
-    if vert > pen_vert:
-        return 0
-    umb_vert = math.tan(alpha_umb) * (re / math.sin(alpha_umb) - horiz)
-    return 2 if vert <= umb_vert else 1
-
-
 def test_shadow_entry_and_exit_times_of_a_leo_orbit_match_the_shadow_cones() -> None:
     """Penumbra entry, umbra entry, umbra exit, penumbra exit on a circular 500 km orbit at
     51.6 deg, DE421 Sun of 2026-01-01 held fixed, to 1 s (the penumbra lasts ~8 s)."""
@@ -152,10 +135,10 @@ def test_shadow_entry_and_exit_times_of_a_leo_orbit_match_the_shadow_cones() -> 
     nu = _nu_fn()
     module_state = [lambda t: float(nu(r_at(t), sun, np.zeros(3))) - (1.0 - 1e-9),
                     lambda t: float(nu(r_at(t), sun, np.zeros(3))) - 1e-9]
-    cone_state = [lambda t: 0.5 - (_vallado_state(r_at(t), sun) >= 1),
-                  lambda t: 0.5 - (_vallado_state(r_at(t), sun) >= 2)]
+    cone_side = [lambda t: 0.5 - (cone_state(r_at(t), sun) >= 1),
+                  lambda t: 0.5 - (cone_state(r_at(t), sun) >= 2)]
     grid = np.arange(0.0, 2 * math.pi / n, 5.0)
-    for f_mod, f_cone in zip(module_state, cone_state, strict=True):
+    for f_mod, f_cone in zip(module_state, cone_side, strict=True):
         signs = np.sign([f_cone(t) for t in grid])
         edges = np.flatnonzero(np.diff(signs))
         assert len(edges) == 2  # one entry, one exit per orbit
@@ -169,17 +152,17 @@ def test_shadow_entry_and_exit_times_of_a_leo_orbit_match_the_shadow_cones() -> 
     # GEO, no eclipse in January: x is linear in C_r to first order; the step 0.05 keeps the
     # cubic term of the central difference at ~3e-10 relative, integration noise far below
     (periapsis_state(42164.0, 0.001, 5.0), 2 * 86400.0, 1e-13, 0.05, 1e-6),
-    # LEO through four eclipses: ν has kinks at the penumbra edges that the integrator steps
-    # over without locating them, which leaves ~1e-4 relative noise in the differenced
-    # trajectories at tol 1e-13 (2e-5 at 1e-14, step 0.05); 1e-14 and a step of 0.2 bring it
-    # to ~1e-6, while the variational sensitivity moves by under 1e-5 across these settings
-    (periapsis_state(6878.0, 0.01, 51.6, raan_deg=100.0), 6 * 3600.0, 1e-14, 0.2, 1e-5),
+    # LEO through four eclipses, each shadow edge located and restarted at (integration
+    # events): 1.7e-7 (DOP853) and 3.8e-7 (rkn12) at the default tolerance, independent of the
+    # step from 0.05 to 0.2; before the events, ν's kinks stepped over left 1e-4 of noise
+    (periapsis_state(6878.0, 0.01, 51.6, raan_deg=100.0), 6 * 3600.0, 1e-13, 0.1, 1e-6),
 ])
-def test_cr_sensitivity_matches_central_differences(x0, t_end_s, tol, step, rel) -> None:
+def test_cr_sensitivity_matches_central_differences(x0, t_end_s, tol, step, rel,
+                                                     method) -> None:
     """A sail-like A/m = 1 m^2/kg, with the Sun and Moon as third bodies too."""
     surface = SurfaceForces(1.0, srp=True, c_r=1.3)
     prop = Propagator(earth_model("J2", ("sun", "moon"), surface=surface), params=("Cr",),
-                      rtol=tol, atol=tol)
+                      rtol=tol, atol=tol, method=method)
     t = np.array([0.0, t_end_s])
     kw = dict(epoch_jd_utc=JD_2026)
     col = prop.propagate(x0, t, **kw).sensitivity[-1, :, 0]
