@@ -108,14 +108,6 @@ def _written_scenario(path: Path, data: dict, problem: BPlaneSearch, run: Target
     return replace_tables(text, str(path), tables, comment=comment)
 
 
-def _periapsis_utc(problem: BPlaneSearch, t_s: float) -> str:
-    from tapp.constants import SECONDS_PER_DAY
-    from tapp.frames.time import Epoch
-
-    epoch = problem.program.epoch
-    return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(3)
-
-
 def _encounter_dict(problem: BPlaneSearch, run: TargetingRun) -> dict:
     from tapp.constants import RADIUS_km
 
@@ -124,7 +116,7 @@ def _encounter_dict(problem: BPlaneSearch, run: TargetingRun) -> dict:
     r_p = float(enc.b_plane.periapsis_radius_km)
     return {"body": body,
             "t_periapsis_s": enc.t_periapsis_s,
-            "periapsis_utc": _periapsis_utc(problem, enc.t_periapsis_s),
+            "periapsis_utc": problem.program.epoch.iso_after(enc.t_periapsis_s, 3),
             "periapsis_radius_km": r_p,
             "periapsis_altitude_km": r_p - RADIUS_km[body],
             "v_inf_km_s": float(enc.b_plane.v_inf_km_s),

@@ -117,11 +117,10 @@ def _tdm_text(sim: Simulation, scenario: Path, parsed: Scenario) -> str:
 
 def _encounter_dict(tape: T13) -> tuple[dict, dict | None]:
     """The tape's miss (kind, time, names, nominal values) and its retargeting record."""
-    from tapp.io.tape.t13 import utc_at
 
     miss = tape.miss
     record = tape.provenance.get("targeting")
-    return ({"kind": miss.kind, "t_s": miss.t_s, "utc": utc_at(tape.epoch, miss.t_s),
+    return ({"kind": miss.kind, "t_s": miss.t_s, "utc": tape.epoch.iso_after(miss.t_s, 3),
              "names": list(miss.name), "nominal": miss.nominal.tolist()},
             json.loads(record) if record else None)
 
@@ -145,6 +144,17 @@ def _print_encounter(console: Console, miss: dict, targeting: dict | None) -> No
                       + (f" (aim {aim[name]:.10g})" if name in aim else ""))
 
 
+def _events_line(events: list[dict]) -> str:
+    """One line: how many integration events of each kind, first and last (the JSON and the
+    OEM list them all)."""
+    kinds: dict[str, int] = {}
+    for e in events:
+        kinds[e["event"]] = kinds.get(e["event"], 0) + 1
+    counts = ", ".join(f"{n} {kind}" for kind, n in kinds.items())
+    return (f"Integration events: {len(events)} ({counts}), {events[0]['utc']} to "
+            f"{events[-1]['utc']} UTC")
+
+
 def _print_report(out: dict, tape: T13, oem_states: int) -> None:
     """What ``tapp simulate`` wrote: the tape's sizes, its stations, the OEM and TDM, the
     miss."""
@@ -158,6 +168,8 @@ def _print_report(out: dict, tape: T13, oem_states: int) -> None:
                   f"{tape.n_m}, n_ts = {tape.n_ts}, n_it = {tape.n_it}; "
                   f"{out['observations']} observations in {out['passes']} passes")
     console.print(editing_table(out["stations"]))
+    if out["events"]:
+        console.print(_events_line(out["events"]))
     if out["oem"] is not None:
         console.print(f"OEM {out['oem']} ({oem_states} states)")
     if out["tdm"] is not None:
@@ -190,6 +202,7 @@ def simulate(
         from tapp.io.ccsds.oem import (
             INTERPOLATION,
             INTERPOLATION_DEGREE,
+            event_comments,
             format_oem,
         )
         from tapp.io.outputs import check_paths
@@ -223,7 +236,8 @@ def simulate(
                                   interpolation=INTERPOLATION,
                                   interpolation_degree=INTERPOLATION_DEGREE,
                                   comments=(f"TAPP I trajectory of {scenario.name}",),
-                                  meta_comments=traj.comments)
+                                  meta_comments=traj.comments + event_comments(tape.epoch,
+                                                                               traj.events))
         out = {"tape": str(output), "bytes": None, "iden": tape.iden,
                "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
@@ -232,7 +246,10 @@ def simulate(
                "stations": summary(tape)["stations"], "raw": raw,
                "oem": None if oem is None else str(oem),
                "tdm": None if tdm is None else str(tdm), "wall_s": wall_s,
-               "warnings": list(sim.warnings)}
+               "warnings": list(sim.warnings),
+               "events": [{"t_s": float(t), "utc": tape.epoch.iso_after(float(t), 6),
+                           "event": label}
+                          for t, label in zip(sim.events.t_s, sim.events.labels(), strict=True)]}
         out["miss"], out["targeting"] = _encounter_dict(tape)
         # the JSON is written after the tape's temporary, whose size it then holds
         outputs = _outputs(output, sim, oem, oem_text, tdm, tdm_text, sizes=out)

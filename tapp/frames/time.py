@@ -157,6 +157,11 @@ class Epoch:
         text = f"{year:04d}-{month:02d}-{day:02d}T{hour:02d}:{minute:02d}:{second:02d}"
         return f"{text}.{sub:0{decimals}d}" if decimals > 0 else text
 
+    def iso_after(self, t_s: float, decimals: int = 6) -> str:
+        """Return :meth:`iso` of the date ``t_s`` seconds after this epoch (t_s / 86400 days
+        added to the fraction, as the scenario's times count)."""
+        return Epoch(self.jd_whole, self.jd_fraction + t_s / SECONDS_PER_DAY).iso(decimals)
+
     def gmst_rad(self) -> float:
         """GMST IAU-82 at this epoch, rad in [0, 2 pi), taking UT1 = UTC (see :func:`gmst_rad`)."""
         return float(gmst_rad(self.jd_whole, self.jd_fraction))

@@ -46,10 +46,6 @@ RIC_NOTE = ("RIC axes of the nominal state at the set's time (R = r/|r|, C = (r 
             "I = C x R; velocity components along the same axes, without the ω x r term)")
 
 
-def _utc(epoch: Epoch, t_s: float) -> str:
-    return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(3)
-
-
 def sigmas(matrix: np.ndarray) -> np.ndarray:
     """Standard deviations √diag of a covariance (negative rounding clipped to 0)."""
     return np.sqrt(np.maximum(np.diagonal(matrix), 0.0))
@@ -158,7 +154,7 @@ def block_lines(block: Block, epoch: Epoch, info_names: tuple[str, ...]) -> list
     title = "PRINT OUTPUT" if block.kind == "print" else "RECYCLE OUTPUT"
     lines = ["", "=" * 100,
              f"{title} {block.number}   i = {block.number}, j = {block.j}, l = {block.l}, "
-             f"k = {block.k}   t_k = {block.t_s:.3f} s ({_utc(epoch, block.t_s)} UTC)",
+             f"k = {block.k}   t_k = {block.t_s:.3f} s ({epoch.iso_after(block.t_s, 3)} UTC)",
              "INFO: " + ", ".join(f"{n} = {v:.9g}" for n, v in
                                   zip(info_names, block.info, strict=True)),
              "-" * 100]
@@ -218,7 +214,7 @@ def run_dict(run: Run, header, deck_source: str, tape_source: str) -> dict:
         "tape": tape_source, "iden": header.iden, "deck": deck_source,
         "epoch_utc": header.epoch.iso(3),
         "blocks": [{"kind": b.kind, "number": b.number, "j": b.j, "l": b.l, "k": b.k,
-                    "t_s": b.t_s, "utc": _utc(header.epoch, b.t_s), "info": b.info.tolist(),
+                    "t_s": b.t_s, "utc": header.epoch.iso_after(b.t_s, 3), "info": b.info.tolist(),
                     "entities": [entity_dict(e) for e in b.entities]} for b in run.blocks],
         "history": {"labels": list(run.history_labels), "miss": list(header.miss.name),
                     "ric_labels": list(RIC_NAMES),

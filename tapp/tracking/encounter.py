@@ -58,7 +58,6 @@ from tapp.dynamics import PropagationError, Propagator
 from tapp.dynamics.forces import default_parameters
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.io.orbits import check_perigee
-from tapp.io.tape.t13 import utc_at
 from tapp.targeting.program import (
     BPlaneProgram,
     ClosestApproach,
@@ -148,7 +147,7 @@ def _no_encounter(scenario: Scenario, at_miss: str, retargeted: bool) -> NoEncou
                 f"attraction (D (GM_{miss.body} / GM_{PRIMARY[miss.body]})^(1/2), "
                 f"tapp.tracking.encounter) on a {miss.body}-relative hyperbola; {how}")
     got = (f"{at_miss}; closest approach {closest.distance_km:,.1f} km from the "
-           f"{miss.body}'s centre at {utc_at(scenario.epoch, closest.t_s)} UTC (t = "
+           f"{miss.body}'s centre at {scenario.epoch.iso_after(closest.t_s, 3)} UTC (t = "
            f"{closest.t_s:.0f} s from the epoch), sphere of attraction there "
            f"{attraction_radius_km(program, closest.t_s):,.0f} km")
     return NoEncounterError(scenario.source, expected, got, closest)
@@ -183,7 +182,7 @@ def check_encounter(scenario: Scenario, *, retargeted: bool = False) -> None:
     radius_km = attraction_radius_km(program, miss.t_s)
     if r_km <= radius_km and energy > 0.0:
         return
-    raise _no_encounter(scenario, f"at the miss time {utc_at(scenario.epoch, miss.t_s)} UTC "
+    raise _no_encounter(scenario, f"at the miss time {scenario.epoch.iso_after(miss.t_s, 3)} UTC "
                         f"(t = {miss.t_s:.3f} s) {r_km:,.1f} km from the centre, sphere of "
                         f"attraction {radius_km:,.0f} km, {miss.body}-relative energy "
                         f"{energy:.4g} km^2/s^2", retargeted)

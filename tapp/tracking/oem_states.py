@@ -56,9 +56,10 @@ def oem_trajectory(scenario: Scenario, t_end_s: float) -> OemTrajectory:
                               t_end_s / INTERPOLATION_DEGREE))
     while t.size <= MAX_STATES:
         mids = 0.5 * (t[1:] + t[:-1])
-        both = prop.propagate(scenario.x0, np.sort(np.concatenate([t, mids])), stm=False,
+        traj = prop.propagate(scenario.x0, np.sort(np.concatenate([t, mids])), stm=False,
                               param_values=values, orientation=scenario.orientation,
-                              epoch_jd_utc=scenario.epoch.jd).states
+                              epoch_jd_utc=scenario.epoch.jd)
+        both = traj.states
         states = both[0::2]
         err = np.abs(lagrange_interpolate(t, states, mids, INTERPOLATION_DEGREE) - both[1::2])
         bad = ((err[:, :3].max(axis=1) > INTERPOLATION_TOL_KM)
@@ -67,7 +68,8 @@ def oem_trajectory(scenario: Scenario, t_end_s: float) -> OemTrajectory:
             steps = np.diff(t)
             return OemTrajectory(t, states, REF_FRAMES[scenario.orientation.model],
                                  float(steps.min()), float(steps.max()),
-                                 float(err[:, :3].max()), float(err[:, 3:].max()))
+                                 float(err[:, :3].max()), float(err[:, 3:].max()),
+                                 traj.events)
         t = np.sort(np.concatenate([t, mids[np.convolve(bad, reach, mode="same") > 0]]))
     raise TappError(f"{scenario.source}: OEM: the trajectory needs more than {MAX_STATES:,} "
                     f"states for Lagrange interpolation of degree {INTERPOLATION_DEGREE} to "

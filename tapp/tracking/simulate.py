@@ -72,12 +72,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tapp.dynamics import Propagator, Trajectory
+from tapp.dynamics.events import Events
 from tapp.dynamics.forces import default_parameters
 from tapp.errors import InputError
 from tapp.estimation.factors import triangularize
@@ -159,6 +160,8 @@ class Simulation:
     warnings : one line each, ``SOURCE: FIELD: what``: a station that yields no
         observation while others do (it never sees the spacecraft above its mask, outside its
         blackouts, for min_pass_s), with the samples each editing rule removed.
+    events : the integration events of the trajectory from t = 0 to its end (shadow
+        entries and exits, Harris-Priester table heights: :mod:`tapp.dynamics.events`).
     """
 
     tape: T13
@@ -166,6 +169,7 @@ class Simulation:
     states: np.ndarray
     scenario: Scenario
     warnings: tuple[str, ...] = ()
+    events: Events = field(default_factory=Events.none)
 
 
 @dataclass(frozen=True, slots=True)
@@ -828,7 +832,11 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     )
     t_out = np.concatenate([[0.0], arc.t_s])
     states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])
-    return Simulation(tape, t_out, states, scenario, warnings)
+    events = prop.propagate(scenario.x0, t_out[-1:], stm=False,
+                            param_values=dict(scenario.dynamic_values),
+                            orientation=scenario.orientation,
+                            epoch_jd_utc=scenario.epoch.jd).events
+    return Simulation(tape, t_out, states, scenario, warnings, events)
 
 
 def _pass_table(stations: tuple[TrackingStation | TrackingBaseline, ...],

@@ -21,6 +21,9 @@ What the OEM of a simulation says (:func:`tapp.tracking.oem_states.oem_trajector
   ends, as the ``oem`` package chooses it) reproduces the propagated trajectory at
   every mid-point between states within :data:`INTERPOLATION_TOL_KM` and
   :data:`INTERPOLATION_TOL_KM_S`; the largest errors found are stated in a ``COMMENT``.
+- Every integration event met (a shadow entry or exit, a Harris-Priester table height:
+  :mod:`tapp.dynamics.events`) is a ``COMMENT`` of the metadata, with its time
+  (:func:`event_comments`).
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tapp.constants import SECONDS_PER_DAY
+from tapp.dynamics.events import Events
 from tapp.errors import InputError
 from tapp.frames.time import Epoch
 from tapp.io.atomic import atomic_write
@@ -64,6 +67,7 @@ class OemTrajectory:
     min_step_s, max_step_s : shortest and longest spacing of the states, s.
     error_km, error_km_s : largest interpolation error at the mid-points between states
         (:data:`INTERPOLATION` of degree :data:`INTERPOLATION_DEGREE`), position and velocity.
+    events : the integration events of the trajectory.
     """
 
     t_s: np.ndarray
@@ -73,6 +77,7 @@ class OemTrajectory:
     max_step_s: float
     error_km: float
     error_km_s: float
+    events: Events
 
     @property
     def comments(self) -> tuple[str, ...]:
@@ -87,6 +92,18 @@ class OemTrajectory:
                 f"{self.error_km * 1e6:.2g} mm and {self.error_km_s * 1e6:.2g} mm/s "
                 f"(required: {INTERPOLATION_TOL_KM * 1e6:g} mm, "
                 f"{INTERPOLATION_TOL_KM_S * 1e6:g} mm/s).")
+
+
+def event_comments(epoch: Epoch, events: Events) -> tuple[str, ...]:
+    """COMMENT lines of the integration events: their number, then one line each,
+    ``EVENT <UTC> <label>`` (the time as the data lines write theirs)."""
+    if not len(events):
+        return ()
+    lines = [f"Integration events ({len(events)}: shadow entries and exits, atmosphere table "
+             "heights), where the force model has a kink and the integrator restarted:"]
+    lines += [f"EVENT {epoch.iso_after(float(t), EPOCH_DECIMALS)} {label}"
+              for t, label in zip(events.t_s, events.labels(), strict=True)]
+    return tuple(lines)
 
 
 def lagrange_interpolate(t_nodes, y_nodes, t, degree: int) -> np.ndarray:
@@ -124,10 +141,6 @@ def lagrange_interpolate(t_nodes, y_nodes, t, degree: int) -> np.ndarray:
         others = np.arange(n) != k
         weights[:, others] *= ((tq - tw[:, k])[:, None] / (tw[:, others] - tw[:, k:k + 1]))
     return np.einsum("mj,mjc->mc", weights, y[idx])
-
-
-def _utc(epoch: Epoch, t_s: float) -> str:
-    return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(EPOCH_DECIMALS)
 
 
 def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
@@ -191,13 +204,13 @@ def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
              "CENTER_NAME = EARTH",
              f"REF_FRAME = {ref_frame}",
              "TIME_SYSTEM = UTC",
-             f"START_TIME = {_utc(epoch, float(t[0]))}",
-             f"STOP_TIME = {_utc(epoch, float(t[-1]))}",
+             f"START_TIME = {epoch.iso_after(float(t[0]), EPOCH_DECIMALS)}",
+             f"STOP_TIME = {epoch.iso_after(float(t[-1]), EPOCH_DECIMALS)}",
              f"INTERPOLATION = {interpolation}",
              f"INTERPOLATION_DEGREE = {interpolation_degree}",
              "META_STOP", ""]
     for ti, row in zip(t, x, strict=True):
-        lines.append(f"{_utc(epoch, float(ti))} " + " ".join(
+        lines.append(f"{epoch.iso_after(float(ti), EPOCH_DECIMALS)} " + " ".join(
             [f"{v:.9f}" for v in row[:3]] + [f"{v:.12f}" for v in row[3:]]))
     return "\n".join(lines) + "\n"
 

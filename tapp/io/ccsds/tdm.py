@@ -601,8 +601,9 @@ def tdm_from_tracks(tracks: Sequence[StationTrack], epoch: Epoch, *,
         vals = np.array([_to_tdm(kind, v) for row in tr.values.tolist()
                          for kind, v in zip(tr.kinds, row, strict=True)])
         end = float(t[-1]) if tr.span_end_s is None else max(float(tr.span_end_s), float(t[-1]))
-        meta = [("TIME_SYSTEM", "UTC"), ("START_TIME", _at(epoch, float(t[0]))),
-                ("STOP_TIME", _at(epoch, end)), ("PARTICIPANT_1", tr.station),
+        meta = [("TIME_SYSTEM", "UTC"),
+                ("START_TIME", epoch.iso_after(float(t[0]), EPOCH_DECIMALS)),
+                ("STOP_TIME", epoch.iso_after(end, EPOCH_DECIMALS)), ("PARTICIPANT_1", tr.station),
                 ("PARTICIPANT_2", tr.spacecraft), ("MODE", "SEQUENTIAL"), ("PATH", tr.path),
                 ("TIMETAG_REF", "RECEIVE")]
         if "range" in tr.kinds:
@@ -617,8 +618,6 @@ def tdm_from_tracks(tracks: Sequence[StationTrack], epoch: Epoch, *,
     return Tdm(VERSION_WRITTEN, header, tuple(comments), tuple(segments))
 
 
-def _at(epoch: Epoch, t_s: float) -> str:
-    return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(EPOCH_DECIMALS)
 
 
 def _check_track(tr: StationTrack) -> None:

@@ -45,7 +45,6 @@ from functools import cache
 
 import numpy as np
 
-from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics.empirical import COMPONENTS
 from tapp.errors import InputError
 from tapp.estimation.factors import psd_factor
@@ -90,7 +89,7 @@ __all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PART
            "TapePasses", "TapeRaw", "TapeRecords", "TapeStations", "check_factors",
            "check_parts_sum", "column_norms2",
            "factor_normal_matrices", "memory_pairs", "packed_column_norms2", "summary",
-           "utc_at", "validate"]
+           "validate"]
 
 @dataclass(frozen=True, slots=True, eq=False)
 class TapeParameters:
@@ -761,7 +760,7 @@ def summary(tape: T13, *, version: int = VERSION) -> dict:
         "stations": stations,
         "observations": int(tape.pairs.n_obs.sum()),
         "epochs": [{"index": int(i), "t_s": float(t),
-                    "utc": utc_at(tape.epoch, float(t))}
+                    "utc": tape.epoch.iso_after(float(t), 3)}
                    for i, t in zip(np.flatnonzero(rec.is_epoch), epoch_times, strict=True)],
         "input_times": int(np.count_nonzero(rec.is_input)),
         "miss": {"kind": tape.miss.kind, "t_s": tape.miss.t_s,
@@ -779,9 +778,4 @@ def _editing_summary(ed: TapeEditing, i: int) -> dict:
                                               strict=True)},
             "passes_added_by_split": int(ed.added_passes[i])}
 
-
-def utc_at(epoch: Epoch, t_s: float, decimals: int = 3) -> str:
-    """Return the UTC date (ISO, ``decimals`` digits of seconds) ``t_s`` seconds after
-    ``epoch``."""
-    return Epoch(epoch.jd_whole, epoch.jd_fraction + t_s / SECONDS_PER_DAY).iso(decimals)
 

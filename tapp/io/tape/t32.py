@@ -42,7 +42,7 @@ import numpy as np
 from tapp.estimation.factors import gram
 from tapp.frames.time import Epoch
 from tapp.io.tape.checks import MAX_MAGNITUDE, Checker
-from tapp.io.tape.t13 import TapeParameters, check_parameters, utc_at
+from tapp.io.tape.t13 import TapeParameters, check_parameters
 
 FORMAT = "T32"
 VERSION = 2
@@ -449,7 +449,7 @@ def summary(t32: T32, *, version: int = VERSION) -> dict:
         pos_real, vel_real = _sigmas(t32, rc.Lambda_real)
         recycles.append({
             "number": rc.number, "k": rc.k, "l": rc.l, "j": rc.j, "t_s": rc.t_s,
-            "t_l_s": rc.t_l_s, "utc": utc_at(t32.epoch, rc.t_s),
+            "t_l_s": rc.t_l_s, "utc": t32.epoch.iso_after(rc.t_s, 3),
             "sigma_position_km": {"fit": pos_fit, "real": pos_real},
             "sigma_velocity_km_s": {"fit": vel_fit, "real": vel_real},
             "entities": [{"omega": e.omega, "command": e.command, "alias": e.alias,
