@@ -137,10 +137,10 @@ class SurfaceForces:
     atmosphere : one of :data:`ATMOSPHERES`: the density model of the drag force
         (:mod:`tapp.dynamics.atmosphere`), ``"none"`` for no drag.
     c_d : drag coefficient, in :data:`SURFACE_RANGES`; its nominal value as the parameter ``Cd``.
-    shadows : True to dim SRP in the Earth's and the Moon's shadows. Without them SRP is the
-        gradient of a potential (−k/|r − r☉|), so a variational model without shadows keeps
-        the STM symplectic (which TAPP III's exact adjoint (3-13) relies on); with them,
-        and with drag, it is not.
+    shadows : True to dim SRP in the Earth's and the Moon's shadows (their boundaries are
+        integration events: :mod:`tapp.dynamics.events`). Without them SRP is the gradient of
+        a potential (−k/|r − r☉|) and the STM symplectic; with them, and with drag, it is
+        not.
     exponential : the layer of the ``"exponential"`` atmosphere.
     """
 

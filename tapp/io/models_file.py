@@ -131,9 +131,9 @@ class ModelTable(Schema):
     shadows: bool = Field(True, description="Dim SRP in the conical shadows of the Earth and "
                           "the Moon (penumbra included), in the state model.")
     var_shadows: bool | None = Field(
-        None, description="Shadows in the variational model's SRP; default: shadows. Without "
-        "them SRP is conservative and the STM stays symplectic, as TAPP III's exact adjoint "
-        "of the orbit link assumes (with them it falls back to an LU solve).")
+        None, description="Shadows in the variational model's SRP; default: shadows (the "
+        "integrators locate every shadow boundary, so Φ and the C_r partials stay exact "
+        "through them).")
     atmosphere: Atmosphere = Field(
         "none", description="Drag in the state model: \"none\", \"exponential\" (one layer, "
         "Vallado 2013 Table 8-4 at 400 km) or \"harris_priester\" (Montenbruck & Gill Table "

@@ -24,7 +24,8 @@ factor K, M = KᵀK (square-root information or covariance, as TAPP III computes
 TAPP II forms Σ, draws its samples and re-runs the regression without subtraction and without
 factoring a matrix that rounding has made indefinite; the matrices themselves are the
 properties of the same names (:attr:`T32Recycle.Sigma`). It also carries each transition's
-adjoint (inverse transpose), exact for the symplectic orbit block. Version 1 carried the
+adjoint (inverse transpose), the orbit block's from its exact inverse (TAPP III rounds it to a
+double-double, :func:`tapp.estimation.factors.accurate_inverse`). Version 1 carried the
 matrices; its reader factors them (:mod:`tapp.io.tape.t32_hdf5`).
 
 :func:`validate` checks the dimensions and invariants of a tape; :func:`summary` and
@@ -67,8 +68,8 @@ SIGMA_ROUNDING = 1e-6
 #: rounding of their terms: Σ_k's scaled eigenvalues reached −2e-4 on the deep-space tape.
 V1_PSD_TOL = 1e-3
 #: Largest |Tᵀ A − I|, relative to the terms |T|ᵀ|A|, for a transition T and its adjoint A:
-#: both come from the tape's STMs through the symplectic identity, exact to ~1e-12 of the
-#: terms; anything beyond this is not the adjoint of that transition.
+#: TAPP III inverts the tape's STMs exactly and rounds the result, so the product is I to
+#: ~1e-12 of the terms; anything beyond this is not the adjoint of that transition.
 ADJOINT_TOL = 1e-6
 #: Provenance the writer stamps itself (a value given for these is replaced).
 STAMPED = ("tapp_version", "git_commit", "created_utc")

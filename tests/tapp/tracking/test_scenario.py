@@ -55,7 +55,7 @@ def test_the_shipped_scenarios_parse() -> None:
     assert deep.stochastic.n_intervals == 15 and deep.stochastic.frame == "ric"
     assert deep.dynamic == ("GM", "GM_moon", "Cr")
     assert deep.state_model.name == "J2+sun+moon+srp"
-    assert deep.var_model.name == "J2+sun+moon+srp(no shadows)"
+    assert deep.var_model.name == "J2+sun+moon+srp"
     drag = read_scenario(SCENARIOS / "leo_drag.toml")
     assert drag.n_o == 13 and drag.dynamic == ("GM", "J2", "Cd")
     assert drag.state_model.name == drag.var_model.name == "J2+drag(harris_priester)"
