@@ -90,15 +90,14 @@ from typing import Annotated, Literal, NoReturn
 import numpy as np
 from pydantic import Field, PlainValidator
 
-from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics import ForceModel, Propagator
 from tapp.dynamics.empirical import COMPONENTS
-from tapp.dynamics.ephemeris import tai_minus_utc_s
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.errors import InputError
 from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
 from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.frames.timescales import seconds_after
 from tapp.io.models_file import ModelTable
 from tapp.io.noise_file import FitTable, NoiseTable, NonNegative, Positive, RealTable
 from tapp.io.orbits import OrbitTable
@@ -560,9 +559,7 @@ class _Parser:
             when = parse_epoch(str(value), self.source)
         except InputError as exc:
             raise InputError(self.source, field, exc.expected, value) from None
-        days = (when.jd_whole - self.epoch.jd_whole) + (when.jd_fraction - self.epoch.jd_fraction)
-        leaps = tai_minus_utc_s(when.jd, self.source) - tai_minus_utc_s(self.epoch.jd, self.source)
-        return days * SECONDS_PER_DAY + leaps
+        return seconds_after(self.epoch, when, self.source)
 
     def times(self, values: list, field: str) -> tuple[float, ...]:
         out = tuple(self.time_s(v, f"{field}[{i}]") for i, v in enumerate(values))
