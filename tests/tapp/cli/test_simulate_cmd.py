@@ -174,8 +174,8 @@ def test_a_station_without_data_is_one_warning_line_and_in_the_json(tmp_path: Pa
     res = runner.invoke(app, ["simulate", str(scenario), "-o", str(out), "--json", "-"])
     assert res.exit_code == 0, res.output
     warning = (f"{scenario}: tracking.stations[3]: NORTH yields no observation while other "
-               "stations do (0 of its 541 sample times kept; removed: outside_tape 1, "
-               "elevation_mask 540, blackout 0, min_pass 0)")
+               "stations do (0 of its 1082 scheduled observations kept; removed: "
+               "outside_tape 2, elevation_mask 1080, blackout 0, min_pass 0)")
     assert res.stderr.splitlines() == [f"warning: {warning}"]
     assert json.loads(res.stdout)["warnings"] == [warning]
 

@@ -143,9 +143,9 @@ def test_a_schedule_with_no_observation_left_says_what_removed_them() -> None:
         simulate(leo_scenario(tracking={"blackouts": [[0.0, 20000.0]]}))
     message = str(err.value)
     assert message.startswith("test_scenario.toml: tracking: expected a schedule")
-    assert "0 observations from 541 sample times per station" in message
-    # 3 stations: t = 0 outside the tape; every sample above a mask blacked out
-    assert "outside_tape 3, elevation_mask" in message and "min_pass 0" in message
+    assert "0 of 3246 observations scheduled over the stations kept" in message
+    # 3 stations, 2 observables: t = 0 outside the tape; every sample above a mask blacked out
+    assert "outside_tape 6, elevation_mask" in message and "min_pass 0" in message
 
 
 def test_a_station_that_never_sees_the_spacecraft_is_a_warning_saying_what_removed_them(
@@ -155,6 +155,6 @@ def test_a_station_that_never_sees_the_spacecraft_is_a_warning_saying_what_remov
     sim = simulate(leo_scenario(**NORTH))
     assert sim.warnings == (
         "test_scenario.toml: tracking.stations[3]: NORTH yields no observation while other "
-        "stations do (0 of its 541 sample times kept; removed: outside_tape 1, elevation_mask "
-        "540, blackout 0, min_pass 0)",)
+        "stations do (0 of its 1082 scheduled observations kept; removed: outside_tape 2, "
+        "elevation_mask 1080, blackout 0, min_pass 0)",)
     assert simulate(leo_scenario()).warnings == ()
