@@ -128,6 +128,12 @@ from tapp.tracking.scenario import (
     Scenario,
     TrackingStation,
 )
+from tapp.tracking.schedule import (
+    StationSamples,
+    by_schedule,
+    scheduled_passes,
+    station_samples,
+)
 from tapp.tracking.stochastic import BatchPartials, propagate_batches
 
 #: progress(stage, step, total): called as work advances (the CLI draws a bar with it).
@@ -185,7 +191,8 @@ class _Arc:
 class _StationData:
     """Samples of one station (or ΔDOR baseline): rows A (n, m, n_o), values, records,
     passes, segments; ``scale`` (n,) the observable's unit per noise unit of each sample (a
-    ΔDOR σ in nrad: its projected baseline, km), None: 1."""
+    ΔDOR σ in nrad: its projected baseline, km), None: 1; ``taken`` (n, m) bool, the
+    observables each sample measures (a scheduled pass's data types), None: all."""
 
     t_s: np.ndarray
     values: np.ndarray
@@ -194,6 +201,7 @@ class _StationData:
     segment: np.ndarray
     passes: list[tuple[float, float, int]]
     scale: np.ndarray | None = None
+    taken: np.ndarray | None = None
 
 
 def equinoctial_elements(state, mu_km3_s2: float) -> np.ndarray:
@@ -363,20 +371,27 @@ def _segments(t: np.ndarray, label: np.ndarray, t13: np.ndarray
 
 
 def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc: _Arc,
-                  grid: np.ndarray, t13: np.ndarray, columns: dict[str, int], n_scheduled: int
-                  ) -> tuple[_StationData | None, Editing]:
+                  grid: np.ndarray, t13: np.ndarray, columns: dict[str, int], n_scheduled: int,
+                  samples: StationSamples | None = None) -> tuple[_StationData | None, Editing]:
     """Rows of A for one station (module docstring, item 2), or None without samples, and
-    what the rules removed of its ``n_scheduled`` samples."""
-    pos = np.searchsorted(arc.t_s, grid)
+    what the rules removed of its ``n_scheduled`` samples on the ``grid``, or of its
+    scheduled ``samples`` (:mod:`tapp.tracking.schedule`)."""
     sch = scenario.schedule
-    passes, editing = edited_passes(_above(ts.station, scenario, grid, arc.states[pos]),
-                                    ts.blackouts_s, sch.min_pass_s, sch.max_pass_s,
-                                    sch.data_interval_s, grid, n_scheduled, len(ts.kinds))
+    times = grid if samples is None else samples.t_s
+    pos = np.searchsorted(arc.t_s, times)
+    above = (_above(ts.station, scenario, times, arc.states[pos]) if times.size
+             else np.zeros(0, dtype=bool))  # a station without a scheduled sample
+    taken = None
+    if samples is None:
+        passes, editing = edited_passes(above, ts.blackouts_s, sch.min_pass_s, sch.max_pass_s,
+                                        sch.data_interval_s, grid, n_scheduled, len(ts.kinds))
+    else:
+        passes, taken, editing = scheduled_passes(samples, above, ts, sch, scenario.epoch)
     if not passes:
         return None, editing
     take = np.concatenate([np.arange(a, b) for a, b in passes])
     label = np.concatenate([np.full(b - a, i) for i, (a, b) in enumerate(passes)])
-    t, p = grid[take], pos[take]
+    t, p = times[take], pos[take]
     x = arc.states[p]
     model = _measurement_model(ts, scenario, prop)
     a = _state_rows(model.state_partials(t, x), arc, p, scenario, columns)
@@ -389,9 +404,11 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
         i = BIAS_KINDS.index(kind)
         a[..., columns[f"{name}.{BIAS_NAMES[i]}"]] = bias[..., i]
     record, segment = _segments(t, label, t13)
-    m = len(ts.kinds)
-    pass_list = [(float(grid[a_]), float(grid[b_ - 1]), (b_ - a_) * m) for a_, b_ in passes]
-    return _StationData(t, model.compute(t, x), a, record, segment, pass_list), editing
+    counts = np.full(times.size, len(ts.kinds)) if taken is None else taken.sum(axis=1)
+    pass_list = [(float(times[a_]), float(times[b_ - 1]), int(counts[a_:b_].sum()))
+                 for a_, b_ in passes]
+    return (_StationData(t, model.compute(t, x), a, record, segment, pass_list,
+                         taken=None if taken is None else taken[take]), editing)
 
 
 def _ddor_points(bl: TrackingBaseline, windows: list[tuple[int, int]], grid: np.ndarray,
@@ -472,12 +489,17 @@ def _accumulate(ts: TrackingStation | TrackingBaseline, data: _StationData, n_o:
         # Rows in the noise unit: A / scale with σ in that unit (the same AᵀWA, AᵀWMWA).
         scale = 1.0 if data.scale is None else data.scale[start:stop, None]
         for c, (fit, real) in enumerate(zip(ts.fit, ts.real, strict=True)):
-            weights = np.full(t.size, fit.weight)
-            pr = pass_rows(data.a[start:stop, c, :] / scale, t, weights, real)
+            rows_c = (slice(None) if data.taken is None
+                      else np.flatnonzero(data.taken[start:stop, c]))
+            t_c = t[rows_c]
+            if not t_c.size:  # a scheduled pass without this observable
+                continue
+            weights = np.full(t_c.size, fit.weight)
+            pr = pass_rows((data.a[start:stop, c, :] / scale)[rows_c], t_c, weights, real)
             acc[0].append(pr.fit)
             for part, block in zip(acc[1], pr.parts, strict=True):
                 part.append(block)
-            acc[2] += t.size
+            acc[2] += t_c.size
     out = {}
     for k, (fit_rows, part_rows, count) in rows.items():
         parts = np.array([triangularize(*blocks, n=n_o) for blocks in part_rows])
@@ -513,8 +535,9 @@ def _raw(stations: tuple[TrackingStation | TrackingBaseline, ...],
             "m_tau_s": np.tile([r.tau_s for r in ts.real], n),
         }
         segment_offset += (int(d.segment[-1]) + 1) * m
+        taken = slice(None) if d.taken is None else d.taken.ravel()
         for key, value in rows.items():
-            cols.setdefault(key, []).append(value)
+            cols.setdefault(key, []).append(value[taken])
     joined = {key: np.concatenate(value) for key, value in cols.items()}
     return TapeRaw(RAW_KINDS, **joined)
 
@@ -675,13 +698,18 @@ def simulate(scenario: Scenario, *, raw: bool = False,
             progress(stage, done, total)
 
     grid = _grid(scenario, float(t13[-1]))
-    arc = _arc(scenario, prop, t13, is_epoch, grid, tick)
+    samples = {ts.number: station_samples(scenario.schedule, ts.station.name, float(t13[-1]))
+               for ts in scenario.stations if by_schedule(scenario.schedule, ts.station.name)}
+    on_grid = len(samples) < len(scenario.stations) or scenario.baselines
+    arc = _arc(scenario, prop, t13, is_epoch, np.unique(np.concatenate(
+        [grid if on_grid else grid[:0], *(s.t_s for s in samples.values())])), tick)
 
     n_scheduled = _n_samples(scenario, scenario.schedule.end_s)
     data: list[_StationData | None] = []
     editing: list[Editing] = []
     for ts in scenario.stations:
-        d, e = _station_data(ts, scenario, prop, arc, grid, t13, columns, n_scheduled)
+        d, e = _station_data(ts, scenario, prop, arc, grid, t13, columns, n_scheduled,
+                             samples.get(ts.number))
         data.append(d)
         editing.append(e)
         tick(f"observations {ts.station.name}")
@@ -702,12 +730,14 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         raise InputError(scenario.source, "tracking",
                          "a schedule that yields at least one observation (check the stations, "
                          "their masks and blackouts, start/end, data_interval_s, min_pass_s)",
-                         f"0 of {total.scheduled} observations scheduled over the stations "
-                         "kept; removed: " + removed_text(total.removed_obs))
+                         f"0 observations kept of the {total.scheduled} scheduled over the "
+                         "stations; removed: " + removed_text(total.removed_obs))
     warnings = tuple(  # the stations' (the baselines' data and editing follow theirs)
         f"{scenario.source}: tracking.stations[{i}]: {ts.station.name} yields no observation "
-        f"while other stations do (0 of its {e.scheduled} scheduled observations kept; "
-        f"removed: {removed_text(e.removed_obs)})" for i, (ts, d, e) in enumerate(zip(
+        f"while other stations do ("
+        + (f"0 of its {e.scheduled} scheduled observations kept; removed: "
+           f"{removed_text(e.removed_obs)})" if e.scheduled else "no pass in the schedule)")
+        for i, (ts, d, e) in enumerate(zip(
             scenario.stations, data, editing, strict=False)) if d is None)
 
     pair_rows = []
