@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from tapp.constants import GM_EARTH_km3_s2, OMEGA_EARTH_rad_s
+from tapp.io.tape.t13 import T13
 from tapp.tracking.scenario import Scenario, parse_scenario
 
 SOURCE = "test_scenario.toml"
@@ -143,6 +144,17 @@ def hand_document() -> dict:
                                       "blackouts": [[0.0, 6600.0]]}}},
         times={"input": [6000.0], "input_step_s": None, "end": None})
     return doc
+
+
+def schedule_text(tape: T13, *, dates: bool = True) -> str:
+    """The tape's passes (station, first and last sample) as the rows of a schedule: UTC
+    dates to the microsecond, or seconds."""
+    p = tape.passes
+    lines = []
+    for s, a, b in zip(p.station, p.t_start_s, p.t_end_s, strict=True):
+        ends = [tape.epoch.iso_after(float(t), 6) if dates else repr(float(t)) for t in (a, b)]
+        lines.append(",".join([tape.stations.name[s - 1], *ends]))
+    return "\n".join(lines) + "\n"
 
 
 def scaled_close(a: np.ndarray, b: np.ndarray, tol: float) -> float:

@@ -24,6 +24,7 @@ from tests.tapp.tracking.helpers import (
     hand_document,
     leo_document,
     scaled_close,
+    schedule_text,
 )
 
 EXAMPLES = Path(__file__).parents[3] / "tapp" / "examples"
@@ -34,17 +35,6 @@ ROUND_OFF = 1e-13
 MASK = EDITING_RULES.index("elevation_mask")
 BLACKOUT = EDITING_RULES.index("blackout")
 OUTSIDE = EDITING_RULES.index("outside_tape")
-
-
-def schedule_text(tape: T13, *, dates: bool = True) -> str:
-    """The tape's passes (station, first and last sample) as the rows of a schedule: UTC
-    dates to the microsecond, or seconds."""
-    p = tape.passes
-    lines = []
-    for s, a, b in zip(p.station, p.t_start_s, p.t_end_s, strict=True):
-        ends = [tape.epoch.iso_after(float(t), 6) if dates else repr(float(t)) for t in (a, b)]
-        lines.append(",".join([tape.stations.name[s - 1], *ends]))
-    return "\n".join(lines) + "\n"
 
 
 def _with_schedule(doc: dict, folder: Path, text: str, header: str = "station,start,end",
