@@ -37,6 +37,7 @@ breaks inside quoted cells).
 from __future__ import annotations
 
 import csv
+import hashlib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -92,10 +93,12 @@ class ScheduledPass:
 
 @dataclass(frozen=True, slots=True)
 class PassSchedule:
-    """A schedule file's passes, ordered by station (the scenario's order) then start."""
+    """A schedule file's passes, ordered by station (the scenario's order) then start, and
+    the SHA-256 of its text (hex; the tape's provenance)."""
 
     source: str
     passes: tuple[ScheduledPass, ...]
+    sha256: str
 
     @property
     def stations(self) -> frozenset[str]:
@@ -260,7 +263,7 @@ def parse_schedule(text: str, source: str, *, epoch: Epoch,
                             f"pass on row {before.row} ({epoch.iso_after(before.end_s, 3)} "
                             "UTC): passes of a station do not overlap",
                             epoch.iso_after(after.start_s, 3))
-    return PassSchedule(source, tuple(passes))
+    return PassSchedule(source, tuple(passes), hashlib.sha256(text.encode()).hexdigest())
 
 
 def read_schedule(path: Path | str, *, epoch: Epoch, stations: Mapping[str, tuple[str, ...]],

@@ -55,6 +55,13 @@ def by_schedule(schedule: Schedule, station: str) -> bool:
     return schedule.use == "schedule" or station in schedule.passes.stations
 
 
+def schedule_provenance(schedule: Schedule) -> dict[str, str]:
+    """The tape's ``schedule`` provenance, ``FILE (sha256 HEX)``; none by visibility."""
+    if schedule.passes is None:
+        return {}
+    return {"schedule": f"{schedule.passes.source} (sha256 {schedule.passes.sha256})"}
+
+
 @dataclass(frozen=True, slots=True)
 class StationSamples:
     """The samples one station's passes ask for within the tape's span (0, last T13 time].

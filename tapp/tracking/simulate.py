@@ -22,8 +22,10 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    the integration then also restarts at their interval boundaries
    (:mod:`tapp.tracking.stochastic`), Φ and S being carried across them by forward products.
 
-2. **Observations.** Samples fall on the schedule's grid; a station observes where the
-   spacecraft is above its mask (geometric elevation) and outside its blackouts; runs of
+2. **Observations.** Samples fall on the schedule's grid (or in the passes of a pass
+   schedule: :mod:`tapp.tracking.schedule`; the rules are :mod:`tapp.tracking.editing`'s);
+   a station observes where the spacecraft is above its mask (geometric elevation) and
+   outside its blackouts; runs of
    samples form passes (:func:`tapp.measurements.find_passes`, split at gaps); passes shorter
    than min_pass_s are removed, and passes longer than max_pass_s are split into consecutive
    passes of at most max_pass_s (each its own block of the real world's M: its own per-pass
@@ -131,6 +133,7 @@ from tapp.tracking.scenario import (
 from tapp.tracking.schedule import (
     StationSamples,
     by_schedule,
+    schedule_provenance,
     scheduled_passes,
     station_samples,
 )
@@ -793,7 +796,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                     "earth_orientation": scenario.orientation.model,
                     "eop": scenario.orientation.eop_note + (
                         " (predicted values used)" if scenario.orientation.uses_predicted_eop(
-                            t13) else ""), **encounter},
+                            t13) else ""), **encounter, **schedule_provenance(scenario.schedule)},
     )
     t_out = np.concatenate([[0.0], arc.t_s])
     states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])

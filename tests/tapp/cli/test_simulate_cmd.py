@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -434,7 +435,11 @@ def test_a_schedule_of_the_visibility_passes_through_the_cli(
     assert info["observations"] == int(before.pairs.n_obs.sum())
     assert [s["scheduled_observations"] for s in info["stations"]] == [
         s["observations"] for s in info["stations"]]
-    np.testing.assert_array_equal(read_t13(out, raw=False).pairs.R, before.pairs.R)
+    after = read_t13(out, raw=False)
+    np.testing.assert_array_equal(after.pairs.R, before.pairs.R)
+    digest = hashlib.sha256((tmp_path / "passes.csv").read_bytes()).hexdigest()
+    assert after.provenance["schedule"] == f"{tmp_path / 'passes.csv'} (sha256 {digest})"
+    assert before.provenance["schedule"] == ""  # tracked by visibility
 
 
 @pytest.mark.parametrize(("edit", "expected"), [
@@ -486,16 +491,9 @@ def test_a_scheduled_pass_the_station_cannot_see_exits_2_and_writes_nothing(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["edited.toml", "passes.csv"]
 
 
-def test_a_schedule_that_is_no_regular_file_or_too_large_is_refused(
-        leo_passes: tuple[Path, str], tmp_path: Path) -> None:
+def test_a_schedule_beyond_its_size_bound_is_refused_from_its_size(tmp_path: Path) -> None:
+    """(A FIFO or a device: tests/tapp/cli/test_input_files.py.)"""
     path, schedule = _scheduled(tmp_path, "")
-    schedule.unlink()
-    os.mkfifo(schedule)
-    res = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "bad.t13.h5")])
-    assert res.exit_code == 2
-    assert res.stderr.splitlines() == [f"error: {schedule}: file: expected a regular file "
-                                       "(pass schedule (CSV)) (got 'a FIFO (named pipe)')"]
-    schedule.unlink()
     schedule.write_bytes(b"#" * (MAX_SCHEDULE_BYTES + 1))
     res = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "bad.t13.h5")])
     assert res.exit_code == 2

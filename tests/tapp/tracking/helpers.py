@@ -148,10 +148,12 @@ def hand_document() -> dict:
 
 def schedule_text(tape: T13, *, dates: bool = True) -> str:
     """The tape's passes (station, first and last sample) as the rows of a schedule: UTC
-    dates to the microsecond, or seconds."""
+    dates to the microsecond, or seconds (a ΔDOR baseline's windows left out)."""
     p = tape.passes
     lines = []
     for s, a, b in zip(p.station, p.t_start_s, p.t_end_s, strict=True):
+        if tape.stations.observables[s - 1] == "ddor":  # a ΔDOR baseline's window
+            continue
         ends = [tape.epoch.iso_after(float(t), 6) if dates else repr(float(t)) for t in (a, b)]
         lines.append(",".join([tape.stations.name[s - 1], *ends]))
     return "\n".join(lines) + "\n"

@@ -78,9 +78,19 @@ def _example(name: str) -> tuple[dict, str]:
 CASES = {"leo": lambda: (leo_document(), "leo.toml"),
         "leo_rkn12": lambda: (leo_document(model={"method": "rkn12"}), "leo.toml"),
         "geo_split_at_max_pass": lambda: (geo_document(), "geo.toml"),
+        "geo_with_ddor_on_its_own_grid": lambda: (geo_with_ddor(), "geo.toml"),
         "blackouts_min_pass_outside_tape": lambda: (hand_document(), "hand.toml"),
         **{name: (lambda name=name: _example(name))
            for name in ("leo_equatorial", "leo_drag", "tapp1_table_d1")}}
+
+
+def geo_with_ddor() -> dict:
+    """The GEO track with a ΔDOR point every hour on its baseline (which keeps its own
+    schedule, on the scenario's grid, whatever tracks the stations)."""
+    doc = geo_document()
+    doc["ddor"] = {"baselines": [["UNDER", "EAST"]], "interval_s": 3600.0,
+                   "fit": {"sigma_ns": 0.1}}
+    return doc
 
 
 def _visibility_then_schedule(case, folder: Path, dates: bool = True
