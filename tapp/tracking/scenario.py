@@ -435,7 +435,8 @@ class StationTracking(Schema):
 class TrackingTable(Schema):
     """``[tracking]``: the stations, what they measure and when. Samples fall every
     ``data_interval_s`` from ``start`` to ``end`` while a station sees the spacecraft above
-    its mask and outside blackouts; a pass is a run of such samples."""
+    its mask and outside blackouts; a pass is a run of such samples. A ``schedule`` gives the
+    passes instead (``use``)."""
 
     stations: Annotated[list[str], Field(min_length=1), Unique] = Field(
         description="Names of [stations.NAME] tables, numbered 1, 2, ... on the tape.")
