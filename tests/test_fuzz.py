@@ -512,6 +512,83 @@ def test_mutated_eop_tables_keep_the_contract() -> None:
     run()
 
 
+# --- a user's pass schedule ------------------------------------------------------------------
+
+#: Text put into a cell of a schedule row: non-numbers, non-finite, out of every bound, dates
+#: that are not, observables that are not or that the station does not take, another station.
+SCHEDULE_CELL_VALUES = ("nan", "inf", "-1e300", "1e300", "", "abc", "\x00\x01", "0", "-600",
+                        "2026-13-01T00:00:00", "1969-12-31", "2026-01-01T23:59:59.999999",
+                        "range azimuth", "doppler", "range range", "QUITO", "GOLDSTONE",
+                        '"a,b"')
+#: Whole-line edits: swap a row with the next, repeat it, drop it, drop the header.
+SCHEDULE_LINE_EDITS = ("swap", "repeat", "drop", "no header")
+SCHEDULE_HEADER = "station,start,end,data_types,data_interval_s,uplink_station"
+
+
+@st.composite
+def schedule_edits(draw: st.DrawFn, n_rows: int) -> tuple[str, Callable[[list[str]], list[str]]]:
+    """Draw one edit of a schedule's lines (the header, then ``n_rows`` rows), and what it
+    does."""
+    row = draw(st.integers(1, n_rows - 1))
+    if draw(st.booleans()):
+        column = draw(st.integers(0, SCHEDULE_HEADER.count(",")))
+        text = draw(st.sampled_from(SCHEDULE_CELL_VALUES))
+
+        def cell(lines: list[str]) -> list[str]:
+            cells = lines[row].split(",")
+            cells[column] = text
+            lines[row] = ",".join(cells)
+            return lines
+
+        return f"row {row + 1} column {column} = {text!r}", cell
+    kind = draw(st.sampled_from(SCHEDULE_LINE_EDITS))
+
+    def whole(lines: list[str]) -> list[str]:
+        if kind == "swap":
+            lines[row], lines[row + 1] = lines[row + 1], lines[row]
+        elif kind == "repeat":
+            lines.insert(row, lines[row])
+        elif kind == "drop":
+            del lines[row]
+        else:
+            del lines[0]
+        return lines
+
+    return f"{kind} at row {row + 1}", whole
+
+
+def test_mutated_schedules_keep_the_contract(tmp_path: Path) -> None:
+    """leo_equatorial.toml tracked by its own visibility passes, one row or cell edited."""
+    from tapp.io.tape.t13_hdf5 import read_t13
+    from tests.tapp.tracking.helpers import schedule_text
+
+    seen = tmp_path / "seen.t13.h5"
+    assert runner.invoke(app, ["simulate", str(SCENARIOS / "leo_equatorial.toml"), "-o",
+                               str(seen)]).exit_code == 0
+    rows = [f"{line},,," for line in schedule_text(read_t13(seen, raw=False)).splitlines()]
+    text = (SCENARIOS / "leo_equatorial.toml").read_text()
+    assert "blackouts = []" in text
+
+    @_fuzz_settings(8)
+    @given(edit=schedule_edits(len(rows) + 1))
+    def run(edit: tuple[str, Callable[[list[str]], list[str]]]) -> None:
+        what, change = edit
+        with tempfile.TemporaryDirectory() as folder:
+            folder_path = Path(folder)
+            schedule = folder_path / "passes.csv"
+            schedule.write_text("\n".join(change([SCHEDULE_HEADER, *rows])) + "\n")
+            scenario = folder_path / "leo.toml"
+            scenario.write_text(text.replace("blackouts = []",
+                                             'blackouts = []\nschedule = "passes.csv"', 1))
+            out = folder_path / "out"
+            out.mkdir()
+            check_contract(["simulate", str(scenario), "-o", str(out / "run.t13.h5")],
+                           inputs=[scenario, schedule], out_dir=out, outputs=("run.t13.h5",),
+                           codes=frozenset(), what=what)
+
+    run()
+
+
 # --- corrupt tapes ---------------------------------------------------------------------------
 
 

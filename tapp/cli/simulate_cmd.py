@@ -42,14 +42,11 @@ if TYPE_CHECKING:
     from tapp.tracking.scenario import Scenario
     from tapp.tracking.simulate import Simulation
 
-def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: str | None = None
-                       ) -> tuple[Simulation, float, Scenario]:
+def _simulate_with_bar(scenario: Scenario, raw: bool, quiet: bool) -> tuple[Simulation, float]:
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
-    from tapp.tracking.scenario import read_scenario
     from tapp.tracking.simulate import simulate as run_simulation
 
-    scenario = read_scenario(path, earth_orientation)
     start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
         "{task.completed}/{task.total}"), TimeElapsedColumn())
@@ -60,7 +57,7 @@ def _simulate_with_bar(path: Path, raw: bool, quiet: bool, earth_orientation: st
             bar.update(task, description=stage, completed=done, total=total)
 
         sim = run_simulation(scenario, raw=raw, progress=progress)
-    return sim, time.perf_counter() - start, scenario
+    return sim, time.perf_counter() - start
 
 
 def _outputs(output: Path, sim: Simulation, oem: Path | None,
@@ -209,14 +206,17 @@ def simulate(
         from tapp.io.tape.t13 import summary
         from tapp.tracking.encounter import TargetingError
         from tapp.tracking.oem_states import oem_trajectory
+        from tapp.tracking.scenario import read_scenario
 
-        check_paths({"SCENARIO": scenario}, {"-o/--output": output, "--oem": oem,
-                                             "--tdm": tdm, "--json": json_file(json_out)})
+        outputs = {"-o/--output": output, "--oem": oem, "--tdm": tdm,
+                   "--json": json_file(json_out)}
+        check_paths({"SCENARIO": scenario}, outputs)
+        parsed = read_scenario(scenario, earth_orientation_option(earth_orientation))
+        if parsed.schedule.passes is not None:  # an input too
+            check_paths({"tracking.schedule": Path(parsed.schedule.passes.source)}, outputs)
         try:
-            sim, wall_s, parsed = _simulate_with_bar(scenario, raw or tdm is not None,
-                                                     quiet=json_out == STDOUT,
-                                                     earth_orientation=earth_orientation_option(
-                                                         earth_orientation))
+            sim, wall_s = _simulate_with_bar(parsed, raw or tdm is not None,
+                                             quiet=json_out == STDOUT)
         except TargetingError as exc:
             echo_error(exc)
             code = search_exit_code(exc.status)

@@ -34,6 +34,25 @@ TT_MINUS_TAI_s = 32.184
 DTDB_NODE_s = 600.0
 
 
+def seconds_after(epoch: Epoch, when: Epoch, source: str = "epoch") -> float:
+    """Return the scenario time of the UTC date ``when``: SI seconds elapsed since ``epoch``, s.
+
+    .. math:: t = 86400\\,(JD_{when} - JD_{epoch}) + ΔAT(when) - ΔAT(epoch)
+
+    (Julian dates differenced whole and fraction apart; a leap second between them counted).
+
+    Raises
+    ------
+    InputError
+        Naming ``source``: a date before 1972 (no leap-second UTC).
+    """
+    days = (when.jd_whole - epoch.jd_whole) + (when.jd_fraction - epoch.jd_fraction)
+    leaps = leap_seconds()
+    step = (leaps.at_utc(when.jd - MJD_OFFSET, source)
+            - leaps.at_utc(epoch.jd - MJD_OFFSET, source))
+    return days * SECONDS_PER_DAY + float(step)
+
+
 def _tdb_minus_tt_s(whole: np.ndarray, fraction: np.ndarray) -> np.ndarray:
     """TDB − TT at the geocentre, s: ERFA's Fairhead & Bretagnon series."""
     return erfa.dtdb(whole, fraction, 0.0, 0.0, 0.0, 0.0)

@@ -40,7 +40,9 @@ ISO strings or TOML dates)::
     [tracking]         stations = [names], observables = ["range", "range_rate", "azimuth",
                        "elevation"], light_time = "none" | "one_way" | "two_way",
                        data_interval_s, start, end, min_pass_s, max_pass_s,
-                       blackouts = [[start, end], ...]
+                       blackouts = [[start, end], ...], schedule (a pass schedule, CSV:
+                       tapp.io.schedule_file), use = "visibility" | "schedule" | "both",
+                       allow_partial (tapp.tracking.schedule)
     [tracking.station.NAME]  per-station observables, location, biases, range_bias_m,
                        range_rate_bias_mm_s (nominal bias values), blackouts, and fit / real
                        tables overriding [noise.fit] / [noise.real] keys
@@ -90,18 +92,18 @@ from typing import Annotated, Literal, NoReturn
 import numpy as np
 from pydantic import Field, PlainValidator
 
-from tapp.constants import SECONDS_PER_DAY
 from tapp.dynamics import ForceModel, Propagator
 from tapp.dynamics.empirical import COMPONENTS
-from tapp.dynamics.ephemeris import tai_minus_utc_s
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.errors import InputError
 from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
 from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.frames.timescales import seconds_after
 from tapp.io.models_file import ModelTable
 from tapp.io.noise_file import FitTable, NoiseTable, NonNegative, Positive, RealTable
 from tapp.io.orbits import OrbitTable
+from tapp.io.schedule_file import PassSchedule, read_schedule
 from tapp.io.schema import (
     EarthOrientationName,
     EopSource,
@@ -129,6 +131,8 @@ LOCATION_MODES = ("cylindrical", "ecef", "none")
 #: Most T13 input times a scenario may ask for (each is a tape record, held in memory).
 MAX_INPUT_TIMES = 100_000
 LIGHT_TIME_MODES = ("none", "one_way", "two_way")
+#: Where the samples come from: [tracking] use (tapp.tracking.schedule).
+USES = ("visibility", "schedule", "both")
 #: The p part of x: Cartesian state at the epoch, EME2000, Earth-centred.
 ORBIT_PARAMETERS = (("x_km", "km"), ("y_km", "km"), ("z_km", "km"), ("vx_km_s", "km/s"),
                     ("vy_km_s", "km/s"), ("vz_km_s", "km/s"))
@@ -212,7 +216,11 @@ class Schedule:
     A pass is a run of consecutive such samples; passes shorter than min_pass_s
     are dropped, and passes longer than max_pass_s split into consecutive passes of at most
     max_pass_s, every sample kept (each piece has its own per-pass bias in the real world).
-    What each rule removes is counted (:data:`tapp.tracking.simulate.EDITING_RULES`).
+    What each rule removes is counted (:data:`tapp.tracking.editing.EDITING_RULES`).
+
+    ``use`` "schedule" or "both" takes the samples of the stations in ``passes`` from their
+    passes instead (``allow_partial``: drop the samples a station cannot see instead of
+    refusing them; :mod:`tapp.tracking.schedule`).
     """
 
     data_interval_s: float
@@ -221,6 +229,9 @@ class Schedule:
     min_pass_s: float
     max_pass_s: float
     light_time: str
+    use: str = "visibility"
+    passes: PassSchedule | None = None
+    allow_partial: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -424,7 +435,8 @@ class StationTracking(Schema):
 class TrackingTable(Schema):
     """``[tracking]``: the stations, what they measure and when. Samples fall every
     ``data_interval_s`` from ``start`` to ``end`` while a station sees the spacecraft above
-    its mask and outside blackouts; a pass is a run of such samples."""
+    its mask and outside blackouts; a pass is a run of such samples. A ``schedule`` gives the
+    passes instead (``use``)."""
 
     stations: Annotated[list[str], Field(min_length=1), Unique] = Field(
         description="Names of [stations.NAME] tables, numbered 1, 2, ... on the tape.")
@@ -442,6 +454,20 @@ class TrackingTable(Schema):
     blackouts: list[Window] = Field([], description=_BLACKOUTS + " at every station.")
     station: dict[str, StationTracking] = Field(
         {}, description="Per-station overrides, by station name.")
+    schedule: str | None = Field(
+        None, description="A pass schedule (CSV, relative to the scenario's folder): a header, "
+        "then one row per pass: station, start, end (UTC dates or seconds from the epoch), "
+        "data_types (observables separated by spaces; empty: the station's), data_interval_s "
+        "(empty: tracking.data_interval_s), uplink_station (empty or the station itself: "
+        "three-way tracking is not modelled); tapp.io.schedule_file.")
+    use: Literal[USES] | None = Field(  # type: ignore[valid-type]
+        None, description="Which samples: \"visibility\" (the grid, wherever a station sees "
+        "the spacecraft), \"schedule\" (the schedule's passes only) or \"both\" (the stations "
+        "with passes in the schedule in them, the others by visibility); default: "
+        "\"schedule\" with a schedule, else \"visibility\".")
+    allow_partial: bool = Field(
+        False, description="Drop the samples of a scheduled pass that the station cannot see "
+        "(counted under elevation_mask) instead of refusing the schedule.")
 
 
 class TimesTable(Schema):
@@ -560,9 +586,7 @@ class _Parser:
             when = parse_epoch(str(value), self.source)
         except InputError as exc:
             raise InputError(self.source, field, exc.expected, value) from None
-        days = (when.jd_whole - self.epoch.jd_whole) + (when.jd_fraction - self.epoch.jd_fraction)
-        leaps = tai_minus_utc_s(when.jd, self.source) - tai_minus_utc_s(self.epoch.jd, self.source)
-        return days * SECONDS_PER_DAY + leaps
+        return seconds_after(self.epoch, when, self.source)
 
     def times(self, values: list, field: str) -> tuple[float, ...]:
         out = tuple(self.time_s(v, f"{field}[{i}]") for i, v in enumerate(values))
@@ -716,7 +740,8 @@ def _times(p: _Parser, tim: TimesTable) -> TapeTimes:
     return TapeTimes(inputs, (0.0, *epochs))
 
 
-def _schedule(p: _Parser, trk: TrackingTable, last_s: float) -> Schedule:
+def _schedule(p: _Parser, trk: TrackingTable, last_s: float,
+              stations: tuple[TrackingStation, ...]) -> Schedule:
     start = p.time_s(trk.start, "tracking.start")
     end = p.time_s(last_s if trk.end is None else trk.end, "tracking.end")
     if start < 0:
@@ -724,7 +749,18 @@ def _schedule(p: _Parser, trk: TrackingTable, last_s: float) -> Schedule:
     if end <= start:
         p.fail("tracking.end", f"a time after tracking.start = {start:g} s", end)
     max_pass = math.inf if trk.max_pass_s is None else trk.max_pass_s
-    return Schedule(trk.data_interval_s, start, end, trk.min_pass_s, max_pass, trk.light_time)
+    use = trk.use or ("visibility" if trk.schedule is None else "schedule")
+    passes = None
+    if use != "visibility":
+        if trk.schedule is None:
+            p.fail("tracking.schedule", f'a pass schedule file with use = "{use}"')
+        path = Path(trk.schedule)
+        passes = read_schedule(path if path.is_absolute() else Path(p.source).parent / path,
+                               epoch=p.epoch,
+                               stations={ts.station.name: ts.kinds for ts in stations},
+                               data_interval_s=trk.data_interval_s, clock_s=start)
+    return Schedule(trk.data_interval_s, start, end, trk.min_pass_s, max_pass, trk.light_time,
+                    use, passes, trk.allow_partial)
 
 
 def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -> MissSpec:
@@ -858,7 +894,7 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     stations = _stations(p, doc, doc.parameters)
     times = _times(p, doc.times)
     last_s = float(times.t13_s[-1])
-    schedule = _schedule(p, doc.tracking, last_s)
+    schedule = _schedule(p, doc.tracking, last_s, stations)
     miss = _miss(p, doc.miss, state_model, last_s)
     stochastic = _stochastic(p, doc.stochastic, last_s)
     orientation.check_covers(np.array([0.0, last_s, schedule.end_s]), source)

@@ -22,8 +22,10 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    the integration then also restarts at their interval boundaries
    (:mod:`tapp.tracking.stochastic`), Φ and S being carried across them by forward products.
 
-2. **Observations.** Samples fall on the schedule's grid; a station observes where the
-   spacecraft is above its mask (geometric elevation) and outside its blackouts; runs of
+2. **Observations.** Samples fall on the schedule's grid (or in the passes of a pass
+   schedule: :mod:`tapp.tracking.schedule`; the rules are :mod:`tapp.tracking.editing`'s);
+   a station observes where the spacecraft is above its mask (geometric elevation) and
+   outside its blackouts; runs of
    samples form passes (:func:`tapp.measurements.find_passes`, split at gaps); passes shorter
    than min_pass_s are removed, and passes longer than max_pass_s are split into consecutive
    passes of at most max_pass_s (each its own block of the real world's M: its own per-pass
@@ -99,7 +101,6 @@ from tapp.measurements import (
     LightTime,
     MeasurementModel,
     Station,
-    find_passes,
     is_visible,
     wrap_angle_rad,
 )
@@ -113,6 +114,13 @@ from tapp.orbit.bplane import b_plane
 from tapp.orbit.elements import cartesian_to_elements
 from tapp.targeting.program import BPlaneProgram
 from tapp.tracking.ddor import TrackingBaseline
+from tapp.tracking.editing import (
+    EDITING_RULES,
+    Editing,
+    edited_passes,
+    outside_blackouts,
+    removed_text,
+)
 from tapp.tracking.encounter import prepare_encounter
 from tapp.tracking.noise import PARTS, pass_rows
 from tapp.tracking.scenario import (
@@ -121,6 +129,13 @@ from tapp.tracking.scenario import (
     MISS_QUANTITIES,
     Scenario,
     TrackingStation,
+)
+from tapp.tracking.schedule import (
+    StationSamples,
+    by_schedule,
+    schedule_provenance,
+    scheduled_passes,
+    station_samples,
 )
 from tapp.tracking.stochastic import BatchPartials, propagate_batches
 
@@ -133,15 +148,6 @@ MISS_STEP = 1e-6
 #: their angles are singular there (use equinoctial elements).
 CLASSICAL_MIN_E = 1e-4
 CLASSICAL_MIN_I_rad = 1e-4
-#: Passes split where consecutive samples are more than this many data intervals apart.
-_GAP_INTERVALS = 1.5
-#: The rules that remove scheduled samples, in the order they apply; a sample is counted
-#: under the first that removes it. "outside_tape": at t = 0 or after the last T13 time (no
-#: record holds it; counted whatever the spacecraft's elevation); "elevation_mask": at or
-#: below the station's mask; "blackout": in one of the station's blackouts (passes: the
-#: passes above the mask left without a sample); "min_pass": in a pass shorter than
-#: min_pass_s (passes: those passes).
-EDITING_RULES = ("outside_tape", "elevation_mask", "blackout", "min_pass")
 #: Kind codes of the raw rows: the stations' observables, then ΔDOR (baselines).
 RAW_KINDS = (*KINDS, DDOR_KIND)
 
@@ -188,7 +194,8 @@ class _Arc:
 class _StationData:
     """Samples of one station (or ΔDOR baseline): rows A (n, m, n_o), values, records,
     passes, segments; ``scale`` (n,) the observable's unit per noise unit of each sample (a
-    ΔDOR σ in nrad: its projected baseline, km), None: 1."""
+    ΔDOR σ in nrad: its projected baseline, km), None: 1; ``taken`` (n, m) bool, the
+    observables each sample measures (a scheduled pass's data types), None: all."""
 
     t_s: np.ndarray
     values: np.ndarray
@@ -197,23 +204,7 @@ class _StationData:
     segment: np.ndarray
     passes: list[tuple[float, float, int]]
     scale: np.ndarray | None = None
-
-
-@dataclass(frozen=True, slots=True)
-class _Editing:
-    """What the rules did at one station: samples and passes removed per rule (in the order
-    of :data:`EDITING_RULES`), passes added by splitting at max_pass_s, of ``scheduled``
-    samples (a ΔDOR baseline's: the points its schedule asks for)."""
-
-    removed_samples: tuple[int, ...]
-    removed_passes: tuple[int, ...]
-    added_passes: int
-    scheduled: int
-
-
-def _removed(counts) -> str:
-    """``RULE N, ...``: samples removed by each editing rule (:data:`EDITING_RULES`)."""
-    return ", ".join(f"{rule} {n}" for rule, n in zip(EDITING_RULES, counts, strict=True))
+    taken: np.ndarray | None = None
 
 
 def equinoctial_elements(state, mu_km3_s2: float) -> np.ndarray:
@@ -330,56 +321,11 @@ def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.nda
 # ---------------------------------------------------------------------------------------------
 
 
-def _split(t: np.ndarray, start: int, stop: int, max_pass_s: float) -> list[tuple[int, int]]:
-    """Cut the pass [start, stop) of the grid ``t`` into consecutive passes of at most
-    ``max_pass_s`` each (first to last sample), every sample kept."""
-    out = []
-    while start < stop:
-        end = start + int(np.count_nonzero(t[start:stop] - t[start] <= max_pass_s))
-        out.append((start, end))
-        start = end
-    return out
-
-
 def _above(station: Station, scenario: Scenario, t: np.ndarray, states: np.ndarray
            ) -> np.ndarray:
     """Whether ``station`` sees the spacecraft strictly above its mask at t, (N,) bool."""
     geometric = MeasurementModel(station, scenario.orientation, ("elevation",))
     return is_visible(geometric.elevation_rad(t, states), station.elev_mask_rad)
-
-
-def _outside_blackouts(above: np.ndarray, t: np.ndarray,
-                       blackouts_s: tuple[tuple[float, float], ...]) -> np.ndarray:
-    """``above`` where t is in none of the blackouts (inclusive windows), (N,) bool."""
-    visible = above.copy()
-    for start, end in blackouts_s:
-        visible &= ~((t >= start) & (t <= end))
-    return visible
-
-
-def _passes(above: np.ndarray, blackouts_s: tuple[tuple[float, float], ...],
-            min_pass_s: float, max_pass_s: float, data_interval_s: float, t: np.ndarray,
-            n_scheduled: int) -> tuple[list[tuple[int, int]], _Editing]:
-    """Index ranges [start, stop) into the grid ``t`` of the passes of samples ``above`` the
-    mask and outside the blackouts, at least ``min_pass_s`` long and split at ``max_pass_s``,
-    and what each rule removed of the ``n_scheduled`` samples (:data:`EDITING_RULES`)."""
-    gap_s = _GAP_INTERVALS * data_interval_s
-    visible = _outside_blackouts(above, t, blackouts_s)
-    blacked_out = sum(not visible[a:b].any() for a, b in find_passes(above, t, gap_s))
-    long_enough = []
-    short = [0, 0]  # samples, passes
-    for start, stop in find_passes(visible, t, gap_s):
-        if t[stop - 1] - t[start] < min_pass_s:
-            short[0] += int(stop - start)
-            short[1] += 1
-        else:
-            long_enough.append((int(start), int(stop)))
-    out = [piece for start, stop in long_enough
-           for piece in _split(t, start, stop, max_pass_s)]
-    n_above, n_visible = int(np.count_nonzero(above)), int(np.count_nonzero(visible))
-    return out, _Editing(
-        (n_scheduled - t.size, t.size - n_above, n_above - n_visible, short[0]),
-        (0, 0, blacked_out, short[1]), len(out) - len(long_enough), n_scheduled)
 
 
 def _light_time(scenario: Scenario, prop: Propagator, two_way: bool) -> LightTime | None:
@@ -428,20 +374,27 @@ def _segments(t: np.ndarray, label: np.ndarray, t13: np.ndarray
 
 
 def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc: _Arc,
-                  grid: np.ndarray, t13: np.ndarray, columns: dict[str, int], n_scheduled: int
-                  ) -> tuple[_StationData | None, _Editing]:
+                  grid: np.ndarray, t13: np.ndarray, columns: dict[str, int], n_scheduled: int,
+                  samples: StationSamples | None = None) -> tuple[_StationData | None, Editing]:
     """Rows of A for one station (module docstring, item 2), or None without samples, and
-    what the rules removed of its ``n_scheduled`` samples."""
-    pos = np.searchsorted(arc.t_s, grid)
+    what the rules removed of its ``n_scheduled`` samples on the ``grid``, or of its
+    scheduled ``samples`` (:mod:`tapp.tracking.schedule`)."""
     sch = scenario.schedule
-    passes, editing = _passes(_above(ts.station, scenario, grid, arc.states[pos]),
-                              ts.blackouts_s, sch.min_pass_s, sch.max_pass_s,
-                              sch.data_interval_s, grid, n_scheduled)
+    times = grid if samples is None else samples.t_s
+    pos = np.searchsorted(arc.t_s, times)
+    above = (_above(ts.station, scenario, times, arc.states[pos]) if times.size
+             else np.zeros(0, dtype=bool))  # a station without a scheduled sample
+    taken = None
+    if samples is None:
+        passes, editing = edited_passes(above, ts.blackouts_s, sch.min_pass_s, sch.max_pass_s,
+                                        sch.data_interval_s, grid, n_scheduled, len(ts.kinds))
+    else:
+        passes, taken, editing = scheduled_passes(samples, above, ts, sch, scenario.epoch)
     if not passes:
         return None, editing
     take = np.concatenate([np.arange(a, b) for a, b in passes])
     label = np.concatenate([np.full(b - a, i) for i, (a, b) in enumerate(passes)])
-    t, p = grid[take], pos[take]
+    t, p = times[take], pos[take]
     x = arc.states[p]
     model = _measurement_model(ts, scenario, prop)
     a = _state_rows(model.state_partials(t, x), arc, p, scenario, columns)
@@ -454,9 +407,11 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
         i = BIAS_KINDS.index(kind)
         a[..., columns[f"{name}.{BIAS_NAMES[i]}"]] = bias[..., i]
     record, segment = _segments(t, label, t13)
-    m = len(ts.kinds)
-    pass_list = [(float(grid[a_]), float(grid[b_ - 1]), (b_ - a_) * m) for a_, b_ in passes]
-    return _StationData(t, model.compute(t, x), a, record, segment, pass_list), editing
+    counts = np.full(times.size, len(ts.kinds)) if taken is None else taken.sum(axis=1)
+    pass_list = [(float(times[a_]), float(times[b_ - 1]), int(counts[a_:b_].sum()))
+                 for a_, b_ in passes]
+    return (_StationData(t, model.compute(t, x), a, record, segment, pass_list,
+                         taken=None if taken is None else taken[take]), editing)
 
 
 def _ddor_points(bl: TrackingBaseline, windows: list[tuple[int, int]], grid: np.ndarray,
@@ -478,7 +433,7 @@ def _ddor_points(bl: TrackingBaseline, windows: list[tuple[int, int]], grid: np.
 
 def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, arc: _Arc,
                    grid: np.ndarray, t13: np.ndarray, columns: dict[str, int],
-                   n_scheduled: int) -> tuple[_StationData | None, _Editing]:
+                   n_scheduled: int) -> tuple[_StationData | None, Editing]:
     """Rows of A of one ΔDOR baseline (:mod:`tapp.tracking.ddor`), or None without points,
     and what the rules removed of the points its schedule asks for (a window is a pass)."""
     sch = scenario.schedule
@@ -487,17 +442,17 @@ def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, a
     above = np.logical_and(*(_above(ts.station, scenario, grid, arc.states[pos])
                              for ts in pair))
     blackouts = pair[0].blackouts_s + pair[1].blackouts_s
-    windows, win_editing = _passes(above, blackouts, bl.min_window_s, math.inf,
-                                   sch.data_interval_s, grid, n_scheduled)
+    windows, win_editing = edited_passes(above, blackouts, bl.min_window_s, math.inf,
+                                         sch.data_interval_s, grid, n_scheduled)
     picks, asked, n_asked = _ddor_points(bl, windows, grid, scenario, n_scheduled)
-    visible = _outside_blackouts(above, grid, blackouts)
+    visible = outside_blackouts(above, grid, blackouts)
     kept = np.zeros(grid.size, dtype=bool)
     for p in picks:
         kept[p] = True
     removed = (n_asked - int(np.count_nonzero(asked)), np.count_nonzero(asked & ~above),
                np.count_nonzero(asked & above & ~visible),
                np.count_nonzero(asked & visible & ~kept))
-    editing = _Editing(tuple(int(n) for n in removed), win_editing.removed_passes, 0, n_asked)
+    editing = Editing(tuple(int(n) for n in removed), win_editing.removed_passes, 0, n_asked)
     if not picks:
         return None, editing
     take = np.concatenate(picks)
@@ -537,12 +492,17 @@ def _accumulate(ts: TrackingStation | TrackingBaseline, data: _StationData, n_o:
         # Rows in the noise unit: A / scale with σ in that unit (the same AᵀWA, AᵀWMWA).
         scale = 1.0 if data.scale is None else data.scale[start:stop, None]
         for c, (fit, real) in enumerate(zip(ts.fit, ts.real, strict=True)):
-            weights = np.full(t.size, fit.weight)
-            pr = pass_rows(data.a[start:stop, c, :] / scale, t, weights, real)
+            rows_c = (slice(None) if data.taken is None
+                      else np.flatnonzero(data.taken[start:stop, c]))
+            t_c = t[rows_c]
+            if not t_c.size:  # a scheduled pass without this observable
+                continue
+            weights = np.full(t_c.size, fit.weight)
+            pr = pass_rows((data.a[start:stop, c, :] / scale)[rows_c], t_c, weights, real)
             acc[0].append(pr.fit)
             for part, block in zip(acc[1], pr.parts, strict=True):
                 part.append(block)
-            acc[2] += t.size
+            acc[2] += t_c.size
     out = {}
     for k, (fit_rows, part_rows, count) in rows.items():
         parts = np.array([triangularize(*blocks, n=n_o) for blocks in part_rows])
@@ -578,8 +538,9 @@ def _raw(stations: tuple[TrackingStation | TrackingBaseline, ...],
             "m_tau_s": np.tile([r.tau_s for r in ts.real], n),
         }
         segment_offset += (int(d.segment[-1]) + 1) * m
+        taken = slice(None) if d.taken is None else d.taken.ravel()
         for key, value in rows.items():
-            cols.setdefault(key, []).append(value)
+            cols.setdefault(key, []).append(value[taken])
     joined = {key: np.concatenate(value) for key, value in cols.items()}
     return TapeRaw(RAW_KINDS, **joined)
 
@@ -740,13 +701,18 @@ def simulate(scenario: Scenario, *, raw: bool = False,
             progress(stage, done, total)
 
     grid = _grid(scenario, float(t13[-1]))
-    arc = _arc(scenario, prop, t13, is_epoch, grid, tick)
+    samples = {ts.number: station_samples(scenario.schedule, ts.station.name, float(t13[-1]))
+               for ts in scenario.stations if by_schedule(scenario.schedule, ts.station.name)}
+    on_grid = len(samples) < len(scenario.stations) or scenario.baselines
+    arc = _arc(scenario, prop, t13, is_epoch, np.unique(np.concatenate(
+        [grid if on_grid else grid[:0], *(s.t_s for s in samples.values())])), tick)
 
     n_scheduled = _n_samples(scenario, scenario.schedule.end_s)
     data: list[_StationData | None] = []
-    editing: list[_Editing] = []
+    editing: list[Editing] = []
     for ts in scenario.stations:
-        d, e = _station_data(ts, scenario, prop, arc, grid, t13, columns, n_scheduled)
+        d, e = _station_data(ts, scenario, prop, arc, grid, t13, columns, n_scheduled,
+                             samples.get(ts.number))
         data.append(d)
         editing.append(e)
         tick(f"observations {ts.station.name}")
@@ -758,21 +724,23 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                              "masks, outside their blackouts, at some ΔDOR point (check the "
                              "masks, min_window_s, interval_s)",
                              f"0 points on {bl.name} of {e.scheduled} asked for; removed: "
-                             + _removed(e.removed_samples))
+                             + removed_text(e.removed_obs))
         data.append(d)
         editing.append(e)
         tick(f"observations {bl.name}")
     if all(d is None for d in data):
-        removed = np.sum([e.removed_samples for e in editing], axis=0)
+        total = Editing.total(editing)
         raise InputError(scenario.source, "tracking",
                          "a schedule that yields at least one observation (check the stations, "
                          "their masks and blackouts, start/end, data_interval_s, min_pass_s)",
-                         f"0 observations from {n_scheduled} sample times per station; "
-                         "samples removed over the stations: " + _removed(removed))
+                         f"0 observations kept of the {total.scheduled} scheduled over the "
+                         "stations; removed: " + removed_text(total.removed_obs))
     warnings = tuple(  # the stations' (the baselines' data and editing follow theirs)
         f"{scenario.source}: tracking.stations[{i}]: {ts.station.name} yields no observation "
-        f"while other stations do (0 of its {e.scheduled} sample times kept; removed: "
-        f"{_removed(e.removed_samples)})" for i, (ts, d, e) in enumerate(zip(
+        f"while other stations do ("
+        + (f"0 of its {e.scheduled} scheduled observations kept; removed: "
+           f"{removed_text(e.removed_obs)})" if e.scheduled else "no pass in the schedule)")
+        for i, (ts, d, e) in enumerate(zip(
             scenario.stations, data, editing, strict=False)) if d is None)
 
     pair_rows = []
@@ -821,14 +789,14 @@ def simulate(scenario: Scenario, *, raw: bool = False,
                         np.array([r[3] for r in pair_rows]), np.array([r[4] for r in pair_rows]),
                         Rt_parts=np.array([r[5] for r in pair_rows])),
         passes=_pass_table(entries, data),
-        editing=_editing_table(entries, editing),
+        editing=_editing_table(editing),
         raw=_raw(entries, data, n_o) if raw else None,
         stochastic=scenario.stochastic,
         provenance={"scenario": scenario.document_json, "scenario_source": scenario.source,
                     "earth_orientation": scenario.orientation.model,
                     "eop": scenario.orientation.eop_note + (
                         " (predicted values used)" if scenario.orientation.uses_predicted_eop(
-                            t13) else ""), **encounter},
+                            t13) else ""), **encounter, **schedule_provenance(scenario.schedule)},
     )
     t_out = np.concatenate([[0.0], arc.t_s])
     states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])
@@ -848,11 +816,9 @@ def _pass_table(stations: tuple[TrackingStation | TrackingBaseline, ...],
                       np.array([r[2] for r in rows]), np.array([r[3] for r in rows]))
 
 
-def _editing_table(stations: tuple[TrackingStation | TrackingBaseline, ...],
-                   editing: list[_Editing]) -> TapeEditing:
-    """The tape's ``editing/``: samples turned into scalar observations (m per sample)."""
-    m = np.array([len(ts.kinds) for ts in stations])
-    return TapeEditing(EDITING_RULES, m * np.array([e.scheduled for e in editing]),
-                       m[:, None] * np.array([e.removed_samples for e in editing]),
+def _editing_table(editing: list[Editing]) -> TapeEditing:
+    """The tape's ``editing/``: the counts of each station and baseline."""
+    return TapeEditing(EDITING_RULES, np.array([e.scheduled for e in editing]),
+                       np.array([e.removed_obs for e in editing]),
                        np.array([e.removed_passes for e in editing]),
                        np.array([e.added_passes for e in editing]))

@@ -57,8 +57,10 @@ from tapp.io.tape.packing import pack_tr, scaled_difference, tr_diagonal, tr_siz
 #: Provenance attributes the simulator stamps: the scenario (JSON) and its file, the Earth
 #: orientation model ("iau2006" or "gmst"), the EOP source of the run and, when SEARCH
 #: retargeted the injection (a ``[targeting]`` table), its record (JSON: aim point, achieved
-#: values, first and targeted injection velocities, cases; empty otherwise).
-SCENARIO_PROVENANCE = ("scenario", "scenario_source", "earth_orientation", "eop", "targeting")
+#: values, first and targeted injection velocities, cases; empty otherwise) and the pass
+#: schedule it tracked by (``FILE (sha256 HEX)``; empty by visibility).
+SCENARIO_PROVENANCE = ("scenario", "scenario_source", "earth_orientation", "eop", "targeting",
+                       "schedule")
 
 
 def frame_of(provenance: dict[str, str]) -> str:

@@ -41,11 +41,19 @@ def _dummy(folder: Path, name: str) -> Path:
     return path
 
 
-def _scenario_with_eop(folder: Path, bad: Path) -> Path:
+def _leo_with(folder: Path, old: str, new: str) -> Path:
+    """leo_equatorial.toml in ``folder`` with ``old`` replaced by ``new`` (once)."""
     path = folder / "leo.toml"
-    text = (SCENARIOS / "leo_equatorial.toml").read_text()
-    path.write_text(text.replace('\nepoch = ', f'\neop = "{bad.name}"\nepoch = ', 1))
+    path.write_text((SCENARIOS / "leo_equatorial.toml").read_text().replace(old, new, 1))
     return path
+
+
+def _scenario_with_eop(folder: Path, bad: Path) -> Path:
+    return _leo_with(folder, '\nepoch = ', f'\neop = "{bad.name}"\nepoch = ')
+
+
+def _scenario_with_schedule(folder: Path, bad: Path) -> Path:
+    return _leo_with(folder, "blackouts = []", f'blackouts = []\nschedule = "{bad.name}"')
 
 
 def _pipeline_with_deck(folder: Path, bad: Path) -> Path:
@@ -78,6 +86,8 @@ READERS: dict[str, tuple[str, Callable[[Path, Path], list[str]]]] = {
         "dc", "--orbit", "SATORB1", "--arc", "2h", "--obs", str(b)]),
     "EOP table": ("finals2000A.user", lambda d, b: [
         "simulate", str(_scenario_with_eop(d, b)), "-o", str(d / "o.h5")]),
+    "pass schedule (CSV)": ("passes.csv", lambda d, b: [
+        "simulate", str(_scenario_with_schedule(d, b)), "-o", str(d / "o.h5")]),
     "T13 tape": ("t.t13.h5", lambda d, b: [
         "process", str(b), str(SCENARIOS / "tapp3_leo_equatorial.toml")]),
     "T32 tape": ("t.t32.h5", lambda d, b: [

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -18,6 +19,7 @@ import tapp.cli.simulate_cmd  # noqa: F401  (registers the commands until tapp.c
 from tapp.cli.common import app
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.io.ccsds.oem import INTERPOLATION_TOL_KM, INTERPOLATION_TOL_KM_S
+from tapp.io.schedule_file import MAX_SCHEDULE_BYTES
 from tapp.io.tape.t13_hdf5 import read_t13
 from tapp.tracking.scenario import parse_scenario, read_scenario
 from tapp.tracking.simulate import EDITING_RULES, simulate
@@ -28,7 +30,7 @@ from tests.tapp.tracking.encounter_reference import (
     Reference,
     moved_deep_space,
 )
-from tests.tapp.tracking.helpers import NORTH, geo_document, leo_document
+from tests.tapp.tracking.helpers import NORTH, geo_document, leo_document, schedule_text
 
 SCENARIOS = EXAMPLES
 LEO = SCENARIOS / "leo_equatorial.toml"
@@ -174,8 +176,8 @@ def test_a_station_without_data_is_one_warning_line_and_in_the_json(tmp_path: Pa
     res = runner.invoke(app, ["simulate", str(scenario), "-o", str(out), "--json", "-"])
     assert res.exit_code == 0, res.output
     warning = (f"{scenario}: tracking.stations[3]: NORTH yields no observation while other "
-               "stations do (0 of its 541 sample times kept; removed: outside_tape 1, "
-               "elevation_mask 540, blackout 0, min_pass 0)")
+               "stations do (0 of its 1082 scheduled observations kept; removed: "
+               "outside_tape 2, elevation_mask 1080, blackout 0, min_pass 0)")
     assert res.stderr.splitlines() == [f"warning: {warning}"]
     assert json.loads(res.stdout)["warnings"] == [warning]
 
@@ -400,3 +402,114 @@ def test_a_ddor_scenario_writes_its_baseline_and_a_tdm_of_the_stations(tmp_path:
     assert np.all(back.raw.station[rows] == 3) and rows.sum() == 12
     text = tdm.read_text()
     assert text.count("META_START") == 2 and "UNDER-EAST" not in text
+
+
+@pytest.fixture(scope="module")
+def leo_passes(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
+    """The tape of leo_equatorial.toml by visibility and its passes as a schedule's rows."""
+    out = tmp_path_factory.mktemp("visibility") / "leo.t13.h5"
+    res = runner.invoke(app, ["simulate", str(LEO), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    return out, schedule_text(read_t13(out, raw=False))
+
+
+def _scheduled(tmp_path: Path, text: str) -> tuple[Path, Path]:
+    """leo_equatorial.toml in ``tmp_path`` tracking by ``passes.csv`` beside it."""
+    schedule = tmp_path / "passes.csv"
+    schedule.write_text(text)
+    return _edited(tmp_path, "blackouts = []", 'blackouts = []\nschedule = "passes.csv"'), \
+        schedule
+
+
+def test_a_schedule_of_the_visibility_passes_through_the_cli(
+        leo_passes: tuple[Path, str], tmp_path: Path) -> None:
+    """The schedule's path is relative to the scenario's folder; the tape keeps every
+    observation of the visibility one, and the editing table counts them as scheduled."""
+    seen, rows = leo_passes
+    path, _ = _scheduled(tmp_path, "station,start,end\n" + rows)
+    out = tmp_path / "scheduled.t13.h5"
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(out), "--json", "-"])
+    assert res.exit_code == 0, res.output
+    info = json.loads(res.stdout)
+    before = read_t13(seen, raw=False)
+    assert info["observations"] == int(before.pairs.n_obs.sum())
+    assert [s["scheduled_observations"] for s in info["stations"]] == [
+        s["observations"] for s in info["stations"]]
+    after = read_t13(out, raw=False)
+    np.testing.assert_array_equal(after.pairs.R, before.pairs.R)
+    digest = hashlib.sha256((tmp_path / "passes.csv").read_bytes()).hexdigest()
+    assert after.provenance["schedule"] == f"{tmp_path / 'passes.csv'} (sha256 {digest})"
+    assert before.provenance["schedule"] == ""  # tracked by visibility
+
+
+@pytest.mark.parametrize(("edit", "expected"), [
+    (lambda rows: "station,begin,end\n" + rows,
+     "row 1: header: expected the columns station, start, end (optional: data_types, "
+     "data_interval_s, uplink_station), each once, comma-separated (got 'station,begin,end')"),
+    (lambda rows: "station,start,end\nGOLDSTONE,0,100\n" + rows,
+     "row 2: station: expected a station of tracking.stations (QUITO, KOUROU, ASCENSION, "
+     "MALINDI, SINGAPORE, KWAJALEIN) (got 'GOLDSTONE')"),
+    (lambda rows: "station,start,end\nQUITO,2026-01-01T05:00:00,2026-01-01T04:00:00\n" + rows,
+     "row 2: end: expected a time after the pass's start (18000.000000 s from the epoch) "
+     "(got '2026-01-01T04:00:00')"),
+    (lambda rows: "station,start,end\nQUITO,2026-01-01T25:00:00,90000\n" + rows,
+     "row 2: start: expected seconds from the epoch or an ISO 8601 UTC date "
+     "YYYY-MM-DD[Thh:mm[:ss[.fff]]][Z] with hh<24, mm<60, ss<60 (got '2026-01-01T25:00:00')"),
+    (lambda rows: "station,start,end,data_types\nQUITO,0,100,azimuth\n" + rows.replace(
+        "\n", ",\n"),
+     "row 2: data_types: expected observables that QUITO measures (range, range_rate; "
+     "tracking.observables or tracking.station.QUITO.observables) (got 'azimuth')"),
+    (lambda rows: "station,start,end,uplink_station\nQUITO,0,100,KOUROU\n" + rows.replace(
+        "\n", ",\n"),
+     "row 2: uplink_station: expected empty or QUITO, the pass's own station (three-way "
+     "tracking, with another station's uplink, is not modelled yet) (got 'KOUROU')"),
+])
+def test_a_bad_schedule_is_one_line_naming_the_row_exit_2_and_nothing_written(
+        leo_passes: tuple[Path, str], tmp_path: Path, edit, expected: str) -> None:
+    path, schedule = _scheduled(tmp_path, edit(leo_passes[1]))
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "bad.t13.h5")])
+    assert res.exit_code == 2
+    assert res.stderr.splitlines() == [f"error: {schedule}: {expected}"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["edited.toml", "passes.csv"]
+
+
+def test_a_scheduled_pass_the_station_cannot_see_exits_2_and_writes_nothing(
+        leo_passes: tuple[Path, str], tmp_path: Path) -> None:
+    """The last pass begun 10 min early (20 samples of 30 s below the mask)."""
+    tape = read_t13(leo_passes[0], raw=False)
+    rows = leo_passes[1].splitlines()
+    station, _, end = rows[-1].split(",")
+    rows[-1] = ",".join([station, tape.epoch.iso_after(float(tape.passes.t_start_s[-1])
+                                                       - 600.0, 6), end])
+    path, schedule = _scheduled(tmp_path, "station,start,end\n" + "\n".join(rows) + "\n")
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "bad.t13.h5")])
+    assert res.exit_code == 2
+    (line,) = res.stderr.splitlines()
+    assert line.startswith(f"error: {schedule}: row {len(rows) + 1}: start: expected a pass "
+                           f"that {station} sees above its ")
+    assert "(got '20 of its " in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["edited.toml", "passes.csv"]
+
+
+def test_a_schedule_beyond_its_size_bound_is_refused_from_its_size(tmp_path: Path) -> None:
+    """(A FIFO or a device: tests/tapp/cli/test_input_files.py.)"""
+    path, schedule = _scheduled(tmp_path, "")
+    schedule.write_bytes(b"#" * (MAX_SCHEDULE_BYTES + 1))
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(tmp_path / "bad.t13.h5")])
+    assert res.exit_code == 2
+    assert res.stderr.splitlines() == [
+        f"error: {schedule}: file: expected a pass schedule (CSV) of at most "
+        f"{MAX_SCHEDULE_BYTES:,} bytes (got '{MAX_SCHEDULE_BYTES + 1:,} bytes')"]
+    assert not (tmp_path / "bad.t13.h5").exists()
+
+
+def test_an_output_over_the_schedule_is_refused(leo_passes: tuple[Path, str],
+                                                tmp_path: Path) -> None:
+    text = "station,start,end\n" + leo_passes[1]
+    path, schedule = _scheduled(tmp_path, text)
+    res = runner.invoke(app, ["simulate", str(path), "-o", str(schedule)])
+    assert res.exit_code == 2
+    assert res.stderr.splitlines() == [
+        f"error: -o/--output: {schedule}: expected a file other than the input "
+        "tracking.schedule (it would be overwritten)"]
+    assert schedule.read_text() == text

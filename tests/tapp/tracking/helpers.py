@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from tapp.constants import GM_EARTH_km3_s2, OMEGA_EARTH_rad_s
+from tapp.io.tape.t13 import T13
 from tapp.tracking.scenario import Scenario, parse_scenario
 
 SOURCE = "test_scenario.toml"
@@ -111,6 +112,51 @@ def geo_document() -> dict:
                "real": {"bias_range_m": GEO_BIAS_M}},
         times={"input": [GEO_END_S], "input_step_s": None, "end": None})
     return doc
+
+
+HAND_A_KM = 12000.0
+HAND_MASK_DEG = 10.0
+HAND_CENTRE_S = 3000.0
+HAND_DT_S = 60.0
+
+
+
+def hand_document() -> dict:
+    """Samples every 60 s from 0 to 6600 s, the tape ending at 6000 s, of a two-body circular
+    equatorial orbit (a = 12000 km) over two stations on the equator where it culminates at
+    3000 s: EQ (range, range rate) blacked out over [1100, 1300] s, passes of at least 300 s
+    and at most 2400 s; EQ2 at the same place (range only) blacked out throughout."""
+    n = math.sqrt(GM_EARTH_km3_s2 / HAND_A_KM**3)
+    base = leo_scenario(earth_orientation="gmst")
+    lon_deg = math.degrees((n - OMEGA_EARTH_rad_s) * HAND_CENTRE_S - base.epoch.gmst_rad())
+    station = {"lat_deg": 0.0, "lon_deg": lon_deg, "h_km": 0.0,
+               "elev_mask_deg": HAND_MASK_DEG}
+    doc = leo_document(
+        earth_orientation="gmst",
+        injection={"r_km": [HAND_A_KM, 0.0, 0.0], "v_km_s": [0.0, HAND_A_KM * n, 0.0]},
+        model={"gravity": "J0", "var_gravity": "J0"},
+        parameters={"dynamic": [], "station_location": "none", "station_biases": []},
+        stations={"EQ": station, "EQ2": station},
+        tracking={"stations": ["EQ", "EQ2"], "data_interval_s": HAND_DT_S, "end": 6600.0,
+                  "min_pass_s": 300.0, "max_pass_s": 2400.0,
+                  "station": {"EQ": {"blackouts": [[1100.0, 1300.0]]},
+                              "EQ2": {"observables": ["range"],
+                                      "blackouts": [[0.0, 6600.0]]}}},
+        times={"input": [6000.0], "input_step_s": None, "end": None})
+    return doc
+
+
+def schedule_text(tape: T13, *, dates: bool = True) -> str:
+    """The tape's passes (station, first and last sample) as the rows of a schedule: UTC
+    dates to the microsecond, or seconds (a ΔDOR baseline's windows left out)."""
+    p = tape.passes
+    lines = []
+    for s, a, b in zip(p.station, p.t_start_s, p.t_end_s, strict=True):
+        if tape.stations.observables[s - 1] == "ddor":  # a ΔDOR baseline's window
+            continue
+        ends = [tape.epoch.iso_after(float(t), 6) if dates else repr(float(t)) for t in (a, b)]
+        lines.append(",".join([tape.stations.name[s - 1], *ends]))
+    return "\n".join(lines) + "\n"
 
 
 def scaled_close(a: np.ndarray, b: np.ndarray, tol: float) -> float:

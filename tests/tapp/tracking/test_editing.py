@@ -15,9 +15,12 @@ from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import EDITING_RULES, simulate
 from tests.tapp.tracking.helpers import (
     GEO_BIAS_M,
+    HAND_A_KM,
+    HAND_CENTRE_S,
+    HAND_MASK_DEG,
     NORTH,
     geo_document,
-    leo_document,
+    hand_document,
     leo_scenario,
     scaled_close,
 )
@@ -70,12 +73,6 @@ def test_each_piece_of_a_split_pass_has_its_own_bias(geo: T13) -> None:
 
 # --- every rule, counted by hand -------------------------------------------------------------
 
-HAND_A_KM = 12000.0
-HAND_MASK_DEG = 10.0
-HAND_CENTRE_S = 3000.0
-HAND_DT_S = 60.0
-
-
 def _rise_set_s() -> tuple[float, float]:
     """Rise and set of a circular equatorial orbit over an equatorial station, two-body:
     visible while the central angle is below λ = arccos(R cos ε / a) - ε, which changes at
@@ -89,27 +86,8 @@ def _rise_set_s() -> tuple[float, float]:
 
 @pytest.fixture(scope="module")
 def hand() -> T13:
-    """Samples every 60 s from 0 to 6600 s, the tape ending at 6000 s; station EQ (range,
-    range rate) blacked out over [1100, 1300] s, passes of at least 300 s and at most 2400 s;
-    station EQ2 at the same place (range only) blacked out throughout."""
-    n = math.sqrt(GM_EARTH_km3_s2 / HAND_A_KM**3)
-    base = leo_scenario(earth_orientation="gmst")
-    lon_deg = math.degrees((n - OMEGA_EARTH_rad_s) * HAND_CENTRE_S - base.epoch.gmst_rad())
-    station = {"lat_deg": 0.0, "lon_deg": lon_deg, "h_km": 0.0,
-               "elev_mask_deg": HAND_MASK_DEG}
-    doc = leo_document(
-        earth_orientation="gmst",
-        injection={"r_km": [HAND_A_KM, 0.0, 0.0], "v_km_s": [0.0, HAND_A_KM * n, 0.0]},
-        model={"gravity": "J0", "var_gravity": "J0"},
-        parameters={"dynamic": [], "station_location": "none", "station_biases": []},
-        stations={"EQ": station, "EQ2": station},
-        tracking={"stations": ["EQ", "EQ2"], "data_interval_s": HAND_DT_S, "end": 6600.0,
-                  "min_pass_s": 300.0, "max_pass_s": 2400.0,
-                  "station": {"EQ": {"blackouts": [[1100.0, 1300.0]]},
-                              "EQ2": {"observables": ["range"],
-                                      "blackouts": [[0.0, 6600.0]]}}},
-        times={"input": [6000.0], "input_step_s": None, "end": None})
-    return simulate(parse_scenario(doc, "hand.toml")).tape
+    """:func:`hand_document` simulated."""
+    return simulate(parse_scenario(hand_document(), "hand.toml")).tape
 
 
 def test_each_rule_removes_what_is_counted_by_hand(hand: T13) -> None:
@@ -143,9 +121,9 @@ def test_a_schedule_with_no_observation_left_says_what_removed_them() -> None:
         simulate(leo_scenario(tracking={"blackouts": [[0.0, 20000.0]]}))
     message = str(err.value)
     assert message.startswith("test_scenario.toml: tracking: expected a schedule")
-    assert "0 observations from 541 sample times per station" in message
-    # 3 stations: t = 0 outside the tape; every sample above a mask blacked out
-    assert "outside_tape 3, elevation_mask" in message and "min_pass 0" in message
+    assert "0 observations kept of the 3246 scheduled over the stations" in message
+    # 3 stations, 2 observables: t = 0 outside the tape; every sample above a mask blacked out
+    assert "outside_tape 6, elevation_mask" in message and "min_pass 0" in message
 
 
 def test_a_station_that_never_sees_the_spacecraft_is_a_warning_saying_what_removed_them(
@@ -155,6 +133,6 @@ def test_a_station_that_never_sees_the_spacecraft_is_a_warning_saying_what_remov
     sim = simulate(leo_scenario(**NORTH))
     assert sim.warnings == (
         "test_scenario.toml: tracking.stations[3]: NORTH yields no observation while other "
-        "stations do (0 of its 541 sample times kept; removed: outside_tape 1, elevation_mask "
-        "540, blackout 0, min_pass 0)",)
+        "stations do (0 of its 1082 scheduled observations kept; removed: outside_tape 2, "
+        "elevation_mask 1080, blackout 0, min_pass 0)",)
     assert simulate(leo_scenario()).warnings == ()
