@@ -30,8 +30,8 @@ noise step of the square-root information filter:
 R⁺ the information factor of x after the noise (w integrated out), with no inverse of the
 (ill-conditioned) a priori and no subtraction. Mapping to the next recycle's representation
 is R ← R T_k⁻¹ = R (T_k*)ᵀ with the tape's adjoint transition T_k* (TAPP III's: the orbit
-link's exact inverse, rounded). Without a manoeuvre these steps give back the tape's L_k and Σ_k (the
-same regression on the same factors): checked in the tests.
+link's exact inverse, rounded). Without a manoeuvre these steps give back the tape's L_k and
+Σ_k (the same regression on the same factors): checked in the tests.
 """
 
 from __future__ import annotations
