@@ -13,6 +13,7 @@ from tapp.dynamics.gates import (
     gates_partials,
     pointing_axes,
 )
+from tests.tapp.dynamics.burn_reference import executed
 
 #: 5 m/s with all four sources, σ₂ ≠ σ₄ (the general case TAPP I flies).
 ERRORS = GatesErrors(0.02, 2e-6, 0.01, 5e-6)
@@ -25,17 +26,6 @@ N = 200_000
 Z_LIMIT = 5.0
 
 
-def _executed(dv: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """The executed Δv of the physical model that Gates' linearises: magnitude
-    |Δv|(1 + q₁) + q₂, the direction turned by the angles α_i = q_{3,4} + q_{5,6}/|Δv| towards
-    ê₁ and ê₂ (the fixed pointing error is a velocity across Δv)."""
-    u, e1, e2 = pointing_axes(dv)
-    m = np.linalg.norm(dv)
-    a1, a2 = q[2] + q[4] / m, q[3] + q[5] / m
-    return (m * (1 + q[0]) + q[1]) * (np.cos(a1) * np.cos(a2) * u + np.sin(a1) * np.cos(a2) * e1
-                                      + np.sin(a2) * e2)
-
-
 @pytest.mark.parametrize("dv", DV)
 def test_the_partials_are_the_derivative_of_the_executed_manoeuvre(dv):
     g = gates_partials(dv)
@@ -44,7 +34,7 @@ def test_the_partials_are_the_derivative_of_the_executed_manoeuvre(dv):
         h = 1e-6 * scale[i]
         e = np.zeros(6)
         e[i] = h
-        fd = (_executed(dv, e) - _executed(dv, -e)) / (2 * h)
+        fd = (executed(dv, e) - executed(dv, -e)) / (2 * h)
         assert np.max(np.abs(fd - g[:, i])) <= FD_TOL * np.max(np.abs(g[:, i])), i
 
 
