@@ -171,6 +171,10 @@ class ImpulsiveBurn(_Burn):
     def t_end_s(self) -> float:
         return self.t_s
 
+    @property
+    def duration_s(self) -> float:
+        return 0.0
+
     def apply(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return (x⁺ (6,), I + ∂Δx/∂x⁻ (6, 6), ∂Δx/∂q (6, n_e)) at the pre-burn state x
         (module docstring), q the burn's execution errors (:meth:`parameters`)."""

@@ -52,12 +52,12 @@ from tapp.io.schema import Schema, Time
 MAX_MANOEUVRES = 100
 
 Vector = Annotated[list[float], Field(min_length=3, max_length=3)]
-_SIGMA = "Gates' {} error, 1σ (0: none)."
 
 
 class ManoeuvreTable(Schema):
-    """``[[manoeuvre]]``: one burn (module docstring): impulsive (time, dv) or finite (start,
-    duration_s, thrust_N, direction, mass_kg, mass_flow_kg_s), with its execution errors."""
+    """``[[manoeuvre]]``: one burn, impulsive (time, dv_m_s or dv_km_s) or finite (start,
+    duration_s, thrust_N, direction, mass_kg, mass_flow_kg_s), in inertial, RIC or VNB axes,
+    with Gates' four execution-error σ's; burns lie in the arc and do not overlap."""
 
     name: str | None = Field(None, description="Names its execution-error parameters "
                              "(NAME.mag_prop, ...); default: burn1, burn2, ... in file order.")
@@ -71,27 +71,31 @@ class ManoeuvreTable(Schema):
     time: Time | None = Field(None, description="An impulsive burn's time (s from the epoch "
                               "or a UTC date); outputs at that time precede it.")
     dv_m_s: Vector | None = Field(None, description="An impulsive burn's velocity change in "
-                                  "its axes (or dv_km_s).")
+                                  "its axes (or dv_km_s).", json_schema_extra={"unit": "m/s"})
     dv_km_s: Vector | None = Field(None, description="The same in km/s.")
     start: Time | None = Field(None, description="A finite burn's ignition (s from the epoch "
                                "or a UTC date).")
     duration_s: Positive | None = Field(None, description="A finite burn's duration.")
-    thrust_N: Positive | None = Field(None, description="A finite burn's thrust.")
+    thrust_N: Positive | None = Field(None, description="A finite burn's thrust.",
+                                      json_schema_extra={"unit": "N"})
     direction: Vector | None = Field(None, description="A finite burn's thrust direction in "
                                      "its axes (normalised).")
-    mass_kg: Positive | None = Field(None, description="The mass at ignition (finite).")
+    mass_kg: Positive | None = Field(None, description="The mass at ignition (finite).",
+                                     json_schema_extra={"unit": "kg"})
     mass_flow_kg_s: Positive | None = Field(None, description="The mass flow (finite): "
-                                            "m(t) = mass_kg - mass_flow_kg_s (t - start).")
+                                            "m(t) = mass_kg - mass_flow_kg_s (t - start).",
+                                            json_schema_extra={"unit": "kg/s"})
     sigma_magnitude_proportional: Annotated[float, Field(ge=0, lt=MAX_PROPORTIONAL)] = Field(
-        0.0, description=_SIGMA.format("magnitude error proportional to |Δv|, as a fraction"),
-        json_schema_extra={"unit": "1"})
+        0.0, description="1σ magnitude error proportional to |Δv|, a fraction of it (0: "
+        "none).", json_schema_extra={"unit": "1"})
     sigma_magnitude_fixed_mm_s: Annotated[float, Field(ge=0, le=MAX_FIXED_km_s * 1e6)] = Field(
-        0.0, description=_SIGMA.format("fixed magnitude"))
+        0.0, description="1σ magnitude error independent of |Δv| (0: none).")
     sigma_pointing_proportional_mrad: Annotated[
         float, Field(ge=0, le=MAX_POINTING_rad * 1e3)] = Field(
-        0.0, description=_SIGMA.format("pointing (per axis across Δv; small angles)"))
+        0.0, description="1σ pointing error per axis across Δv, an angle (small; 0: none).")
     sigma_pointing_fixed_mm_s: Annotated[float, Field(ge=0, le=MAX_FIXED_km_s * 1e6)] = Field(
-        0.0, description=_SIGMA.format("fixed pointing (velocity per axis across Δv)"))
+        0.0, description="1σ velocity error per axis across Δv, independent of |Δv| (0: "
+        "none).")
 
 
 #: The keys of each kind (beside name, kind, axes and the σ's).

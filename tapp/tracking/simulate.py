@@ -826,6 +826,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         editing=_editing_table(entries, editing),
         raw=_raw(entries, data, n_o) if raw else None,
         stochastic=scenario.stochastic,
+        manoeuvres=scenario.manoeuvres,
         provenance={"scenario": scenario.document_json, "scenario_source": scenario.source,
                     "earth_orientation": scenario.orientation.model,
                     "eop": scenario.orientation.eop_note + (

@@ -11,8 +11,10 @@ differences (steps h and h/2: the O(h²) of the turned directions cancels).
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 import tomli_w
@@ -23,7 +25,9 @@ from tapp.cli.common import app
 from tapp.dynamics import Propagator
 from tapp.dynamics.gates import pointing_axes
 from tapp.dynamics.manoeuvres import THRUST_PARAMETERS, ImpulsiveBurn
-from tapp.errors import InputError
+from tapp.errors import InputError, TapeError
+from tapp.io.tape.t13 import summary, validate
+from tapp.io.tape.t13_hdf5 import read_t13, write_t13
 from tapp.tracking.simulate import equinoctial_elements, simulate
 from tests.tapp.dynamics.burn_reference import axes, executed, turned
 from tests.tapp.tracking.helpers import leo_document, leo_scenario
@@ -241,3 +245,33 @@ def test_the_command_says_it_in_one_line_and_exits_2(tmp_path: Path):
     assert res.stderr.splitlines() == [f"error: {path}: manoeuvre[1].thrust_N: expected a "
                                        "finite number > 0 (got -20.0)"]
     assert not out.exists()
+
+
+def test_the_tape_keeps_the_burns_and_refuses_a_mismatch(simulation, tmp_path: Path):
+    tape = simulation.tape
+    path = write_t13(tmp_path / "b.t13.h5", tape)
+    back = read_t13(path)
+    assert back.manoeuvres == tape.manoeuvres == simulation.scenario.manoeuvres
+    assert summary(back)["manoeuvres"][1] == {
+        "name": "BURN", "kind": "finite", "axes": "ric", "t_start_s": 5000.0,
+        "t_end_s": 5600.0, "execution_errors": 6}
+    with pytest.raises(TapeError, match="parameters/kind: expected the 6 execution errors"):
+        validate(replace(tape, manoeuvres=tape.manoeuvres[:1]))
+    with h5py.File(path, "r+") as f:
+        sigma = f["manoeuvres/sigma"][...]
+        sigma[0, 2] = 0.5  # a pointing σ beyond Gates' small angles
+        del f["manoeuvres/sigma"]
+        f.create_dataset("manoeuvres/sigma", data=sigma, fletcher32=True)
+        f["manoeuvres/sigma"].attrs["units"] = "1, km/s, rad, km/s"
+    with pytest.raises(TapeError, match="manoeuvres/sigma: expected a finite number >= 0 and "
+                       "<= 0.2 rad"):
+        read_t13(path)
+
+
+def test_without_burns_nothing_changes(tmp_path: Path):
+    """A scenario without [[manoeuvre]] gives the tape it gave before: no manoeuvres/ group,
+    no parameter of kind execution, the same partials."""
+    tape = simulate(leo_scenario(times=TIMES)).tape
+    with h5py.File(write_t13(tmp_path / "p.t13.h5", tape), "r") as f:
+        assert "manoeuvres" not in f
+    assert "execution" not in tape.parameters.kind and tape.manoeuvres == ()
