@@ -26,8 +26,10 @@ from tapp.dynamics import Propagator
 from tapp.dynamics.gates import pointing_axes
 from tapp.dynamics.manoeuvres import THRUST_PARAMETERS, ImpulsiveBurn
 from tapp.errors import InputError, TapeError
+from tapp.io.ccsds.oem import INTERPOLATION_TOL_KM, INTERPOLATION_TOL_KM_S
 from tapp.io.tape.t13 import summary, validate
 from tapp.io.tape.t13_hdf5 import read_t13, write_t13
+from tapp.tracking.oem_states import oem_trajectory
 from tapp.tracking.simulate import equinoctial_elements, simulate
 from tests.tapp.dynamics.burn_reference import axes, executed, turned
 from tests.tapp.tracking.helpers import leo_document, leo_scenario
@@ -275,3 +277,19 @@ def test_without_burns_nothing_changes(tmp_path: Path):
     with h5py.File(write_t13(tmp_path / "p.t13.h5", tape), "r") as f:
         assert "manoeuvres" not in f
     assert "execution" not in tape.parameters.kind and tape.manoeuvres == ()
+
+
+def test_an_oem_flies_a_finite_burn_and_refuses_an_impulsive_one(simulation):
+    """Across ignition and cut-off the acceleration jumps: the states are halved there until
+    the interpolation holds (1 mm, 1 µm/s), and they are the simulation's trajectory. An
+    impulsive burn's velocity jump cannot be interpolated in one OEM segment."""
+    finite = leo_scenario(manoeuvre=MANOEUVRES[1:], times=TIMES)
+    oem = oem_trajectory(finite, 10800.0)
+    assert oem.error_km <= INTERPOLATION_TOL_KM and oem.error_km_s <= INTERPOLATION_TOL_KM_S
+    assert oem.min_step_s < 1.0 < oem.max_step_s  # halved about the burn only
+    sim = simulate(finite)
+    at = np.isin(sim.t_s, oem.t_s)
+    np.testing.assert_allclose(oem.states[np.isin(oem.t_s, sim.t_s[at])], sim.states[at],
+                               rtol=0, atol=1e-9)
+    with pytest.raises(InputError, match=r"manoeuvre: expected no impulsive burn with an OEM"):
+        oem_trajectory(simulation.scenario, 10800.0)
