@@ -70,12 +70,15 @@ def test_the_jump_of_an_impulsive_burn_and_its_jacobians(name, x):
     assert np.max(np.abs(fd - d_errors) / np.max(np.abs(d_errors), axis=0)) < JUMP_TOL
 
 
-@pytest.mark.parametrize("name", ["ric", "vnb"])
-def test_a_finite_burn_flies_as_scipy_on_the_tests_own_thrust_model(name):
+@pytest.mark.parametrize(("name", "method"), [("ric", "dop853"), ("vnb", "dop853"),
+                                              ("inertial", "dop853"), ("inertial", "rkn12")])
+def test_a_finite_burn_flies_as_scipy_on_the_tests_own_thrust_model(name, method):
+    """RIC and VNB axes move with v (∂a/∂v in Φ); in inertial axes the thrust depends on t
+    only and rkn12 takes it too."""
     x0 = STATES[0]
     burn = FiniteBurn(name="F", axes=name, errors=ERRORS, **BURN)
     t0, t1 = burn.t_start_s, burn.t_end_s
-    prop = Propagator(earth_model("J2"), params=burn.thrust_parameters())
+    prop = Propagator(earth_model("J2"), params=burn.thrust_parameters(), method=method)
     got = prop.propagate(x0, np.array([t1]), t0_s=t0, stm=True,
                          param_values=burn.thrust_values())
     rhs = thrust_rhs(burn.thrust_N, burn.mass_kg, burn.mass_flow_kg_s, t0,

@@ -47,13 +47,21 @@ MANOEUVRES = [
      "mass_flow_kg_s": 0.01, **SIGMAS},
 ]
 TIMES = {"epochs": [5300.0]}
+#: Impulsive burns where the arc restarts: one at the injection (RIC), one at the epoch
+#: (inertial; the state at 5300 s is the one before it, the partials referred to it count it).
+AT_RESTARTS = [
+    {"name": "START", "kind": "impulsive", "time": 0.0, "axes": "ric",
+     "dv_m_s": [0.5, -1.0, 0.3], **SIGMAS},
+    {"name": "EPOCH", "kind": "impulsive", "time": 5300.0, "axes": "inertial",
+     "dv_km_s": [1e-3, 2e-3, -1e-3], **SIGMAS},
+]
 #: Agreement of ∂x(t_k)/∂e on the tape with the differences, relative to the largest partial
 #: of the burn's parameters of the same unit at that record: the integrator's noise over the
 #: steps (rtol 1e-13 of 7000 km against displacements of 0.1-10 km) and O(h⁴) of the turned
-#: directions (measured 1.2e-8).
+#: directions (measured 1.2e-8 in moving axes, 3.2e-9 at the restarts).
 FD_TOL = 1e-7
 #: The transition through the burns, each column relative to its largest entry (steps 1 km,
-#: 1 m/s; measured 3.5e-10).
+#: 1 m/s; measured 3.5e-10 in moving axes, 2.7e-9 at the restarts).
 PHI_TOL = 1e-7
 #: The miss partials carry G = ∂m/∂x(t_m) by central differences (tapp.tracking.simulate),
 #: as the stochastic accelerations' (tests/tapp/tracking/test_stochastic.py; measured 9.1e-9
@@ -66,6 +74,15 @@ runner = CliRunner()
 @pytest.fixture(scope="module")
 def simulation():
     return simulate(leo_scenario(manoeuvre=MANOEUVRES, times=TIMES))
+
+
+@pytest.fixture(scope="module", params=["moving axes", "at restarts"])
+def simulations(request, simulation):
+    """The two cases: burns in moving axes (one cut by the epoch), burns where the arc
+    restarts (the injection, the epoch)."""
+    if request.param == "moving axes":
+        return simulation
+    return simulate(leo_scenario(manoeuvre=AT_RESTARTS, times=TIMES))
 
 
 def _flown(sc, x: np.ndarray, t0: float, t1: float, errors: dict[str, np.ndarray]
@@ -129,7 +146,8 @@ def test_each_error_source_is_a_parameter_of_kind_execution(simulation):
         "TCM1.mag_prop", "TCM1.point_fixed_1_km_s", "TCM1.point_fixed_2_km_s"]
 
 
-def test_execution_partials_on_the_tape_match_restarted_propagations(simulation):
+def test_execution_partials_on_the_tape_match_restarted_propagations(simulations):
+    simulation = simulations
     sc, tape = simulation.scenario, simulation.tape
     names = list(tape.parameters.name)
     worst = 0.0
@@ -137,7 +155,8 @@ def test_execution_partials_on_the_tape_match_restarted_propagations(simulation)
         for burn in sc.manoeuvres:
             params = burn.parameters()
             u = tape.records.U[k][:, [names.index(n) for n, _, _ in params]]
-            if t_j > burn.t_end_s or t_k <= burn.t_start_s:  # held fixed by x(t_j), or after
+            if t_j > burn.t_end_s or t_k <= burn.t_start_s or (
+                    t_j == burn.t_end_s and burn.kind == "finite"):  # before x(t_j), or after
                 assert np.all(u == 0), (k, burn.name)
                 continue
             for i, (_, unit, sigma) in enumerate(params):
@@ -152,9 +171,11 @@ def test_execution_partials_on_the_tape_match_restarted_propagations(simulation)
     assert worst < FD_TOL, worst
 
 
-def test_the_transition_through_the_burns_matches_central_differences(simulation):
-    """Φ(t_k, t_j) across the VNB burn (its axes move with x: ∂Δv/∂x) and across the RIC
-    thrust (∂a/∂r, ∂a/∂v), against differences of the reference flown from x(t_j) ± h."""
+def test_the_transition_through_the_burns_matches_central_differences(simulations):
+    """Φ(t_k, t_j) across the VNB and RIC burns (their axes move with x: ∂Δv/∂x) and across
+    the RIC thrust (∂a/∂r, ∂a/∂v), against differences of the reference flown from
+    x(t_j) ± h."""
+    simulation = simulations
     sc, tape = simulation.scenario, simulation.tape
     worst = 0.0
     for k, t_k, t_j, x_j in _records(simulation):
@@ -169,7 +190,8 @@ def test_the_transition_through_the_burns_matches_central_differences(simulation
     assert worst < PHI_TOL, worst
 
 
-def test_miss_partials_of_the_execution_errors_match_central_differences(simulation):
+def test_miss_partials_of_the_execution_errors_match_central_differences(simulations):
+    simulation = simulations
     sc, tape = simulation.scenario, simulation.tape
     names = list(tape.parameters.name)
     gm = float(tape.parameters.nominal[names.index("GM_km3_s2")])
@@ -236,6 +258,18 @@ def test_bad_manoeuvres_are_input_errors_naming_the_field(tables, message):
     with pytest.raises(InputError) as info:
         leo_scenario(manoeuvre=tables, times=TIMES)
     assert str(info.value) == f"test_scenario.toml: {message}"
+
+
+def test_rkn12_takes_a_thrust_in_inertial_axes_only():
+    model = {"gravity": "J2", "var_gravity": "J2", "method": "rkn12"}
+    tables = _manoeuvre(1, axes="inertial")
+    assert leo_scenario(manoeuvre=tables, model=model).manoeuvres[1].axes == "inertial"
+    with pytest.raises(InputError) as info:
+        leo_scenario(manoeuvre=MANOEUVRES, model=model)
+    assert str(info.value) == (
+        "test_scenario.toml: manoeuvre[1].axes: expected \"inertial\" with model.method = "
+        "\"rkn12\" (a thrust in RIC or VNB axes depends on the velocity; rkn12 integrates "
+        "r'' = a(t, r) only) (got 'ric')")
 
 
 def test_the_command_says_it_in_one_line_and_exits_2(tmp_path: Path):
