@@ -46,6 +46,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import block_diag
 
 from tapp.dynamics import Propagator, Trajectory
 from tapp.dynamics.events import Events
@@ -115,33 +116,27 @@ class Forcing:
         stochastic accelerations (nominal 0, no force) are left out.
         """
         params, values = list(prop.params), dict(values)
-        blocks: list[tuple[int, np.ndarray, np.ndarray]] = []  # (n_own, columns, C)
+        blocks: list[tuple[np.ndarray, np.ndarray]] = []  # (C of the block, its columns)
         sto = self.stochastic
         if sto is not None and differentiate:
             params += sto.model_parameters
             n_c = len(sto.components)
             k = int(np.searchsorted(sto.boundaries_s, t_s, side="right")) - 1
             if 0 <= k < sto.n_intervals:
-                blocks.append((n_c, np.arange(k * n_c, (k + 1) * n_c), np.eye(n_c)))
+                blocks.append((np.eye(n_c), np.arange(k * n_c, (k + 1) * n_c)))
             else:
-                blocks.append((n_c, np.zeros(0, dtype=int), np.zeros((n_c, 0))))
+                blocks.append((np.zeros((n_c, 0)), np.zeros(0, dtype=int)))
         burn = self.thrust_on(t_s)
         if burn is not None:
             params += burn.thrust_parameters()
             values.update(burn.thrust_values())
-            n_own = len(burn.thrust_parameters())
-            c_map = np.zeros((n_own, len(burn.parameters())))
-            c_map[:THRUST_COLUMNS] = burn.thrust_map()
-            blocks.append((n_own, self.burn_columns(burn), c_map))
-        n_own = sum(n for n, _, _ in blocks)
-        columns = np.concatenate([c for _, c, _ in blocks]) if blocks else np.zeros(0, int)
-        c_map = np.zeros((n_own, columns.size))
-        row = col = 0
-        for n, cols, m in blocks:
-            c_map[row:row + n, col:col + cols.size] = m
-            row, col = row + n, col + cols.size
-        seg_prop = dataclasses.replace(prop, params=tuple(params)) if params != list(
-            prop.params) else prop
+            c_map = np.zeros((len(burn.thrust_parameters()), len(burn.parameters())))
+            c_map[:THRUST_COLUMNS] = burn.thrust_map()  # β and t₀ move no column
+            blocks.append((c_map, self.burn_columns(burn)))
+        columns = np.concatenate([c for _, c in blocks]) if blocks else np.zeros(0, int)
+        c_map = block_diag(*(m for m, _ in blocks)) if blocks else np.zeros((0, 0))
+        seg_prop = prop if params == list(prop.params) else dataclasses.replace(
+            prop, params=tuple(params))
         return seg_prop, values, columns.astype(int), c_map
 
 
@@ -215,14 +210,12 @@ class PieceArc:
     phi : (N, 6, 6) Φ(t, t̂).
     sens : (N, 6, n_q) ∂x(t)/∂q of the model parameters referred to t̂.
     partials : ∂x(t)/∂s of the segment parameters referred to t̂.
-    events : the integration events met.
     """
 
     states: np.ndarray
     phi: np.ndarray
     sens: np.ndarray
     partials: SegmentPartials
-    events: Events
 
 
 def propagate_pieces(prop: Propagator, forcing: Forcing, x0: np.ndarray, t_s: np.ndarray, *,
@@ -237,7 +230,7 @@ def propagate_pieces(prop: Propagator, forcing: Forcing, x0: np.ndarray, t_s: np
     x_start = np.asarray(x0, dtype=float)
     phi0, sq0, sa0 = np.eye(6), np.zeros((6, n_q)), np.zeros((6, n_s))
     out = {key: [] for key in ("states", "phi", "sens", "phi_seg", "sens_seg", "segment")}
-    start_rows, columns, events = [], [], []
+    start_rows, columns = [], []
     for m, (a, b) in enumerate(zip(starts, ends, strict=True)):
         burn = forcing.impulse_at(float(a))
         if burn is not None:
@@ -261,7 +254,6 @@ def propagate_pieces(prop: Propagator, forcing: Forcing, x0: np.ndarray, t_s: np
         out["segment"].append(np.full(int(np.count_nonzero(keep)), m))
         start_rows.append(sa0)
         columns.append(cols)
-        events.append(traj.events)
         # carry everything to b, the next segment's start
         sa0 = _compose(phi_m[-1:], sa0)[0]
         sa0[:, cols] += local[-1]
@@ -274,8 +266,7 @@ def propagate_pieces(prop: Propagator, forcing: Forcing, x0: np.ndarray, t_s: np
     cols = np.array([np.pad(c, (0, width - c.size), constant_values=-1) for c in columns],
                     dtype=int).reshape(len(columns), width)
     return PieceArc(cat["states"], cat["phi"], cat["sens"], SegmentPartials(
-        cat["phi_seg"], cat["sens_seg"], cat["segment"], np.array(start_rows), cols),
-        Events.join(events))
+        cat["phi_seg"], cat["sens_seg"], cat["segment"], np.array(start_rows), cols))
 
 
 def fly(prop: Propagator, burns: tuple[Burn, ...], x0: np.ndarray, t_s: np.ndarray, *,
