@@ -101,7 +101,7 @@ from tapp.dynamics.empirical import COMPONENTS
 from tapp.dynamics.ephemeris import tai_minus_utc_s
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.manoeuvres import KIND as EXECUTION
-from tapp.dynamics.manoeuvres import Burn
+from tapp.dynamics.manoeuvres import THRUST_NAMES, Burn
 from tapp.errors import InputError
 from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
 from tapp.frames.orientation import EarthOrientation, orientation_for
@@ -596,6 +596,9 @@ def _epoch(p: _Parser, value: object) -> Epoch:
 def _dynamic(p: _Parser, par: ParametersTable, state_model: ForceModel
              ) -> tuple[tuple[str, ...], tuple[tuple[str, float], ...]]:
     for i, name in enumerate(par.dynamic):
+        if name in THRUST_NAMES:
+            p.fail(f"parameters.dynamic[{i}]", "a model parameter (a burn's thrust is set by "
+                   "its [[manoeuvre]] table)", name)
         try:
             default_parameters(state_model, (name,))
         except InputError as exc:

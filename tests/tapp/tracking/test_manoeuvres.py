@@ -260,6 +260,12 @@ def test_bad_manoeuvres_are_input_errors_naming_the_field(tables, message):
     assert str(info.value) == f"test_scenario.toml: {message}"
 
 
+def test_a_thrust_parameter_is_no_model_parameter_of_the_file():
+    with pytest.raises(InputError, match=r"parameters.dynamic\[2\]: expected a model parameter "
+                       r"\(a burn's thrust is set by its \[\[manoeuvre\]\] table\)"):
+        leo_scenario(parameters={"dynamic": ["GM", "J2", "thr_ric_1"]})
+
+
 def test_rkn12_takes_a_thrust_in_inertial_axes_only():
     model = {"gravity": "J2", "var_gravity": "J2", "method": "rkn12"}
     tables = _manoeuvre(1, axes="inertial")
