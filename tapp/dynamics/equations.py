@@ -12,9 +12,12 @@ With x = (r, v), q the solve-for model parameters:
     \\end{pmatrix},\\ B_M = \\begin{pmatrix} 0 \\\\ \\partial a_M/\\partial q \\end{pmatrix},
 
 with Φ(t0) = I and S(t0) = 0, so Φ = ∂x(t)/∂x(t0) and S = ∂x(t)/∂q when M = N. The block
-∂a_M/∂v is built only when the variational model has drag (:attr:`ForceModel.drag`), the one
-velocity-dependent force; otherwise it is the zero block, and the generated code is the same
-as before drag existed.
+∂a_M/∂v is built only when the variational model has drag (:attr:`ForceModel.drag`) or the
+parameters hold a finite burn's thrust in axes that move with the velocity (RIC, VNB:
+:mod:`tapp.dynamics.manoeuvres`), the velocity-dependent forces; otherwise it is the zero
+block, and the generated code is the same as before drag existed. The empirical accelerations
+(:mod:`tapp.dynamics.empirical`) and a finite burn's thrust are added to both models, from
+their parameters in q.
 
 Layout of the augmented vector y (length 6 + 36 + 6 n_q): x, then Φ column-major, then S
 column-major. Nobody slices it by hand: use :func:`split_augmented`.
@@ -41,6 +44,7 @@ import numpy as np
 from tapp.dynamics.empirical import empirical_acceleration
 from tapp.dynamics.events import boundaries
 from tapp.dynamics.forces import acceleration
+from tapp.dynamics.manoeuvres import thrust_acceleration, thrust_moves_with_velocity
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError
 
@@ -99,19 +103,21 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
     x = ca.SX.sym("x", 6)
     r, v = x[:3], x[3:]
     a_state = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow, v) + \
-        empirical_acceleration(r, v, q_map)
+        empirical_acceleration(r, v, q_map) + thrust_acceleration(t, r, v, q_map)
     xdot = ca.vertcat(v, a_state)
     f_state = ca.Function("f_state", [t, x, q, c, rb], [ca.cse(xdot)],
                           ["t", "y", "q", "c", "rb"], ["ydot"])
 
     y = ca.SX.sym("y", 42 + 6 * nq)
     r, v = y[:3], y[3:6]
-    a_q = empirical_acceleration(r, v, q_map)  # both models (tapp.dynamics.empirical)
+    # both models (tapp.dynamics.empirical, tapp.dynamics.manoeuvres)
+    a_q = empirical_acceleration(r, v, q_map) + thrust_acceleration(t, r, v, q_map)
     a_n = acceleration(state_model, t, r, c[0], q_map, r_bodies, slow, v) + a_q
     a_m = acceleration(var_model, t, r, c[0], q_map, r_bodies, slow, v) + a_q
     phi = ca.reshape(y[6:42], 6, 6)
     da_dr = ca.jacobian(a_m, r)
-    da_dv = ca.jacobian(a_m, v) if var_model.drag else ca.SX.zeros(3, 3)
+    da_dv = (ca.jacobian(a_m, v) if var_model.drag or thrust_moves_with_velocity(params)
+             else ca.SX.zeros(3, 3))
     a_mat = ca.vertcat(ca.horzcat(ca.SX.zeros(3, 3), ca.SX.eye(3)),
                        ca.horzcat(da_dr, da_dv))
     parts = [v, a_n, ca.vec(ca.mtimes(a_mat, phi))]

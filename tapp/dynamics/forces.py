@@ -44,9 +44,10 @@ Model parameters (values in :func:`default_parameters`) may be symbols so that t
 sensitivities come out of the variational equations: ``GM`` (centre, km^3/s^2), ``Jn``
 (unnormalised zonal, \\bar C_{n0} = -J_n/\\sqrt{2n+1}), ``Cnm``/``Snm`` (normalised, single
 digits n, m), ``GM_<body>`` for a third body, ``Cr`` (radiation pressure coefficient) and
-``Cd`` (drag coefficient), dimensionless; and the constant empirical accelerations of
-:mod:`tapp.dynamics.empirical` (``acc_R``, ``acc_x``, ..., km/s², nominal 0), whose term
-:mod:`tapp.dynamics.equations` adds.
+``Cd`` (drag coefficient), dimensionless; the constant empirical accelerations of
+:mod:`tapp.dynamics.empirical` (``acc_R``, ``acc_x``, ..., km/s², nominal 0) and the thrust of
+a finite burn (:data:`tapp.dynamics.manoeuvres.THRUST_PARAMETERS`, nominal 0: set by TAPP I
+on the burn's arc), whose terms :mod:`tapp.dynamics.equations` adds.
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ import casadi as ca
 from tapp.constants import GM_km3_s2, OMEGA_EARTH_rad_s, R_EARTH_km, egm96_coefficients
 from tapp.dynamics.atmosphere import density_kg_m3, drag_acceleration
 from tapp.dynamics.empirical import NAMES as EMPIRICAL_NAMES
+from tapp.dynamics.manoeuvres import THRUST_NAMES
 from tapp.dynamics.radiation import SHADOW_BODIES, srp_acceleration
 from tapp.dynamics.spec import ForceModel, check_surface_value
 from tapp.errors import InputError
@@ -83,7 +85,7 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
     for name in names:
         if name == "GM":
             values[name] = model.gm_center_km3_s2
-        elif name in EMPIRICAL_NAMES:
+        elif name in EMPIRICAL_NAMES or name in THRUST_NAMES:
             values[name] = 0.0
         elif name.startswith("GM_") and name[3:] in model.third_bodies:
             values[name] = GM_km3_s2[name[3:]]

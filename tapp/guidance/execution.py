@@ -1,25 +1,17 @@
-"""Manoeuvre execution errors: a Gates-type model, sampled and in second moments.
+"""Manoeuvre execution errors of TAPP II: Gates' model with the fixed errors isotropic.
 
 The applied velocity change is Δv_a = Δv + ε, with Δv the commanded correction (km/s,
-inertial frame of the tape) and, after Gates (1963), the execution error
-
-.. math::
-
-    \\varepsilon = \\sigma_p\\,n\\,\\Delta v
-        + \\sigma_\\theta \\lvert\\Delta v\\rvert\\,(I - \\hat u \\hat u^T)\\,g
-        + \\sigma_f\\,f, \\qquad \\hat u = \\Delta v / \\lvert\\Delta v\\rvert,
-
-with n ~ N(0, 1), g, f ~ N(0, I₃) independent:
+inertial frame of the tape) and ε the execution error of Gates (1963) in the four components
+of :mod:`tapp.dynamics.gates` (the code TAPP I's manoeuvres use too):
 
 - a magnitude error proportional to |Δv| (σ_p, dimensionless), along Δv;
 - a pointing error (σ_θ, rad, small-angle) on each of the two axes perpendicular to Δv,
-  proportional to |Δv|: the projection (I − ûûᵀ)g has covariance I − ûûᵀ, i.e. two
-  independent unit normals on any orthonormal pair of axes perpendicular to Δv;
-- a fixed part (σ_f, km/s per axis, isotropic), independent of |Δv| (shut-off transients,
-  attitude-control coupling).
+  proportional to |Δv|;
+- a fixed magnitude error and a fixed pointing error, both σ_f (km/s): one isotropic fixed
+  vector σ_f f, independent of |Δv| (shut-off transients, attitude-control coupling).
 
-This is Gates' model with his fixed magnitude and fixed pointing errors merged into one
-isotropic fixed vector. Given Δv the error has zero mean and the covariance
+So the guidance file's three σ's are Gates' four with σ₂ = σ₄ = σ_f (:attr:`ExecutionErrors.
+gates`). Given Δv the error has zero mean and the covariance
 σ_p² ΔvΔvᵀ + σ_θ² (|Δv|² I − ΔvΔvᵀ) + σ_f² I, so over zero-mean corrections of covariance
 P = E[ΔvΔvᵀ] its second moment is exactly
 
@@ -28,7 +20,10 @@ P = E[ΔvΔvᵀ] its second moment is exactly
     E[\\varepsilon\\varepsilon^T] = \\sigma_p^2 P + \\sigma_\\theta^2
         (\\operatorname{tr}P\\,I - P) + \\sigma_f^2 I,
 
-and ε is uncorrelated with anything Δv is a function of (its conditional mean is zero).
+and ε is uncorrelated with anything Δv is a function of (its conditional mean is zero). Two
+different fixed σ's would make that moment depend on the distribution of Δv, not only on P
+(:meth:`tapp.dynamics.gates.GatesErrors.second_moment`), and TAPP II's linear covariance would
+no longer be exact: the guidance file keeps them equal.
 
 References
 ----------
@@ -38,13 +33,14 @@ Report 32-504 (1963).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from tapp.dynamics.gates import NORMALS_PER_SAMPLE, GatesErrors
+
 #: Standard normals a sample draws per manoeuvre: n (1), g (3), f (3).
-NORMALS_PER_MANOEUVRE = 7
+NORMALS_PER_MANOEUVRE = NORMALS_PER_SAMPLE
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,8 +50,13 @@ class ExecutionErrors:
     Attributes
     ----------
     sigma_proportional : σ_p, magnitude error as a fraction of |Δv|, 0 <= σ_p < 1.
-    sigma_pointing_rad : σ_θ, pointing error per perpendicular axis, rad, >= 0.
-    sigma_fixed_km_s : σ_f, fixed error per axis, km/s, >= 0.
+    sigma_pointing_rad : σ_θ, pointing error per perpendicular axis, rad, 0 <= σ_θ <= 0.2.
+    sigma_fixed_km_s : σ_f, fixed error per axis, km/s, 0 <= σ_f <= 1.
+
+    Raises
+    ------
+    tapp.dynamics.gates.GatesRangeError
+        A σ out of its range (the ranges of :class:`~tapp.dynamics.gates.GatesErrors`).
     """
 
     sigma_proportional: float = 0.0
@@ -63,13 +64,13 @@ class ExecutionErrors:
     sigma_fixed_km_s: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("sigma_proportional", "sigma_pointing_rad", "sigma_fixed_km_s"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"{name}: expected a finite number >= 0 (got {value!r})")
-        if self.sigma_proportional >= 1:
-            raise ValueError(f"sigma_proportional: expected a fraction < 1 (got "
-                             f"{self.sigma_proportional!r})")
+        self.gates  # noqa: B018  (checks the ranges)
+
+    @property
+    def gates(self) -> GatesErrors:
+        """Gates' four σ's: (σ_p, σ_f, σ_θ, σ_f)."""
+        return GatesErrors(self.sigma_proportional, self.sigma_fixed_km_s,
+                           self.sigma_pointing_rad, self.sigma_fixed_km_s)
 
 
 def sample_errors(dv_km_s: np.ndarray, normals: np.ndarray, errors: ExecutionErrors
@@ -79,21 +80,14 @@ def sample_errors(dv_km_s: np.ndarray, normals: np.ndarray, errors: ExecutionErr
     Parameters
     ----------
     dv_km_s : (n, 3) commanded corrections Δv, km/s.
-    normals : (n, 7) independent standard normals: n, then g (3), then f (3).
+    normals : (n, 7) independent standard normals: n, then g (3), then f (3)
+        (:meth:`tapp.dynamics.gates.GatesErrors.sample`).
     errors : the 1σ values.
 
     A zero Δv gets no proportional or pointing error. Row i of the result depends on row i
     of the inputs only (element-wise operations), whatever n is.
     """
-    magnitude = np.sqrt(np.einsum("si,si->s", dv_km_s, dv_km_s))
-    g = normals[:, 1:4]
-    along = np.einsum("si,si->s", g, dv_km_s)
-    safe = np.where(magnitude > 0, magnitude, 1.0)
-    # σ_θ |Δv| (I − ûûᵀ) g = σ_θ (|Δv| g − (g·Δv) Δv / |Δv|)
-    pointing = magnitude[:, None] * g - (along / safe)[:, None] * dv_km_s
-    return (errors.sigma_proportional * normals[:, :1] * dv_km_s
-            + errors.sigma_pointing_rad * pointing
-            + errors.sigma_fixed_km_s * normals[:, 4:7])
+    return errors.gates.sample(dv_km_s, normals)
 
 
 def error_second_moment(P: np.ndarray, errors: ExecutionErrors) -> np.ndarray:
@@ -107,9 +101,7 @@ def error_second_moment(P: np.ndarray, errors: ExecutionErrors) -> np.ndarray:
            [0.  , 0.29, 0.  ],
            [0.  , 0.  , 0.05]])
     """
-    eye = np.eye(3)
-    sp, st, sf = errors.sigma_proportional, errors.sigma_pointing_rad, errors.sigma_fixed_km_s
-    return sp**2 * P + st**2 * (np.trace(P) * eye - P) + sf**2 * eye
+    return errors.gates.second_moment(P)
 
 
 __all__ = ["NORMALS_PER_MANOEUVRE", "ExecutionErrors", "error_second_moment", "sample_errors"]

@@ -38,6 +38,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from tapp.dynamics.gates import MAX_FIXED_km_s, MAX_POINTING_rad
 from tapp.errors import InputError
 from tapp.guidance.execution import ExecutionErrors
 from tapp.guidance.model import Problem, build_problem
@@ -46,12 +47,10 @@ from tapp.guidance.statistics import BPLANE, FLIGHT_TIME, Corridor, bplane_rows,
 from tapp.io.schema import Invalid, Schema, Unique, load
 from tapp.io.tape.t32 import T32
 
-#: Largest pointing σ, mrad: the model adds pointing errors as small angles.
-MAX_POINTING_MRAD = 200.0
-#: Largest fixed σ per axis, mm/s: 1 km/s, more than the whole budget of a spacecraft's
-#: propulsion (shut-off transients and attitude coupling are mm/s to cm/s). Without a bound,
-#: 1e150 mm/s failed in the linear algebra and 1e300 overflowed its square.
-MAX_FIXED_MM_S = 1e6
+#: Largest pointing σ, mrad, and fixed σ per axis, mm/s: Gates' model's bounds
+#: (:data:`tapp.dynamics.gates.MAX_POINTING_rad`, :data:`~tapp.dynamics.gates.MAX_FIXED_km_s`).
+MAX_POINTING_MRAD = MAX_POINTING_rad * 1e3
+MAX_FIXED_MM_S = MAX_FIXED_km_s * 1e6
 
 Positive = Annotated[float, Field(gt=0)]
 

@@ -52,6 +52,7 @@ tapp.errors.InputError: study.toml: sed: expected no such key (allowed: seed, si
 from __future__ import annotations
 
 import datetime as dt
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Literal, TypeVar
@@ -64,7 +65,7 @@ from tapp.errors import InputError
 from tapp.io.tomlfile import read_toml
 
 __all__ = ["AllowInf", "EarthOrientationName", "EopSource", "InfFloat", "Invalid", "Schema",
-           "Tolerance", "Unique", "UtcDate", "load", "validate"]
+           "Time", "Tolerance", "Unique", "UtcDate", "load", "validate"]
 
 M = TypeVar("M", bound=Schema)
 
@@ -108,6 +109,22 @@ def _utc_date(value: object) -> object:
     if not isinstance(value, str | dt.datetime):
         raise Invalid("a UTC date (ISO 8601 string or TOML date-time)", value)
     return value
+
+
+def _time_value(value: object) -> object:
+    ok = (isinstance(value, int | float) and not isinstance(value, bool)
+          and math.isfinite(value)) or isinstance(value, str | dt.date)
+    if not ok:
+        raise Invalid("a time: s from the epoch (a finite number) or a UTC date (ISO string "
+                      "or TOML date)", value)
+    return value
+
+
+#: A time of a scenario: seconds from the epoch, or a UTC date (ISO string or TOML date),
+#: converted by the file's reader once the epoch is known.
+Time = Annotated[object, PlainValidator(_time_value,
+                                        json_schema_input_type=float | dt.datetime),
+                 Field(json_schema_extra={"unit": "s or UTC"})]
 
 
 def _tolerance_range(json_schema: dict) -> None:

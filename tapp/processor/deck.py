@@ -32,6 +32,7 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     fixed = ["GM_moon_km3_s2"]  # readable; or permutation/n_f1 as the seed
     constraints = []
     stochastic = "ignore"       # the tape's stochastic accelerations: "estimate" | "ignore"
+    manoeuvres = "ignore"       # the tape's execution errors: "estimate" | "ignore"
     [fit.apriori]
     sigma = { x_km = 1.0, "GM_moon_km3_s2" = 0.0 }  # σ = 0: held fixed; inf: no information
     # sigma = [1.0, 1.0, ...]   # positional over f1 (seed coding), or
@@ -39,6 +40,7 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     [real]                      # real system: P_r, n_r1, K_r, a priori
     certain = []
     stochastic = "include"      # "include" | "ignore"
+    manoeuvres = "include"      # "include" | "ignore"
     [real.apriori]
     sigma = { x_km = 1.0, "GM_moon_km3_s2" = 1e-4 }  # σ = 0: certain
     correlation = [["x_km", "y_km", 0.3]]
@@ -73,11 +75,20 @@ has them with (ignore, ignore); (estimate, ignore) is a filter that estimates wh
 there. Their a priori is generated in the σ-table form only (not with matrices given whole);
 the σ tables and correlation triples must not name them (σ = 0 is accepted where they are
 fixed), and the error budget counts them as one source, "stochastic accelerations".
+
+The execution errors of the burns TAPP I flew (parameters of kind "execution", defined on the
+tape by the scenario's ``[[manoeuvre]]`` tables: :mod:`tapp.dynamics.manoeuvres`, Gates'
+model :mod:`tapp.dynamics.gates`) are generated the same way, with ``fit.manoeuvres`` and
+``real.manoeuvres``: their a priori is N(0, σ²) of each, independent, the σ's of the tape.
+``fit.manoeuvres = "estimate"`` reconstructs the manoeuvres (the fit estimates their errors),
+(ignore, include) considers them, (ignore, ignore) leaves them out of both worlds; the error
+budget counts each burn as a source of its own, ``manoeuvre NAME``.
 """
 
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -232,6 +243,10 @@ class Fit(Schema):
         "ignore", description="The tape's stochastic accelerations: \"estimate\" them with "
         "the a priori information of their Gauss-Markov covariance, or \"ignore\" them (held "
         "fixed at 0; with real.stochastic = \"include\" they are then considered).")
+    manoeuvres: Literal["estimate", "ignore"] = Field(
+        "ignore", description="The execution errors of the tape's burns: \"estimate\" them "
+        "(manoeuvre reconstruction) with the a priori of their Gates σ's, or \"ignore\" them "
+        "(held fixed at 0; with real.manoeuvres = \"include\" they are then considered).")
     apriori: FitApriori = Field(FitApriori(), description="The fit world's a priori.")
 
 
@@ -259,6 +274,9 @@ class Real(Schema):
     stochastic: Literal["include", "ignore"] = Field(
         "ignore", description="The tape's stochastic accelerations: \"include\" them with "
         "their Gauss-Markov covariance, or \"ignore\" them (certain, 0).")
+    manoeuvres: Literal["include", "ignore"] = Field(
+        "ignore", description="The execution errors of the tape's burns: \"include\" them "
+        "with their Gates σ's, or \"ignore\" them (certain, 0).")
     apriori: RealApriori = Field(RealApriori(), description="The real world's a priori.")
 
 
@@ -329,6 +347,63 @@ def read_deck(path: Path | str) -> Deck:
 # ---------------------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class _Generated:
+    """Parameters of one kind whose a priori the tape defines (module docstring): the deck's
+    ``fit.<key>`` and ``real.<key>`` turn them on, their σ's and correlations are generated.
+
+    Attributes
+    ----------
+    key : the deck's key in [fit] and [real] ("stochastic", "manoeuvres").
+    plural, one : what they are, for messages ("stochastic accelerations", "stochastic
+        acceleration"); ``article`` goes before ``one`` ("a", "an").
+    correlated : why the deck gives them no correlations.
+    names : their names, in the tape's order.
+    covariance, information : their a priori P (n, n) and P⁻¹, in their units squared.
+    sources : the error budget's sources among them: (label, names).
+    """
+
+    key: str
+    plural: str
+    one: str
+    article: str
+    correlated: str
+    names: tuple[str, ...]
+    covariance: np.ndarray
+    information: np.ndarray
+    sources: tuple[tuple[str, tuple[str, ...]], ...]
+
+
+def _generated(header, names: tuple[str, ...]) -> tuple[_Generated, ...]:
+    """The generated kinds of a tape: its stochastic accelerations, its burns' execution
+    errors (each when it has them)."""
+    kinds = tuple(header.parameters.kind)
+    out = []
+    sto = getattr(header, "stochastic", None)
+    mine = tuple(n for n, k in zip(names, kinds, strict=True) if k == STOCHASTIC)
+    if sto is not None and mine:
+        out.append(_Generated("stochastic", "stochastic accelerations",
+                              "stochastic acceleration", "a", "their correlations are the "
+                              "Gauss-Markov process's", mine, sto.covariance(),
+                              sto.information(), (("stochastic accelerations", mine),)))
+    burns = getattr(header, "manoeuvres", ())
+    params = [(b.name, p) for b in burns for p in b.parameters()]
+    if params:
+        variance = np.array([sigma for _, (_, _, sigma) in params]) ** 2
+        out.append(_Generated(
+            "manoeuvres", "execution errors", "execution error", "an", "Gates' errors are "
+            "independent", tuple(n for _, (n, _, _) in params), np.diag(variance),
+            np.diag(1.0 / variance), tuple((f"manoeuvre {b.name}", tuple(
+                n for n, _, _ in b.parameters())) for b in burns if b.parameters())))
+    return tuple(out)
+
+
+#: The mode of each world that puts a generated kind in it.
+_ON = {"fit": "estimate", "real": "include"}
+#: The deck's keys of the generated kinds.
+_GENERATED_KEYS = ("stochastic", "manoeuvres")
+
+
 class _Binder:
     """Resolves the deck's names, positions and times against a T13 header."""
 
@@ -339,10 +414,8 @@ class _Binder:
         self.times = np.asarray(header.records.times_s, dtype=float)
         #: Fields that refer to parameters by position (checked in :meth:`_check_positions`).
         self.positional: list[str] = []
-        #: The tape's stochastic accelerations (None without them) and their names.
-        self.stochastic = getattr(header, "stochastic", None)
-        self.stochastic_names = tuple(n for n, kind in zip(self.names, header.parameters.kind,
-                                                           strict=True) if kind == STOCHASTIC)
+        #: The parameters whose a priori the tape defines, by kind.
+        self.generated = _generated(header, self.names)
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -471,15 +544,13 @@ class _Binder:
         k_c = self._constraints(com.constraints, order_c, "common.constraints")
         fit_sigma_fixed = self._sigma_zero(d.fit.apriori.sigma, order_c, n_c1, "fit.apriori")
         p_f, n_f1 = self._world(d.fit.permutation, d.fit.fixed, fit_sigma_fixed, d.fit.n_f1,
-                                order_c, n_c1, "fit", "fixed", "n_f1",
-                                d.fit.stochastic == "ignore")
+                                order_c, n_c1, "fit", "fixed", "n_f1")
         order_f = p_f.move(order_c) if p_f else order_c
         k_f = self._constraints(d.fit.constraints, order_f, "fit.constraints")
         real_sigma_certain = self._sigma_zero(d.real.apriori.sigma, order_c, n_c1,
                                               "real.apriori")
         p_r, n_r1 = self._world(d.real.permutation, d.real.certain, real_sigma_certain,
-                                d.real.n_r1, order_c, n_c1, "real", "certain", "n_r1",
-                                d.real.stochastic == "ignore")
+                                d.real.n_r1, order_c, n_c1, "real", "certain", "n_r1")
         order_r = p_r.move(order_c) if p_r else order_c
         k_r = self._constraints(d.real.constraints, order_r, "real.constraints")
         miss = self.miss_partitions()
@@ -487,16 +558,22 @@ class _Binder:
                      p_c, k_c, p_f, k_f, p_r, k_r, miss)
         return sy, self.fit_normal(order_f, n_f1), self.real_covariance(order_r, n_r1)
 
+    def _on(self, world: str, kind: _Generated) -> bool:
+        """Whether the deck puts the generated ``kind`` in ``world``."""
+        return getattr(getattr(self.deck, world), kind.key) == _ON[world]
+
     def _world(self, perm: list, listed: list, from_sigma: list, n_given: int | None,
-               order: list[str], n_c1: int, world: str, key: str, count: str,
-               without_stochastic: bool) -> tuple[Permutation | None, int]:
-        """The world's permutation and n_1; ``without_stochastic``: the stochastic
-        accelerations join the fixed (fit) or certain (real) set."""
-        generated = [n for n in self.stochastic_names if without_stochastic
-                     and n in (name.rstrip("'") for name in order[:n_c1])]
+               order: list[str], n_c1: int, world: str, key: str, count: str
+               ) -> tuple[Permutation | None, int]:
+        """The world's permutation and n_1; the generated kinds the world ignores join the
+        fixed (fit) or certain (real) set."""
+        common = [name.rstrip("'") for name in order[:n_c1]]
+        off = [g for g in self.generated if not self._on(world, g)
+               and any(n in common for n in g.names)]
+        generated = [n for g in off for n in g.names if n in common]
         if perm and (listed or from_sigma or generated):
             raise self.fail(world, f"either permutation (with {count}) or {key} / σ = 0"
-                            + (f" / {world}.stochastic = \"ignore\"" if generated else ""))
+                            + "".join(f" / {world}.{g.key} = \"ignore\"" for g in off))
         if listed and from_sigma and sorted(map(str, listed)) != sorted(map(str, from_sigma)):
             raise self.fail(f"{world}.{key}", f"the parameters with σ = 0 in {world}.apriori",
                             listed)
@@ -528,32 +605,36 @@ class _Binder:
                 zero.append(order[pos].rstrip("'"))
         return zero
 
-    def _stochastic_block(self, order: list[str], n1: int, field: str, world: str, on: str,
-                          sigma) -> list[int]:
-        """Positions in ``order`` of the stochastic accelerations (in the tape's order) when
-        the world has them (``{world}.stochastic = on``; [] otherwise), after checking the σ
-        table does not give them a σ (their a priori is generated)."""
-        if getattr(self.deck, world).stochastic != on:
-            return []
-        if not isinstance(sigma, dict):
-            raise self.fail(f"{field}.sigma", f"a σ table with {world}.stochastic = \"{on}\" "
-                            "(the stochastic block is generated; no list or matrix)")
-        given = [k for k in sigma if self._key(k, field) in self.stochastic_names]
-        if given:
-            raise self.fail(f"{field}.sigma.{given[0]}", f"no σ for a stochastic acceleration "
-                            f"(its a priori comes from the tape with {world}.stochastic = "
-                            f"\"{on}\")", sigma[given[0]])
-        bare = [n.rstrip("'") for n in order[:n1]]
-        outside = [n for n in self.stochastic_names if n not in bare]
-        if outside:
-            raise self.fail(f"{world}.stochastic", f"the stochastic accelerations in the "
-                            f"{world} world's set (not fixed, certain or eliminated)", outside[0])
-        return [bare.index(n) for n in self.stochastic_names]
+    def _generated_blocks(self, order: list[str], n1: int, field: str, world: str, sigma
+                          ) -> list[tuple[list[int], _Generated]]:
+        """Positions in ``order`` of each generated kind the world has (``{world}.<key>``
+        on), with the kind, after checking the σ table gives them no σ (their a priori is
+        the tape's) and that they are in the world's set."""
+        out = []
+        for g in self.generated:
+            if not self._on(world, g):
+                continue
+            on = _ON[world]
+            if not isinstance(sigma, dict):
+                raise self.fail(f"{field}.sigma", f"a σ table with {world}.{g.key} = \"{on}\" "
+                                f"(the block of the {g.plural} is generated; no list or matrix)")
+            given = [k for k in sigma if self._key(k, field) in g.names]
+            if given:
+                raise self.fail(f"{field}.sigma.{given[0]}", f"no σ for {g.article} {g.one} "
+                                f"(its a priori comes from the tape with {world}.{g.key} = "
+                                f"\"{on}\")", sigma[given[0]])
+            bare = [n.rstrip("'") for n in order[:n1]]
+            outside = [n for n in g.names if n not in bare]
+            if outside:
+                raise self.fail(f"{world}.{g.key}", f"the {g.plural} in the {world} world's set "
+                                "(not fixed, certain or eliminated)", outside[0])
+            out.append(([bare.index(n) for n in g.names], g))
+        return out
 
     def _sigmas(self, sigma, order: list[str], n1: int, field: str,
-                generated: list[int] = ()) -> np.ndarray:
+                generated: list[tuple[list[int], _Generated]] = ()) -> np.ndarray:
         """σ of the first n1 parameters of ``order`` from a list or a table; those at the
-        ``generated`` positions are the stochastic accelerations' σ."""
+        positions of the ``generated`` blocks are the σ's of their a priori."""
         if isinstance(sigma, list):
             self.positional.append(f"{field}.sigma")
             if len(sigma) != n1:
@@ -569,8 +650,8 @@ class _Binder:
                 elif value != 0:
                     raise self.fail(f"{field}.sigma.{key}", "σ = 0 (the parameter is not in the "
                                     "estimated set of this world)", value)
-            if generated:
-                out[list(generated)] = self.stochastic.sigma_km_s2
+            for at, g in generated:
+                out[at] = np.sqrt(np.diag(g.covariance))
             missing = [order[i] for i in range(n1) if np.isnan(out[i])]
             if missing:
                 raise self.fail(f"{field}.sigma", "a σ for every parameter (missing: "
@@ -623,28 +704,26 @@ class _Binder:
         ap = self.deck.fit.apriori
         if (ap.sigma is None) == (ap.normal is None):
             raise self.fail("fit.apriori", "exactly one of sigma or normal")
-        block = self._stochastic_block(order, n_f1, "fit.apriori", "fit", "estimate",
-                                       ap.sigma)
+        blocks = self._generated_blocks(order, n_f1, "fit.apriori", "fit", ap.sigma)
         if ap.normal is not None:
             return self._matrix(ap.normal, n_f1, "fit.apriori.normal", order, "normal")
-        sigma = self._sigmas(ap.sigma, order, n_f1, "fit.apriori", block)
+        sigma = self._sigmas(ap.sigma, order, n_f1, "fit.apriori", blocks)
         s0 = np.diag(1.0 / sigma**2)
-        if block:
-            s0[np.ix_(block, block)] = self.stochastic.information()
+        for at, g in blocks:
+            s0[np.ix_(at, at)] = g.information
         return s0
 
     def real_covariance(self, order: list[str], n_r1: int) -> np.ndarray:
         ap = self.deck.real.apriori
         if (ap.sigma is None) == (ap.covariance is None):
             raise self.fail("real.apriori", "exactly one of sigma or covariance")
-        block = self._stochastic_block(order, n_r1, "real.apriori", "real", "include",
-                                       ap.sigma)
+        blocks = self._generated_blocks(order, n_r1, "real.apriori", "real", ap.sigma)
         if ap.covariance is not None:
             if ap.correlation:
                 raise self.fail("real.apriori.correlation", "no correlations with a covariance")
             return self._matrix(ap.covariance, n_r1, "real.apriori.covariance", order,
                                 "covariance")
-        sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori", block)
+        sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori", blocks)
         if np.any(~np.isfinite(sigma)):
             raise self.fail("real.apriori.sigma", "finite σ's")
         corr = np.eye(n_r1)
@@ -656,13 +735,13 @@ class _Binder:
             if a >= n_r1 or b >= n_r1 or a == b or not -1 <= tr[2] <= 1:
                 raise self.fail(where, "two different uncertain parameters and -1 <= ρ <= 1",
                                 tr)
-            if a in block or b in block:
-                raise self.fail(where, "no stochastic acceleration (their correlations are "
-                                "the Gauss-Markov process's)", tr)
+            for at, g in blocks:
+                if a in at or b in at:
+                    raise self.fail(where, f"no {g.one} ({g.correlated})", tr)
             corr[a, b] = corr[b, a] = float(tr[2])
-        if block:
-            corr[np.ix_(block, block)] = self.stochastic.covariance() / \
-                self.stochastic.sigma_km_s2**2
+        for at, g in blocks:
+            scale = np.sqrt(np.diag(g.covariance))
+            corr[np.ix_(at, at)] = g.covariance / np.outer(scale, scale)
         smallest = scaled_min_eigenvalue(corr)
         if smallest < -PSD_TOL:
             raise self.fail("real.apriori.correlation", "a positive semi-definite real-world "
@@ -750,10 +829,12 @@ class _Binder:
             seen |= set(idx)
             out.append((name, idx))
         bare = [n.rstrip("'") for n in order]
-        rest = tuple(i for i in (bare.index(n) for n in self.stochastic_names)
-                     if systems.n_p <= i < systems.n_r1 and i not in seen)
-        if rest:
-            out.append(("stochastic accelerations", rest))
+        for g in self.generated:
+            for label, names in g.sources:
+                rest = tuple(i for i in (bare.index(n) for n in names)
+                             if systems.n_p <= i < systems.n_r1 and i not in seen)
+                if rest:
+                    out.append((label, rest))
         return tuple(out)
 
     def history(self) -> Side:
@@ -822,10 +903,13 @@ class _Binder:
             raise self.fail("tape.parameters", f"the tape's {self.n_o} parameter names in "
                             f"order (position {i + 1}: {tape_has})",
                             given[i] if i < len(given) else "none (the list ends)")
-        for world, on in (("fit", "estimate"), ("real", "include")):
-            if getattr(d, world).stochastic == on and not self.stochastic_names:
-                raise self.fail(f"{world}.stochastic", "\"ignore\" (the tape has no "
-                                "stochastic accelerations)", on)
+        have = {g.key for g in self.generated}
+        for world, on in _ON.items():
+            for key, plural in zip(_GENERATED_KEYS, ("stochastic accelerations", "manoeuvres "
+                                                     "with execution errors"), strict=True):
+                if getattr(getattr(d, world), key) == on and key not in have:
+                    raise self.fail(f"{world}.{key}", f"\"ignore\" (the tape has no {plural})",
+                                    on)
 
     def plan(self) -> Plan:
         d = self.deck

@@ -1,6 +1,9 @@
 """TAPP I: tracking simulation from a scenario to the T13 tape (and a CCSDS OEM trajectory).
 
-- :mod:`tapp.tracking.scenario`: TOML scenario -> frozen dataclasses;
+- :mod:`tapp.tracking.scenario`: TOML scenario -> frozen dataclasses (its ``[[manoeuvre]]``
+  tables: :mod:`tapp.tracking.manoeuvres`);
+- :mod:`tapp.tracking.pieces`: the trajectory in pieces, restarted at the stochastic
+  accelerations' bounds and at the burns, with the partials of their parameters;
 - :mod:`tapp.tracking.noise`: fit-world and real-world noise, per-pass AᵀWA and AᵀWMWA;
 - :mod:`tapp.tracking.simulate`: trajectory, partials, records, miss partials -> :class:`T13`;
 - :mod:`tapp.tracking.encounter`: a B-plane miss must be an encounter; ``[targeting]``

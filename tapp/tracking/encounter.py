@@ -67,6 +67,7 @@ from tapp.targeting.program import (
     run_search,
 )
 from tapp.targeting.searchfile import ScanTable
+from tapp.tracking.pieces import fly
 from tapp.tracking.scenario import Scenario
 
 #: The primary of each body that can carry a B-plane miss (the body it orbits).
@@ -165,13 +166,12 @@ def _periapsis_s(scenario: Scenario) -> float:
 def check_encounter(scenario: Scenario, *, retargeted: bool = False) -> None:
     """Raise :class:`NoEncounterError` unless the B-plane miss at ``scenario.miss.t_s``
     describes an encounter (module docstring); the state comes from the scenario's own
-    propagation (its parameter values too). ``retargeted``: the injection is SEARCH's (the
+    propagation (its parameter values and burns too). ``retargeted``: the injection is SEARCH's (the
     message then suggests another aim point rather than a ``[targeting]`` table)."""
     miss = scenario.miss
-    traj = scenario.propagator().propagate(
-        scenario.x0, np.array([miss.t_s]), stm=False,
-        param_values=dict(scenario.dynamic_values), orientation=scenario.orientation,
-        epoch_jd_utc=scenario.epoch.jd)
+    traj = fly(scenario.propagator(), scenario.manoeuvres, scenario.x0, np.array([miss.t_s]),
+               param_values=dict(scenario.dynamic_values), orientation=scenario.orientation,
+               epoch_jd_utc=scenario.epoch.jd)
     program = _program(scenario, miss.t_s)
     z = traj.states[0] - program.target_state(np.array([miss.t_s]))[0][0]
     gm_name = f"GM_{miss.body}"

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tapp.errors import TappError
+from tapp.errors import InputError, TappError
 from tapp.io.ccsds.oem import (
     INTERPOLATION_DEGREE,
     INTERPOLATION_TOL_KM,
@@ -17,6 +17,7 @@ from tapp.io.ccsds.oem import (
     OemTrajectory,
     lagrange_interpolate,
 )
+from tapp.tracking.pieces import fly
 from tapp.tracking.scenario import Scenario
 
 #: Most states the OEM of a simulation may hold (the step is halved at most down to this).
@@ -39,16 +40,25 @@ def oem_trajectory(scenario: Scenario, t_end_s: float) -> OemTrajectory:
     more than :data:`INTERPOLATION_TOL_KM` or :data:`INTERPOLATION_TOL_KM_S`, that interval
     and the degree // 2 + 1 on each side (the span of the windows that reach it) are halved,
     and all is checked again: the steps shrink only where the motion is fast (a low perigee,
-    a swing-by). States come from the scenario's state model, propagated from the injection
-    state (no variational equations).
+    a swing-by, about a finite burn's ignition and cut-off). States come from the scenario's
+    state model, propagated from the injection state with its finite burns (no variational
+    equations).
 
     Raises
     ------
+    InputError
+        A scenario with impulsive burns (naming them).
     TappError
         When more than :data:`MAX_STATES` states would be needed.
     PropagationError
         From the integrator.
     """
+    impulsive = [b.name for b in scenario.manoeuvres if b.kind == "impulsive"]
+    if impulsive:
+        raise InputError(scenario.source, "manoeuvre", "no impulsive burn with an OEM (the "
+                         "velocity jumps there: Lagrange interpolation across it cannot hold, "
+                         "and an OEM of one segment per coast arc is not written yet)",
+                         impulsive)
     prop = scenario.propagator()
     values = dict(scenario.dynamic_values)
     reach = np.ones(2 * (INTERPOLATION_DEGREE // 2 + 1) + 1)
@@ -56,9 +66,9 @@ def oem_trajectory(scenario: Scenario, t_end_s: float) -> OemTrajectory:
                               t_end_s / INTERPOLATION_DEGREE))
     while t.size <= MAX_STATES:
         mids = 0.5 * (t[1:] + t[:-1])
-        traj = prop.propagate(scenario.x0, np.sort(np.concatenate([t, mids])), stm=False,
-                              param_values=values, orientation=scenario.orientation,
-                              epoch_jd_utc=scenario.epoch.jd)
+        traj = fly(prop, scenario.manoeuvres, scenario.x0, np.sort(np.concatenate([t, mids])),
+                   param_values=values, orientation=scenario.orientation,
+                   epoch_jd_utc=scenario.epoch.jd)
         both = traj.states
         states = both[0::2]
         err = np.abs(lagrange_interpolate(t, states, mids, INTERPOLATION_DEGREE) - both[1::2])

@@ -71,6 +71,11 @@ ISO strings or TOML dates)::
                        boundaries = [times], sigma_km_s2 or sigma_m_s2, tau_s (first-order
                        Gauss-Markov across the intervals); one parameter acc_<c>_<k> (km/s²,
                        kind "stochastic") per interval and component, appended to x
+    [[manoeuvre]]      optional, one table per burn (tapp.tracking.manoeuvres): kind =
+                       "impulsive" (time, dv_m_s or dv_km_s) or "finite" (start, duration_s,
+                       thrust_N, direction, mass_kg, mass_flow_kg_s), axes = "inertial" |
+                       "ric" | "vnb", Gates' four σ; one parameter <name>.<component> (kind
+                       "execution") per error source with σ > 0, appended to x
     [targeting]        optional: retarget the injection velocity to a B-plane aim point of the
                        miss body by SEARCH before simulating
                        (tapp.targeting.searchfile.scenario_targeting: targets.b_dot_r_km,
@@ -90,11 +95,13 @@ from pathlib import Path
 from typing import Annotated, Literal, NoReturn
 
 import numpy as np
-from pydantic import Field, PlainValidator
+from pydantic import Field
 
 from tapp.dynamics import ForceModel, Propagator
 from tapp.dynamics.empirical import COMPONENTS
 from tapp.dynamics.forces import check_parameter_value, default_parameters
+from tapp.dynamics.manoeuvres import KIND as EXECUTION
+from tapp.dynamics.manoeuvres import THRUST_NAMES, Burn
 from tapp.errors import InputError
 from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
 from tapp.frames.orientation import EarthOrientation, orientation_for
@@ -107,8 +114,8 @@ from tapp.io.schedule_file import PassSchedule, read_schedule
 from tapp.io.schema import (
     EarthOrientationName,
     EopSource,
-    Invalid,
     Schema,
+    Time,
     Unique,
     UtcDate,
     validate,
@@ -121,6 +128,7 @@ from tapp.orbit.bplane import REFERENCE_POLES
 from tapp.targeting.program import BPlaneSearch
 from tapp.targeting.searchfile import TargetingTable, scenario_targeting
 from tapp.tracking.ddor import DdorTable, TrackingBaseline, tracking_baselines
+from tapp.tracking.manoeuvres import MAX_MANOEUVRES, ManoeuvreTable, scenario_manoeuvres
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
 #: Observable kinds, in the order of ``tapp.measurements.Observable``.
@@ -304,6 +312,7 @@ class Scenario:
     baselines : the ΔDOR baselines of a ``[ddor]`` table, numbered after the stations.
     stochastic : the stochastic accelerations of a ``[stochastic]`` table, or None.
     method : the integration method of every propagation (``tapp.dynamics.propagate``).
+    manoeuvres : the burns of the ``[[manoeuvre]]`` tables, ascending in time.
     """
 
     source: str
@@ -327,6 +336,7 @@ class Scenario:
     baselines: tuple[TrackingBaseline, ...] = ()
     stochastic: StochasticAccelerations | None = None
     method: str = "dop853"
+    manoeuvres: tuple[Burn, ...] = ()
 
     def propagator(self) -> Propagator:
         """The (state model, variational model, dynamic parameters) propagator."""
@@ -336,7 +346,7 @@ class Scenario:
     @property
     def parameters(self) -> tuple[Parameter, ...]:
         """x = [p; q]: orbit state at the epoch, dynamic parameters, station parameters,
-        stochastic accelerations."""
+        stochastic accelerations, execution errors of the manoeuvres."""
         out = [Parameter(name, unit, "orbit", float(v))
                for (name, unit), v in zip(ORBIT_PARAMETERS, self.x0, strict=True)]
         values = default_parameters(self.state_model, self.dynamic)
@@ -349,6 +359,8 @@ class Scenario:
             out.extend(st.parameters())
         if self.stochastic is not None:
             out.extend(Parameter(name, UNIT, KIND, 0.0) for name in self.stochastic.names)
+        out.extend(Parameter(name, unit, EXECUTION, 0.0) for burn in self.manoeuvres
+                   for name, unit, _ in burn.parameters())
         return tuple(out)
 
     @property
@@ -374,19 +386,6 @@ def _unit_of(name: str) -> str:
 # ---------------------------------------------------------------------------------------------
 
 
-def _time_value(value: object) -> object:
-    ok = (isinstance(value, int | float) and not isinstance(value, bool)
-          and math.isfinite(value)) or isinstance(value, str | dt.date)
-    if not ok:
-        raise Invalid("a time: s from the epoch (a finite number) or a UTC date (ISO string "
-                      "or TOML date)", value)
-    return value
-
-
-#: A time: seconds from the epoch, or a UTC date (ISO string or TOML date).
-Time = Annotated[object, PlainValidator(_time_value,
-                                        json_schema_input_type=float | dt.datetime),
-                 Field(json_schema_extra={"unit": "s or UTC"})]
 Window = Annotated[list[Time], Field(min_length=2, max_length=2)]
 Kind = Literal[KINDS]  # type: ignore[valid-type]
 BiasKind = Literal[BIAS_KINDS]  # type: ignore[valid-type]
@@ -557,6 +556,9 @@ class ScenarioFile(StationsSection):
     ddor: DdorTable | None = Field(None, description="ΔDOR on baselines of tracked stations.")
     stochastic: StochasticTable | None = Field(
         None, description="Stochastic accelerations, estimated or considered by TAPP III.")
+    manoeuvre: Annotated[list[ManoeuvreTable], Field(max_length=MAX_MANOEUVRES)] = Field(
+        [], description="Burns, impulsive or finite, with their execution errors "
+        "(tapp.tracking.manoeuvres).")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -618,6 +620,9 @@ def _epoch(p: _Parser, value: object) -> Epoch:
 def _dynamic(p: _Parser, par: ParametersTable, state_model: ForceModel
              ) -> tuple[tuple[str, ...], tuple[tuple[str, float], ...]]:
     for i, name in enumerate(par.dynamic):
+        if name in THRUST_NAMES:
+            p.fail(f"parameters.dynamic[{i}]", "a model parameter (a burn's thrust is set by "
+                   "its [[manoeuvre]] table)", name)
         try:
             default_parameters(state_model, (name,))
         except InputError as exc:
@@ -863,6 +868,11 @@ def _targeting(p: _Parser, doc: ScenarioFile, miss: MissSpec, values: tuple,
                               orientation=orientation)
 
 
+#: Why burns are refused with a [targeting] table or a miss at the periapsis.
+_NO_MANOEUVRES = ("no [[manoeuvre]] with [targeting] or miss.time = \"periapsis\" (SEARCH's "
+                  "program, which finds the periapsis, flies no burn)")
+
+
 def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = None
                    ) -> Scenario:
     """Build a :class:`Scenario` from parsed TOML tables, validating everything.
@@ -906,12 +916,15 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
                          dynamic + (() if stochastic is None else stochastic.model_parameters))
     targeting = _targeting(p, doc, miss, values, x0,
                            doc.model.propagator(source, state_model, var_model), orientation)
+    manoeuvres = scenario_manoeuvres(
+        source, doc.manoeuvre, time_s=p.time_s, last_s=last_s, method=doc.model.method,
+        forbidden=_NO_MANOEUVRES if doc.targeting is not None or miss.at_periapsis else None)
     baselines = tracking_baselines(source, doc.ddor, tuple(ts.station for ts in stations),
                                    schedule.data_interval_s)
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,
                     dynamic, values, stations, schedule, times, miss, document, targeting,
-                    baselines, stochastic, doc.model.method)
+                    baselines, stochastic, doc.model.method, manoeuvres)
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

@@ -18,9 +18,11 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    instead, Φ(t, t̂_i) = Φ(t, t_0) Φ(t̂_i, t_0)⁻¹, loses every digit after a lunar swing-by
    (cond Φ ~ 1e17 over 30 days): the restart keeps the full precision of the integrator.
    U of record k is the top n_p rows of Ψ(t_k, t_j). Stochastic accelerations (a
-   ``[stochastic]`` table) add the columns S_k(t) = ∂x(t)/∂a_k referred to the same epoch;
-   the integration then also restarts at their interval boundaries
-   (:mod:`tapp.tracking.stochastic`), Φ and S being carried across them by forward products.
+   ``[stochastic]`` table) and the execution errors of manoeuvres (``[[manoeuvre]]``) add the
+   columns S(t) = ∂x(t)/∂s of their parameters referred to the same epoch; the integration
+   then also restarts at their interval boundaries and at the burns, an impulsive burn
+   jumping the state, Φ and S there (:mod:`tapp.tracking.pieces`), Φ and S being carried
+   across them by forward products.
 
 2. **Observations.** Samples fall on the schedule's grid (or in the passes of a pass
    schedule: :mod:`tapp.tracking.schedule`; the rules are :mod:`tapp.tracking.editing`'s);
@@ -44,7 +46,7 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    .. math::
 
        A = \\Big[\\, H\\,\\Phi(t, t_j),\\; H\\,S_j(t),\\; \\partial h/\\partial(\\text{location}),
-       \\; \\partial h/\\partial(\\text{bias}),\\; H\\,S_{a,j}(t) \\,\\Big].
+       \\; \\partial h/\\partial(\\text{bias}),\\; H\\,S_{s,j}(t) \\,\\Big].
 
 3. **Square-root information.** Per (record k, station s): upper-triangular factors R and R̃
    with RᵀR = ΔJ = AᵀWA and R̃ᵀR̃ = ΔJ̃ = AᵀWMWA over the observations in (t_{k-1}, t_k],
@@ -61,7 +63,7 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    osculating target-relative hyperbola, or orbit elements), and
 
    .. math:: B = \\frac{\\partial m}{\\partial x(t_0)} = G\\,[\\Phi(t_m, t_0),\\ S(t_m),\\ 0,
-             \\ S_a(t_m)]
+             \\ S_s(t_m)]
              + \\frac{\\partial m}{\\partial q}\\Big|_{\\text{direct}}
 
    with G = ∂m/∂x(t_m) by central differences of the closed-form m (steps 1e-6 of |r|,
@@ -123,6 +125,7 @@ from tapp.tracking.editing import (
 )
 from tapp.tracking.encounter import prepare_encounter
 from tapp.tracking.noise import PARTS, pass_rows
+from tapp.tracking.pieces import Forcing, SegmentPartials, fly, propagate_pieces
 from tapp.tracking.scenario import (
     BIAS_KINDS,
     KINDS,
@@ -137,7 +140,6 @@ from tapp.tracking.schedule import (
     scheduled_passes,
     station_samples,
 )
-from tapp.tracking.stochastic import BatchPartials, propagate_batches
 
 #: progress(stage, step, total): called as work advances (the CLI draws a bar with it).
 ProgressCallback = Callable[[str, int, int], None]
@@ -181,13 +183,14 @@ class Simulation:
 @dataclass(frozen=True, slots=True)
 class _Arc:
     """Trajectory on the output times, partials referred to each time's epoch (those of the
-    stochastic accelerations in ``batches``, None without them)."""
+    segment parameters, stochastic accelerations and execution errors, in ``batches``, None
+    without them)."""
 
     t_s: np.ndarray
     states: np.ndarray
     phi: np.ndarray
     sens: np.ndarray
-    batches: BatchPartials | None = None
+    batches: SegmentPartials | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -275,12 +278,9 @@ def _grid(scenario: Scenario, last_s: float) -> np.ndarray:
     return t[(t > 0) & (t <= end)]
 
 
-def _batch_propagator(scenario: Scenario) -> Propagator:
-    """The scenario's propagator with the empirical accelerations of its stochastic ones
-    appended to the model parameters (:func:`tapp.tracking.stochastic.propagate_batches`)."""
-    return Propagator(scenario.state_model, scenario.var_model,
-                      scenario.dynamic + scenario.stochastic.model_parameters,
-                      rtol=scenario.rtol, atol=scenario.atol, method=scenario.method)
+def _forcing(scenario: Scenario) -> Forcing:
+    """What acts on pieces of the scenario's arc (:mod:`tapp.tracking.pieces`)."""
+    return Forcing(scenario.stochastic, scenario.manoeuvres)
 
 
 def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.ndarray,
@@ -291,21 +291,21 @@ def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.nda
     x_start = np.asarray(scenario.x0, dtype=float)
     values = dict(scenario.dynamic_values)
     parts: list[Trajectory] = []
-    batches: list[BatchPartials] = []
+    batches: list[SegmentPartials] = []
+    forcing = _forcing(scenario)
     for a, b in zip(epochs, ends, strict=True):
         out = np.unique(np.concatenate([grid[(grid > a) & (grid <= b)],
                                         t13[(t13 > a) & (t13 <= b)]]))
-        if scenario.stochastic is None:
+        if not forcing:
             traj = prop.propagate(x_start, out, t0_s=float(a), stm=True, param_values=values,
                                   orientation=scenario.orientation,
                                   epoch_jd_utc=scenario.epoch.jd)
         else:
-            arc = propagate_batches(_batch_propagator(scenario), scenario.stochastic, x_start,
-                                    out, t0_s=float(a), param_values=values,
-                                    orientation=scenario.orientation,
-                                    epoch_jd_utc=scenario.epoch.jd)
+            arc = propagate_pieces(prop, forcing, x_start, out, t0_s=float(a),
+                                   param_values=values, orientation=scenario.orientation,
+                                   epoch_jd_utc=scenario.epoch.jd)
             traj = Trajectory(out, arc.states, arc.phi, arc.sens, prop.params, 0, 0)
-            batches.append(arc.batches)
+            batches.append(arc.partials)
         parts.append(traj)
         x_start = traj.states[-1]
         progress("propagation")
@@ -313,7 +313,7 @@ def _arc(scenario: Scenario, prop: Propagator, t13: np.ndarray, is_epoch: np.nda
                 np.concatenate([p.states for p in parts]),
                 np.concatenate([p.stm for p in parts]),
                 np.concatenate([p.sensitivity for p in parts]),
-                BatchPartials.join(batches) if batches else None)
+                SegmentPartials.join(batches) if batches else None)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -336,9 +336,8 @@ def _light_time(scenario: Scenario, prop: Propagator, two_way: bool) -> LightTim
     values = dict(scenario.dynamic_values)
 
     def state_at(t_s: np.ndarray) -> np.ndarray:
-        return prop.propagate(scenario.x0, t_s, stm=False, param_values=values,
-                              orientation=scenario.orientation,
-                              epoch_jd_utc=scenario.epoch.jd).states
+        return fly(prop, scenario.manoeuvres, scenario.x0, t_s, param_values=values,
+                   orientation=scenario.orientation, epoch_jd_utc=scenario.epoch.jd).states
 
     return LightTime(two_way=two_way, state_at=state_at)
 
@@ -353,14 +352,15 @@ def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
 def _state_rows(h: np.ndarray, arc: _Arc, p: np.ndarray, scenario: Scenario,
                 columns: dict[str, int]) -> np.ndarray:
     """Rows A (n, m, n_o) of the samples at arc positions ``p`` with the orbit, dynamic and
-    stochastic-acceleration columns [H Φ, H S, H S_k] filled."""
+    segment-parameter columns [H Φ, H S, H S_s] filled."""
     a = np.zeros(h.shape[:2] + (len(columns),))
     sens = arc.sens[p]
     a[..., :6] = h @ arc.phi[p]
     a[..., 6:6 + sens.shape[-1]] = h @ sens
     if arc.batches is not None:
-        first = columns[scenario.stochastic.names[0]]
-        a[..., first:first + len(scenario.stochastic.names)] = arc.batches.rows(p, h)
+        names = _forcing(scenario).names
+        first = columns[names[0]] if names else len(columns)
+        a[..., first:first + len(names)] = arc.batches.rows(p, h)
     return a
 
 
@@ -610,10 +610,17 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """
     miss = scenario.miss
     values = dict(scenario.dynamic_values)
-    traj = scenario.propagator().propagate(
-        scenario.x0, np.array([miss.t_s]), stm=True, param_values=values,
-        orientation=scenario.orientation, epoch_jd_utc=scenario.epoch.jd)
-    x, phi, sens = traj.states[0], traj.stm[0], traj.sensitivity[0]
+    forcing = _forcing(scenario)
+    if forcing:
+        arc = propagate_pieces(scenario.propagator(), forcing, scenario.x0,
+                               np.array([miss.t_s]), t0_s=0.0, param_values=values,
+                               orientation=scenario.orientation, epoch_jd_utc=scenario.epoch.jd)
+        x, phi, sens = arc.states[0], arc.phi[0], arc.sens[0]
+    else:
+        traj = scenario.propagator().propagate(
+            scenario.x0, np.array([miss.t_s]), stm=True, param_values=values,
+            orientation=scenario.orientation, epoch_jd_utc=scenario.epoch.jd)
+        x, phi, sens = traj.states[0], traj.stm[0], traj.sensitivity[0]
     body_gm = f"GM_{miss.body}" if miss.kind == "bplane" else "GM"
     gm_values = default_parameters(scenario.state_model, (body_gm,))
     gm_values.update(values)
@@ -640,14 +647,9 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
         column = 6 + scenario.dynamic.index(gm_name)
         big_b[:, column] += _difference(lambda q: f(x, float(q[0])), np.array([gm]),
                                         np.array([MISS_STEP * gm]), angles)[:, 0]
-    if scenario.stochastic is not None:
-        names = scenario.stochastic.names
-        first = [p.name for p in scenario.parameters].index(names[0])
-        arc = propagate_batches(_batch_propagator(scenario), scenario.stochastic, scenario.x0,
-                                np.array([miss.t_s]), t0_s=0.0, param_values=values,
-                                orientation=scenario.orientation,
-                                epoch_jd_utc=scenario.epoch.jd)
-        big_b[:, first:first + len(names)] = arc.batches.rows(np.array([0]), g[None])[0]
+    if forcing.names:
+        first = scenario.n_o - len(forcing.names)  # the segment parameters come last
+        big_b[:, first:] = arc.partials.rows(np.array([0]), g[None])[0]
     return nominal, big_b
 
 
@@ -759,8 +761,8 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     u = np.zeros((n_it, n_p, n_o))
     u[:, :, :6] = arc.phi[at_k]
     u[:, :, 6:6 + arc.sens.shape[-1]] = arc.sens[at_k]
-    if arc.batches is not None:
-        first = columns[scenario.stochastic.names[0]]
+    if arc.batches is not None and _forcing(scenario).names:
+        first = columns[_forcing(scenario).names[0]]
         u[:, :, first:] = arc.batches.rows(at_k, np.broadcast_to(np.eye(n_p), (n_it, n_p, 6)))
     j = np.maximum.accumulate(np.where(is_epoch[:-1], np.arange(n_it), 0))
     # A baseline's entry carries the position and mask of its first station.
@@ -792,6 +794,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         editing=_editing_table(editing),
         raw=_raw(entries, data, n_o) if raw else None,
         stochastic=scenario.stochastic,
+        manoeuvres=scenario.manoeuvres,
         provenance={"scenario": scenario.document_json, "scenario_source": scenario.source,
                     "earth_orientation": scenario.orientation.model,
                     "eop": scenario.orientation.eop_note + (
@@ -800,10 +803,9 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     )
     t_out = np.concatenate([[0.0], arc.t_s])
     states = np.concatenate([np.asarray(scenario.x0, dtype=float)[None, :], arc.states])
-    events = prop.propagate(scenario.x0, t_out[-1:], stm=False,
-                            param_values=dict(scenario.dynamic_values),
-                            orientation=scenario.orientation,
-                            epoch_jd_utc=scenario.epoch.jd).events
+    events = fly(prop, scenario.manoeuvres, scenario.x0, t_out[-1:],
+                 param_values=dict(scenario.dynamic_values), orientation=scenario.orientation,
+                 epoch_jd_utc=scenario.epoch.jd).events
     return Simulation(tape, t_out, states, scenario, warnings, events)
 
 

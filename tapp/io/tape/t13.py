@@ -19,8 +19,10 @@ tracking passes (:class:`TapePasses`), optionally what the tracking schedule ask
 what each rule that removes data removed, per station (:class:`TapeEditing`), optionally the
 definition of the stochastic accelerations among the parameters (kind "stochastic": frame,
 components, interval boundaries, σ, τ; :class:`tapp.estimation.gauss_markov.
-StochasticAccelerations`, from which TAPP III builds their a priori), and, optionally,
-one row per scalar observation (:class:`TapeRaw`). Units: factor entry (r, b) in 1/u_b with
+StochasticAccelerations`, from which TAPP III builds their a priori), optionally the burns
+whose execution errors are parameters (kind "execution": :mod:`tapp.dynamics.manoeuvres`,
+with Gates' σ's, from which TAPP III builds their a priori), and, optionally, one row per
+scalar observation (:class:`TapeRaw`). Units: factor entry (r, b) in 1/u_b with
 u the parameters' units (normal matrices 1/(u_a u_b)); U and B entries in (unit of row)/(unit
 of column).
 
@@ -46,6 +48,8 @@ from functools import cache
 import numpy as np
 
 from tapp.dynamics.empirical import COMPONENTS
+from tapp.dynamics.manoeuvres import KIND as EXECUTION
+from tapp.dynamics.manoeuvres import Burn
 from tapp.errors import InputError
 from tapp.estimation.factors import psd_factor
 from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
@@ -98,8 +102,9 @@ class TapeParameters:
     """The n_o TAPP I parameters x = [p; q]: names (with units), units, kinds, nominal values.
 
     ``kind`` is "orbit" (p), "dynamic" (model constants), "location" or "bias" (station
-    parameters, with ``station`` their station number; 0 otherwise) or "stochastic" (the
-    accelerations of :attr:`T13.stochastic`).
+    parameters, with ``station`` their station number; 0 otherwise), "stochastic" (the
+    accelerations of :attr:`T13.stochastic`) or "execution" (the execution errors of the burns
+    of :attr:`T13.manoeuvres`).
     """
 
     name: tuple[str, ...]
@@ -276,7 +281,9 @@ class T13:
     ``provenance`` holds the root attributes that describe how the tape was made
     (scenario JSON and source on writing; plus tapp_version, git_commit, created_utc on
     reading). ``editing`` is None on tapes written before it was recorded. ``stochastic``
-    defines the parameters of kind "stochastic" (None without them).
+    defines the parameters of kind "stochastic" (None without them), ``manoeuvres`` the burns
+    TAPP I flew, ascending in time, whose execution errors are the parameters of kind
+    "execution".
     """
 
     iden: str
@@ -292,6 +299,7 @@ class T13:
     provenance: dict[str, str] = field(default_factory=dict)
     editing: TapeEditing | None = None
     stochastic: StochasticAccelerations | None = None
+    manoeuvres: tuple[Burn, ...] = ()
 
     @property
     def n_o(self) -> int:
@@ -499,6 +507,27 @@ def _validate_stochastic(c: Checker, spec: StochasticAccelerations | None,
         c.fail("parameters/unit", f"stochastic accelerations in {UNIT}, nominal 0")
 
 
+def _validate_manoeuvres(c: Checker, burns: tuple[Burn, ...], par: TapeParameters) -> None:
+    """The parameters of kind "execution" are exactly the burns' execution errors, named,
+    ordered and in the units the burns give them, nominal 0; the burns are in the arc's order
+    and do not overlap."""
+    at = [i for i, kind in enumerate(par.kind) if kind == EXECUTION]
+    want = [p for b in burns for p in b.parameters()]
+    if tuple(par.name[i] for i in at) != tuple(n for n, _, _ in want):
+        c.fail("parameters/kind", f"the {len(want)} execution errors of the manoeuvres/ burns "
+               "in order", f"{len(at)}: {', '.join(par.name[i] for i in at[:4])}")
+    if any(par.unit[i] != u for i, (_, u, _) in zip(at, want, strict=True)) or \
+            np.any(par.nominal[at] != 0):
+        c.fail("parameters/unit", "execution errors in the units of Gates' model "
+               "(tapp.dynamics.gates), nominal 0")
+    starts = np.array([b.t_start_s for b in burns])
+    ends = np.array([b.t_end_s for b in burns])
+    if not (np.all(np.isfinite(starts)) and np.all(ends >= starts)
+            and np.all(starts[1:] >= ends[:-1]) and np.all(np.diff(starts) > 0)):
+        c.fail("manoeuvres/t_start_s", "finite times of burns in order, not overlapping",
+               starts.tolist())
+
+
 def _validate_header(c: Checker, tape: T13) -> None:
     """Everything of :func:`validate` but the pair matrices and the raw rows."""
     n_o, n_p, n_m, n_ts, n_it = tape.n_o, tape.n_p, tape.n_m, tape.n_ts, tape.n_it
@@ -506,6 +535,7 @@ def _validate_header(c: Checker, tape: T13) -> None:
     check_parameters(c, par, n_p)
 
     _validate_stochastic(c, tape.stochastic, par)
+    _validate_manoeuvres(c, tape.manoeuvres, par)
 
     st = tape.stations
     c.shape("stations/id", st.id, (n_ts,))
@@ -768,6 +798,9 @@ def summary(tape: T13, *, version: int = VERSION) -> dict:
         "miss": {"kind": tape.miss.kind, "t_s": tape.miss.t_s,
                  "names": list(tape.miss.name), "units": list(tape.miss.unit),
                  "nominal": tape.miss.nominal.tolist()},
+        "manoeuvres": [{"name": b.name, "kind": b.kind, "axes": b.axes,
+                        "t_start_s": b.t_start_s, "t_end_s": b.t_end_s,
+                        "execution_errors": len(b.parameters())} for b in tape.manoeuvres],
         "provenance": {k: v for k, v in tape.provenance.items() if k != "scenario"},
     }
 

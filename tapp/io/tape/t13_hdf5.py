@@ -65,6 +65,19 @@ stochastic/ (optional)                             the parameters of kind "stoch
                                                    estimation.gauss_markov): attrs frame,
                                                    components, sigma_km_s2, tau_s
 stochastic/boundaries_s     (K+1,) float           interval boundaries, s
+manoeuvres/ (optional)                             the burns whose execution errors are the
+                                                   parameters of kind "execution" (tapp.
+                                                   dynamics.manoeuvres), ascending in time:
+manoeuvres/name, kind, axes (n_b,) str             name, "impulsive" or "finite", "inertial",
+                                                   "ric" or "vnb"
+manoeuvres/t_start_s,       (n_b,) float           time (ignition), s; duration (0: impulsive)
+duration_s
+manoeuvres/vector           (n_b, 3) float         Δv (km/s, impulsive) or the thrust's unit
+                                                   direction (finite), in the burn's axes
+manoeuvres/thrust_N,        (n_b,) float           thrust (N), mass at ignition (kg), mass flow
+mass_kg, mass_flow_kg_s                            (kg/s) of a finite burn; 0 for impulsive
+manoeuvres/sigma            (n_b, 4) float         Gates' σ₁..σ₄ (1, km/s, rad, km/s: tapp.
+                                                   dynamics.gates)
 raw/... (optional)          (N, ...)               one row per scalar observation: t_s,
                                                    station, kind (code into attr ``kinds``),
                                                    record, segment, value, A (N, n_o) referred
@@ -107,6 +120,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from tapp.dynamics.gates import GatesErrors, GatesRangeError
+from tapp.dynamics.manoeuvres import AXES, BURN_KINDS, Burn, FiniteBurn, ImpulsiveBurn
 from tapp.errors import InputError, TapeError
 from tapp.estimation.gauss_markov import StochasticAccelerations
 from tapp.frames.time import Epoch
@@ -264,6 +279,9 @@ def _write(f: h5py.File, tape: T13, packing: str, version: int = VERSION) -> Non
                                "sigma_km_s2": sto.sigma_km_s2, "tau_s": sto.tau_s},
                            checksums=cs)
         numbers(g, "boundaries_s", np.asarray(sto.boundaries_s), "s")
+
+    if tape.manoeuvres:
+        _write_manoeuvres(f.create_group("manoeuvres"), tape.manoeuvres, strings, numbers)
 
     if tape.raw is not None:
         raw = tape.raw
@@ -452,6 +470,7 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, n
             tuple(float(t) for t in r.read("stochastic/boundaries_s")),
             r.attr("sigma_km_s2", float, owner="stochastic"),
             r.attr("tau_s", float, owner="stochastic"))
+    manoeuvres = _read_manoeuvres(r) if r.has("manoeuvres") else ()
     tape_raw = None
     if raw and r.has("raw"):
         kinds = r.attr("kinds", list, owner="raw", default=())
@@ -463,8 +482,66 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, n
                                                     "created_utc", *SCENARIO_PROVENANCE)
                   if r.has_attr(key)}
     tape = T13(r.attr("iden", str), epoch, dims["n_p"], parameters, stations, miss, records,
-               pairs, passes, tape_raw, provenance, editing, stochastic)
+               pairs, passes, tape_raw, provenance, editing, stochastic, manoeuvres)
     return tape, r.read("records/t_s")
+
+
+#: The numbers of a burn on the tape beside its name, kind, axes, vector and σ's, with their
+#: units (those an impulsive burn has not are 0 on the tape).
+_BURN_NUMBERS = (("t_start_s", "s"), ("duration_s", "s"), ("thrust_N", "N"), ("mass_kg", "kg"),
+                 ("mass_flow_kg_s", "kg/s"))
+
+
+def _write_manoeuvres(g: h5py.Group, burns: tuple[Burn, ...], strings, numbers) -> None:
+    """The ``manoeuvres/`` group (module docstring)."""
+    for name in ("name", "kind", "axes"):
+        strings(g, name, [getattr(b, name) for b in burns])
+    for name, units in _BURN_NUMBERS:
+        numbers(g, name, np.array([getattr(b, name, 0.0) for b in burns]), units)
+    numbers(g, "vector", np.array([b.dv_km_s if b.kind == "impulsive" else b.direction
+                                   for b in burns]), "km/s (impulsive) or 1 (finite), in the "
+            "burn's axes")
+    numbers(g, "sigma", np.array([b.errors.sources for b in burns]), "1, km/s, rad, km/s")
+
+
+def _read_manoeuvres(r: Reader) -> tuple[Burn, ...]:
+    """The burns of the ``manoeuvres/`` group, checked as the scenario's were."""
+    names, kinds, axes = (r.strings(f"manoeuvres/{n}") for n in ("name", "kind", "axes"))
+    n_b = len(names)
+    values = {name: r.read(f"manoeuvres/{name}") for name, *_ in _BURN_NUMBERS}
+    vector, sigma = r.read("manoeuvres/vector"), r.read("manoeuvres/sigma")
+    for name, a, shape in (("kind", kinds, n_b), ("axes", axes, n_b)):
+        if len(a) != shape:
+            r.check.fail(f"manoeuvres/{name}", f"{n_b} entries", len(a))
+    for name, a in values.items():
+        r.check.shape(f"manoeuvres/{name}", a, (n_b,))
+        r.check.finite(f"manoeuvres/{name}", a)
+    r.check.shape("manoeuvres/vector", vector, (n_b, 3))
+    r.check.finite("manoeuvres/vector", vector)
+    r.check.shape("manoeuvres/sigma", sigma, (n_b, 4))
+    out = []
+    for i in range(n_b):
+        if kinds[i] not in BURN_KINDS:
+            r.check.fail("manoeuvres/kind", f"one of {', '.join(BURN_KINDS)}", kinds[i])
+        if axes[i] not in AXES:
+            r.check.fail("manoeuvres/axes", f"one of {', '.join(AXES)}", axes[i])
+        try:
+            errors = GatesErrors(*(float(x) for x in sigma[i]))
+        except GatesRangeError as exc:
+            r.check.fail("manoeuvres/sigma", exc.expected, exc.got)
+        common = {"name": names[i], "axes": axes[i], "errors": errors}
+        v = tuple(float(x) for x in vector[i])
+        if kinds[i] == "impulsive":
+            out.append(ImpulsiveBurn(**common, t_s=float(values["t_start_s"][i]), dv_km_s=v))
+        else:
+            if min(values[n][i] for n in ("duration_s", "thrust_N", "mass_kg",
+                                          "mass_flow_kg_s")) <= 0 or \
+                    values["mass_flow_kg_s"][i] * values["duration_s"][i] >= values["mass_kg"][i]:
+                r.check.fail("manoeuvres/duration_s", "a finite burn's positive duration, "
+                             "thrust, mass and mass flow, mass left at cut-off", names[i])
+            out.append(FiniteBurn(**common, direction=v, **{
+                name: float(values[name][i]) for name, *_ in _BURN_NUMBERS}))
+    return tuple(out)
 
 
 def _check_record_times(source: str, record_times: np.ndarray, tape: T13) -> None:

@@ -136,3 +136,62 @@ def z_scores(sample: np.ndarray, c: np.ndarray, n_draws: int, skip: int | None =
     if skip is not None:
         z[skip, :] = z[:, skip] = 0.0
     return z
+
+
+def edit_deck(doc: dict, change: Mapping) -> dict:
+    """Apply ``{table: changes}`` to a deck document :func:`deck` made: ``common`` is replaced;
+    in a world's table the keys are set and its ``apriori`` entries applied (``sigma`` merged
+    into the σ table, ``covariance`` replacing the a priori, others set)."""
+    for world, table in change.items():
+        if world == "common":
+            doc[world] = table
+            continue
+        table = dict(table)
+        apriori = table.pop("apriori", {})
+        doc[world].update(table)
+        for key, value in apriori.items():
+            if key == "sigma":
+                doc[world]["apriori"]["sigma"].update(value)
+            elif key == "covariance":
+                doc[world]["apriori"] = {"covariance": value}
+            else:
+                doc[world]["apriori"][key] = value
+    return doc
+
+
+def real_world_monte_carlo(tape: T13, generated: list[int], prior: np.ndarray,
+                           base: Mapping[str, float], deck_of, seed: int
+                           ) -> dict[str, tuple[float, float]]:
+    """The Monte Carlo of a kind of parameters whose a priori the deck generates (stochastic
+    accelerations, execution errors), at the indices ``generated`` of the tape with the
+    covariance ``prior``: for each fit mode ("ignore", "estimate": a priori information
+    prior⁻¹) with GM held fixed and the other parameters' σ from ``base``, the largest |z| of
+    the sample covariance of the fit-world estimator's error (:func:`fit_error_moments`)
+    against TAPP III's real world with them, over every entry and print time, and the largest
+    against the real world without them (orbit rows). ``deck_of(fit_mode, real_mode,
+    **tables)`` writes the deck."""
+    names = list(tape.parameters.name)
+    gm = names.index("GM_km3_s2")
+    lam_bar = np.diag([base.get(n, 0.0) ** 2 for n in names])
+    lam_bar[np.ix_(generated, generated)] = prior
+    chol_bar = np.linalg.cholesky(lam_bar)
+    tables = {"times": {"print": list(PRINTS)}, "commands": {"print": ["cov-real o@epoch"]}}
+
+    def predicted(fit_mode: str, real_mode: str) -> dict[int, np.ndarray]:
+        out = run(tape, deck_of(fit_mode, real_mode, **tables))
+        return {b.k: b.entities[0].matrix for b in out.blocks if b.kind == "print"}
+
+    out = {}
+    for mode in ("ignore", "estimate"):
+        fitted = [i for i in range(tape.n_o) if i != gm
+                  and (mode == "estimate" or i not in generated)]
+        s0 = np.diag([1.0 / base[names[i]] ** 2 if i not in generated else 0.0 for i in fitted])
+        if mode == "estimate":
+            at = [fitted.index(i) for i in generated]
+            s0[np.ix_(at, at)] = np.linalg.inv(prior)
+        moments = fit_error_moments(tape.raw, s0, fitted, chol_bar, seed=seed)
+        real, without = predicted(mode, "include"), predicted(mode, "ignore")
+        out[mode] = (max(float(np.max(z_scores(moments[k], real[k], N_DRAWS))) for k in PRINTS),
+                     max(float(np.max(z_scores(moments[k], without[k], N_DRAWS, skip=None)
+                                      [:6, :6])) for k in PRINTS))
+    return out
