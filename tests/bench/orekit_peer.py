@@ -25,11 +25,13 @@ tapp's problem, and how:
 - **Measurements.** The arrays tapp simulated (times, station, range, range rate, σ) become
   ``InstantaneousRangeAndRate`` measurements (``orekit/InstantaneousRangeAndRate.java``,
   compiled here): range and range rate without light time, as tapp's DC computes them.
-  Orekit 13's ``Range`` and ``RangeRate`` always solve the light time (30-60 m in range at
-  LEO): with them the two fits would fit different models. Weights 1/σ² on each scalar.
+  Orekit 13's ``Range`` and ``RangeRate`` always solve the light time (up to tens of metres
+  in range at LEO): with them the two fits would fit different models. Weights 1/σ² on each
+  scalar.
 - **Estimation.** The same initial guess, no a priori, Cartesian position and velocity in the
   GCRF at the epoch as the estimated parameters (so Gauss-Newton follows the same path),
-  normal equations solved by Cholesky as tapp does, and tapp's convergence rule (:class:`Settled`).
+  normal equations solved by Cholesky as tapp does, and tapp's convergence rule
+  (:func:`settled_checker`).
 
 Only the bench imports this module, after :func:`unavailable` has said the peer can run.
 """
