@@ -22,6 +22,7 @@ from tests.bench import (  # noqa: E402
     guidance,
     kernels,
     od,
+    od_peer,
     processor,
     propagation,
     sweeps,
@@ -30,7 +31,7 @@ from tests.bench import (  # noqa: E402
 )
 
 SECTIONS = {module.NAME: module
-            for module in (propagation, tracking, od, targeting, sweeps, processor,
+            for module in (propagation, tracking, od, od_peer, targeting, sweeps, processor,
                            guidance, kernels, cli)}
 
 
