@@ -51,40 +51,34 @@ static const double *eph_coef(const ctx_t *cx, int b, int seg, int k) {
     return cx->eph + (((size_t)b * cx->nseg + seg) * 3 + k) * cx->ncoef;
 }
 
+/* Clenshaw's recurrence at tau for sum_j a_j T_j (rate = 0), or for its derivative
+ * d/dtau = sum_{j>=1} j a_j U_{j-1}, a U series summed the same way (rate = 1). */
+static double cheb_sum(const double *a, int ncoef, double tau, int rate) {
+    double b1 = 0.0, b2 = 0.0;
+    for (int j = ncoef - 1; j >= 1; --j) {
+        double tmp = 2.0 * tau * b1 - b2 + (rate ? j * a[j] : a[j]);
+        b2 = b1;
+        b1 = tmp;
+    }
+    return rate ? b1 : tau * b1 - b2 + a[0];
+}
+
 static void eph_eval(ctx_t *cx, double t) {
     double tau;
     int seg = eph_segment(cx, t, &tau);
-    for (int b = 0; b < cx->nb; ++b) {
-        for (int k = 0; k < 3; ++k) {
-            const double *a = eph_coef(cx, b, seg, k);
-            double b1 = 0.0, b2 = 0.0;
-            for (int j = cx->ncoef - 1; j >= 1; --j) {
-                double tmp = 2.0 * tau * b1 - b2 + a[j];
-                b2 = b1;
-                b1 = tmp;
-            }
-            cx->rb[3 * b + k] = tau * b1 - b2 + a[0];
-        }
-    }
+    for (int b = 0; b < cx->nb; ++b)
+        for (int k = 0; k < 3; ++k)
+            cx->rb[3 * b + k] = cheb_sum(eph_coef(cx, b, seg, k), cx->ncoef, tau, 0);
 }
 
-/* Rates (per s) of the series at t: d/dtau sum_j a_j T_j = sum_{j>=1} j a_j U_{j-1}, summed
- * by Clenshaw's recurrence for the U series, times dtau/dt = 2 / eph_h. */
+/* Rates (per s) of the series at t: the derivative in tau times dtau/dt = 2 / eph_h. */
 static void eph_rate(ctx_t *cx, double t, double *rate) {
     double tau;
     int seg = eph_segment(cx, t, &tau);
-    for (int b = 0; b < cx->nb; ++b) {
-        for (int k = 0; k < 3; ++k) {
-            const double *a = eph_coef(cx, b, seg, k);
-            double b1 = 0.0, b2 = 0.0;
-            for (int j = cx->ncoef - 1; j >= 1; --j) {
-                double tmp = 2.0 * tau * b1 - b2 + j * a[j];
-                b2 = b1;
-                b1 = tmp;
-            }
-            rate[3 * b + k] = b1 * 2.0 / cx->eph_h;
-        }
-    }
+    for (int b = 0; b < cx->nb; ++b)
+        for (int k = 0; k < 3; ++k)
+            rate[3 * b + k] = cheb_sum(eph_coef(cx, b, seg, k), cx->ncoef, tau, 1) * 2.0
+                              / cx->eph_h;
 }
 
 static void rhs(ctx_t *cx, double t, const double *y, double *dy) {
