@@ -12,6 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Entries of the series evaluated at a time: 3 per body or orientation series (at most 16). */
+#define MAX_SERIES 48
+
 typedef int (*rhs_fn)(const casadi_real **arg, casadi_real **res, casadi_int *iw,
                       casadi_real *w, int mem);
 
@@ -23,7 +26,7 @@ typedef struct {
     const double *eph;
     int nb, nseg, ncoef;
     double eph_t0, eph_h;
-    double rb[3 * 16];
+    double rb[MAX_SERIES];
     const casadi_real **arg;
     casadi_real **res;
     casadi_int *iw;
@@ -146,7 +149,6 @@ static void ctx_close(ctx_t *cx) {
  */
 #define EVENT_TOL_S 1e-6
 #define EVENT_MAX_TRIES 16
-#define MAX_SERIES 48
 enum { EV_NONE = 0, EV_AT_START, EV_AT_END, EV_REAIM };
 
 typedef struct {

@@ -109,12 +109,6 @@ class Events:
             return f"{name} {'entry' if falling else 'exit'}"
         return tuple(label(n, bool(f)) for n, f in zip(self.name, self.falling, strict=True))
 
-    def after(self, t_s: float) -> Events:
-        """The events strictly after ``t_s`` (s)."""
-        keep = self.t_s > t_s
-        return Events(self.t_s[keep], tuple(n for n, k in zip(self.name, keep, strict=True)
-                                            if k), self.falling[keep])
-
     @staticmethod
     def join(parts: list[Events]) -> Events:
         """The events of consecutive propagations, in order."""
