@@ -1,11 +1,15 @@
-"""``tapp simulate``: TAPP I, a scenario -> a T13 tape (and its OEM and TDM).
+"""``tapp simulate``: TAPP I, a scenario -> a T13 tape (and its OEM, TDM and SPK).
 
 Bad input (scenario file or field, an unreadable or corrupt tape, an output path that is the
-scenario or the other output) is one line on stderr naming the file and the field or dataset,
-or the option, exit code 2 (1 for other failures; see :mod:`tapp.cli.common`). The tape, the
-OEM and the TDM are written together or not at all (:class:`tapp.io.outputs.OutputSet`). A
-station that yields no observation while others do is a ``warning:`` line on stderr naming
-the file and ``tracking.stations[i]``, and in the JSON's ``warnings``; the tape is written.
+scenario or the other output, a ``[reference]`` file that cannot be read or fitted within its
+limit) is one line on stderr naming the file and the field or dataset, or the option, exit
+code 2 (1 for other failures; see :mod:`tapp.cli.common`). The tape, the OEM, the TDM and the
+SPK are written together or not at all (:class:`tapp.io.outputs.OutputSet`). A station that
+yields no observation while others do is a ``warning:`` line on stderr naming the file and
+``tracking.stations[i]``, and in the JSON's ``warnings``; the tape is written; so is a
+reference fit worse than its limit that ``--force`` accepted. The reference fit (per arc: RMS
+and largest position difference) is in the report, the JSON's ``reference`` and the OEM's and
+SPK's comments.
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -39,10 +44,26 @@ if TYPE_CHECKING:
 
     from tapp.io.outputs import OutputSet
     from tapp.io.tape.t13 import T13
+    from tapp.tracking.reference import ReferenceFit
     from tapp.tracking.scenario import Scenario
     from tapp.tracking.simulate import Simulation
 
-def _simulate_with_bar(scenario: Scenario, raw: bool, quiet: bool) -> tuple[Simulation, float]:
+#: NAIF id of the spacecraft in an SPK written without --spk-id or an SPK reference (NAIF
+#: gives spacecraft negative ids; this one is no mission's).
+DEFAULT_SPK_ID = -999
+
+
+def _spk_body(spk_id: int | None, fit: ReferenceFit | None) -> int:
+    """The SPK's NAIF id: --spk-id, else the reference SPK's, else :data:`DEFAULT_SPK_ID`."""
+    if spk_id is not None:
+        return spk_id
+    if fit is not None and fit.trajectory.kind == "SPK":
+        return int(fit.trajectory.body)
+    return DEFAULT_SPK_ID
+
+
+def _simulate_with_bar(scenario: Scenario, raw: bool, quiet: bool, force: bool = False
+                       ) -> tuple[Simulation, float]:
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
     from tapp.tracking.simulate import simulate as run_simulation
@@ -56,15 +77,18 @@ def _simulate_with_bar(scenario: Scenario, raw: bool, quiet: bool) -> tuple[Simu
         def progress(stage: str, done: int, total: int) -> None:
             bar.update(task, description=stage, completed=done, total=total)
 
-        sim = run_simulation(scenario, raw=raw, progress=progress)
+        sim = run_simulation(scenario, raw=raw, progress=progress, accept_poor_fit=force)
     return sim, time.perf_counter() - start
 
 
 def _outputs(output: Path, sim: Simulation, oem: Path | None,
              oem_text: str | None, tdm: Path | None = None,
-             tdm_text: str | None = None, sizes: dict | None = None) -> OutputSet:
-    """The tape, the OEM and the TDM, to be written together or not at all; the tape's size
-    goes into ``sizes["bytes"]`` as soon as it is written (before the outputs added later)."""
+             tdm_text: str | None = None, sizes: dict | None = None,
+             spk: Callable[[Path], None] | None = None, spk_path: Path | None = None
+             ) -> OutputSet:
+    """The tape, the OEM, the TDM and the SPK (``spk`` writes it), to be written together or
+    not at all; the tape's size goes into ``sizes["bytes"]`` as soon as it is written (before
+    the outputs added later)."""
     from tapp.io.outputs import OutputSet
     from tapp.io.tape.t13_hdf5 import t13_file_writer
 
@@ -81,6 +105,8 @@ def _outputs(output: Path, sim: Simulation, oem: Path | None,
         outputs.add("--oem", oem, lambda tmp: tmp.write_text(oem_text, encoding="utf-8"))
     if tdm is not None:
         outputs.add("--tdm", tdm, lambda tmp: tmp.write_text(tdm_text, encoding="utf-8"))
+    if spk is not None:
+        outputs.add("--spk", spk_path, spk)
     return outputs
 
 
@@ -152,9 +178,10 @@ def _events_line(events: list[dict]) -> str:
             f"{events[-1]['utc']} UTC")
 
 
-def _print_report(out: dict, tape: T13, oem_states: int) -> None:
-    """What ``tapp simulate`` wrote: the tape's sizes, its stations, the OEM and TDM, the
-    miss."""
+def _print_report(out: dict, tape: T13, oem_states: int, fit_lines: tuple[str, ...] = ()
+                  ) -> None:
+    """What ``tapp simulate`` wrote: the tape's sizes, its stations, the reference fit, the
+    OEM, TDM and SPK, the miss."""
     from rich.console import Console
 
     from tapp.cli.tape_cmd import editing_table
@@ -165,12 +192,17 @@ def _print_report(out: dict, tape: T13, oem_states: int) -> None:
                   f"{tape.n_m}, n_ts = {tape.n_ts}, n_it = {tape.n_it}; "
                   f"{out['observations']} observations in {out['passes']} passes")
     console.print(editing_table(out["stations"]))
+    for line in fit_lines:
+        console.print(line)
     if out["events"]:
         console.print(_events_line(out["events"]))
     if out["oem"] is not None:
         console.print(f"OEM {out['oem']} ({oem_states} states)")
     if out["tdm"] is not None:
         console.print(f"TDM {out['tdm']} ({out['observations']} observations)")
+    if out["spk"] is not None:
+        console.print(f"SPK {out['spk']['path']} (type 13, body {out['spk']['body']}, "
+                      f"{oem_states} states)")
     _print_encounter(console, out["miss"], out["targeting"])
 
 
@@ -185,6 +217,15 @@ def simulate(
                                              "CCSDS OEM 2.0 (KVN) file.")] = None,
     tdm: Annotated[Path | None, typer.Option("--tdm", help="Also write the observations as a "
                                              "CCSDS TDM 2.0 (KVN) file.")] = None,
+    spk: Annotated[Path | None, typer.Option("--spk", help="Also write the trajectory as a "
+                                             "SPICE SPK (type 13, about the Earth, J2000).")
+                   ] = None,
+    spk_id: Annotated[int | None, typer.Option(
+        "--spk-id", help=f"NAIF id of the spacecraft in the SPK; default: the [reference] "
+        f"SPK's, else {DEFAULT_SPK_ID}.")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Fly a [reference] fit worse than its "
+                                        "max_fit_error_m (refused otherwise), with a warning "
+                                        "stating it.")] = False,
     earth_orientation: EarthOrientationOpt = None,
     json_out: JsonOpt = None,
 ) -> None:
@@ -192,7 +233,8 @@ def simulate(
 
     A B-plane miss must be an encounter (exit 2 naming the closest approach otherwise); a
     [targeting] table retargets the injection by SEARCH first (exit 3 diverged, 4 singular,
-    1 a case that failed; no tape then).
+    1 a case that failed; no tape then). A [reference] trajectory is fitted first, and a fit
+    worse than its limit is exit 2 unless --force.
     """
 
     def body() -> int:
@@ -205,18 +247,20 @@ def simulate(
         from tapp.io.outputs import check_paths
         from tapp.io.tape.t13 import summary
         from tapp.tracking.encounter import TargetingError
-        from tapp.tracking.oem_states import oem_trajectory
+        from tapp.tracking.oem_states import oem_trajectory, write_trajectory_spk
         from tapp.tracking.scenario import read_scenario
 
-        outputs = {"-o/--output": output, "--oem": oem, "--tdm": tdm,
+        outputs = {"-o/--output": output, "--oem": oem, "--tdm": tdm, "--spk": spk,
                    "--json": json_file(json_out)}
         check_paths({"SCENARIO": scenario}, outputs)
         parsed = read_scenario(scenario, earth_orientation_option(earth_orientation))
-        if parsed.schedule.passes is not None:  # an input too
+        if parsed.schedule.passes is not None:  # inputs too
             check_paths({"tracking.schedule": Path(parsed.schedule.passes.source)}, outputs)
+        if parsed.reference is not None:
+            check_paths({"reference.file": Path(parsed.reference.trajectory.source)}, outputs)
         try:
             sim, wall_s = _simulate_with_bar(parsed, raw or tdm is not None,
-                                             quiet=json_out == STDOUT)
+                                             quiet=json_out == STDOUT, force=force)
         except TargetingError as exc:
             echo_error(exc)
             code = search_exit_code(exc.status)
@@ -227,17 +271,28 @@ def simulate(
             if not raw:  # the raw rows were for the TDM only
                 sim = dataclasses.replace(sim, tape=dataclasses.replace(sim.tape, raw=None))
         tape = sim.tape
-        oem_text, oem_states = None, 0
-        if oem is not None:
+        fit = sim.reference_fit
+        fit_lines = () if fit is None else fit.lines(tape.epoch)
+        comments = (f"TAPP I trajectory of {scenario.name}", *fit_lines)
+        oem_text, oem_states, write_spk, spk_info = None, 0, None, None
+        if oem is not None or spk is not None:
             traj = oem_trajectory(sim.scenario, float(sim.t_s[-1]))
             oem_states = traj.t_s.size
+        if oem is not None:
             oem_text = format_oem(tape.epoch, traj.t_s, traj.states, object_name=tape.iden,
                                   object_id=tape.iden, ref_frame=traj.ref_frame,
                                   interpolation=INTERPOLATION,
                                   interpolation_degree=INTERPOLATION_DEGREE,
-                                  comments=(f"TAPP I trajectory of {scenario.name}",),
+                                  comments=comments,
                                   meta_comments=traj.comments + event_comments(tape.epoch,
                                                                                traj.events))
+        if spk is not None:
+            body = _spk_body(spk_id, fit)
+            spk_info = {"path": str(spk), "body": body}
+
+            def write_spk(tmp: Path) -> None:
+                spk_info["error_km"], spk_info["error_km_s"] = write_trajectory_spk(
+                    tmp, sim.scenario, traj, body, comments + traj.comments)
         out = {"tape": str(output), "bytes": None, "iden": tape.iden,
                "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
@@ -245,18 +300,26 @@ def simulate(
                "observations": int(tape.pairs.n_obs.sum()),
                "stations": summary(tape)["stations"], "raw": raw,
                "oem": None if oem is None else str(oem),
-               "tdm": None if tdm is None else str(tdm), "wall_s": wall_s,
-               "warnings": list(sim.warnings),
+               "tdm": None if tdm is None else str(tdm), "spk": spk_info,
+               "wall_s": wall_s, "warnings": list(sim.warnings),
+               "reference": None if fit is None else fit.to_json(tape.epoch),
                "events": [{"t_s": float(t), "utc": tape.epoch.iso_after(float(t), 6),
                            "event": label}
                           for t, label in zip(sim.events.t_s, sim.events.labels(), strict=True)]}
         out["miss"], out["targeting"] = _encounter_dict(tape)
         # the JSON is written after the tape's temporary, whose size it then holds
-        outputs = _outputs(output, sim, oem, oem_text, tdm, tdm_text, sizes=out)
+        outputs = _outputs(output, sim, oem, oem_text, tdm, tdm_text, sizes=out,
+                           spk=write_spk, spk_path=spk)
         with delivering(json_out, out, outputs) as report:
             if report:
-                _print_report(out, tape, oem_states)
-        for warning in sim.warnings:  # last: a failed run's one line is its error
+                _print_report(out, tape, oem_states, fit_lines)
+        warnings = list(sim.warnings)
+        if fit is not None and fit.forced:
+            warnings.append(f"{scenario}: reference.max_fit_error_m: the fit to "
+                            f"{fit.trajectory.source} misses it by {fit.worst.max_m:.4g} m "
+                            f"(RMS {fit.worst.rms_m:.4g} m), more than "
+                            f"{fit.max_fit_error_m:g} m; flown as --force asked")
+        for warning in warnings:  # last: a failed run's one line is its error
             echo_warning(warning)
         return 0
 

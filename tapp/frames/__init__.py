@@ -5,7 +5,9 @@ date; :mod:`tapp.frames.timescales`). The Earth-fixed frame is reached from the 
 the scenario's Earth orientation (:mod:`tapp.frames.orientation`): the IAU 2006/2000A GCRS ->
 ITRS rotation with IERS EOP, or the gmst model R3(GMST IAU-82 + omega t) with UT1 = UTC of
 :mod:`tapp.frames.rotation`. :mod:`tapp.frames.ric` gives the radial / in-track / cross-track
-axes of a state and rotates covariances into them.
+axes of a state and rotates covariances into them. Trajectory files are brought into the
+scenario's time and frame by :mod:`tapp.frames.timesystems` (CCSDS time systems, SPICE's ET)
+and :mod:`tapp.frames.file_frames` (GCRF, ICRF, EME2000, the ITRF).
 """
 
 from tapp.frames.geodesy import ecef_to_geodetic, enu_matrix, geodetic_to_ecef

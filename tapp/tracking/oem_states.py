@@ -1,14 +1,23 @@
-"""The states of TAPP I's trajectory for its CCSDS OEM (:mod:`tapp.io.ccsds.oem` writes them).
+"""The states of TAPP I's trajectory for its CCSDS OEM (:mod:`tapp.io.ccsds.oem` writes them)
+and its SPK (:mod:`tapp.io.spk`).
 
 The trajectory is sampled where Lagrange interpolation of the degree the OEM declares holds
-to the tolerances of :mod:`tapp.io.ccsds.oem` at every mid-point between states.
+to the tolerances of :mod:`tapp.io.ccsds.oem` at every mid-point between states. The SPK holds
+the same states in one type 13 segment (Hermite of degree :data:`tapp.io.spk.SPK_DEGREE`,
+through half as many states); :func:`write_trajectory_spk` reads it back through SPICE at
+every mid-point and refuses to keep it unless it too holds to those tolerances.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from pathlib import Path
+
 import numpy as np
 
 from tapp.errors import InputError, TappError
+from tapp.frames.file_frames import gcrs_from_scenario, to_scenario_frame
+from tapp.frames.timesystems import et_from_scenario, from_et, to_et
 from tapp.io.ccsds.oem import (
     INTERPOLATION_DEGREE,
     INTERPOLATION_TOL_KM,
@@ -18,6 +27,7 @@ from tapp.io.ccsds.oem import (
     lagrange_interpolate,
 )
 from tapp.tracking.pieces import fly
+from tapp.io.spk import SPK_DEGREE, add_comments, spk_states, write_spk
 from tapp.tracking.scenario import Scenario
 
 #: Most states the OEM of a simulation may hold (the step is halved at most down to this).
@@ -85,3 +95,51 @@ def oem_trajectory(scenario: Scenario, t_end_s: float) -> OemTrajectory:
                     f"states for Lagrange interpolation of degree {INTERPOLATION_DEGREE} to "
                     f"{INTERPOLATION_TOL_KM * 1e6:g} mm and {INTERPOLATION_TOL_KM_S * 1e6:g} "
                     "mm/s")
+
+
+def write_trajectory_spk(path: Path, scenario: Scenario, traj: OemTrajectory, body: int,
+                         comments: Sequence[str] = (), option: str = "--spk"
+                         ) -> tuple[float, float]:
+    """Write the OEM's states ``traj`` as an SPK (one type 13 segment of NAIF id ``body``
+    about the Earth, J2000 = the GCRS axes, a gmst scenario's states rotated there by the
+    frame bias) at ``path``, check it, and return the largest interpolation errors SPICE
+    makes at the mid-points between states (km, km/s).
+
+    The states go in at ET of their scenario times, each moved by the sub-ulp remainder its
+    rounded ET leaves out, velocities per TDB second (:func:`tapp.frames.timesystems.to_et`);
+    SPICE's states at the mid-points, taken back (``from_et``), are compared with the
+    scenario's propagation there. ``comments`` and a line stating those errors end up in the file's
+    comment area.
+
+    Raises
+    ------
+    TappError
+        SPICE's interpolation misses a mid-point by more than the OEM's tolerances.
+    InputError
+        A path or segment SPICE refuses (naming ``option``).
+    """
+    epoch, orientation = scenario.epoch, scenario.orientation
+    et, states = to_et(traj.t_s, gcrs_from_scenario(traj.states, orientation), epoch)
+    write_spk(path, body, et, states, option=option)
+    mids = 0.5 * (traj.t_s[1:] + traj.t_s[:-1])
+    truth = scenario.propagator().propagate(
+        scenario.x0, mids, stm=False, param_values=dict(scenario.dynamic_values),
+        orientation=orientation, epoch_jd_utc=epoch.jd).states
+    spice = spk_states(path, body, et_from_scenario(mids, epoch), option, str(path))
+    got = to_scenario_frame("GCRF", mids, from_et(mids, spice, epoch), orientation)
+    err = np.abs(got - truth)
+    error_km, error_km_s = float(err[:, :3].max()), float(err[:, 3:].max())
+    if error_km > INTERPOLATION_TOL_KM or error_km_s > INTERPOLATION_TOL_KM_S:
+        raise TappError(f"{scenario.source}: SPK: SPICE's type 13 interpolation of degree "
+                        f"{SPK_DEGREE} misses the trajectory by {error_km * 1e6:.3g} mm and "
+                        f"{error_km_s * 1e6:.3g} mm/s at the mid-points between states "
+                        f"(required: {INTERPOLATION_TOL_KM * 1e6:g} mm, "
+                        f"{INTERPOLATION_TOL_KM_S * 1e6:g} mm/s)")
+    add_comments(path, (*comments, f"SPK type 13 (Hermite of degree {SPK_DEGREE}) of body "
+                        f"{body} about the Earth (399) in J2000 (the GCRS axes); ET = TDB "
+                        "seconds past J2000 of the scenario's UTC times. Read back by SPICE "
+                        "at every mid-point between states, it reproduces the propagated "
+                        f"trajectory to {error_km * 1e6:.2g} mm and {error_km_s * 1e6:.2g} "
+                        f"mm/s (required: {INTERPOLATION_TOL_KM * 1e6:g} mm, "
+                        f"{INTERPOLATION_TOL_KM_S * 1e6:g} mm/s)."), option)
+    return error_km, error_km_s

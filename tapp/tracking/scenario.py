@@ -22,6 +22,9 @@ ISO strings or TOML dates)::
                        elements a_km, e, i_deg, raan_deg, argp_deg and M_deg or nu_deg;
                        allow_subsurface = true accepts an orbit whose perigee is below the
                        Earth's surface (refused otherwise, ``tapp.io.orbits.check_perigee``)
+    [reference]        instead of [injection]: the mission's trajectory, file = an SPK or
+                       OEM (relative to this file), object, max_fit_error_m, step_s; TAPP I
+                       flies its force model fitted to it (tapp.tracking.reference)
     [model]            gravity (J0 | Jn | NxM), third_bodies (each once), var_gravity,
                        var_third_bodies (the variational model: the seed's truncated
                        variational equations; default the state model), rtol, atol (within
@@ -122,6 +125,7 @@ from tapp.io.schema import (
 )
 from tapp.io.stations_file import StationsSection
 from tapp.io.tomlfile import read_toml
+from tapp.io.trajectory_file import Reference, ReferenceTable
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.stations import Station
 from tapp.orbit.bplane import REFERENCE_POLES
@@ -313,6 +317,9 @@ class Scenario:
     stochastic : the stochastic accelerations of a ``[stochastic]`` table, or None.
     method : the integration method of every propagation (``tapp.dynamics.propagate``).
     manoeuvres : the burns of the ``[[manoeuvre]]`` tables, ascending in time.
+    reference : the mission's trajectory of a ``[reference]`` table, to which TAPP I fits its
+        force model (:mod:`tapp.tracking.reference`); ``x0`` is then its state at t = 0
+        until the fit replaces it; None without one.
     """
 
     source: str
@@ -337,6 +344,7 @@ class Scenario:
     stochastic: StochasticAccelerations | None = None
     method: str = "dop853"
     manoeuvres: tuple[Burn, ...] = ()
+    reference: Reference | None = None
 
     def propagator(self) -> Propagator:
         """The (state model, variational model, dynamic parameters) propagator."""
@@ -543,7 +551,11 @@ class ScenarioFile(StationsSection):
                            "seconds from it.")
     earth_orientation: EarthOrientationName = "iau2006"
     eop: EopSource = "iers"
-    injection: OrbitTable = Field(description="The state at the epoch (GCRS; EME2000 with gmst).")
+    injection: OrbitTable | None = Field(
+        None, description="The state at the epoch (GCRS; EME2000 with gmst); or [reference].")
+    reference: ReferenceTable | None = Field(
+        None, description="The mission's own trajectory, fitted by TAPP I's force model; or "
+        "[injection].")
     model: ModelTable = Field(description="The state and variational force models.")
     parameters: ParametersTable = Field(ParametersTable(),
                                         description="The parameters q beside the state.")
@@ -873,6 +885,28 @@ _NO_MANOEUVRES = ("no [[manoeuvre]] with [targeting] or miss.time = \"periapsis\
                   "program, which finds the periapsis, flies no burn)")
 
 
+#: Why burns are refused with a [reference]: its fit flies one coast arc.
+_NO_REFERENCE = ("no [[manoeuvre]] with [reference] (the reference's fit flies one coast arc: "
+                 "the fit per arc between burns is not built yet)")
+
+
+def _injection(p: _Parser, doc: ScenarioFile, orientation: EarthOrientation, last_s: float
+               ) -> tuple[np.ndarray, Reference | None]:
+    """The injection state, and the reference it comes from: ``[injection]``, or the state at
+    t = 0 of ``[reference]``'s trajectory read over [0, last T13 time] (one arc)."""
+    if (doc.injection is None) == (doc.reference is None):
+        p.fail("injection", "either an [injection] table or a [reference] trajectory file")
+    if doc.injection is not None:
+        return doc.injection.state(p.source, "injection",
+                                   how_to_allow="injection.allow_subsurface = true"), None
+    if doc.targeting is not None:
+        p.fail("targeting", "no [targeting] with [reference] (the reference's trajectory is "
+               "the mission's)")
+    reference = doc.reference.read(p.source, epoch=p.epoch, orientation=orientation,
+                                   span_s=(0.0, last_s), boundaries_s=(0.0,))
+    return reference.trajectory.state_at_boundary(0.0).copy(), reference
+
+
 def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = None
                    ) -> Scenario:
     """Build a :class:`Scenario` from parsed TOML tables, validating everything.
@@ -896,14 +930,13 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     model = doc.earth_orientation if earth_orientation is None else earth_orientation
     orientation = orientation_for(model, epoch, doc.eop, Path(source).parent, source)
     iden = Path(source).name.split(".")[0] if doc.iden is None else doc.iden
-    x0 = doc.injection.state(source, "injection",
-                             how_to_allow="injection.allow_subsurface = true")
     state_model, var_model = doc.model.force_models(p.source, model)
     rtol, atol = doc.model.rtol, doc.model.atol
     dynamic, values = _dynamic(p, doc.parameters, state_model)
     stations = _stations(p, doc, doc.parameters)
     times = _times(p, doc.times)
     last_s = float(times.t13_s[-1])
+    x0, reference = _injection(p, doc, orientation, last_s)
     schedule = _schedule(p, doc.tracking, last_s, stations)
     miss = _miss(p, doc.miss, state_model, last_s)
     stochastic = _stochastic(p, doc.stochastic, last_s)
@@ -918,13 +951,14 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
                            doc.model.propagator(source, state_model, var_model), orientation)
     manoeuvres = scenario_manoeuvres(
         source, doc.manoeuvre, time_s=p.time_s, last_s=last_s, method=doc.model.method,
-        forbidden=_NO_MANOEUVRES if doc.targeting is not None or miss.at_periapsis else None)
+        forbidden=_NO_MANOEUVRES if doc.targeting is not None or miss.at_periapsis else
+        _NO_REFERENCE if reference is not None else None)
     baselines = tracking_baselines(source, doc.ddor, tuple(ts.station for ts in stations),
                                    schedule.data_interval_s)
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,
                     dynamic, values, stations, schedule, times, miss, document, targeting,
-                    baselines, stochastic, doc.model.method, manoeuvres)
+                    baselines, stochastic, doc.model.method, manoeuvres, reference)
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

@@ -126,6 +126,7 @@ from tapp.tracking.editing import (
 from tapp.tracking.encounter import prepare_encounter
 from tapp.tracking.noise import PARTS, pass_rows
 from tapp.tracking.pieces import Forcing, SegmentPartials, fly, propagate_pieces
+from tapp.tracking.reference import ReferenceFit, fitted
 from tapp.tracking.scenario import (
     BIAS_KINDS,
     KINDS,
@@ -170,6 +171,8 @@ class Simulation:
         blackouts, for min_pass_s), with the samples each editing rule removed.
     events : the integration events of the trajectory from t = 0 to its end (shadow
         entries and exits, Harris-Priester table heights: :mod:`tapp.dynamics.events`).
+    reference_fit : the fit of the force model to the scenario's ``[reference]``
+        (:mod:`tapp.tracking.reference`), whose fitted trajectory was flown; None without one.
     """
 
     tape: T13
@@ -178,6 +181,7 @@ class Simulation:
     scenario: Scenario
     warnings: tuple[str, ...] = ()
     events: Events = field(default_factory=Events.none)
+    reference_fit: ReferenceFit | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -659,7 +663,8 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
 
 
 def simulate(scenario: Scenario, *, raw: bool = False,
-             progress: ProgressCallback | None = None) -> Simulation:
+             progress: ProgressCallback | None = None,
+             accept_poor_fit: bool = False) -> Simulation:
     """Run TAPP I on a scenario: return the T13 tape and the trajectory.
 
     Parameters
@@ -667,6 +672,11 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     scenario : Scenario
     raw : also keep the per-observation rows (``tape.raw``) for validation.
     progress : called with (stage, step, total) as the work advances.
+    accept_poor_fit : fly a ``[reference]`` fit worse than its ``max_fit_error_m``
+        (:func:`tapp.tracking.reference.fitted`; refused otherwise).
+
+    A ``[reference]`` trajectory is first fitted by the force model, and the fitted
+    trajectory is flown (:mod:`tapp.tracking.reference`).
 
     A B-plane miss is first checked for an encounter, after the ``[targeting]`` of the
     scenario has retargeted its injection (:func:`tapp.tracking.encounter.prepare_encounter`):
@@ -674,6 +684,8 @@ def simulate(scenario: Scenario, *, raw: bool = False,
 
     Raises
     ------
+    PoorFitError
+        A ``[reference]`` fit worse than its limit, unless ``accept_poor_fit``.
     InputError
         A schedule that yields no observation (naming the scenario file and ``tracking``);
         classical miss elements at a singular orbit; a B-plane miss without an encounter
@@ -683,6 +695,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     PropagationError, NotHyperbolicError, DivergenceError
         From the integrator, the B-plane and the light-time iteration.
     """
+    scenario, fit = fitted(scenario, accept_poor_fit=accept_poor_fit)
     scenario, encounter = prepare_encounter(scenario)
     times = scenario.times
     t13, is_epoch, is_input = times.t13_s, times.is_epoch, times.is_input
@@ -806,7 +819,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     events = fly(prop, scenario.manoeuvres, scenario.x0, t_out[-1:],
                  param_values=dict(scenario.dynamic_values), orientation=scenario.orientation,
                  epoch_jd_utc=scenario.epoch.jd).events
-    return Simulation(tape, t_out, states, scenario, warnings, events)
+    return Simulation(tape, t_out, states, scenario, warnings, events, fit)
 
 
 def _pass_table(stations: tuple[TrackingStation | TrackingBaseline, ...],

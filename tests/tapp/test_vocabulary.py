@@ -8,6 +8,7 @@ reader (the CLI's path to the file).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import get_args
 
 import pytest
 
@@ -60,8 +61,11 @@ def test_an_old_spelling_is_refused_naming_the_new_key(
 
 def test_scenario_and_search_files_share_the_injection_and_model_tables() -> None:
     for schema in (ScenarioFile, SearchFile):
-        assert schema.model_fields["injection"].annotation is OrbitTable
         assert schema.model_fields["model"].annotation is ModelTable
+    assert SearchFile.model_fields["injection"].annotation is OrbitTable
+    # a scenario's [injection] may give way to a [reference] trajectory
+    assert get_args(ScenarioFile.model_fields["injection"].annotation) == (OrbitTable,
+                                                                          type(None))
 
 
 def test_a_search_injection_may_be_given_by_elements_as_a_scenario_s(tmp_path: Path) -> None:

@@ -106,6 +106,18 @@ def event_comments(epoch: Epoch, events: Events) -> tuple[str, ...]:
     return tuple(lines)
 
 
+def interpolation_window(t_nodes: np.ndarray, t: np.ndarray, n: int) -> np.ndarray:
+    """Return the indices (M, n) of the n consecutive nodes whose mean is nearest each time
+    (the window centred on it, shifted inwards at the ends, as the ``oem`` package chooses
+    it): t_nodes (N,) increasing, t (M,), n <= N."""
+    centres = np.convolve(t_nodes, np.full(n, 1.0 / n), mode="valid")  # mean of each window
+    above = np.searchsorted(centres, t)  # centres[above - 1] < t <= centres[above]
+    lo = np.clip(above - 1, 0, centres.size - 1)
+    hi = np.clip(above, 0, centres.size - 1)
+    first = np.where(t - centres[lo] <= centres[hi] - t, lo, hi)
+    return first[:, None] + np.arange(n)
+
+
 def lagrange_interpolate(t_nodes, y_nodes, t, degree: int) -> np.ndarray:
     """Return the Lagrange interpolant of degree ``degree`` of (t_nodes, y_nodes) at ``t``.
 
@@ -129,12 +141,7 @@ def lagrange_interpolate(t_nodes, y_nodes, t, degree: int) -> np.ndarray:
     y = np.asarray(y_nodes, dtype=float)
     tq = np.asarray(t, dtype=float)
     n = degree + 1
-    centres = np.convolve(tn, np.full(n, 1.0 / n), mode="valid")  # mean of each window
-    above = np.searchsorted(centres, tq)  # centres[above - 1] < t <= centres[above]
-    lo = np.clip(above - 1, 0, centres.size - 1)
-    hi = np.clip(above, 0, centres.size - 1)
-    first = np.where(tq - centres[lo] <= centres[hi] - tq, lo, hi)
-    idx = first[:, None] + np.arange(n)  # (M, n)
+    idx = interpolation_window(tn, tq, n)  # (M, n)
     tw = tn[idx]
     weights = np.ones(idx.shape)  # weight of node j: prod over k != j of (t - t_k)/(t_j - t_k)
     for k in range(n):

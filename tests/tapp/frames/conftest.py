@@ -9,6 +9,7 @@ with ``iers.earth_orientation_table``; both are restored when the context ends.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 from functools import cache
 from pathlib import Path
@@ -21,6 +22,7 @@ import pytest
 from astropy.time import Time
 from astropy.utils import iers
 
+from tapp.frames.eop import EopTable, MAS_rad
 from tapp.frames.time import Epoch
 
 #: Columns of a finals2000A line, bytes 1-based inclusive, with their Fortran formats
@@ -180,3 +182,35 @@ def astropy_times(epochs, t_s):
     """
     iso = np.array([Epoch.from_calendar(*e).iso(6) for e in epochs])[:, None]
     return Time(iso, format="isot", scale="utc") + np.asarray(t_s)[None, :] * u.s
+
+
+def without_cip_offsets(table: EopTable) -> EopTable:
+    """The table with dX = dY = 0.
+
+    astropy's GCRS ↔ ITRS goes through ``erfa.c2i06a`` and ignores the IERS celestial pole
+    offsets dX, dY (they are in its table but not used), so it matches tapp only with them
+    zeroed; with them, the two differ by |r| · |(dX, dY)|, 1-90 mm (test below), and that
+    difference is astropy's omission, not an error of tapp.
+    """
+    return dataclasses.replace(table, dx_rad=np.zeros_like(table.dx_rad),
+                               dy_rad=np.zeros_like(table.dy_rad))
+
+
+#: IERS Conventions (2010), §5.5.1 eq. 5.21 and Table 5.1 footnote: the frame bias from the
+#: GCRS to the mean equator and equinox of J2000.0, B = R1(−η0) R2(ξ0) R3(dα0).
+XI0_mas, ETA0_mas, DALPHA0_mas = -16.6170, -6.8192, -14.6
+
+
+def _r(axis: int, angle: float) -> np.ndarray:
+    """The frame rotation R_axis(angle) of the IERS Conventions (a passive rotation)."""
+    c, s = np.cos(angle), np.sin(angle)
+    i, j = [(1, 2), (2, 0), (0, 1)][axis - 1]
+    m = np.eye(3)
+    m[i, i] = m[j, j] = c
+    m[i, j], m[j, i] = s, -s
+    return m
+
+
+def iers_frame_bias() -> np.ndarray:
+    """B (3, 3): r_EME2000 = B r_GCRS, from the IERS Conventions' published angles."""
+    return _r(1, -ETA0_mas * MAS_rad) @ _r(2, XI0_mas * MAS_rad) @ _r(3, DALPHA0_mas * MAS_rad)

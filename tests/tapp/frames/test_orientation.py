@@ -9,8 +9,6 @@ References
   conftest), for station positions and velocities in the GCRS.
 """
 
-import dataclasses
-
 import astropy.units as u
 import erfa
 import numpy as np
@@ -29,6 +27,7 @@ from tests.tapp.frames.conftest import (
     SHIPPED_EPOCHS,
     SCENARIO_TIMES_s,
     astropy_times,
+    without_cip_offsets,
 )
 
 #: The cookbook prints the matrix to 15 decimals (half a unit: 5e-16); allow 1e-14 (measured
@@ -63,18 +62,6 @@ STATIONS = {
 def _station_itrs_km() -> np.ndarray:
     lat, lon, h = np.array(list(STATIONS.values())).T
     return geodetic_to_ecef(np.radians(lat), np.radians(lon), h)  # (5, 3)
-
-
-def _without_cip_offsets(table: EopTable) -> EopTable:
-    """The table with dX = dY = 0.
-
-    astropy's GCRS ↔ ITRS goes through ``erfa.c2i06a`` and ignores the IERS celestial pole
-    offsets dX, dY (they are in its table but not used), so it matches tapp only with them
-    zeroed; with them, the two differ by |r| · |(dX, dY)|, 1-90 mm (test below), and that
-    difference is astropy's omission, not an error of tapp.
-    """
-    return dataclasses.replace(table, dx_rad=np.zeros_like(table.dx_rad),
-                               dy_rad=np.zeros_like(table.dy_rad))
 
 
 def _angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -143,7 +130,7 @@ def test_gcrs_to_itrs_matrix_matches_the_sofa_cookbook():
 
 @pytest.mark.usefixtures("astropy_shipped_eop")
 def test_station_gcrs_states_match_astropy_1990_to_2026():
-    r, v, _ = _station_gcrs(SHIPPED_EPOCHS, _without_cip_offsets(finals2000a()))
+    r, v, _ = _station_gcrs(SHIPPED_EPOCHS, without_cip_offsets(finals2000a()))
     r_ref, v_ref = _astropy_station_gcrs(SHIPPED_EPOCHS)
     assert r.shape == r_ref.shape == (len(STATIONS), len(SHIPPED_EPOCHS), 4, 3)
     assert np.linalg.norm(r - r_ref, axis=-1).max() < ONE_MM_km
