@@ -26,8 +26,8 @@ from tapp.io.ccsds.oem import (
     OemTrajectory,
     lagrange_interpolate,
 )
-from tapp.tracking.pieces import fly
 from tapp.io.spk import SPK_DEGREE, add_comments, spk_states, write_spk
+from tapp.tracking.pieces import fly
 from tapp.tracking.scenario import Scenario
 
 #: Most states the OEM of a simulation may hold (the step is halved at most down to this).
