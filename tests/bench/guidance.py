@@ -41,6 +41,7 @@ from iter.execute import Execution, local_cluster
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.guidance.guidefile import GuideFile, bind, read_guide
 from tapp.guidance.linear import linear_covariance
+from tapp.guidance.montecarlo import outcome_maps
 from tapp.guidance.statistics import linear_outcome
 from tapp.guidance.study import MAX_SAMPLES, GuidanceResult, guidance_study
 from tapp.io.tape.t13_hdf5 import write_t13
@@ -236,12 +237,13 @@ def run() -> Section:
         f"T32 tape of `{SCENARIO.name}` through `{DECK.name}` (set-up, not timed with the "
         f"study: TAPP I {setup['simulate_s']:.1f} s, TAPP III {setup['process_s']:.2f} s); "
         f"guidance file `{GUIDE.name}`: {len(problem.manoeuvres)} manoeuvres, n_o = "
-        f"{problem.n_o}, {problem.n_normals} normals a sample; {N_SAMPLES:,} samples, seed "
-        f"{SEED}. Monte Carlo: the study's own wall time (connect, scatter, simulate, gather); "
-        "study: the whole call (bind, Monte Carlo, sample statistics, linear covariance with "
-        f"its Imhof percentiles). Best of the repeats. Target: {N_SAMPLES:,} samples in < "
-        f"{TARGET_S:.0f} s. Load average (1 min) {load_before[0]:.1f} before and "
-        f"{load_after[0]:.1f} after the section (2 logical CPUs; other work inflates times).",
+        f"{problem.n_o}, {outcome_maps(problem).n_normals} normals a sample; {N_SAMPLES:,} "
+        f"samples, seed {SEED}. Monte Carlo: the study's own wall time (connect, scatter, "
+        "simulate, gather); study: the whole call (bind, Monte Carlo, sample statistics, "
+        "linear covariance with its Imhof percentiles). Best of the repeats. Target: "
+        f"{N_SAMPLES:,} samples in < {TARGET_S:.0f} s. Load average (1 min) "
+        f"{load_before[0]:.1f} before and {load_after[0]:.1f} after the section (2 logical "
+        "CPUs; other work inflates times).",
         "",
         markdown_table(
             ["execution", "repeats", "Monte Carlo (s)", "samples/s", "study (s)",
