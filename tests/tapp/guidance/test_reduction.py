@@ -2,6 +2,9 @@
 model drawn in the whole state, written here on its own: d₀, every step's tracking noise and
 the execution errors drawn per sample, the state stepped through every map.
 
+Both on the test tape (tests.tapp.guidance.helpers: n_o = 24, three recycles), with the
+shipped guidance file and either navigation after a manoeuvre.
+
 Deterministic: the maps F, C of :func:`~tapp.guidance.montecarlo.outcome_maps` against the
 whole-state model's own linear response, A = ∂y/∂g (g the normals of d₀ and of every Σ_k) and
 C = ∂y/∂ε, computed here by stepping unit inputs through the model: F Fᵀ = A Aᵀ and the C's
