@@ -45,13 +45,17 @@ replaces L_k, Σ_k after the first manoeuvre by those of the same fit world whos
 holds the manoeuvre's execution-error covariance (:mod:`tapp.guidance.navigation`); the maps
 stay linear and everything else is unchanged.
 
-The Monte Carlo (:mod:`tapp.guidance.montecarlo`) draws the samples in fixed RNG blocks and
-runs them in shards on Dask (:mod:`tapp.guidance.shards`), reproducibly whatever the workers
-and shard size; the linear covariance (:mod:`tapp.guidance.linear`) propagates the exact
-second moments of [d; e] through the same maps; :mod:`tapp.guidance.statistics` turns both
-into ΔV and miss statistics, and :mod:`tapp.guidance.agreement` sets the linear statistics
-that take a law as Gaussian (the |Δv| statistics, the corridor fractions) against the samples
-of the same run, marking those the samples contradict.
+The Monte Carlo (:mod:`tapp.guidance.montecarlo`) draws in the space of the outcomes: the
+state errors reach the corrections and the miss through fixed linear maps, so a sample draws
+their Gaussian image there (n_y = 3 per manoeuvre + the miss components) and only the execution
+errors step by step, with the joint law of the whole-state model exactly; it draws the samples
+in fixed RNG blocks and runs them in shards on Dask (:mod:`tapp.guidance.shards`),
+reproducibly whatever the workers and shard size; the linear covariance
+(:mod:`tapp.guidance.linear`) propagates the exact second moments of [d; e] through the same
+maps; :mod:`tapp.guidance.statistics` turns both into ΔV and miss statistics, and
+:mod:`tapp.guidance.agreement` sets the linear statistics that take a law as Gaussian (the
+|Δv| statistics, the corridor fractions) against the samples of the same run, marking those
+the samples contradict.
 
 Public API
 ----------
@@ -65,14 +69,21 @@ from tapp.guidance.execution import ExecutionErrors, error_second_moment, sample
 from tapp.guidance.guidefile import GuideFile, Study, bind, read_guide
 from tapp.guidance.linear import LinearCovariance, linear_covariance
 from tapp.guidance.model import Problem, Step, build_problem
-from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples, propagate, simulate_blocks
+from tapp.guidance.montecarlo import (
+    BLOCK_SAMPLES,
+    OutcomeMaps,
+    Samples,
+    outcome_maps,
+    propagate,
+    simulate_blocks,
+)
 from tapp.guidance.shards import run_shards
 from tapp.guidance.statistics import Corridor, Outcome, linear_outcome, sample_outcome
 from tapp.guidance.study import GuidanceResult, guidance_study
 
 __all__ = ["BLOCK_SAMPLES", "Agreement", "Check", "Corridor", "ExecutionErrors",
-           "GuidanceResult", "GuideFile", "LinearCovariance", "Outcome", "Problem", "Samples",
-           "Step", "Study", "bind", "build_problem", "compare", "error_second_moment",
-           "guidance_study", "linear_covariance",
-           "linear_outcome", "propagate", "read_guide", "run_shards",
+           "GuidanceResult", "GuideFile", "LinearCovariance", "Outcome", "OutcomeMaps",
+           "Problem", "Samples", "Step", "Study", "bind", "build_problem", "compare",
+           "error_second_moment", "guidance_study", "linear_covariance",
+           "linear_outcome", "outcome_maps", "propagate", "read_guide", "run_shards",
            "sample_errors", "sample_outcome", "simulate_blocks"]

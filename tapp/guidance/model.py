@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tapp.errors import InputError
-from tapp.guidance.execution import NORMALS_PER_MANOEUVRE, ExecutionErrors
+from tapp.guidance.execution import ExecutionErrors
 from tapp.io.tape.t32 import T32
 
 #: Units of a Cartesian orbit (x, y, z, vx, vy, vz), the only orbit TAPP II can correct.
@@ -114,11 +114,6 @@ class Problem:
     def manoeuvres(self) -> tuple[Step, ...]:
         """The manoeuvre recycles, in time order."""
         return tuple(s for s in self.steps if s.correction is not None)
-
-    @property
-    def n_normals(self) -> int:
-        """Standard normals one sample draws: Λ̄⁰, then per step Σ_k and any manoeuvre."""
-        return self.n_o * (1 + len(self.steps)) + NORMALS_PER_MANOEUVRE * len(self.manoeuvres)
 
 
 def _velocity(t32: T32, source: str) -> tuple[int, int, int]:

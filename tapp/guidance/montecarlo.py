@@ -1,16 +1,65 @@
-"""Monte Carlo samples of the guidance model (:mod:`tapp.guidance`), block by block.
+"""Monte Carlo samples of the guidance model (:mod:`tapp.guidance`), drawn in the space of
+the outcomes, block by block.
+
+What a sample is made of
+------------------------
+Let g = [n₀; n₁; …; n_K] be the standard normals of the model: d₀ = F₀ n₀ (F₀F₀ᵀ = Λ̄⁰)
+and the tracking noise of step k, w_k = F_k n_k (F_kF_kᵀ = Σ_k); and ε_j the execution error
+of manoeuvre j. Every map of a step is linear in z = [d; e]: the recycle
+z ← diag(T_k, L_kT_k) z + [0; w_k], the correction Δv_j = K_j z with K_j = −G_j B_t [I I],
+and z ← z + [S; 0] Δv_j + [S; −S] ε_j (S: the velocity columns of the identity); the final
+miss is m = B_final d. By induction over the steps, the outcomes every statistic of a sample
+reads, y = [Δv₁; …; Δv_M; m] (n_y = 3M + n_m), are
+
+.. math::
+
+    y = A\\,g + C\\,\\varepsilon, \\qquad \\varepsilon = [\\varepsilon_1; \\dots;
+        \\varepsilon_M],
+
+A (n_y x n_g; n_g = n_o + the columns of every Σ_k's factor, n_o(1 + K) on TAPP III's
+tapes) and C (n_y x 3M) fixed, C strictly block lower triangular (ε_j acts on
+what follows manoeuvre j only: C_ji = 0 for the rows of Δv_j, j ≤ i). What is not linear is
+ε_j = ε(Δv_j, ν_j) (Gates, :mod:`tapp.guidance.execution`: its law given Δv_j scales with
+|Δv_j|), with ν_j its 7 normals, independent of g and of one another.
+
+The reduction (exact)
+---------------------
+So y = Y(a, ν) is one fixed function of a = A g and ν = [ν₁; …; ν_M]: in turn
+Δv_j = a_j + Σ_{i<j} C_ji ε(Δv_i, ν_i), then m = a_m + C_m ε. a ~ N(0, A Aᵀ) and ν are
+independent; any a′ ~ N(0, A Aᵀ) independent of ν gives (a′, ν) the joint law of (a, ν), and
+Y(a′, ν) the joint law of y: every outcome of a sample, jointly, and so every statistic of the
+samples (magnitudes, percentiles, corridor counts, covariances), has the law it has when the
+whole state is drawn. A sample draws
+
+.. math:: a' = F u, \\qquad u \\sim N(0, I_{n_y}), \\qquad F F^T = A A^T,
+
+n_y + 7M normals (33 for three manoeuvres and three miss components) instead of
+n_o(1 + K) + 7M (297 at n_o = 69, K = 3), and its arithmetic does not grow with n_o. Its
+second moments are those of the linear covariance (:mod:`tapp.guidance.linear`):
+Cov(y) = F Fᵀ + C diag(E[ε_jε_jᵀ]) Cᵀ, since E[ε_j | a, ν_{<j}] = 0 leaves ε_j uncorrelated
+with a and with every other ε_i.
+
+:func:`outcome_maps` forms F and C once per problem, as :mod:`tapp.guidance.linear` forms its
+square-root covariance: the columns of a factor of the Gaussian part of [d; e; y] go through
+the maps (Σ_k's factor columns appended at each recycle, the rows of Δv_j filled in at its
+manoeuvre and of m at the end) and are compressed back to 2 n_o + n_y by a Householder QR
+after each recycle; F is the lower-triangular factor of the y rows, (QR of their transpose)ᵀ,
+so A Aᵀ is never formed. Householder QR of a transpose is backward stable row by row: each
+row of F keeps the digits of its own norm, so the Gaussian parts of the later corrections and
+of the miss (what the nulling leaves, 1e-4 of the first correction on the deep-space study)
+are not rounded against the larger ones. C is the same maps acting on unit execution errors,
+with no QR.
 
 Randomness comes in fixed blocks of :data:`BLOCK_SAMPLES` samples: block b draws one
-(n_b, n_normals) array of standard normals, row-major, from its own generator
+(n_b, n_y + 7M) array of standard normals, row-major, from its own generator
 ``np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(b,)))`` (the b-th child of
 the root ``SeedSequence(seed)``). Sample s is row s mod :data:`BLOCK_SAMPLES` of block
-s // :data:`BLOCK_SAMPLES`; its columns are, in order, the normals of Λ̄⁰ (n_o), then per
-step those of Σ_k (n_o) and, at a manoeuvre, those of its execution error (7).
-
-Every product is an :func:`numpy.einsum` (not a BLAS matrix product, whose rounding depends
-on the number of rows and threads), so each sample's numbers depend on its own row only:
-the samples are bitwise the same whatever the block, shard or worker count, and the first
-N samples of a larger run are those of a run of N.
+s // :data:`BLOCK_SAMPLES`; its columns are u (n_y), then ν_j (7) of each manoeuvre in time
+order. Every product with a sample is an :func:`numpy.einsum` (not a BLAS matrix product,
+whose rounding depends on the number of rows and threads), and F and C are formed once, in
+the process that plans the shards: each sample's numbers depend on its own row only, so the
+samples are bitwise the same whatever the block, shard or worker count, and the first N
+samples of a larger run are those of a run of N.
 """
 
 from __future__ import annotations
@@ -18,8 +67,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
-from tapp.guidance.execution import NORMALS_PER_MANOEUVRE, sample_errors
+from tapp.estimation.factors import triangularize
+from tapp.guidance.execution import NORMALS_PER_MANOEUVRE, ExecutionErrors, sample_errors
 from tapp.guidance.model import Problem
 
 #: Samples per RNG block; shards are whole numbers of blocks.
@@ -50,6 +101,85 @@ class Samples:
         return np.sqrt(np.einsum("smi,smi->sm", self.dv_km_s, self.dv_km_s))
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class OutcomeMaps:
+    """The maps from a sample's normals to its outcomes y = F u + C ε (module docstring).
+
+    Attributes
+    ----------
+    gauss_factor : (n_y, n_y) F, lower triangular, F Fᵀ = Cov of the Gaussian part A g of
+        y = [Δv₁; …; Δv_M; m] (km/s and miss units).
+    error_map : (n_y, 3 n_man) C = ∂y/∂ε, strictly block lower triangular.
+    errors : the execution errors.
+    """
+
+    gauss_factor: np.ndarray
+    error_map: np.ndarray
+    errors: ExecutionErrors
+
+    @property
+    def n_man(self) -> int:
+        """Number of manoeuvres."""
+        return self.error_map.shape[1] // 3
+
+    @property
+    def n_y(self) -> int:
+        """Number of outcomes a sample has, 3 n_man + n_m."""
+        return self.gauss_factor.shape[0]
+
+    @property
+    def n_normals(self) -> int:
+        """Standard normals one sample draws: u (n_y), then 7 per manoeuvre."""
+        return self.n_y + NORMALS_PER_MANOEUVRE * self.n_man
+
+
+def outcome_maps(problem: Problem) -> OutcomeMaps:
+    """Return F and C of ``problem`` (module docstring).
+
+    Rows of the working factors: d (n_o), e (n_o), then y (n_y); the Gaussian factor's columns
+    are compressed after each recycle, the n_man unit execution errors keep 3 columns each.
+    BLAS runs on one thread meanwhile (``threadpoolctl``): the QRs are (3 n_o + n_y) x
+    (2 n_o + n_y), where two threads on a loaded 2-core machine took 0.3 s for the 69-parameter
+    tape against 2 ms on one, and F and C then do not depend on the thread count.
+    """
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _outcome_maps(problem)
+
+
+def _outcome_maps(problem: Problem) -> OutcomeMaps:
+    n = problem.n_o
+    n_man = len(problem.manoeuvres)
+    n_m = problem.B_final.shape[0]
+    y0 = 2 * n                                       # first row of y
+    vel = list(problem.velocity)
+    gauss = np.zeros((2 * n + 3 * n_man + n_m, n))
+    gauss[:n] = problem.lambda0_factor               # d₀ = F₀ n₀, e₀ = −d₀
+    gauss[n:y0] = -problem.lambda0_factor
+    unit = np.zeros((gauss.shape[0], 3 * n_man))
+    j = 0
+    for step in problem.steps:
+        noise = np.zeros((gauss.shape[0], step.sigma_factor.shape[1]))
+        noise[n:y0] = step.sigma_factor
+        for block in (gauss, unit):                  # z ← diag(T, LT) z
+            block[:n] = step.transition @ block[:n]
+            block[n:y0] = step.LT @ block[n:y0]
+        gauss = triangularize(np.hstack([gauss, noise]).T).T
+        if step.correction is None:
+            continue
+        K = -step.correction.gain @ step.correction.B_target
+        rows = slice(y0 + 3 * j, y0 + 3 * j + 3)
+        for block in (gauss, unit):                  # Δv_j = K (d + e); d_v ← d_v + Δv_j
+            block[rows] = K @ (block[:n] + block[n:y0])
+            block[vel] += block[rows]
+        cols = slice(3 * j, 3 * j + 3)               # d_v ← d_v + ε_j, e_v ← e_v − ε_j
+        unit[vel, cols] += np.eye(3)
+        unit[[n + v for v in vel], cols] -= np.eye(3)
+        j += 1
+    for block in (gauss, unit):                      # m = B_final d
+        block[y0 + 3 * n_man:] = problem.B_final @ block[:n]
+    return OutcomeMaps(triangularize(gauss[y0:].T).T, unit[y0:], problem.errors)
+
+
 def block_normals(seed: int, block: int, n: int, n_normals: int) -> np.ndarray:
     """Return the (n, n_normals) standard normals of RNG block ``block`` (module docstring)."""
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(block,)))
@@ -61,52 +191,45 @@ def _apply(M: np.ndarray, x: np.ndarray) -> np.ndarray:
     return np.einsum("ij,sj->si", M, x)
 
 
-def propagate(problem: Problem, normals: np.ndarray) -> Samples:
-    """Return the outcomes of samples given their normals (n, n_normals) (model of
-    :mod:`tapp.guidance`).
+def propagate(maps: OutcomeMaps, normals: np.ndarray) -> Samples:
+    """Return the outcomes of samples given their normals (n, ``maps.n_normals``) (module
+    docstring).
 
-    d ~ N(0, Λ̄⁰), e = −d; at each step d ← T d, e ← L T e + w; at a manoeuvre
-    Δv = −G B_t (d + e), d_v ← d_v + Δv + ε, e_v ← e_v − ε; finally m = B_final d.
+    a = F u; in turn Δv_j = a_j + Σ_{i<j} C_ji ε_i, ε_j = ε(Δv_j, ν_j); m = a_m + C_m ε.
     """
-    n_o = problem.n_o
-    vel = list(problem.velocity)
-    d = _apply(problem.lambda0_factor, normals[:, :n_o])
-    e = -d
-    col = n_o
-    dvs = []
-    for step in problem.steps:
-        d = _apply(step.transition, d)
-        e = _apply(step.LT, e) + _apply(step.sigma_factor, normals[:, col:col + n_o])
-        col += n_o
-        if step.correction is None:
-            continue
-        c = step.correction
-        dv = -_apply(c.gain, _apply(c.B_target, d + e))
-        eps = sample_errors(dv, normals[:, col:col + NORMALS_PER_MANOEUVRE], problem.errors)
+    n_y, n_man = maps.n_y, maps.n_man
+    C = maps.error_map
+    a = _apply(maps.gauss_factor, normals[:, :n_y])
+    dv = np.empty((normals.shape[0], 3 * n_man))
+    eps = np.empty_like(dv)
+    col = n_y
+    for j in range(n_man):
+        rows = slice(3 * j, 3 * j + 3)
+        dv[:, rows] = a[:, rows] + _apply(C[rows, :3 * j], eps[:, :3 * j])
+        eps[:, rows] = sample_errors(dv[:, rows], normals[:, col:col + NORMALS_PER_MANOEUVRE],
+                                     maps.errors)
         col += NORMALS_PER_MANOEUVRE
-        d[:, vel] += dv + eps
-        e[:, vel] -= eps
-        dvs.append(dv)
-    return Samples(np.stack(dvs, axis=1), _apply(problem.B_final, d))
+    miss = a[:, 3 * n_man:] + _apply(C[3 * n_man:], eps)
+    return Samples(dv.reshape(-1, n_man, 3), miss)
 
 
-def simulate_blocks(problem: Problem, seed: int, first_block: int, n_blocks: int,
+def simulate_blocks(maps: OutcomeMaps, seed: int, first_block: int, n_blocks: int,
                     n_samples: int) -> Samples:
     """Return the samples of RNG blocks first_block .. first_block + n_blocks − 1 of a run
     of ``n_samples`` samples (the last block of the run may be partial): one shard."""
-    n_normals = problem.n_normals
     start = first_block * BLOCK_SAMPLES
     stop = min((first_block + n_blocks) * BLOCK_SAMPLES, n_samples)
-    dv = np.empty((stop - start, len(problem.manoeuvres), 3))
-    miss = np.empty((stop - start, problem.B_final.shape[0]))
+    dv = np.empty((stop - start, maps.n_man, 3))
+    miss = np.empty((stop - start, maps.n_y - 3 * maps.n_man))
     for b in range(first_block, first_block + n_blocks):
         lo, hi = b * BLOCK_SAMPLES, min((b + 1) * BLOCK_SAMPLES, n_samples)
         if lo >= hi:
             break
-        out = propagate(problem, block_normals(seed, b, hi - lo, n_normals))
+        out = propagate(maps, block_normals(seed, b, hi - lo, maps.n_normals))
         dv[lo - start:hi - start] = out.dv_km_s
         miss[lo - start:hi - start] = out.miss
     return Samples(dv, miss)
 
 
-__all__ = ["BLOCK_SAMPLES", "Samples", "block_normals", "propagate", "simulate_blocks"]
+__all__ = ["BLOCK_SAMPLES", "OutcomeMaps", "Samples", "block_normals", "outcome_maps",
+           "propagate", "simulate_blocks"]

@@ -1,7 +1,9 @@
 """Run the Monte Carlo in shards, in this process or on Dask, as ITER runs its cases.
 
 A shard is a run of whole RNG blocks (:data:`tapp.guidance.montecarlo.BLOCK_SAMPLES`
-samples each) simulated by :func:`tapp.guidance.montecarlo.simulate_blocks`; shards run on
+samples each) simulated by :func:`tapp.guidance.montecarlo.simulate_blocks` from the maps of
+:func:`tapp.guidance.montecarlo.outcome_maps`, formed once here and sent to every shard (so no
+worker forms its own, with its own BLAS); shards run on
 the executor of :func:`iter.execute.open_executor` (serially, on a local Dask cluster, or on
 a running cluster given its scheduler address; by default in this process below
 :data:`DASK_MIN_SAMPLES` samples and on a local cluster from there), complete in any order,
@@ -20,7 +22,13 @@ import numpy as np
 
 from iter.execute import DaskExecutor, Execution, open_executor, too_small
 from tapp.guidance.model import Problem
-from tapp.guidance.montecarlo import BLOCK_SAMPLES, Samples, simulate_blocks
+from tapp.guidance.montecarlo import (
+    BLOCK_SAMPLES,
+    OutcomeMaps,
+    Samples,
+    outcome_maps,
+    simulate_blocks,
+)
 
 #: Shards per worker slot when the shard size is chosen automatically (load balance).
 SHARDS_PER_SLOT = 4
@@ -90,6 +98,7 @@ def run_shards(problem: Problem, seed: int, n_samples: int, execution: Execution
         The scheduler address does not answer, or its cluster has no worker.
     """
     small = too_small("samples", n_samples, DASK_MIN_SAMPLES)
+    maps = outcome_maps(problem)
     with open_executor(execution, small=small) as executor:
         size = shard_samples or default_shard_samples(n_samples, executor.slots)
         shards = plan_shards(n_samples, size)
@@ -104,10 +113,10 @@ def run_shards(problem: Problem, seed: int, n_samples: int, execution: Execution
                 progress(done, n_samples)
 
         if isinstance(executor, DaskExecutor):
-            _on_dask(executor, problem, seed, n_samples, shards, record)
+            _on_dask(executor, maps, seed, n_samples, shards, record)
         else:
             for shard in shards:
-                record(shard, simulate_blocks(problem, seed, shard.first_block,
+                record(shard, simulate_blocks(maps, seed, shard.first_block,
                                               shard.n_blocks, n_samples))
         where = executor.description
     samples = Samples(np.concatenate([p.dv_km_s for p in parts]),
@@ -115,13 +124,13 @@ def run_shards(problem: Problem, seed: int, n_samples: int, execution: Execution
     return ShardRun(samples, size, where)
 
 
-def _on_dask(executor: DaskExecutor, problem: Problem, seed: int, n_samples: int,
+def _on_dask(executor: DaskExecutor, maps: OutcomeMaps, seed: int, n_samples: int,
              shards: tuple[Shard, ...], record: Callable[[Shard, Samples], None]) -> None:
-    """Submit every shard (the problem scattered once); record each as it completes."""
+    """Submit every shard (the maps scattered once); record each as it completes."""
     from distributed import as_completed
 
     client = executor.client
-    [remote] = client.scatter([problem], broadcast=True)
+    [remote] = client.scatter([maps], broadcast=True)
     pending = {client.submit(simulate_blocks, remote, seed, s.first_block, s.n_blocks,
                              n_samples, pure=False): s for s in shards}
     try:

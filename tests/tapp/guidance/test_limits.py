@@ -10,7 +10,7 @@ import pytest
 from tapp.guidance.execution import error_second_moment
 from tapp.guidance.guidefile import bind
 from tapp.guidance.linear import linear_covariance
-from tapp.guidance.montecarlo import simulate_blocks
+from tapp.guidance.montecarlo import outcome_maps, simulate_blocks
 from tests.tapp.guidance.helpers import EXECUTION, deep_space_t32, guide, with_recycles
 
 ALL = ["b_dot_r_km", "b_dot_t_km", "flight_time_s"]  # the tape's order of the miss
@@ -39,7 +39,7 @@ def _problem(tape, targets, execution, recycles=(1,)):
 def test_a_perfect_estimator_and_perfect_execution_leave_no_miss(perfect_tape):
     problem = _problem(perfect_tape, ALL, {})
     bv = problem.steps[0].correction.B_target[:, 3:6]
-    out = simulate_blocks(problem, 5, 0, 2, 2000)
+    out = simulate_blocks(outcome_maps(problem), 5, 0, 2, 2000)
     nulled = np.abs(out.dv_km_s[:, 0] @ bv.T)  # the miss each correction removed
     assert np.all(np.abs(out.miss) < NULLED * nulled.max(axis=0))
     lin = linear_covariance(problem)
@@ -50,7 +50,7 @@ def test_a_perfect_estimator_and_perfect_execution_leave_no_miss(perfect_tape):
 
 def test_two_targets_leave_only_the_untargeted_component(perfect_tape):
     problem = _problem(perfect_tape, ALL[:2], {}, recycles=(1, 3))
-    out = simulate_blocks(problem, 5, 0, 1, 1000)
+    out = simulate_blocks(outcome_maps(problem), 5, 0, 1, 1000)
     assert np.abs(out.miss[:, :2]).max() < NULLED * np.abs(out.miss[:, 2]).max()
     # the second correction sees the first one's miss again through B_3 T_3 T_2 = B_1, which
     # the tape's partials satisfy to the integrator's accuracy (~1e-10 relative)
@@ -70,7 +70,7 @@ def test_execution_errors_alone_give_the_analytic_miss_covariance(perfect_tape):
     np.testing.assert_allclose(lin.dv_cov[0], P, rtol=1e-9, atol=1e-9 * np.abs(P).max())
     d = np.sqrt(np.diag(want))
     assert np.max(np.abs(lin.miss_cov - want) / np.outer(d, d)) < 1e-8
-    samples = simulate_blocks(problem, 17, 0, N // 1000, N).miss
+    samples = simulate_blocks(outcome_maps(problem), 17, 0, N // 1000, N).miss
     prod = samples[:, :, None] * samples[:, None, :]
     z = (prod.mean(axis=0) - want) / (prod.std(axis=0) / np.sqrt(N))
     assert np.all(np.abs(z) < COV_Z), z
