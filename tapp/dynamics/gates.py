@@ -173,14 +173,24 @@ class GatesErrors:
         ``normals`` (n, :data:`NORMALS_PER_SAMPLE`) are independent unit normals (n, g, f): q
         = σ ⊙ (n, û·f, ê₁·g, ê₂·g, ê₁·f, ê₂·f), the projections of the isotropic g and f on
         the triad, so that the proportional pointing error is σ₃ |Δv| (I − ûûᵀ) g and, with
-        σ₂ = σ₄, the fixed error is σ₂ f (to rounding) whatever the triad. Row i of the result
-        depends on row i of the inputs only.
+        σ₂ = σ₄, the fixed error is σ₂ f (to rounding) whatever the triad. Since
+        ê₁ê₁ᵀ + ê₂ê₂ᵀ = I − ûûᵀ, ε = G q needs no triad:
+
+        .. math:: \\varepsilon = \\left(\\sigma_1 n |\\Delta v| + (\\sigma_2 - \\sigma_4)
+            (\\hat u\\cdot f) - \\sigma_3 |\\Delta v| (\\hat u\\cdot g)\\right)\\hat u
+            + \\sigma_3 |\\Delta v|\\, g + \\sigma_4 f
+
+        (û = x̂ for Δv = 0, as :func:`pointing_axes`); G q itself agrees to rounding (tests).
+        Row i of the result depends on row i of the inputs only.
         """
-        u, e1, e2 = pointing_axes(dv_km_s)
-        g, f = normals[:, 1:4], normals[:, 4:7]
-        xi = np.stack([normals[:, 0], _dot(u, f), _dot(e1, g), _dot(e2, g), _dot(e1, f),
-                       _dot(e2, f)], axis=-1)
-        return np.einsum("sij,sj->si", gates_partials(dv_km_s), xi * self.sigmas)
+        dv = np.asarray(dv_km_s, dtype=float)
+        size = np.sqrt(_dot(dv, dv))
+        u = np.where(size[:, None] > 0, dv / np.where(size > 0, size, 1.0)[:, None],
+                     np.array([1.0, 0.0, 0.0]))
+        s1, s2, s3, _, s4, _ = self.sigmas
+        n, g, f = normals[:, 0], normals[:, 1:4], normals[:, 4:7]
+        along = s1 * n * size + (s2 - s4) * _dot(u, f) - s3 * size * _dot(u, g)
+        return along[:, None] * u + (s3 * size)[:, None] * g + s4 * f
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -38,6 +38,22 @@ def test_the_partials_are_the_derivative_of_the_executed_manoeuvre(dv):
         assert np.max(np.abs(fd - g[:, i])) <= FD_TOL * np.max(np.abs(g[:, i])), i
 
 
+def test_a_sample_is_the_partials_times_the_scaled_projections():
+    """ε = G (σ ⊙ ξ), ξ = (n, û·f, ê₁·g, ê₂·g, ê₁·f, ê₂·f) on the triad, formed here, against
+    the sampler's closed form without the triad: to rounding (1e-15 of |ε|), Δv = 0 too."""
+    rng = np.random.default_rng(5)
+    dv = np.concatenate([DV, rng.standard_normal((20, 3)) * 1e-3, np.zeros((1, 3))])
+    normals = rng.standard_normal((dv.shape[0], NORMALS_PER_SAMPLE))
+    u, e1, e2 = pointing_axes(dv)
+    g, f = normals[:, 1:4], normals[:, 4:7]
+    xi = np.stack([normals[:, 0], *(np.sum(a * b, axis=-1) for a, b in
+                                    ((u, f), (e1, g), (e2, g), (e1, f), (e2, f)))], axis=-1)
+    expected = np.einsum("sij,sj->si", gates_partials(dv), xi * ERRORS.sigmas)
+    got = ERRORS.sample(dv, normals)
+    scale = np.linalg.norm(expected, axis=-1, keepdims=True)
+    assert np.all(np.abs(got - expected) <= 1e-15 * scale)
+
+
 def test_the_triad_is_right_handed_and_orthonormal_and_exact_on_the_axes():
     rng = np.random.default_rng(3)
     dv = np.concatenate([rng.standard_normal((50, 3)), np.eye(3), -np.eye(3)])
