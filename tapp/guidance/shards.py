@@ -35,12 +35,13 @@ SHARDS_PER_SLOT = 4
 #: Largest automatic shard, blocks (keeps the progress bar moving and worker memory small).
 MAX_AUTO_SHARD_BLOCKS = 50
 #: Fewest samples an automatic execution runs on a local Dask cluster: below, this process
-#: is faster. On the shipped deep-space study (3 manoeuvres, n_o = 23), on 2 cores, a local
-#: cluster of 2 workers costs 6 to 14 s more (starting it, tapp imported in the workers,
-#: stopping it) and saves at most half of the 3.5 to 12 µs a sample takes in this process:
-#: it paid from 3.3 and 5.5 million samples in two runs of ``make bench`` (section ``cli``,
-#: the machine's load average 3 and 5-7), and not below 3 million in a third (load 3-4).
-DASK_MIN_SAMPLES = 4_000_000
+#: is faster. Since a sample draws only in the space of the outcomes (tapp.guidance.montecarlo)
+#: it costs about 2.6 µs in this process, and a local cluster of 2 workers on 2 cores gathers
+#: the outcomes at 0.73x that rate before its 10 s of start-up (``make bench`` section
+#: ``guidance``, 2026-11-27): it repays no run up to the largest one (MAX_SAMPLES, 5 million),
+#: so an automatic execution stays here; ``--workers N`` or ``--scheduler`` still choose one.
+#: (When a sample took 3.5 to 12 µs, the crossover was 3 to 5.5 million.)
+DASK_MIN_SAMPLES = 10_000_000
 
 
 @dataclass(frozen=True, slots=True)
