@@ -90,8 +90,8 @@ def guide_cmd(
 ) -> None:
     """TAPP II: Monte Carlo midcourse guidance from a T32 tape, beside linear covariance.
 
-    Samples: 2 to 5,000,000. In this process below 4,000,000 samples, on a local Dask
-    cluster from there, unless --serial, --workers or --scheduler says otherwise; the
+    Samples: 2 to 5,000,000. In this process below 10,000,000 samples (so every run: a local
+    Dask cluster repays none on 2 cores), unless --workers or --scheduler says otherwise; the
     numbers are the same wherever they run.
     """
 
