@@ -221,8 +221,8 @@ def simulate(
                                              "SPICE SPK (type 13, about the Earth, J2000).")
                    ] = None,
     spk_id: Annotated[int | None, typer.Option(
-        "--spk-id", help=f"NAIF id of the spacecraft in the SPK; default: the [reference] "
-        f"SPK's, else {DEFAULT_SPK_ID}.")] = None,
+        "--spk-id", help=f"NAIF id of the spacecraft in the SPK [default: the [reference] "
+        f"SPK's, else {DEFAULT_SPK_ID}].")] = None,
     force: Annotated[bool, typer.Option("--force", help="Fly a [reference] fit worse than its "
                                         "max_fit_error_m (refused otherwise), with a warning "
                                         "stating it.")] = False,
