@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install test scenario bench lint clean
+.PHONY: install test test-all scenario bench lint clean
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -14,8 +14,16 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
+# On every core (at most 4: the tests start Dask clusters and subprocesses of their own), the
+# modules that share a fixture kept together (tests/conftest.py).
+PYTEST := $(BIN)/python -m pytest -q -n auto --maxprocesses=4 --doctest-modules tapp search iter tests --ignore=tests/bench
+
 test: $(STAMP) lint
-	$(BIN)/python -m pytest -q -m "not slow" --doctest-modules tapp search iter tests --ignore=tests/bench
+	$(PYTEST) -m "not slow"
+
+# Everything, the slow reproductions too: before a release.
+test-all: $(STAMP) lint
+	$(PYTEST)
 
 scenario: $(STAMP)
 	$(BIN)/python -m scenarios.run_all
