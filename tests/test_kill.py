@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 import random
+import shutil
 import signal
 import subprocess
 import sys
@@ -174,14 +175,23 @@ def _nothing_left(temporary: Path) -> None:
     assert names(temporary) == []
 
 
-def _old_run(tmp_path: Path) -> tuple[Path, Path, int]:
-    """Outputs of an old deep-space run in ``tmp_path/out``; the new run's scenario and the
-    OEM's state count."""
-    old = _scenario(tmp_path, "OLD-RUN", DEEP_SPACE)
+@pytest.fixture(scope="module")
+def old_deep_space_outputs(tmp_path_factory) -> Path:
+    """The folder of an old deep-space run's outputs (tape and OEM), run once: each test
+    starts from a copy (:func:`_old_run`)."""
+    folder = tmp_path_factory.mktemp("old")
+    out = folder / "out"
+    out.mkdir()
+    _run(_scenario(folder, "OLD-RUN", DEEP_SPACE), out)
+    return out
+
+
+def _old_run(tmp_path: Path, old_outputs: Path) -> tuple[Path, Path, int]:
+    """Outputs of an old deep-space run in ``tmp_path/out`` (copied from ``old_outputs``); the
+    new run's scenario and the OEM's state count."""
     new = _scenario(tmp_path, "NEW-RUN", DEEP_SPACE)
     out = tmp_path / "out"
-    out.mkdir()
-    _run(old, out)
+    shutil.copytree(old_outputs, out)
     lines = (out / "out.oem").read_text().splitlines()
     n_states = sum(1 for line in lines[lines.index("META_STOP") + 1:]
                    if line and not line.startswith("COMMENT"))
@@ -189,9 +199,9 @@ def _old_run(tmp_path: Path) -> tuple[Path, Path, int]:
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
-def test_a_signalled_simulate_stops_cleanly_with_the_old_outputs(tmp_path: Path,
-                                                                  sig: int) -> None:
-    out, new, n_states = _old_run(tmp_path)
+def test_a_signalled_simulate_stops_cleanly_with_the_old_outputs(
+        tmp_path: Path, old_deep_space_outputs: Path, sig: int) -> None:
+    out, new, n_states = _old_run(tmp_path, old_deep_space_outputs)
     temporary = tmp_path / "tmp"
     proc = _start(_command(new, out), temporary)
     _wait_for(lambda: list(temporary.glob("tapp-run-*")), proc, "run folder")
@@ -207,10 +217,10 @@ def test_a_signalled_simulate_stops_cleanly_with_the_old_outputs(tmp_path: Path,
 @pytest.mark.parametrize("sig", [signal.SIGTERM,
                                  pytest.param(signal.SIGINT, marks=pytest.mark.slow)])
 def test_a_simulate_signalled_while_writing_leaves_old_or_new_outputs_and_no_temporary(
-        tmp_path: Path, sig: int) -> None:
+        tmp_path: Path, old_deep_space_outputs: Path, sig: int) -> None:
     """The temporaries live for milliseconds (each written in one plain write): the signal
     is sent when one is seen, if the run has not ended before."""
-    out, new, n_states = _old_run(tmp_path)
+    out, new, n_states = _old_run(tmp_path, old_deep_space_outputs)
     temporary = tmp_path / "tmp"
     proc = _start(_command(new, out), temporary)
     while proc.poll() is None and not any(p.name.startswith(".") for p in out.iterdir()):
