@@ -229,6 +229,10 @@ def check_contract(args: list[str], *, inputs: list[Path], out_dir: Path,
     return res.exit_code
 
 
+def _as_shipped(document: dict) -> dict:
+    return document
+
+
 @dataclass(frozen=True)
 class FileCase:
     """A shipped file, the command that reads it, and the outputs that command writes."""
@@ -238,7 +242,7 @@ class FileCase:
     outputs: tuple[str, ...]
     examples: int
     codes: frozenset[int] = frozenset()
-    shrink: Callable[[dict], dict] = lambda document: document
+    shrink: Callable[[dict], dict] = _as_shipped
 
 
 def _simulate(path: Path, out: Path) -> list[str]:
@@ -260,9 +264,53 @@ def _iter(path: Path, out: Path) -> list[str]:
             "--serial", "--json", "-"]
 
 
+#: Length of the deep-space arc the fuzz runs, s: 4 days keep the lunar periapsis (day 3.59, a
+#: re-epoch and the miss) and the stochastic accelerations (two 2-day intervals), at an eighth
+#: of the 30 days' tracking. What is fuzzed is the file; its contract does not depend on the arc.
+DEEP_SPACE_ARC_S = 4 * 86400.0
+
+
+def _short_deep_space(document: dict) -> dict:
+    """deep_space.toml cut to :data:`DEEP_SPACE_ARC_S`: the re-epoch at the periapsis kept, the
+    one at 15 days dropped."""
+    document["tracking"]["end"] = document["times"]["end"] = DEEP_SPACE_ARC_S
+    document["times"]["epochs"] = document["times"]["epochs"][:1]
+    return document
+
+
+def _short_deep_space_deck(document: dict) -> dict:
+    """tapp3_deep_space.toml for the tape of :func:`_short_deep_space`: its print times within
+    the arc (days 1-3 and the periapsis), its stochastic batches two (24 + 2 x 3 parameters)."""
+    document["times"]["print"] = [1, 2, 3, "2026-03-14T02:05:58.384"]
+    document["tape"]["n_o"] = 30
+    return document
+
+
+@functools.cache
+def _short_pipeline_parts() -> dict[str, Path]:
+    """The parts of pipeline_deep_space.toml on the short arc, made once: the scenario
+    (:func:`_short_deep_space`), the deck for its tape (:func:`_short_deep_space_deck`) and the
+    shipped guidance file; and a pipeline file naming them."""
+    folder = Path(tempfile.mkdtemp())
+    scenario = _short_deep_space(tomllib.loads((SCENARIOS / "deep_space.toml").read_text()))
+    deck = _short_deep_space_deck(tomllib.loads((SCENARIOS / "tapp3_deep_space.toml").read_text()))
+    parts = {"scenario": folder / "deep_space.toml", "deck": folder / "tapp3_deep_space.toml",
+             "guidance": SCENARIOS / "tapp2_deep_space.toml"}
+    parts["scenario"].write_text(dumps_toml(scenario))
+    parts["deck"].write_text(dumps_toml(deck))
+    pipeline = tomllib.loads((SCENARIOS / "pipeline_deep_space.toml").read_text())
+    pipeline.update({part: str(path) for part, path in parts.items()})
+    parts["pipeline"] = folder / "pipeline_deep_space.toml"
+    parts["pipeline"].write_text(dumps_toml(pipeline))
+    return parts
+
+
 def _deck_scenario(deck: str) -> Path:
     """The TAPP I scenario whose tape a TAPP III deck ``tapp3_NAME.toml`` is written for:
-    ``NAME.toml`` or ``tapp1_NAME.toml``."""
+    ``NAME.toml`` or ``tapp1_NAME.toml``; deep_space.toml on the short arc (the deck fuzzed
+    cut to it: :func:`_short_deep_space_deck`)."""
+    if deck == "tapp3_deep_space.toml":
+        return _short_pipeline_parts()["scenario"]
     name = deck.removeprefix("tapp3_")
     path = SCENARIOS / name
     return path if path.exists() else SCENARIOS / f"tapp1_{name}"
@@ -284,10 +332,10 @@ def _process(path: Path, out: Path) -> list[str]:
 
 @functools.cache
 def _t32_for_guide() -> Path:
-    """The deep-space T32 tape a guidance file is written for, made once."""
+    """The deep-space T32 tape a guidance file is written for (on the short arc), made once."""
     path = Path(tempfile.mkdtemp()) / "run.t32.h5"
     res = runner.invoke(app, ["process", str(_tape_for("tapp3_deep_space.toml")),
-                              str(SCENARIOS / "tapp3_deep_space.toml"), "--tape", str(path),
+                              str(_short_pipeline_parts()["deck"]), "--tape", str(path),
                               "--print", str(path.with_suffix(".txt"))])
     assert res.exit_code == 0, res.output
     return path
@@ -300,41 +348,6 @@ def _guide(path: Path, out: Path) -> list[str]:
 
 def _pipeline(path: Path, out: Path) -> list[str]:
     return ["pipeline", str(path), "-o", str(out / "run"), "--serial", "--json", "-"]
-
-
-#: Length of the deep-space arc the fuzz runs, s: 4 days keep the lunar periapsis (day 3.59, a
-#: re-epoch and the miss) and the stochastic accelerations (two 2-day intervals), at an eighth
-#: of the 30 days' tracking. What is fuzzed is the file; its contract does not depend on the arc.
-DEEP_SPACE_ARC_S = 4 * 86400.0
-
-
-def _short_deep_space(document: dict) -> dict:
-    """deep_space.toml cut to :data:`DEEP_SPACE_ARC_S`: the re-epoch at the periapsis kept, the
-    one at 15 days dropped."""
-    document["tracking"]["end"] = document["times"]["end"] = DEEP_SPACE_ARC_S
-    document["times"]["epochs"] = document["times"]["epochs"][:1]
-    return document
-
-
-@functools.cache
-def _short_pipeline_parts() -> dict[str, Path]:
-    """The parts of pipeline_deep_space.toml on the short arc, made once: the scenario
-    (:func:`_short_deep_space`), the deck printing within it (its stochastic batches: 24 + 2 x
-    3 parameters) and the shipped guidance file; and a pipeline file naming them."""
-    folder = Path(tempfile.mkdtemp())
-    scenario = _short_deep_space(tomllib.loads((SCENARIOS / "deep_space.toml").read_text()))
-    deck = tomllib.loads((SCENARIOS / "tapp3_deep_space.toml").read_text())
-    deck["times"]["print"] = [1, 2, 3, deck["times"]["print"][3]]
-    deck["tape"]["n_o"] = 30
-    parts = {"scenario": folder / "deep_space.toml", "deck": folder / "tapp3_deep_space.toml",
-             "guidance": SCENARIOS / "tapp2_deep_space.toml"}
-    parts["scenario"].write_text(dumps_toml(scenario))
-    parts["deck"].write_text(dumps_toml(deck))
-    pipeline = tomllib.loads((SCENARIOS / "pipeline_deep_space.toml").read_text())
-    pipeline.update({part: str(path) for part, path in parts.items()})
-    parts["pipeline"] = folder / "pipeline_deep_space.toml"
-    parts["pipeline"].write_text(dumps_toml(pipeline))
-    return parts
 
 
 def _pipeline_parts_absolute(document: dict) -> dict:
@@ -364,6 +377,9 @@ def _two_days(document: dict) -> dict:
     return document
 
 
+#: Decks fuzzed cut to a shorter tape than their scenario's.
+DECK_SHRINKS = {"tapp3_deep_space.toml": _short_deep_space_deck}
+
 #: The numerical exit codes of ``tapp iter``: 1, every case failed.
 ITER_CODES = frozenset({1})
 
@@ -383,7 +399,8 @@ FILE_CASES = [
     FileCase("iter_lunar_departure.toml", _iter, ("r.csv", "r.h5"), 8, ITER_CODES,
              shrink=_two_days),
     FileCase("tapp1_table_d1.toml", _simulate, ("run.oem", "run.t13.h5"), 20),
-    *(FileCase(deck.name, _process, ("o3.txt", "t32.h5"), 8)
+    *(FileCase(deck.name, _process, ("o3.txt", "t32.h5"), 8,
+               shrink=DECK_SHRINKS.get(deck.name, _as_shipped))
       for deck in sorted(SCENARIOS.glob("tapp3_*.toml"))),
     FileCase("tapp2_deep_space.toml", _guide, ("g.json",), 8),
     FileCase("pipeline_deep_space.toml", _pipeline, ("run",), 4,
