@@ -14,9 +14,8 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
-# On every core (at most 4: the tests start Dask clusters and subprocesses of their own), the
-# modules that share a fixture kept together (tests/conftest.py).
-PYTEST := $(BIN)/python -m pytest -q -n auto --maxprocesses=4 --doctest-modules tapp search iter tests --ignore=tests/bench
+# On every CPU (at most 4), the modules that share a fixture kept together (tests/conftest.py).
+PYTEST := $(BIN)/python -m pytest -q -n auto --doctest-modules tapp search iter tests --ignore=tests/bench
 
 test: $(STAMP) lint
 	$(PYTEST) -m "not slow"

@@ -14,6 +14,8 @@ Without xdist (a plain ``pytest``) nothing here changes how the tests run.
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 #: Modules kept on one worker, and what their tests share (built in seconds of CPU).
@@ -36,6 +38,20 @@ TOGETHER = {
     "tests/tapp/report/test_guidance.py": "the guidance studies",
     "tests/iter/test_iter_execute.py": "a Dask cluster",
 }
+
+
+#: Most workers ``-n auto`` starts: the tests start Dask clusters and processes of their own.
+MAX_WORKERS = 4
+
+
+@pytest.hookimpl(optionalhook=True)  # a hook of pytest-xdist
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
+    """``-n auto``: one worker per CPU this process may run on, at most :data:`MAX_WORKERS`
+    (xdist counts physical cores, 1 on a machine of two hyperthreads; or every CPU of the
+    host, whatever the affinity). ``PYTEST_XDIST_AUTO_NUM_WORKERS`` still decides if set."""
+    if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
+        return None  # xdist's own hook reads it
+    return max(1, min(len(os.sched_getaffinity(0)), MAX_WORKERS))
 
 
 def module_of(nodeid: str) -> str:
