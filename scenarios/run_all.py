@@ -24,11 +24,12 @@ The input files are the examples shipped in the package (:mod:`tapp.examples`, t
    into the README's generated blocks, then checked against results/ read again, with the
    claims of the prose around them (scenarios/readme.py); ``git diff`` shows what changed.
 
-Steps 1 and 3-6 are independent of one another (5 reads 4's tapes) and run side by side
-(:func:`side_by_side`), as do the commands inside 4 and 5: each runs tapp's commands as
-processes of their own. Steps 2 and 7 then run alone, one after the other, as before: the
-README quotes their wall times (the study's, the tracking sweep's on 2 workers), which
-would grow with the machine shared. The numbers are those of the runs one at a time.
+Steps 1, 3-6 and the first four sweeps of 7 are independent of one another (5 reads 4's
+tapes) and run side by side (:func:`side_by_side`), as do the commands inside 4 and 5: each
+runs tapp's commands, or its sweep's Dask cluster, as processes of their own. Step 2 and the
+tracking sweep then run alone, one after the other, as before: the README quotes their wall
+times (the study's, the tracking sweep's on 2 workers), which would grow with the machine
+shared. The numbers are those of the runs one at a time.
 """
 
 from __future__ import annotations
@@ -299,13 +300,19 @@ def _tracking_section(tab) -> list[str]:
                    "σ t_f (s)", "99 % total ΔV (m/s)", "outside corridor"], rows)]
 
 
-def sweeps() -> None:
+#: The sweeps of step 7, in the report's order. The last, the tracking trade study, is the
+#: one whose wall time the README quotes.
+SWEEPS = ("iter_azimuth_type1", "iter_azimuth_type2", "iter_days_azimuths",
+          "iter_lunar_departure", "iter_pipeline_tracking")
+
+
+def run_sweeps(names: tuple[str, ...]) -> dict[str, tuple]:
+    """Run the sweeps ``names`` one after the other, each on a local cluster of 2 workers;
+    return {name: (results, wall time in s)} for :func:`sweeps_report`."""
     out = RESULTS / "iter"
     out.mkdir(parents=True, exist_ok=True)
-    lines = ["# ITER sweeps\n"]
-    tables, summary = {}, {}
-    for name in ("iter_azimuth_type1", "iter_azimuth_type2", "iter_days_azimuths",
-                 "iter_lunar_departure", "iter_pipeline_tracking"):
+    done = {}
+    for name in names:
         sweep = load_sweep(EXAMPLES / f"{name}.toml")
         h5 = out / f"{name}.h5"
         h5.unlink(missing_ok=True)  # a fresh run, not a resume
@@ -314,6 +321,18 @@ def sweeps() -> None:
                         execution=Execution(workers=2), progress=True)
         wall_s = time.perf_counter() - start
         res.raise_if_all_failed()  # no answer to report: stop here, the failures recorded
+        done[name] = (res, wall_s)
+    return done
+
+
+def sweeps_report(done: dict[str, tuple]) -> None:
+    """results/iter/summary.json and report.md from the runs of every sweep of
+    :data:`SWEEPS` (:func:`run_sweeps`)."""
+    out = RESULTS / "iter"
+    lines = ["# ITER sweeps\n"]
+    tables, summary = {}, {}
+    for name in SWEEPS:
+        res, wall_s = done[name]
         tables[name] = res.table
         summary[name] = {"cases": res.summary.n_cases, "succeeded": res.summary.n_succeeded,
                          "failed": res.summary.n_failed, "workers": 2, "wall_s": wall_s}
@@ -337,6 +356,10 @@ def sweeps() -> None:
     print(f"ITER sweeps -> {out / 'report.md'}")
 
 
+def sweeps() -> None:
+    sweeps_report(run_sweeps(SWEEPS))
+
+
 def readme_figures() -> None:
     if readme.main([]) != 0:
         raise SystemExit("the README's figures disagree with results/ (listed above)")
@@ -345,11 +368,12 @@ def readme_figures() -> None:
 
 def main() -> None:
     # Side by side: the steps whose wall times the README does not quote (module docstring).
-    side_by_side(propagation_demo, search_targeting,
-                 lambda: (tracking_simulations(), matrix_processor()), pipeline_run)
+    *_, first_sweeps = side_by_side(propagation_demo, search_targeting,
+                                    lambda: (tracking_simulations(), matrix_processor()),
+                                    pipeline_run, partial(run_sweeps, SWEEPS[:-1]))
     # Alone: the README quotes their wall times.
     approx_stm_study()
-    sweeps()
+    sweeps_report({**first_sweeps, **run_sweeps(SWEEPS[-1:])})
     readme_figures()
 
 
