@@ -26,9 +26,10 @@ scalar observation (:class:`TapeRaw`). Units: factor entry (r, b) in 1/u_b with
 u the parameters' units (normal matrices 1/(u_a u_b)); U and B entries in (unit of row)/(unit
 of column).
 
-Version 3 carries the factors. Versions 1 and 2 carried the normal matrices themselves; their
-readers turn each into a factor (:func:`factor_normal_matrices`), which can keep only the
-digits the formed matrix kept (about 16 − 2 log₁₀ of the condition number of the data).
+Versions 3 and 4 carry the factors (4 differs from 3 only in how the HDF5 form compresses
+them). Versions 1 and 2 carried the normal matrices themselves; their readers turn each into
+a factor (:func:`factor_normal_matrices`), which can keep only the digits the formed matrix
+kept (about 16 − 2 log₁₀ of the condition number of the data).
 
 :func:`validate` checks the dimensions and invariants of a tape; :class:`PairBlock` holds the
 pairs of a record range, factors packed TR (the upper triangle by rows); :func:`memory_pairs`
@@ -72,8 +73,8 @@ def frame_of(provenance: dict[str, str]) -> str:
     return INERTIAL_FRAME.get(provenance.get("earth_orientation", "gmst"), "EME2000")
 
 FORMAT = "T13"
-VERSION = 3
-SUPPORTED_VERSIONS = (1, 2, 3)
+VERSION = 4
+SUPPORTED_VERSIONS = (1, 2, 3, 4)
 #: Versions that carry normal matrices, not factors (read with a warning).
 NORMAL_MATRIX_VERSIONS = (1, 2)
 #: Names of the parts of ``pairs/Rt_parts``, in order (as tapp.tracking.noise.PARTS).
