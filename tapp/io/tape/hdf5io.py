@@ -43,7 +43,7 @@ from iter.inputfile import regular_file
 from tapp import __version__
 from tapp.errors import InputError, TapeError
 from tapp.io.tape.checks import PACKINGS, Checker, frozen
-from tapp.io.tape.packing import pack_tr, tr_size, unpack_tr
+from tapp.io.tape.packing import pack_tr, tr_size, unpack_tr, upper_from_tr
 
 #: Target size of a chunk (bytes): whole rows of axis 0 up to this size.
 CHUNK_BYTES = 1 << 18
@@ -360,7 +360,10 @@ class Reader:
         if kind == "s":
             out = np.array([self.check.text(name, v) for v in data.ravel()], dtype=object)
             return out.reshape(data.shape)
-        return frozen(data, dtype)
+        if data.dtype != dtype:
+            return frozen(data, dtype)
+        data.setflags(write=False)  # h5py's own new array: frozen without a copy
+        return data
 
     def strings(self, name: str) -> tuple[str, ...]:
         return tuple(self.read(name, "s"))
@@ -396,10 +399,7 @@ class Reader:
         packing = self.stored_shape(name, lead, n)
         stored = self.read(name)
         if packing == "TR":
-            rows, cols = np.triu_indices(n)
-            out = np.zeros((*lead, n, n))
-            out[..., rows, cols] = stored
-            return frozen(out)
+            return frozen(upper_from_tr(stored, n))
         out = stored.reshape(*lead, n, n)
         if np.any(np.tril(out, -1) != 0):
             self.check.fail(name, "upper-triangular factors (zero below the diagonal)")
