@@ -25,10 +25,10 @@ version-2 tape, the same two decks timed the same way in a child process
 (:func:`normal_form`); the print commands evaluated alone on the last record's statistics (per
 entity); reading every pair block alone (the I/O floor), of either tape; a plain NumPy/h5py peer
 (:func:`numpy_peer`) that reads the version-2 tape's packed normal matrices, sums them per
-print interval and does one Cholesky regression per print time; the peak of the processing's
-allocations by tracemalloc; ``tapp process`` end to end in a child process, with the default
-BLAS threads and with one (its peak RSS: VmHWM). The n_o scaling runs the same tape shape at
-n_o = 25, 50, 100."""
+print interval and does one Cholesky regression per print time (BLAS on one thread, as
+TAPP III); the peak of the processing's allocations by tracemalloc; ``tapp process`` end
+to end in a child process, with the default BLAS threads and with one (its peak RSS:
+VmHWM). The n_o scaling runs the same tape shape at n_o = 25, 50, 100."""
 
 from __future__ import annotations
 
@@ -44,6 +44,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 from scipy import linalg
+from threadpoolctl import threadpool_limits
 
 from tapp.estimation.factors import triangularize
 from tapp.frames.time import Epoch
@@ -307,6 +308,11 @@ def numpy_peer(tape_path: Path, names: tuple[str, ...]) -> PeerResult:
     Simplifications (cost-neutral): one representation (the injection; no re-referencing at
     epoch changes and no recycles: the batch form, equal to the sequential one for a linear
     regression), no error budget, the tape's ΔJ̃ parts not read.
+
+    BLAS runs on one thread, as in TAPP III (:meth:`tapp.processor.sequencing.Processor.run`):
+    on matrices of order n_o, two threads on the shared machine cost the peer 3x its time
+    (n_o = 50: 1.63 s against 0.55 s in the same minute, load average 3; n_o = 100: 5.1 s
+    against 1.8 s; n_o = 25: the same), which would flatter the processor.
     """
     n_o = len(names)
     fit = np.array([n not in FIXED for n in names])
@@ -314,7 +320,7 @@ def numpy_peer(tape_path: Path, names: tuple[str, ...]) -> PeerResult:
     s0 = np.eye(int(fit.sum())) / SIGMA_FIT**2
     lam0 = np.eye(n_o) * SIGMA_REAL**2
     out = []
-    with h5py.File(tape_path, "r") as f:
+    with threadpool_limits(limits=1, user_api="blas"), h5py.File(tape_path, "r") as f:
         k = f["pairs/k"][...]
         u_all = f["records/U"]
         b = f["B"][...]
@@ -661,7 +667,8 @@ def run() -> Section:
         "tape of the same data (outputs bit-identical to the version-4 run's unless marked). "
         "NumPy peer: h5py reads of the version-2 tape's ΔJ, ΔJ̃ per "
         "print interval, one Cholesky regression and the ten products per print time, in one "
-        "representation, without recycles, budget or parts (2/5 of the bytes). Λ' vs peer: "
+        "representation, without recycles, budget or parts (2/5 of the bytes), BLAS on one "
+        "thread as in TAPP III. Λ' vs peer: "
         "max relative difference of the fit covariance of the fitted parameters at the first "
         "print time; Λ' vs normal form: the same against the normal-matrix form's, at the "
         "first and the last print time (after the epoch changes and recycles). Dense G: "
