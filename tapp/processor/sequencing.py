@@ -19,7 +19,7 @@ Each cycle k = 0, 1, ..., n_IT runs four phases in order:
 **Square-root information.** Every symmetric matrix of the machine is held as a factor
 (:mod:`tapp.estimation`): J = R_JᵀR_J, J̃ = R̃ᵀR̃ and S = R_SᵀR_S as square-root
 information, Λ̄ = UᵀU as a square-root covariance. Reading in a pair stacks its factors
-(T13 version 3 carries them) under the running ones and triangularises the stack by
+(T13 carries them from version 3) under the running ones and triangularises the stack by
 Householder QR; an update command maps a factor, K ← K Xᵀ (in twice the working precision:
 :func:`tapp.estimation.factors.accurate_map`); the statistics are the
 regression on factors (:func:`tapp.estimation.regression`), and an output entity
