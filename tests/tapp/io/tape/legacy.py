@@ -1,8 +1,9 @@
 """Tapes in the layouts of earlier versions, and the algebra the tape tests check factors with.
 
-The library writes T13 version 3 and T32 version 2 (square-root information). Its readers
+The library writes T13 version 4 and T32 version 2 (square-root information). Its readers
 still read T13 versions 1 and 2 and T32 version 1, which carried the normal matrices and
-covariances themselves: :func:`write_t13_version` writes those T13 layouts (the library keeps
+covariances themselves, and T13 version 3 (version 4 gzip-compressed):
+:func:`write_t13_version` writes those T13 layouts (the library keeps
 ``_write(..., version=)`` for it), :func:`write_t32_version_1` the T32 one (the library no
 longer writes it: the layout of ``tapp/io/tape/t32_hdf5.py`` before version 2).
 
@@ -85,7 +86,8 @@ def bits(a: np.ndarray) -> np.ndarray:
 
 def write_t13_version(path: Path, tape: T13, version: int, packing: str = "TR") -> Path:
     """Write ``tape`` in the layout of ``version`` (1 and 2: the normal matrices RᵀR of the
-    factors, ``pairs/dJ``, ``pairs/dJt`` and, version 2, ``pairs/dJt_parts``)."""
+    factors, ``pairs/dJ``, ``pairs/dJt`` and, version 2, ``pairs/dJt_parts``; 3: the factors,
+    gzip-compressed)."""
     with h5py.File(path, "w") as f:
         t13_hdf5._write(f, tape, packing, version=version)
     return path

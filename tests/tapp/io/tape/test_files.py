@@ -1,5 +1,5 @@
 """Whole tape files whatever their format and version: ``describe`` and ``verify``
-(:mod:`tapp.io.tape.files`) and ``tapp tape info`` on T13 versions 1 to 3 and T32 versions 1 and 2.
+(:mod:`tapp.io.tape.files`) and ``tapp tape info`` on T13 versions 1 to 4 and T32 versions 1 and 2.
 
 The summary of a tape does not depend on how its pair matrices are stored, so each old
 version must describe as the current one does, with the warning of its reader.
@@ -21,7 +21,7 @@ from tapp.errors import TapeError
 from tapp.io.tape import format_t32_summary
 from tapp.io.tape.files import describe, verify
 from tapp.io.tape.hdf5io import write_numbers
-from tapp.io.tape.t13 import T13
+from tapp.io.tape.t13 import T13, VERSION
 from tapp.io.tape.t13_hdf5 import write_t13
 from tapp.io.tape.t32 import T32
 from tapp.io.tape.t32_hdf5 import write_t32
@@ -51,7 +51,7 @@ def t32() -> T32:
 
 def _t13_file(tmp_path: Path, tape: T13, version: int) -> Path:
     path = tmp_path / f"v{version}.t13.h5"
-    if version == 3:
+    if version == VERSION:
         return write_t13(path, tape)
     return write_t13_version(path, tape, version)
 
@@ -62,13 +62,14 @@ def _without(info: dict, *keys: str) -> dict:
     return out
 
 
-@pytest.mark.parametrize("version", [1, 2])
-def test_an_old_t13_describes_as_version_3(tmp_path: Path, t13: T13, version: int) -> None:
-    current = describe(_t13_file(tmp_path, t13, 3))
+@pytest.mark.parametrize("version", [1, 2, 3])
+def test_an_old_t13_describes_as_the_current_version(tmp_path: Path, t13: T13, version: int
+                                                     ) -> None:
+    current = describe(_t13_file(tmp_path, t13, VERSION))
     path = _t13_file(tmp_path, t13, version)
     with t13_read_warnings(version):
         old = describe(path)
-    assert (current["version"], old["version"]) == (3, version)
+    assert (current["version"], old["version"]) == (VERSION, version)
     assert old["verified_datasets"] == len(verify(path))
     assert _without(old, "version", "verified_datasets") == _without(
         current, "version", "verified_datasets")
@@ -78,7 +79,7 @@ def test_an_old_t13_describes_as_version_3(tmp_path: Path, t13: T13, version: in
 def test_describe_checks_every_pair_factor(tmp_path: Path, t13: T13) -> None:
     """``tapp tape info`` validates the tape as it summarises it: a factor with a negative
     diagonal in the last record fails, naming the dataset and the pair."""
-    path = _t13_file(tmp_path, t13, 3)
+    path = _t13_file(tmp_path, t13, VERSION)
     last = t13.pairs.k.size - 1
     with h5py.File(path, "r+") as f:
         data = f["pairs/R"][()]
@@ -93,7 +94,7 @@ def test_describe_checks_every_pair_factor(tmp_path: Path, t13: T13) -> None:
         describe(path)
 
 
-@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("version", [2, 3, 4])
 def test_tape_info_of_a_t13(tmp_path: Path, t13: T13, version: int) -> None:
     path = _t13_file(tmp_path, t13, version)
     with t13_read_warnings(version):

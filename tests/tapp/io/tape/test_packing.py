@@ -15,10 +15,14 @@ from tapp.io.tape.packing import (
     symmetry_defect,
     tr_diagonal,
     tr_index,
+    tr_nonzero_rows,
     tr_order,
+    tr_rows,
     tr_size,
     unpack_tr,
+    upper_from_tr,
 )
+from tests.tapp.io.tape.legacy import upper_by_rows
 
 
 def test_order_is_the_upper_triangle_by_rows() -> None:
@@ -27,6 +31,24 @@ def test_order_is_the_upper_triangle_by_rows() -> None:
     assert [tr_index(i, j, 3) for i, j in ((0, 0), (0, 2), (2, 0), (1, 1), (1, 2), (2, 2))] == [
         0, 2, 2, 3, 4, 5]
     assert tr_size(23) == 276 and tr_order(276) == 23 and tr_order(0) == 0
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(0, 12), lead=st.lists(st.integers(0, 3), max_size=2),
+       seed=st.integers(0, 2**31))
+def test_upper_triangles_by_rows_unpack_and_show_their_zero_rows(n: int, lead: list[int],
+                                                                 seed: int) -> None:
+    """upper_from_tr inverts the packing of upper-triangular stacks (zero below the
+    diagonal, every bit kept); tr_nonzero_rows finds the rows left all zero."""
+    rng = np.random.default_rng(seed)
+    u = np.triu(rng.normal(size=(*lead, n, n)))
+    u[rng.random(u.shape[:-1]) < 0.4] = 0.0  # whole rows zero
+    packed = upper_by_rows(u) if n else np.zeros((*lead, 0))
+    back = upper_from_tr(packed, n)
+    assert back.shape == u.shape
+    np.testing.assert_array_equal(back.view(np.uint64), u.view(np.uint64))
+    np.testing.assert_array_equal(tr_nonzero_rows(packed, n), np.any(u != 0, axis=-1))
+    assert [stop - start for _, start, stop in tr_rows(n)] == list(range(n, 0, -1))
 
 
 @settings(max_examples=40, deadline=None)

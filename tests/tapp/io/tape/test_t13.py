@@ -10,9 +10,12 @@ from __future__ import annotations
 import dataclasses
 import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import h5py
+import hdf5plugin
 import numpy as np
 import pytest
 
@@ -21,7 +24,7 @@ from tapp.io.tape import t13, t13_hdf5
 from tapp.io.tape.files import describe, verify
 from tapp.io.tape.hdf5io import write_numbers
 from tapp.io.tape.packing import tr_size
-from tapp.io.tape.t13 import PARTS, T13
+from tapp.io.tape.t13 import PARTS, T13, VERSION
 from tapp.io.tape.t13_hdf5 import open_t13, read_t13, write_t13
 from tapp.tracking.noise import PARTS as NOISE_PARTS
 from tapp.tracking.simulate import simulate
@@ -55,6 +58,12 @@ def written(tmp_path: Path, tape: T13) -> Path:
     return write_t13(tmp_path / "run.t13.h5", tape)
 
 
+def _filters(ds: h5py.Dataset) -> list[int]:
+    """The HDF5 filter pipeline of a dataset, in the order applied on writing."""
+    dcpl = ds.id.get_create_plist()
+    return [dcpl.get_filter(i)[0] for i in range(dcpl.get_nfilters())]
+
+
 def test_schema_attributes_groups_and_storage(written: Path, tape: T13) -> None:
     n_pairs, n_o = tape.pairs.k.size, tape.n_o
     with h5py.File(written, "r") as f:
@@ -63,7 +72,7 @@ def test_schema_attributes_groups_and_storage(written: Path, tape: T13) -> None:
         for key in ("format", "version", "iden", "n_o", "n_p", "n_m", "n_ts", "n_it", "epoch",
                     "units", "tapp_version", "git_commit", "created_utc", "scenario"):
             assert key in attrs, key
-        assert attrs["format"] == "T13" and attrs["version"] == 3
+        assert attrs["format"] == "T13" and attrs["version"] == VERSION
         assert (attrs["n_o"], attrs["n_p"], attrs["n_m"], attrs["n_ts"], attrs["n_it"]) == (
             tape.n_o, 6, 6, 3, 3)
         assert attrs["epoch"] == "2026-01-01T00:00:00.000000"
@@ -75,8 +84,11 @@ def test_schema_attributes_groups_and_storage(written: Path, tape: T13) -> None:
             assert (ds.attrs["packing"], ds.attrs["order"], ds.attrs["form"]) == (
                 b"TR", n_o, b"factor"), name
             assert ds.attrs["units"] == b"1/u_b, u = parameters/unit", name
-            assert ds.compression == "gzip" and ds.chunks, name
-        assert f["raw/A"].compression == "gzip"
+            assert ds.chunks, name
+        for name in ("records/U", "pairs/R", "pairs/Rt", "pairs/Rt_parts", "raw/A"):
+            # LZ4, then the checksum of the stored (compressed) bytes; no shuffle
+            assert _filters(f[name]) == [hdf5plugin.LZ4_ID, h5py.h5z.FILTER_FLETCHER32], name
+        assert _filters(f["records/info"]) == [h5py.h5z.FILTER_FLETCHER32]
         parts = f["pairs/Rt_parts"]
         assert parts.shape == (n_pairs, 3, tr_size(n_o))
         assert parts.attrs["form"] == b"factor"
@@ -192,7 +204,7 @@ def test_non_symmetric_dJ_of_version_2_is_rejected_naming_the_dataset(tmp_path: 
 @pytest.mark.parametrize(("edit", "dataset"), [
     (lambda f: f.attrs.__setitem__("format", "T32"), "attrs/format"),
     (lambda f: f.attrs.__setitem__("version", 99), "attrs/version"),
-    (lambda f: f.attrs.__setitem__("version", 4), "attrs/version"),
+    (lambda f: f.attrs.__setitem__("version", VERSION + 1), "attrs/version"),
     (lambda f: f.attrs.__setitem__("n_o", 5), "attrs/n_o"),
     (lambda f: f.__delitem__("B"), "B"),
     (lambda f: f.__delitem__("pairs/Rt"), "pairs/Rt"),
@@ -283,7 +295,7 @@ def test_missing_file_and_describe(tmp_path: Path, written: Path) -> None:
     with pytest.raises(InputError, match="file: expected an existing T13 tape"):
         read_t13(tmp_path / "none.h5")
     info = describe(written)
-    assert info["format"] == "T13" and info["version"] == 3 and info["dimensions"]["n_ts"] == 3
+    assert (info["format"], info["version"], info["dimensions"]["n_ts"]) == ("T13", VERSION, 3)
     assert sum(s["observations"] for s in info["stations"]) == info["observations"]
     assert [e["t_s"] for e in info["epochs"]] == [0.0, 3600.0]
     other = tmp_path / "other.h5"
@@ -293,6 +305,55 @@ def test_missing_file_and_describe(tmp_path: Path, written: Path) -> None:
     assert describe(other) == {"format": "OBS", "attributes": {"format": "OBS"},
                                "datasets": {"J": {"shape": [3, 6], "dtype": "float64"}},
                                "verified_datasets": 1}
+
+
+# ---------------------------------------------------------------------------------------------
+# Version 3 (gzip) still read; version 4 (LZ4) with plain h5py
+# ---------------------------------------------------------------------------------------------
+
+
+def test_version_3_is_gzip_and_reads_as_version_4_to_the_bit(tmp_path: Path, tape: T13
+                                                            ) -> None:
+    v3 = write_t13_version(tmp_path / "v3.t13.h5", tape, 3)
+    v4 = write_t13(tmp_path / "v4.t13.h5", tape)
+    with h5py.File(v3, "r") as f:
+        assert f.attrs["version"] == 3
+        for name in ("records/U", "pairs/R", "pairs/Rt_parts", "raw/A"):
+            assert _filters(f[name]) == [h5py.h5z.FILTER_SHUFFLE, h5py.h5z.FILTER_DEFLATE,
+                                         h5py.h5z.FILTER_FLETCHER32], name
+    old, new = read_t13(v3), read_t13(v4)
+    for group in ("records", "pairs", "raw"):
+        for field in dataclasses.fields(getattr(new, group)):
+            a, b = getattr(getattr(old, group), field.name), getattr(getattr(new, group),
+                                                                     field.name)
+            if isinstance(b, np.ndarray):
+                same = bits if b.dtype.kind == "f" else np.asarray
+                np.testing.assert_array_equal(same(a), same(b), err_msg=field.name)
+    assert verify(v3) == verify(v4)
+
+
+#: Run by a plain interpreter: h5py alone reads a version-4 tape but for its LZ4 datasets,
+#: and those too once hdf5plugin is imported.
+_PLAIN_H5PY = """
+import sys, h5py
+with h5py.File(sys.argv[1], "r") as f:
+    print(f.attrs["version"], len(f["parameters/name"][()]), f["pairs/k"].shape[0])
+    try:
+        f["pairs/R"][()]
+    except OSError:
+        print("pairs/R needs hdf5plugin")
+    import hdf5plugin
+    print(f["pairs/R"][()].shape == f["pairs/R"].shape)
+"""
+
+
+def test_plain_h5py_reads_version_4_and_its_lz4_datasets_after_hdf5plugin(written: Path,
+                                                                          tape: T13) -> None:
+    env = {k: v for k, v in os.environ.items() if k != "HDF5_PLUGIN_PATH"}
+    done = subprocess.run([sys.executable, "-c", _PLAIN_H5PY, str(written)], env=env,
+                          capture_output=True, text=True, check=True)
+    assert done.stdout.splitlines() == [f"{VERSION} {tape.n_o} {tape.pairs.k.size}",
+                                        "pairs/R needs hdf5plugin", "True"]
 
 
 # ---------------------------------------------------------------------------------------------

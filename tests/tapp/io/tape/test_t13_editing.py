@@ -1,5 +1,5 @@
-"""The optional ``editing/`` group of T13 version 3: what the schedule asked for and what each
-rule removed, written, read back, checked, and optional on read."""
+"""The optional ``editing/`` group of T13 (from version 3): what the schedule asked for and
+what each rule removed, written, read back, checked, and optional on read."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from tapp.io.tape.hdf5io import write_numbers
 from tapp.io.tape.t13 import T13
 from tapp.io.tape.t13_hdf5 import read_t13, write_t13
 from tapp.tracking.simulate import simulate
+from tests.tapp.io.tape.legacy import write_t13_version
 from tests.tapp.tracking.helpers import leo_scenario
 
 EDITING = ("rule", "scheduled_obs", "removed_obs", "removed_passes", "added_passes")
@@ -51,7 +52,8 @@ def test_editing_is_written_with_units_and_checksums_and_read_back(tmp_path: Pat
 
 
 def test_a_version_3_tape_without_editing_still_reads(tmp_path: Path, tape: T13) -> None:
-    path = write_t13(tmp_path / "old.t13.h5", dataclasses.replace(tape, editing=None))
+    path = write_t13_version(tmp_path / "old.t13.h5", dataclasses.replace(tape, editing=None),
+                             3)
     with h5py.File(path, "r") as f:
         assert "editing" not in f and f.attrs["version"] == 3
     assert read_t13(path).editing is None

@@ -65,13 +65,14 @@ def _assert_same_header(a: T13, b: T13) -> None:
         assert a.provenance[key] == value
 
 
+@pytest.mark.parametrize("version", [3, t13.VERSION])
 @pytest.mark.parametrize("packing", ["TR", "full"])
 def test_file_and_memory_give_identical_headers_and_blocks(tmp_path: Path, tape: T13,
-                                                           packing: str) -> None:
-    path = write_t13(tmp_path / "run.t13.h5", tape, packing=packing)
+                                                           packing: str, version: int) -> None:
+    path = write_t13_version(tmp_path / "run.t13.h5", tape, version, packing)
     mem = memory_pairs(tape)
     with open_t13(path) as f:
-        assert f.packing == packing and f.has_parts and f.version == 3
+        assert f.packing == packing and f.has_parts and f.version == version
         assert f.names == ("pairs/R", "pairs/Rt", "pairs/Rt_parts")
         _assert_same_header(f.header, mem.header)
         n_it = f.header.n_it
