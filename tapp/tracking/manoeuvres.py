@@ -44,6 +44,7 @@ from pydantic import Field
 from tapp.dynamics.gates import MAX_PROPORTIONAL, GatesErrors, MAX_FIXED_km_s, MAX_POINTING_rad
 from tapp.dynamics.manoeuvres import AXES, BURN_KINDS, Burn, FiniteBurn, ImpulsiveBurn
 from tapp.errors import InputError
+from tapp.frames.time import Epoch
 from tapp.io.noise_file import Positive
 from tapp.io.schema import Schema, Time
 
@@ -213,3 +214,27 @@ def _finite(table: ManoeuvreTable, where: str, common: dict, time_s, last_s: flo
                       thrust_N=float(table.thrust_N),
                       direction=tuple(float(x) for x in d / math.hypot(*d)),
                       mass_kg=float(table.mass_kg), mass_flow_kg_s=float(table.mass_flow_kg_s))
+
+
+def describe(burn: Burn, epoch: Epoch, decimals: int = 3) -> str:
+    """One line on ``burn``: its name, kind, time (UTC, ``decimals`` digits of the seconds),
+    vector (:func:`vector_text`) and axes (the OEM's and SPK's COMMENT lines)."""
+    when = (f"impulsive at {epoch.iso_after(burn.t_s, decimals)} UTC"
+            if isinstance(burn, ImpulsiveBurn) else
+            f"finite from {epoch.iso_after(burn.t_start_s, decimals)} UTC for "
+            f"{burn.duration_s:g} s")
+    return (f"{burn.name} {when}: {vector_text(burn)} in {burn.axes} axes "
+            f"({''.join(AXES[burn.axes])})")
+
+
+def vector_text(burn: Burn) -> str:
+    """An impulsive burn's ``dv = [..] m/s``; a finite burn's thrust, direction, mass, flow
+    and ideal Δv."""
+    def vector(v) -> str:
+        return "[" + ", ".join(f"{x:.9g}" for x in v) + "]"
+
+    if isinstance(burn, ImpulsiveBurn):
+        return f"dv = {vector(1e3 * np.asarray(burn.dv_km_s))} m/s"
+    return (f"thrust {burn.thrust_N:.9g} N along {vector(burn.direction)}, mass "
+            f"{burn.mass_kg:g} kg, flow {burn.mass_flow_kg_s:g} kg/s (ideal dv "
+            f"{1e3 * burn.delta_v_km_s():.6g} m/s)")
