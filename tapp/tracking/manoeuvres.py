@@ -107,7 +107,8 @@ _KEYS = {"impulsive": ("time", "dv_m_s", "dv_km_s"),
 
 def scenario_manoeuvres(source: str, tables: list[ManoeuvreTable], *,
                         time_s: Callable[[object, str], float], last_s: float, method: str,
-                        forbidden: str | None = None) -> tuple[Burn, ...]:
+                        forbidden: str | None = None, not_at_start: str | None = None
+                        ) -> tuple[Burn, ...]:
     """Build the burns of a scenario's ``[[manoeuvre]]`` tables, ascending in time.
 
     Parameters
@@ -119,13 +120,14 @@ def scenario_manoeuvres(source: str, tables: list[ManoeuvreTable], *,
     last_s : the last T13 time, s (the arc ends there).
     method : the integration method (``rkn12`` refuses a thrust in moving axes).
     forbidden : why the scenario cannot fly burns at all (None: it can).
+    not_at_start : why a burn at t = 0 is refused (None: it is not).
 
     Raises
     ------
     InputError
         ``manoeuvre[i].FIELD``: a key of the other kind or one missing, a burn outside the
-        arc, overlapping burns, a zero vector, a mass flow that empties the tank, a name used
-        twice, a thrust in RIC or VNB axes with ``rkn12``.
+        arc (or at t = 0 with ``not_at_start``), overlapping burns, a zero vector, a mass flow
+        that empties the tank, a name used twice, a thrust in RIC or VNB axes with ``rkn12``.
     """
     def fail(field: str, expected: str, got: object = None) -> NoReturn:
         raise InputError(source, field, expected, got)
@@ -148,9 +150,13 @@ def scenario_manoeuvres(source: str, tables: list[ManoeuvreTable], *,
                              table.sigma_pointing_fixed_mm_s * 1e-6)
         common = {"name": name, "axes": table.axes, "errors": errors}
         if table.kind == "impulsive":
-            burns.append((i, _impulsive(table, where, common, time_s, last_s, fail)))
+            burn = _impulsive(table, where, common, time_s, last_s, fail)
         else:
-            burns.append((i, _finite(table, where, common, time_s, last_s, method, fail)))
+            burn = _finite(table, where, common, time_s, last_s, method, fail)
+        if not_at_start is not None and burn.t_start_s == 0.0:
+            fail(f"{where}.{'time' if burn.kind == 'impulsive' else 'start'}", not_at_start,
+                 burn.t_start_s)
+        burns.append((i, burn))
     names = [b.name for _, b in burns]
     for i, name in enumerate(names):
         if name in names[:i]:

@@ -92,12 +92,12 @@ def round_trip(tmp_path_factory) -> dict:
     return {"folder": d, "runs": runs}
 
 
-def _scaled_information(r_a: np.ndarray, r_b: np.ndarray) -> float:
+def _scaled_information(r_a: np.ndarray, r_b: np.ndarray, columns: np.ndarray) -> float:
     """max |ΔN_ij| / √(N_ii N_jj) over the information matrices N = RᵀR (rows of zero
-    information left out): a square-root factor itself is not unique where a pair's data
-    leave the information singular."""
-    n_a = np.einsum("...ki,...kj->...ij", r_a, r_a)
-    n_b = np.einsum("...ki,...kj->...ij", r_b, r_b)
+    information left out), i and j among ``columns`` (bool mask): a square-root factor itself
+    is not unique where a pair's data leave the information singular."""
+    n_a = np.einsum("...ki,...kj->...ij", r_a, r_a)[..., columns, :][..., columns]
+    n_b = np.einsum("...ki,...kj->...ij", r_b, r_b)[..., columns, :][..., columns]
     d = np.sqrt(np.abs(np.diagonal(n_a, axis1=-2, axis2=-1)))
     scale = d[..., :, None] * d[..., None, :]
     keep = scale > 0
@@ -113,10 +113,12 @@ def _log_sensitivity(m_a: np.ndarray, m_b: np.ndarray, nominal: np.ndarray) -> f
     return float(np.abs(a - b).max() / np.abs(a).max())
 
 
-def tape_differences(a, b) -> dict[str, float]:
-    """The scaled differences of two T13 tapes, dataset by dataset."""
+def tape_differences(a, b, columns: np.ndarray | None = None) -> dict[str, float]:
+    """The scaled differences of two T13 tapes, dataset by dataset; the information over the
+    parameters ``columns`` (bool mask, default all)."""
     nominal = a.parameters.nominal
     info = a.records.info
+    columns = np.ones(nominal.size, dtype=bool) if columns is None else columns
     return {
         "records/info": float((np.abs(info - b.records.info) / np.abs(info).max(axis=0)).max()),
         "records/U": _log_sensitivity(a.records.U, b.records.U, nominal),
@@ -125,9 +127,9 @@ def tape_differences(a, b) -> dict[str, float]:
                                      / np.abs(a.miss.nominal))),
         "parameters/nominal": float(np.max(np.abs(nominal - b.parameters.nominal)
                                            / np.maximum(np.abs(nominal), 1.0))),
-        "pairs/R": _scaled_information(a.pairs.R, b.pairs.R),
-        "pairs/Rt": _scaled_information(a.pairs.Rt, b.pairs.Rt),
-        "pairs/Rt_parts": _scaled_information(a.pairs.Rt_parts, b.pairs.Rt_parts),
+        "pairs/R": _scaled_information(a.pairs.R, b.pairs.R, columns),
+        "pairs/Rt": _scaled_information(a.pairs.Rt, b.pairs.Rt, columns),
+        "pairs/Rt_parts": _scaled_information(a.pairs.Rt_parts, b.pairs.Rt_parts, columns),
     }
 
 
