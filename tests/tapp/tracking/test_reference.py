@@ -191,13 +191,15 @@ def _two_body_j2(_t: float, x: np.ndarray) -> np.ndarray:
     return np.concatenate([x[3:], a])
 
 
-def _et(t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """ET of scenario times by astropy, as (rounded ET, what it leaves out, dET/dt)."""
-    tdb = (Time(EPOCH, scale="utc") + TimeDelta(t_s, format="sec")).tdb - J2000_TDB
+def scenario_et(t_s: np.ndarray, epoch: str = EPOCH) -> tuple[np.ndarray, np.ndarray,
+                                                               np.ndarray]:
+    """ET of scenario times (SI seconds from the UTC ``epoch``) by astropy, as (rounded ET,
+    what it leaves out, dET/dt)."""
+    tdb = (Time(epoch, scale="utc") + TimeDelta(t_s, format="sec")).tdb - J2000_TDB
     whole, part = tdb.jd1 * 86400.0, tdb.jd2 * 86400.0
     et = whole + part
     remainder = part - (et - whole)
-    tt = Time(EPOCH, scale="utc") + TimeDelta(t_s, format="sec")
+    tt = Time(epoch, scale="utc") + TimeDelta(t_s, format="sec")
     step = TimeDelta(60.0, format="sec")
     rate = (((tt + step).tdb - (tt - step).tdb).sec / 120.0)
     return et, remainder, rate
@@ -213,7 +215,7 @@ def independent(tmp_path_factory) -> dict:
     x0 = np.array(leo_document()["injection"]["r_km"] + leo_document()["injection"]["v_km_s"])
     x0[4] += 0.05  # not tapp's own injection: an e = 0.013 orbit
     t = np.arange(-120.0, 10920.0 + 1.0, 30.0)
-    et, remainder, rate = _et(t)
+    et, remainder, rate = scenario_et(t)
     at = t - remainder  # the instant each rounded ET names
     x = np.empty((t.size, 6))
     for side in (at < 0.0, at >= 0.0):  # from t = 0 backwards and forwards
@@ -244,7 +246,7 @@ def test_tapps_oem_is_within_a_millimetre_of_spkezr_at_every_epoch(independent) 
     states = list(segment.states)
     start = Time(EPOCH, scale="utc")
     t = np.array([(s.epoch - start).sec for s in states])
-    et, remainder, _ = _et(t)
+    et, remainder, _ = scenario_et(t)
     spiceypy.furnsh(str(d / "scipy.bsp"))
     try:
         spice, _ = spiceypy.spkezr(str(NAIF_ID), et, "J2000", "NONE", "399")
