@@ -61,13 +61,14 @@ ONE_M_m = 1.0
 ONE_MM_km = 1e-6
 
 
-def _simulate(*args: str | Path) -> dict:
+def simulate_json(*args: str | Path) -> dict:
+    """``tapp simulate ARGS --json -``'s JSON (exit 0 asserted)."""
     res = runner.invoke(app, ["simulate", *map(str, args), "--json", "-"])
     assert res.exit_code == 0, res.output
     return json.loads(res.stdout)
 
 
-def _write(path: Path, doc: dict) -> Path:
+def write_toml(path: Path, doc: dict) -> Path:
     path.write_text(tomli_w.dumps(doc))
     return path
 
@@ -79,14 +80,15 @@ def round_trip(tmp_path_factory) -> dict:
     """The LEO scenario flown, its OEM and SPK written, and flown again from each."""
     d = tmp_path_factory.mktemp("round_trip")
     doc = leo_document()
-    _simulate(_write(d / "leo.toml", doc), "-o", d / "leo.t13.h5", "--oem", d / "leo.oem",
+    simulate_json(write_toml(d / "leo.toml", doc), "-o", d / "leo.t13.h5", "--oem", d / "leo.oem",
               "--spk", d / "leo.bsp")
     runs = {"original": (d / "leo.t13.h5", None)}
     for kind, table in (("OEM", {"file": "leo.oem"}), ("SPK", {"file": "leo.bsp",
                                                                "object": -999})):
-        scenario = _write(d / f"from_{kind}.toml", leo_document(injection=None, reference=table))
+        scenario = write_toml(d / f"from_{kind}.toml",
+                              leo_document(injection=None, reference=table))
         out = d / f"from_{kind}.t13.h5"
-        info = _simulate(scenario, "-o", out, "--oem", d / f"from_{kind}.oem", "--spk",
+        info = simulate_json(scenario, "-o", out, "--oem", d / f"from_{kind}.oem", "--spk",
                          d / f"from_{kind}.bsp")
         runs[kind] = (out, info)
     return {"folder": d, "runs": runs}
@@ -230,7 +232,7 @@ def independent(tmp_path_factory) -> dict:
     spiceypy.spkw13(handle, NAIF_ID, 399, "J2000", et[0], et[-1], "scipy", 7, et.size,
                     j2000, et)
     spiceypy.spkcls(handle)
-    info = _simulate(_write(d / "scipy.toml", doc), "-o", d / "scipy.t13.h5", "--oem",
+    info = simulate_json(write_toml(d / "scipy.toml", doc), "-o", d / "scipy.t13.h5", "--oem",
                      d / "tapp.oem")
     return {"folder": d, "info": info, "bias": b}
 
@@ -240,23 +242,31 @@ def test_the_fit_to_an_independent_integration_is_within_a_metre(independent) ->
         assert arc["max_m"] < ONE_M_m and arc["points"] == 10800 // 60 + 1
 
 
+def oem_against_spk(oem: Path, spk: Path, naif_id: int, epoch: str = EPOCH
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The states of every segment of ``oem`` read by the ``oem`` package: their times (N,), s
+    from ``epoch``, their positions (N, 3), km, and ``spiceypy.spkezr``'s positions of
+    ``naif_id`` in ``spk`` at the same instants (J2000 about the Earth, km: at the rounded ET,
+    moved by what it leaves out)."""
+    states = [s for segment in OrbitEphemerisMessage.open(oem).segments for s in segment.states]
+    start = Time(epoch, scale="utc")
+    t = np.array([(s.epoch - start).sec for s in states])
+    et, remainder, _ = scenario_et(t, epoch)
+    spiceypy.furnsh(str(spk))
+    try:
+        spice, _ = spiceypy.spkezr(str(naif_id), et, "J2000", "NONE", "399")
+    finally:
+        spiceypy.unload(str(spk))
+    spice = np.array(spice)
+    return (t, np.array([s.position for s in states]),
+            spice[:, :3] + remainder[:, None] * spice[:, 3:])
+
+
 def test_tapps_oem_is_within_a_millimetre_of_spkezr_at_every_epoch(independent) -> None:
     d = independent["folder"]
-    (segment,) = OrbitEphemerisMessage.open(d / "tapp.oem").segments
-    states = list(segment.states)
-    start = Time(EPOCH, scale="utc")
-    t = np.array([(s.epoch - start).sec for s in states])
-    et, remainder, _ = scenario_et(t)
-    spiceypy.furnsh(str(d / "scipy.bsp"))
-    try:
-        spice, _ = spiceypy.spkezr(str(NAIF_ID), et, "J2000", "NONE", "399")
-    finally:
-        spiceypy.unload(str(d / "scipy.bsp"))
-    spice = np.array(spice)
-    r = (spice[:, :3] + remainder[:, None] * spice[:, 3:]) @ independent["bias"].T
-    tapp_r = np.array([s.position for s in states])
+    t, tapp_r, r = oem_against_spk(d / "tapp.oem", d / "scipy.bsp", NAIF_ID)
     assert t.size == 10800 // 20 + 1
-    assert np.linalg.norm(tapp_r - r, axis=1).max() < ONE_MM_km
+    assert np.linalg.norm(tapp_r - r @ independent["bias"].T, axis=1).max() < ONE_MM_km
 
 
 # --- another tool's OEM -----------------------------------------------------------------------

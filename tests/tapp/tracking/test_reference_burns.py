@@ -13,12 +13,10 @@ the fit over each arc between burns.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 import pytest
-import tomli_w
 from typer.testing import CliRunner
 
 import tapp.cli.simulate_cmd  # noqa: F401  (registers the command)
@@ -29,7 +27,14 @@ from tapp.tracking.oem_states import oem_trajectory
 from tapp.tracking.reference import fitted
 from tapp.tracking.scenario import parse_scenario
 from tests.tapp.tracking.helpers import leo_document
-from tests.tapp.tracking.test_reference import B_JITTER, SAME_TAPE, ONE_MM_m, tape_differences
+from tests.tapp.tracking.test_reference import (
+    B_JITTER,
+    SAME_TAPE,
+    ONE_MM_m,
+    simulate_json,
+    tape_differences,
+    write_toml,
+)
 
 runner = CliRunner()
 
@@ -53,17 +58,6 @@ DV_FIT = 1e-8
 EXECUTION_INFORMATION = 1e-8
 
 
-def _simulate(*args: str | Path) -> dict:
-    res = runner.invoke(app, ["simulate", *map(str, args), "--json", "-"])
-    assert res.exit_code == 0, res.output
-    return json.loads(res.stdout)
-
-
-def _write(path: Path, doc: dict) -> Path:
-    path.write_text(tomli_w.dumps(doc))
-    return path
-
-
 def _from(reference: dict, burns: list[dict] = BURNS) -> dict:
     """The LEO scenario reading ``reference`` instead of its injection, with ``burns``."""
     return leo_document(injection=None, reference=reference, manoeuvre=burns)
@@ -73,12 +67,12 @@ def _from(reference: dict, burns: list[dict] = BURNS) -> dict:
 def round_trip(tmp_path_factory) -> dict:
     """The LEO with BURNS flown, its OEM and SPK written, and flown again from each."""
     d = tmp_path_factory.mktemp("burns")
-    _simulate(_write(d / "leo.toml", leo_document(manoeuvre=BURNS)), "-o", d / "leo.t13.h5",
+    simulate_json(write_toml(d / "leo.toml", leo_document(manoeuvre=BURNS)), "-o", d / "leo.t13.h5",
               "--oem", d / "leo.oem", "--spk", d / "leo.bsp")
     runs = {}
     for kind, table in (("OEM", {"file": "leo.oem"}),
                         ("SPK", {"file": "leo.bsp", "object": -999})):
-        info = _simulate(_write(d / f"from_{kind}.toml", _from(table)), "-o",
+        info = simulate_json(write_toml(d / f"from_{kind}.toml", _from(table)), "-o",
                          d / f"from_{kind}.t13.h5", "--oem", d / f"from_{kind}.oem")
         runs[kind] = (d / f"from_{kind}.t13.h5", info)
     return {"folder": d, "runs": runs}
@@ -201,7 +195,7 @@ def test_bad_burns_with_a_reference_are_one_line_exit_2_and_nothing_written(
         round_trip, tmp_path: Path, case: str) -> None:
     table, burns, field, expected, got = CASES[case]
     (tmp_path / "leo.oem").write_text((round_trip["folder"] / "leo.oem").read_text())
-    scenario = _write(tmp_path / "s.toml", _from({"file": "leo.oem", **table}, burns))
+    scenario = write_toml(tmp_path / "s.toml", _from({"file": "leo.oem", **table}, burns))
     before = sorted(p.name for p in tmp_path.iterdir())
     res = runner.invoke(app, ["simulate", str(scenario), "-o", str(tmp_path / "out.t13.h5"),
                               "--oem", str(tmp_path / "out.oem")])

@@ -22,7 +22,6 @@ import numpy as np
 import pytest
 import spiceypy
 import tomli_w
-from astropy.time import Time
 from oem import OrbitEphemerisMessage
 from typer.testing import CliRunner
 
@@ -30,7 +29,7 @@ import tapp.cli.simulate_cmd  # noqa: F401  (registers the command)
 from tapp.cli.common import app
 from tapp.examples import FOLDER
 from tests.tapp.tracking.deep_space_reference import Burn, DeepSpaceOrbit, fly
-from tests.tapp.tracking.test_reference import ONE_M_m, ONE_MM_km, scenario_et
+from tests.tapp.tracking.test_reference import ONE_M_m, ONE_MM_km, oem_against_spk, scenario_et
 
 runner = CliRunner()
 EPOCH = "2026-03-10T12:00:00"  # deep_space.toml's
@@ -104,18 +103,6 @@ def test_tapps_fit_is_within_a_metre_on_every_arc(flown) -> None:
 
 def test_tapps_oem_is_within_a_millimetre_of_spkezr_at_every_epoch(flown) -> None:
     d = flown["folder"]
-    message = OrbitEphemerisMessage.open(d / "tapp.oem")
-    assert len(message.segments) == 3
-    start = Time(EPOCH, scale="utc")
-    states = [s for segment in message.segments for s in segment.states]
-    t = np.array([(s.epoch - start).sec for s in states])
-    et, remainder, _ = scenario_et(t, EPOCH)
-    spiceypy.furnsh(str(d / "scipy.bsp"))
-    try:
-        spice, _ = spiceypy.spkezr(str(NAIF_ID), et, "J2000", "NONE", "399")
-    finally:
-        spiceypy.unload(str(d / "scipy.bsp"))
-    spice = np.array(spice)
-    r = spice[:, :3] + remainder[:, None] * spice[:, 3:]
-    tapp_r = np.array([s.position for s in states])
+    assert len(OrbitEphemerisMessage.open(d / "tapp.oem").segments) == 3
+    _, tapp_r, r = oem_against_spk(d / "tapp.oem", d / "scipy.bsp", NAIF_ID, EPOCH)
     assert np.linalg.norm(tapp_r - r, axis=1).max() < ONE_MM_km
