@@ -20,11 +20,14 @@ The input files are the examples shipped in the package (:mod:`tapp.examples`, t
    departure-day sweep with SEARCH as the body, and the tracking trade study with the whole
    pipeline as the body, on a local Dask cluster -> results/iter/ (report.md; summary.json:
    the cases, failures and wall time of each sweep).
-8. The README's figures: read from results/ into scenarios/readme_figures.json and rendered
+8. Your own mission: the examples' mission folder (its OEM with a deterministic burn, its
+   booked DSN passes) through TAPP I, III and II -> results/mission/ (the tape, the OEM
+   flown, the O3 printout, the T32 tape, the guidance report and every JSON).
+9. The README's figures: read from results/ into scenarios/readme_figures.json and rendered
    into the README's generated blocks, then checked against results/ read again, with the
    claims of the prose around them (scenarios/readme.py); ``git diff`` shows what changed.
 
-Steps 1, 3-6 and the first four sweeps of 7 are independent of one another (5 reads 4's
+Steps 1, 3-6, 8 and the first four sweeps of 7 are independent of one another (5 reads 4's
 tapes) and run side by side (:func:`side_by_side`), as do the commands inside 4 and 5: each
 runs tapp's commands, or its sweep's Dask cluster, as processes of their own. Step 2 and the
 tracking sweep then run alone, one after the other, as before: the README quotes their wall
@@ -273,6 +276,26 @@ def pipeline_run() -> None:
     print(f"pipeline -> {out / 'report.md'}")
 
 
+def mission_run() -> None:
+    """The mission folder (tapp/examples/mission/) as the tutorial's "Your own mission" runs
+    it, into results/mission/."""
+    out, mission = RESULTS / "mission", EXAMPLES / "mission"
+    out.mkdir(parents=True, exist_ok=True)
+    steps = (("simulate", str(mission / "mission.toml"), "-o", str(out / "mission.t13.h5"),
+              "--oem", str(out / "flown.oem"), "--json", str(out / "simulate.json")),
+             ("process", str(out / "mission.t13.h5"), str(mission / "mission_deck.toml"),
+              "--print", str(out / "mission.o3.txt"), "--tape", str(out / "mission.t32.h5"),
+              "--json", str(out / "process.json")),
+             ("guide", str(out / "mission.t32.h5"), str(mission / "mission_guidance.toml"),
+              "--samples", "100000", "--seed", "1", "--json", str(out / "guide.json")))
+    for args in steps:
+        proc = _tapp(*args)
+        if proc.returncode != 0:
+            raise SystemExit(f"tapp {args[0]} mission exited {proc.returncode}: {proc.stderr}")
+        (out / f"{args[0]}.txt").write_text(proc.stdout)
+    print(f"your own mission -> {out}")
+
+
 def _tracking_section(tab) -> list[str]:
     """The tracking trade study: final-miss σ and 99 % ΔV against data interval x network."""
     networks = ("GOLDSTONE, CANBERRA, MADRID", "GOLDSTONE, CANBERRA", "GOLDSTONE")
@@ -370,7 +393,7 @@ def main() -> None:
     # Side by side: the steps whose wall times the README does not quote (module docstring).
     *_, first_sweeps = side_by_side(propagation_demo, search_targeting,
                                     lambda: (tracking_simulations(), matrix_processor()),
-                                    pipeline_run, partial(run_sweeps, SWEEPS[:-1]))
+                                    pipeline_run, mission_run, partial(run_sweeps, SWEEPS[:-1]))
     # Alone: the README quotes their wall times.
     approx_stm_study()
     sweeps_report({**first_sweeps, **run_sweeps(SWEEPS[-1:])})

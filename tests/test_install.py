@@ -116,7 +116,8 @@ def test_the_console_script_copies_the_examples(installed: Installed, console) -
     from tapp.examples import FILES
 
     assert console["examples"].returncode == 0, console["examples"].stderr
-    assert sorted(p.name for p in (installed.work / "ex").iterdir()) == sorted(FILES)
+    ex = installed.work / "ex"
+    assert sorted(str(p.relative_to(ex)) for p in ex.rglob("*") if p.is_file()) == sorted(FILES)
 
 
 def test_the_console_script_reads_the_shipped_study(console) -> None:
@@ -145,6 +146,8 @@ COMMANDS = {
     "process": (["process", "d1.t13.h5", "ex/tapp3_table_d1.toml", "--print", "d1.o3.txt"],
                 "", "d1.o3.txt"),
     "search": (["search", "ex/search_bplane.toml"], "CONVERGED", None),
+    "mission": (["simulate", "ex/mission/mission.toml", "-o", "mission.t13.h5"],
+                "Fitted to the reference", "mission.t13.h5"),
     "pipeline": (["pipeline", "ex/pipeline_deep_space.toml", "-o", "pipe", "--serial"],
                  "pipe/report.md", "pipe/report.md"),
     "guide": (["guide", "pipe/run.t32.h5", "ex/tapp2_deep_space.toml", "--samples", "2000",

@@ -49,7 +49,8 @@ def test_every_block_of_the_tutorial_is_a_step() -> None:
 
 @pytest.fixture(scope="module")
 def study(tmp_path_factory) -> Path:
-    """Follow the tutorial in an empty folder; return the folder it ends in."""
+    """Follow the tutorial in an empty folder; return the study folder it works in (my_study:
+    its last section goes down into my_study/mission)."""
     folder = tmp_path_factory.mktemp("tutorial")
     runner = CliRunner()
     with pytest.MonkeyPatch.context() as patch:
@@ -65,7 +66,7 @@ def study(tmp_path_factory) -> Path:
             assert program == "tapp", f"the tutorial runs only tapp and cd: {what}"
             result = runner.invoke(app, args)
             assert result.exit_code == 0, f"$ {what}\n{result.output}"
-        return Path.cwd()
+        return folder / "my_study"
 
 
 def test_every_figure_the_tutorial_names_is_made(study: Path) -> None:
@@ -79,3 +80,12 @@ def test_the_trade_study_has_a_row_per_case(study: Path) -> None:
     rows = (study / "trade.csv").read_text().splitlines()
     assert rows[0].startswith("case,network,data_interval_s,")
     assert [row.split(",")[-3] for row in rows[1:]] == ["ok"] * 4
+
+
+def test_your_own_mission_flies_its_oem_fitted_on_each_arc(study: Path) -> None:
+    """Section 6: the OEM TAPP I flew has a segment before DV1 and one after, and says what
+    the fit found and the burn it flew."""
+    text = (study / "mission" / "flown.oem").read_text()
+    assert text.count("META_START") == 2
+    assert "UTC, after DV1: dv fitted [3, " in text
+    assert "COMMENT MANOEUVRE DV1 impulsive at 2026-03-11T06:00:00.000000 UTC: dv = [3, " in text

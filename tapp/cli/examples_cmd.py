@@ -15,8 +15,8 @@ from tapp.cli.common import JsonOpt, app, delivering, json_file, run_guarded
 
 @contextmanager
 def copying_examples(out_dir: Path, option: str = "DIR") -> Iterator[tuple[Path, ...]]:
-    """Copy every shipped file (:data:`tapp.examples.FILES`) into ``out_dir``, a new or empty
-    folder.
+    """Copy every shipped file (:data:`tapp.examples.FILES`, some in a folder of their own)
+    into ``out_dir``, a new or empty folder.
 
     The files are written into a hidden folder beside ``out_dir`` and renamed to it once
     the block has run (the report of the copies printed): nothing is left half-copied, and
@@ -38,6 +38,7 @@ def copying_examples(out_dir: Path, option: str = "DIR") -> Iterator[tuple[Path,
     with new_directory(out_dir, option, "examples are copied into a folder of their own, "
                        "never over files") as work:
         for name in FILES:
+            (work / name).parent.mkdir(exist_ok=True)  # the mission/ folder
             shutil.copyfile(FOLDER / name, work / name)
         yield tuple(Path(out_dir) / name for name in FILES)
 
@@ -48,19 +49,21 @@ def examples_cmd(
     json_out: JsonOpt = None,
 ) -> None:
     """Copy every example input file (scenarios, decks, guidance, pipeline, sweeps, SEARCH,
-    the study) into DIRECTORY, and list them with their kind (tapp schema KIND)."""
+    the study, and a mission folder with its own OEM and pass schedule) into DIRECTORY, and
+    list them with their kind (tapp schema KIND)."""
     from tapp.examples import FILES
     from tapp.io.outputs import check_paths
 
     def body() -> None:
         check_paths({}, {"--json": json_file(json_out)})
         with copying_examples(directory) as copied:
-            files = [{"kind": FILES[path.name], "path": str(path)} for path in copied]
+            files = [{"kind": kind, "path": str(path)}
+                     for kind, path in zip(FILES.values(), copied, strict=True)]
             with delivering(json_out, {"directory": str(directory), "files": files}) as report:
                 if report:
                     width = max(len(kind) for kind in FILES.values())
                     typer.echo(f"{len(copied)} example files copied into {directory}:")
-                    for path in copied:
-                        typer.echo(f"  {FILES[path.name]:<{width}}  {path}")
+                    for file in files:
+                        typer.echo(f"  {file['kind']:<{width}}  {file['path']}")
 
     run_guarded(body)

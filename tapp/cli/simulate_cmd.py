@@ -178,10 +178,10 @@ def _events_line(events: list[dict]) -> str:
             f"{events[-1]['utc']} UTC")
 
 
-def _print_report(out: dict, tape: T13, oem_states: int, fit_lines: tuple[str, ...] = ()
-                  ) -> None:
+def _print_report(out: dict, tape: T13, oem_states: tuple[int, int],
+                  fit_lines: tuple[str, ...] = ()) -> None:
     """What ``tapp simulate`` wrote: the tape's sizes, its stations, the reference fit, the
-    OEM, TDM and SPK, the miss."""
+    OEM, TDM and SPK (``oem_states``: their states and segments), the miss."""
     from rich.console import Console
 
     from tapp.cli.tape_cmd import editing_table
@@ -196,13 +196,15 @@ def _print_report(out: dict, tape: T13, oem_states: int, fit_lines: tuple[str, .
         console.print(line)
     if out["events"]:
         console.print(_events_line(out["events"]))
+    states, segments = oem_states
+    held = f"{states} states" + (f" in {segments} segments" if segments > 1 else "")
     if out["oem"] is not None:
-        console.print(f"OEM {out['oem']} ({oem_states} states)")
+        console.print(f"OEM {out['oem']} ({held})")
     if out["tdm"] is not None:
         console.print(f"TDM {out['tdm']} ({out['observations']} observations)")
     if out["spk"] is not None:
         console.print(f"SPK {out['spk']['path']} (type 13, body {out['spk']['body']}, "
-                      f"{oem_states} states)")
+                      f"{held})")
     _print_encounter(console, out["miss"], out["targeting"])
 
 
@@ -238,16 +240,16 @@ def simulate(
     """
 
     def body() -> int:
-        from tapp.io.ccsds.oem import (
-            INTERPOLATION,
-            INTERPOLATION_DEGREE,
-            event_comments,
-            format_oem,
-        )
+        from tapp.io.ccsds.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem
         from tapp.io.outputs import check_paths
         from tapp.io.tape.t13 import summary
         from tapp.tracking.encounter import TargetingError
-        from tapp.tracking.oem_states import oem_trajectory, write_trajectory_spk
+        from tapp.tracking.oem_states import (
+            burn_comments,
+            oem_trajectory,
+            segment_comments,
+            write_trajectory_spk,
+        )
         from tapp.tracking.scenario import read_scenario
 
         outputs = {"-o/--output": output, "--oem": oem, "--tdm": tdm, "--spk": spk,
@@ -273,19 +275,20 @@ def simulate(
         tape = sim.tape
         fit = sim.reference_fit
         fit_lines = () if fit is None else fit.lines(tape.epoch)
-        comments = (f"TAPP I trajectory of {scenario.name}", *fit_lines)
-        oem_text, oem_states, write_spk, spk_info = None, 0, None, None
+        comments = (f"TAPP I trajectory of {scenario.name}", *fit_lines,
+                    *burn_comments(tape.epoch, sim.scenario.manoeuvres, fit))
+        oem_text, oem_states, write_spk, spk_info = None, (0, 0), None, None
         if oem is not None or spk is not None:
             traj = oem_trajectory(sim.scenario, float(sim.t_s[-1]))
-            oem_states = traj.t_s.size
+            oem_states = (traj.t_s.size, len(traj.spans))
         if oem is not None:
             oem_text = format_oem(tape.epoch, traj.t_s, traj.states, object_name=tape.iden,
                                   object_id=tape.iden, ref_frame=traj.ref_frame,
                                   interpolation=INTERPOLATION,
                                   interpolation_degree=INTERPOLATION_DEGREE,
-                                  comments=comments,
-                                  meta_comments=traj.comments + event_comments(tape.epoch,
-                                                                               traj.events))
+                                  comments=comments, meta_comments=traj.comments,
+                                  segment=traj.segment,
+                                  segment_comments=segment_comments(traj, sim.scenario))
         if spk is not None:
             body = _spk_body(spk_id, fit)
             spk_info = {"path": str(spk), "body": body}

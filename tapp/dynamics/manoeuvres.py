@@ -59,6 +59,7 @@ Report 32-504 (1963). GMAT Mathematical Specifications (R2020a), §"Local coordi
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
@@ -211,9 +212,18 @@ class FiniteBurn(_Burn):
         return self.t_start_s + self.duration_s
 
     @property
-    def _w_km_s2(self) -> np.ndarray:
-        """w = (F / m₀) d, km/s² (F in N = kg m/s²)."""
+    def w_km_s2(self) -> np.ndarray:
+        """w = (F / m₀) d (3,), the thrust acceleration at ignition in the burn's axes, km/s²
+        (F in N = kg m/s²)."""
         return self.thrust_N / self.mass_kg * 1e-3 * np.asarray(self.direction, dtype=float)
+
+    def with_thrust(self, w_km_s2) -> FiniteBurn:
+        """The same burn with the thrust acceleration at ignition ``w_km_s2`` (3,), km/s²: its
+        thrust F = m₀ |w| and direction w / |w| (the mass and the flow kept)."""
+        w = np.asarray(w_km_s2, dtype=float)
+        norm = float(np.linalg.norm(w))
+        return dataclasses.replace(self, thrust_N=norm * self.mass_kg * 1e3,
+                                   direction=tuple(float(x) for x in w / norm))
 
     def thrust_parameters(self) -> tuple[str, ...]:
         """The model parameters of its thrust (:data:`THRUST_PARAMETERS` of its axes)."""
@@ -221,14 +231,14 @@ class FiniteBurn(_Burn):
 
     def thrust_values(self) -> dict[str, float]:
         """Their nominal values: w, c = 0, β = ṁ/m₀, t₀."""
-        values = [*self._w_km_s2, 0.0, 0.0, 0.0, self.mass_flow_kg_s / self.mass_kg,
+        values = [*self.w_km_s2, 0.0, 0.0, 0.0, self.mass_flow_kg_s / self.mass_kg,
                   self.t_start_s]
         return dict(zip(self.thrust_parameters(), map(float, values), strict=True))
 
     def thrust_map(self) -> np.ndarray:
         """∂(w, c)/∂q, (6, n_e): the proportional columns of G(w) for w, the fixed ones of
         G(w)/Δt for c (module docstring)."""
-        g = gates_partials(self._w_km_s2)
+        g = gates_partials(self.w_km_s2)
         out = np.zeros((THRUST_COLUMNS, 6))
         out[:3, PROPORTIONAL] = g[:, PROPORTIONAL]
         out[3:, ~PROPORTIONAL] = g[:, ~PROPORTIONAL] / self.duration_s

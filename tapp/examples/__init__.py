@@ -8,7 +8,14 @@ user to start from. ``approx_stm.toml`` is also the study file that ``tapp dc``,
 
 Paths inside the files are relative to their own folder (a pipeline names its scenario,
 deck and guidance file; a sweep its pipeline), so the copied set runs from wherever it is
-copied to. The kind of each file is the schema that reads it (``tapp schema KIND``).
+copied to. The kind of each file is the schema that reads it (``tapp schema KIND``), or what
+a scenario reads from it: a ``trajectory`` (``[reference] file``) or a ``schedule``
+(``[tracking] schedule``).
+
+``mission/`` is a mission of one's own: a scenario whose trajectory is the mission's OEM with a
+deterministic burn and whose tracking is a CSV of booked DSN passes, with its deck and
+guidance file (the tutorial's "Your own mission"). Its OEM and CSV are made by tapp
+(``scenarios/mission_example.py``; regenerating them is tested).
 """
 
 from __future__ import annotations
@@ -17,8 +24,8 @@ import os
 from importlib.resources import files
 from pathlib import Path
 
-#: The shipped files and the kind of input each is (``tapp schema KIND``), in the order a new
-#: user meets them.
+#: The shipped files (paths relative to :data:`FOLDER`) and the kind of input each is, in the
+#: order a new user meets them.
 FILES: dict[str, str] = {
     "leo_equatorial.toml": "scenario",
     "deep_space.toml": "scenario",
@@ -37,6 +44,11 @@ FILES: dict[str, str] = {
     "iter_lunar_departure.toml": "sweep",
     "search_bplane.toml": "search",
     "approx_stm.toml": "study",
+    "mission/mission.toml": "scenario",
+    "mission/transfer.oem": "trajectory",
+    "mission/dsn_passes.csv": "schedule",
+    "mission/mission_deck.toml": "deck",
+    "mission/mission_guidance.toml": "guidance",
 }
 
 #: The folder of the shipped files. A package installed from a wheel is a folder of files

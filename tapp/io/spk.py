@@ -11,9 +11,12 @@ precedence over it. In SPICE, ``J2000`` is the ICRF as the JPL ephemerides reali
 (NAIF, *Frames Required Reading*: the two are not distinguished), which is the GCRS's axes
 (a gmst scenario's EME2000 differs from them by the frame bias: :mod:`tapp.frames.file_frames`).
 
-Writing (:func:`write_spk`): one type 13 segment (Hermite interpolation, unequal time steps,
-NAIF *SPK Required Reading* §"Type 13") per call, centre the Earth, frame ``J2000``; comment
-lines are added to the file's comment area (``commnt`` shows them) by :func:`add_comments`.
+Writing (:func:`write_spk`): type 13 segments (Hermite interpolation, unequal time steps,
+NAIF *SPK Required Reading* §"Type 13"), centre the Earth, frame ``J2000``, one per coast arc
+of a trajectory with impulsive burns: segments that meet at a burn's epoch both hold it, and
+SPICE, which searches the segments last written first, gives the later one's state there (the
+state after the burn); comment lines are added to the file's comment area (``commnt`` shows
+them) by :func:`add_comments`.
 
 SPICE keeps loaded kernels in one global pool and is not thread-safe: every call here holds
 one lock, loads what it needs, and unloads it again before returning. SPICE's own errors
@@ -192,11 +195,12 @@ def _et_text(et: float) -> str:
     return Epoch(float(whole), float(JD_J2000 - whole + days)).iso(3) + " TDB"
 
 
-def write_spk(path: Path | str, body: int, et_s, states, *, segment_id: str = "tapp",
-              degree: int = SPK_DEGREE, option: str = "--spk") -> None:
-    """Write an SPK file holding one type 13 segment of ``body`` relative to the Earth in
-    J2000: states (N, 6) km, km/s at strictly increasing ET values (N,), Hermite of odd
-    ``degree`` through (degree + 1) / 2 states.
+def write_spk(path: Path | str, body: int, segments: Sequence[tuple[np.ndarray, np.ndarray]],
+              *, segment_id: str = "tapp", degree: int = SPK_DEGREE, option: str = "--spk"
+              ) -> None:
+    """Write an SPK file holding type 13 segments of ``body`` relative to the Earth in J2000,
+    one per (ET (N,), states (N, 6) km, km/s) of ``segments``, in time order: ET strictly
+    increasing within each, Hermite of odd ``degree`` through (degree + 1) / 2 states.
 
     ``path`` must not exist (an :class:`tapp.io.outputs.OutputSet` temporary); comments are
     added by :func:`add_comments`.
@@ -207,14 +211,15 @@ def write_spk(path: Path | str, body: int, et_s, states, *, segment_id: str = "t
         A path SPICE cannot name, or a segment SPICE refuses (naming ``option``).
     """
     name = _spice_path(Path(path), option, "path")
-    et = np.ascontiguousarray(et_s, dtype=float)
-    x = np.ascontiguousarray(states, dtype=float)
     with _LOCK:
         try:
             handle = spiceypy.spkopn(name, "tapp", _COMMENT_CHARS)
             try:
-                spiceypy.spkw13(handle, body, EARTH_ID, FRAME, float(et[0]), float(et[-1]),
-                                segment_id[:40], degree, et.size, x, et)
+                for et_s, states in segments:
+                    et = np.ascontiguousarray(et_s, dtype=float)
+                    x = np.ascontiguousarray(states, dtype=float)
+                    spiceypy.spkw13(handle, body, EARTH_ID, FRAME, float(et[0]),
+                                    float(et[-1]), segment_id[:40], degree, et.size, x, et)
             finally:
                 spiceypy.spkcls(handle)
         except SpiceyError as exc:

@@ -99,18 +99,21 @@ class ReferenceTrajectory:
 
 @dataclass(frozen=True, slots=True)
 class Reference:
-    """A scenario's ``[reference]``: the trajectory read, and the largest position difference
-    its fit may leave (``max_fit_error_m``, m; :mod:`tapp.tracking.reference`)."""
+    """A scenario's ``[reference]``: the trajectory read, the largest position difference its
+    fit may leave (``max_fit_error_m``, m) and whether the fit adjusts the burns
+    (``fit_manoeuvres``; :mod:`tapp.tracking.reference`)."""
 
     trajectory: ReferenceTrajectory
     max_fit_error_m: float
+    fit_manoeuvres: bool = True
 
 
 class ReferenceTable(Schema):
     """``[reference]``: the mission's own trajectory, to which TAPP I fits its force model over
     each arc (the fitted trajectory is then the nominal of the observables and the
     variational equations); a fit worse than ``max_fit_error_m`` is refused. Replaces
-    ``[injection]``."""
+    ``[injection]``. The arcs are separated by the ``[[manoeuvre]]`` burns: the first fits
+    the state at t = 0, each later one the burn it starts with."""
 
     file: str = Field(description="The trajectory file, relative to this file: a SPICE SPK "
                       "(any segment type SPICE reads) or a CCSDS OEM (KVN or XML; its "
@@ -123,6 +126,11 @@ class ReferenceTable(Schema):
         MAX_FIT_ERROR_M, description="Largest position difference accepted between the fitted "
         "trajectory and the reference, on any arc (`tapp simulate --force` accepts a worse "
         "fit, printing it).")
+    fit_manoeuvres: bool = Field(
+        True, description="Fit each burn on the arc it starts: an impulsive burn's dv, a "
+        "finite burn's thrust and direction (its ignition, duration, mass and flow as given); "
+        "false flies the burns as the [[manoeuvre]] tables give them and compares those arcs "
+        "only.")
     step_s: Positive | None = Field(
         None, description=f"Spacing of the SPK states the fit compares with; default "
         f"{SPK_STEP_S:g} s (an OEM's own states are used).")
@@ -143,7 +151,7 @@ class ReferenceTable(Schema):
                                     boundaries_s=boundaries_s,
                                     step_s=SPK_STEP_S if self.step_s is None else self.step_s,
                                     source=source)
-        return Reference(trajectory, self.max_fit_error_m)
+        return Reference(trajectory, self.max_fit_error_m, self.fit_manoeuvres)
 
 
 def is_spk(path: Path) -> bool:

@@ -44,6 +44,7 @@ from pydantic import Field
 from tapp.dynamics.gates import MAX_PROPORTIONAL, GatesErrors, MAX_FIXED_km_s, MAX_POINTING_rad
 from tapp.dynamics.manoeuvres import AXES, BURN_KINDS, Burn, FiniteBurn, ImpulsiveBurn
 from tapp.errors import InputError
+from tapp.frames.time import Epoch
 from tapp.io.noise_file import Positive
 from tapp.io.schema import Schema, Time
 
@@ -106,7 +107,8 @@ _KEYS = {"impulsive": ("time", "dv_m_s", "dv_km_s"),
 
 def scenario_manoeuvres(source: str, tables: list[ManoeuvreTable], *,
                         time_s: Callable[[object, str], float], last_s: float, method: str,
-                        forbidden: str | None = None) -> tuple[Burn, ...]:
+                        forbidden: str | None = None, not_at_start: str | None = None
+                        ) -> tuple[Burn, ...]:
     """Build the burns of a scenario's ``[[manoeuvre]]`` tables, ascending in time.
 
     Parameters
@@ -118,13 +120,14 @@ def scenario_manoeuvres(source: str, tables: list[ManoeuvreTable], *,
     last_s : the last T13 time, s (the arc ends there).
     method : the integration method (``rkn12`` refuses a thrust in moving axes).
     forbidden : why the scenario cannot fly burns at all (None: it can).
+    not_at_start : why a burn at t = 0 is refused (None: it is not).
 
     Raises
     ------
     InputError
         ``manoeuvre[i].FIELD``: a key of the other kind or one missing, a burn outside the
-        arc, overlapping burns, a zero vector, a mass flow that empties the tank, a name used
-        twice, a thrust in RIC or VNB axes with ``rkn12``.
+        arc (or at t = 0 with ``not_at_start``), overlapping burns, a zero vector, a mass flow
+        that empties the tank, a name used twice, a thrust in RIC or VNB axes with ``rkn12``.
     """
     def fail(field: str, expected: str, got: object = None) -> NoReturn:
         raise InputError(source, field, expected, got)
@@ -147,9 +150,13 @@ def scenario_manoeuvres(source: str, tables: list[ManoeuvreTable], *,
                              table.sigma_pointing_fixed_mm_s * 1e-6)
         common = {"name": name, "axes": table.axes, "errors": errors}
         if table.kind == "impulsive":
-            burns.append((i, _impulsive(table, where, common, time_s, last_s, fail)))
+            burn = _impulsive(table, where, common, time_s, last_s, fail)
         else:
-            burns.append((i, _finite(table, where, common, time_s, last_s, method, fail)))
+            burn = _finite(table, where, common, time_s, last_s, method, fail)
+        if not_at_start is not None and burn.t_start_s == 0.0:
+            fail(f"{where}.{'time' if burn.kind == 'impulsive' else 'start'}", not_at_start,
+                 burn.t_start_s)
+        burns.append((i, burn))
     names = [b.name for _, b in burns]
     for i, name in enumerate(names):
         if name in names[:i]:
@@ -213,3 +220,27 @@ def _finite(table: ManoeuvreTable, where: str, common: dict, time_s, last_s: flo
                       thrust_N=float(table.thrust_N),
                       direction=tuple(float(x) for x in d / math.hypot(*d)),
                       mass_kg=float(table.mass_kg), mass_flow_kg_s=float(table.mass_flow_kg_s))
+
+
+def describe(burn: Burn, epoch: Epoch, decimals: int = 3) -> str:
+    """One line on ``burn``: its name, kind, time (UTC, ``decimals`` digits of the seconds),
+    vector (:func:`vector_text`) and axes (the OEM's and SPK's COMMENT lines)."""
+    when = (f"impulsive at {epoch.iso_after(burn.t_s, decimals)} UTC"
+            if isinstance(burn, ImpulsiveBurn) else
+            f"finite from {epoch.iso_after(burn.t_start_s, decimals)} UTC for "
+            f"{burn.duration_s:g} s")
+    return (f"{burn.name} {when}: {vector_text(burn)} in {burn.axes} axes "
+            f"({''.join(AXES[burn.axes])})")
+
+
+def vector_text(burn: Burn) -> str:
+    """An impulsive burn's ``dv = [..] m/s``; a finite burn's thrust, direction, mass, flow
+    and ideal Δv."""
+    def vector(v) -> str:
+        return "[" + ", ".join(f"{x:.9g}" for x in v) + "]"
+
+    if isinstance(burn, ImpulsiveBurn):
+        return f"dv = {vector(1e3 * np.asarray(burn.dv_km_s))} m/s"
+    return (f"thrust {burn.thrust_N:.9g} N along {vector(burn.direction)}, mass "
+            f"{burn.mass_kg:g} kg, flow {burn.mass_flow_kg_s:g} kg/s (ideal dv "
+            f"{1e3 * burn.delta_v_km_s():.6g} m/s)")

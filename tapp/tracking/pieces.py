@@ -271,27 +271,29 @@ def propagate_pieces(prop: Propagator, forcing: Forcing, x0: np.ndarray, t_s: np
 
 def fly(prop: Propagator, burns: tuple[Burn, ...], x0: np.ndarray, t_s: np.ndarray, *,
         param_values: Mapping[str, float], orientation: EarthOrientation,
-        epoch_jd_utc: float) -> Trajectory:
-    """The states (no partials) from the injection (t = 0, ``x0``) at the times ``t_s`` (s, any
-    order; before 0 too), flying the ``burns``, and the events met up to the last time."""
+        epoch_jd_utc: float, t0_s: float = 0.0) -> Trajectory:
+    """The states (no partials) from ``x0`` at ``t0_s`` (the injection, t = 0, by default) at
+    the times ``t_s`` (s, any order; before ``t0_s`` too), flying the ``burns``, and the events
+    met up to the last time. An impulsive burn at ``t0_s`` acts after the output there."""
     t_s = np.atleast_1d(np.asarray(t_s, dtype=float))
     if not burns:
-        return prop.propagate(x0, t_s, stm=False, param_values=param_values,
+        return prop.propagate(x0, t_s, t0_s=t0_s, stm=False, param_values=param_values,
                               orientation=orientation, epoch_jd_utc=epoch_jd_utc)
     forcing = Forcing(None, burns)
     order = np.argsort(t_s, kind="stable")
     ts = t_s[order]
     states = np.empty((ts.size, 6))
-    before = ts < 0  # no burn acts before the injection
+    before = ts < t0_s  # no burn acts before the start
     if before.any():
-        states[before] = prop.propagate(x0, ts[before][::-1], stm=False,
+        states[before] = prop.propagate(x0, ts[before][::-1], t0_s=t0_s, stm=False,
                                         param_values=param_values, orientation=orientation,
                                         epoch_jd_utc=epoch_jd_utc).states[::-1]
-    starts = forcing.breaks(0.0, max(float(ts[-1]), 0.0))
-    ends = np.append(starts[1:], max(float(ts[-1]), 0.0))
+    last = max(float(ts[-1]), t0_s)
+    starts = forcing.breaks(t0_s, last)
+    ends = np.append(starts[1:], last)
     x_start = np.asarray(x0, dtype=float)
     events, steps, rhs = [], 0, 0
-    states[ts == 0] = x_start
+    states[ts == t0_s] = x_start
     for a, b in zip(starts, ends, strict=True):
         burn = forcing.impulse_at(float(a))
         if burn is not None:

@@ -23,8 +23,9 @@ ISO strings or TOML dates)::
                        allow_subsurface = true accepts an orbit whose perigee is below the
                        Earth's surface (refused otherwise, ``tapp.io.orbits.check_perigee``)
     [reference]        instead of [injection]: the mission's trajectory, file = an SPK or
-                       OEM (relative to this file), object, max_fit_error_m, step_s; TAPP I
-                       flies its force model fitted to it (tapp.tracking.reference)
+                       OEM (relative to this file), object, max_fit_error_m, fit_manoeuvres,
+                       step_s; TAPP I flies its force model fitted to it over each arc
+                       between the burns (tapp.tracking.reference)
     [model]            gravity (J0 | Jn | NxM), third_bodies (each once), var_gravity,
                        var_third_bodies (the variational model: the seed's truncated
                        variational equations; default the state model), rtol, atol (within
@@ -318,8 +319,9 @@ class Scenario:
     method : the integration method of every propagation (``tapp.dynamics.propagate``).
     manoeuvres : the burns of the ``[[manoeuvre]]`` tables, ascending in time.
     reference : the mission's trajectory of a ``[reference]`` table, to which TAPP I fits its
-        force model (:mod:`tapp.tracking.reference`); ``x0`` is then its state at t = 0
-        until the fit replaces it; None without one.
+        force model over each arc between the burns (:mod:`tapp.tracking.reference`); ``x0``
+        is then its state at t = 0, and ``manoeuvres`` the tables', until the fit replaces
+        them; None without one.
     """
 
     source: str
@@ -885,15 +887,17 @@ _NO_MANOEUVRES = ("no [[manoeuvre]] with [targeting] or miss.time = \"periapsis\
                   "program, which finds the periapsis, flies no burn)")
 
 
-#: Why burns are refused with a [reference]: its fit flies one coast arc.
-_NO_REFERENCE = ("no [[manoeuvre]] with [reference] (the reference's fit flies one coast arc: "
-                 "the fit per arc between burns is not built yet)")
+#: Why a burn at t = 0 is refused with a [reference]: the fit of the first arc is the state
+#: there.
+_NOT_AT_START = ("a burn after t = 0 with [reference] (the first arc fits the state at t = 0, "
+                 "which a burn there could not be told from)")
 
 
-def _injection(p: _Parser, doc: ScenarioFile, orientation: EarthOrientation, last_s: float
-               ) -> tuple[np.ndarray, Reference | None]:
+def _injection(p: _Parser, doc: ScenarioFile, orientation: EarthOrientation, last_s: float,
+               burns: tuple[Burn, ...]) -> tuple[np.ndarray, Reference | None]:
     """The injection state, and the reference it comes from: ``[injection]``, or the state at
-    t = 0 of ``[reference]``'s trajectory read over [0, last T13 time] (one arc)."""
+    t = 0 of ``[reference]``'s trajectory read over [0, last T13 time], at the arc boundaries
+    t = 0 and the ``burns``' starts."""
     if (doc.injection is None) == (doc.reference is None):
         p.fail("injection", "either an [injection] table or a [reference] trajectory file")
     if doc.injection is not None:
@@ -903,7 +907,8 @@ def _injection(p: _Parser, doc: ScenarioFile, orientation: EarthOrientation, las
         p.fail("targeting", "no [targeting] with [reference] (the reference's trajectory is "
                "the mission's)")
     reference = doc.reference.read(p.source, epoch=p.epoch, orientation=orientation,
-                                   span_s=(0.0, last_s), boundaries_s=(0.0,))
+                                   span_s=(0.0, last_s),
+                                   boundaries_s=(0.0, *(b.t_start_s for b in burns)))
     return reference.trajectory.state_at_boundary(0.0).copy(), reference
 
 
@@ -936,9 +941,13 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     stations = _stations(p, doc, doc.parameters)
     times = _times(p, doc.times)
     last_s = float(times.t13_s[-1])
-    x0, reference = _injection(p, doc, orientation, last_s)
-    schedule = _schedule(p, doc.tracking, last_s, stations)
     miss = _miss(p, doc.miss, state_model, last_s)
+    manoeuvres = scenario_manoeuvres(
+        source, doc.manoeuvre, time_s=p.time_s, last_s=last_s, method=doc.model.method,
+        forbidden=_NO_MANOEUVRES if doc.targeting is not None or miss.at_periapsis else None,
+        not_at_start=None if doc.reference is None else _NOT_AT_START)
+    x0, reference = _injection(p, doc, orientation, last_s, manoeuvres)
+    schedule = _schedule(p, doc.tracking, last_s, stations)
     stochastic = _stochastic(p, doc.stochastic, last_s)
     orientation.check_covers(np.array([0.0, last_s, schedule.end_s]), source)
     document = json.dumps(data, default=str, sort_keys=True)
@@ -949,10 +958,6 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
                          dynamic + (() if stochastic is None else stochastic.model_parameters))
     targeting = _targeting(p, doc, miss, values, x0,
                            doc.model.propagator(source, state_model, var_model), orientation)
-    manoeuvres = scenario_manoeuvres(
-        source, doc.manoeuvre, time_s=p.time_s, last_s=last_s, method=doc.model.method,
-        forbidden=_NO_MANOEUVRES if doc.targeting is not None or miss.at_periapsis else
-        _NO_REFERENCE if reference is not None else None)
     baselines = tracking_baselines(source, doc.ddor, tuple(ts.station for ts in stations),
                                    schedule.data_interval_s)
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,

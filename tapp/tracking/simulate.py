@@ -675,8 +675,9 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     accept_poor_fit : fly a ``[reference]`` fit worse than its ``max_fit_error_m``
         (:func:`tapp.tracking.reference.fitted`; refused otherwise).
 
-    A ``[reference]`` trajectory is first fitted by the force model, and the fitted
-    trajectory is flown (:mod:`tapp.tracking.reference`).
+    A ``[reference]`` trajectory is first fitted by the force model over each arc between
+    the burns, and the fitted trajectory (the injection state and the burns) is flown
+    (:mod:`tapp.tracking.reference`).
 
     A B-plane miss is first checked for an encounter, after the ``[targeting]`` of the
     scenario has retargeted its injection (:func:`tapp.tracking.encounter.prepare_encounter`):

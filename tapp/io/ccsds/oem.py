@@ -1,12 +1,14 @@
 """CCSDS Orbit Ephemeris Message (OEM) 2.0 in KVN form: the trajectory of a simulation.
 
 Layout per CCSDS 502.0-B-2 (Orbit Data Messages, Blue Book, 2009), §5: a header
-(``CCSDS_OEM_VERS = 2.0``, ``COMMENT`` lines, ``CREATION_DATE``, ``ORIGINATOR``), one metadata
-block between ``META_START`` and ``META_STOP`` (``COMMENT`` lines, ``OBJECT_NAME``,
-``OBJECT_ID``, ``CENTER_NAME``, ``REF_FRAME``, ``TIME_SYSTEM``, ``START_TIME``,
-``STOP_TIME``, ``INTERPOLATION``, ``INTERPOLATION_DEGREE``), then one data line per epoch:
-the epoch (ISO, UTC) and x, y, z (km), x_dot, y_dot, z_dot (km/s). Epochs must increase.
-The file is written to a temporary name and renamed.
+(``CCSDS_OEM_VERS = 2.0``, ``COMMENT`` lines, ``CREATION_DATE``, ``ORIGINATOR``), then one or
+more segments (§5.2.1: several are allowed, in time order), each a metadata block between
+``META_START`` and ``META_STOP`` (``COMMENT`` lines, ``OBJECT_NAME``, ``OBJECT_ID``,
+``CENTER_NAME``, ``REF_FRAME``, ``TIME_SYSTEM``, ``START_TIME``, ``STOP_TIME``,
+``INTERPOLATION``, ``INTERPOLATION_DEGREE``) and one data line per epoch: the epoch (ISO, UTC)
+and x, y, z (km), x_dot, y_dot, z_dot (km/s). Epochs increase within a segment; a segment
+starts where the one before stops or later. The file is written to a temporary name and
+renamed.
 
 What the OEM of a simulation says (:func:`tapp.tracking.oem_states.oem_trajectory`):
 
@@ -16,13 +18,18 @@ What the OEM of a simulation says (:func:`tapp.tracking.oem_states.oem_trajector
 - The states run from the injection (t = 0) to the end of the simulation, every data
   interval, halved (repeatedly) around the intervals where the interpolation below would not
   hold: near a low perigee, in a swing-by.
+- One segment per smooth arc between burns: an impulsive burn (a jump of the velocity) and a
+  finite burn's ignition and cut-off (jumps of the acceleration), which no polynomial
+  interpolates, end a segment with the state before them, and the next segment starts at the
+  same epoch with the state after them. The burns themselves are header ``COMMENT`` lines
+  (:mod:`tapp.tracking.oem_states`).
 - ``INTERPOLATION = LAGRANGE`` with ``INTERPOLATION_DEGREE = 7``: a Lagrange polynomial
   through the 8 states nearest the time (the window centred on it, shifted inwards at the
   ends, as the ``oem`` package chooses it) reproduces the propagated trajectory at
-  every mid-point between states within :data:`INTERPOLATION_TOL_KM` and
+  every mid-point between states of each segment within :data:`INTERPOLATION_TOL_KM` and
   :data:`INTERPOLATION_TOL_KM_S`; the largest errors found are stated in a ``COMMENT``.
 - Every integration event met (a shadow entry or exit, a Harris-Priester table height:
-  :mod:`tapp.dynamics.events`) is a ``COMMENT`` of the metadata, with its time
+  :mod:`tapp.dynamics.events`) is a ``COMMENT`` of the metadata of its segment, with its time
   (:func:`event_comments`).
 """
 
@@ -61,17 +68,22 @@ class OemTrajectory:
     Attributes
     ----------
     t_s : (N,) times, s from the epoch, from 0 to the end
-        (:func:`tapp.tracking.oem_states.oem_trajectory`).
+        (:func:`tapp.tracking.oem_states.oem_trajectory`), increasing within a segment; the
+        time of an impulsive burn ends one segment and starts the next.
     states : (N, 6) km and km/s, Earth-centred, in ``ref_frame``.
+    segment : (N,) int, the segment of each state: 0, 1, ... in time order (one per smooth
+        arc between burns).
     ref_frame : OEM ``REF_FRAME`` (:data:`REF_FRAMES`).
-    min_step_s, max_step_s : shortest and longest spacing of the states, s.
-    error_km, error_km_s : largest interpolation error at the mid-points between states
-        (:data:`INTERPOLATION` of degree :data:`INTERPOLATION_DEGREE`), position and velocity.
+    min_step_s, max_step_s : shortest and longest spacing of the states within a segment, s.
+    error_km, error_km_s : largest interpolation error at the mid-points between states of
+        each segment (:data:`INTERPOLATION` of degree :data:`INTERPOLATION_DEGREE`), position
+        and velocity.
     events : the integration events of the trajectory.
     """
 
     t_s: np.ndarray
     states: np.ndarray
+    segment: np.ndarray
     ref_frame: str
     min_step_s: float
     max_step_s: float
@@ -80,18 +92,34 @@ class OemTrajectory:
     events: Events
 
     @property
+    def spans(self) -> tuple[slice, ...]:
+        """The states of each segment, in order."""
+        return segment_slices(self.segment)
+
+    @property
     def comments(self) -> tuple[str, ...]:
         """COMMENT lines that say where the states are and how well they interpolate."""
         steps = (f"every {self.max_step_s:g} s" if self.min_step_s == self.max_step_s else
                  f"every {self.max_step_s:g} s, down to {self.min_step_s:g} s where the "
                  "motion is fast")
-        return (f"States from the injection (t = 0) to the end of the simulation, {steps}.",
+        n = len(self.spans)
+        arcs = ("" if n == 1 else f" in {n} segments, one per arc between burns (a segment "
+                "ends with the state before a burn, ignition or cut-off, the next starts at "
+                "the same epoch with the state after it)")
+        return (f"States from the injection (t = 0) to the end of the simulation{arcs}, "
+                f"{steps}.",
                 f"{INTERPOLATION.capitalize()} interpolation of degree {INTERPOLATION_DEGREE} "
-                f"({INTERPOLATION_DEGREE + 1} states, the window centred on the time) "
-                "reproduces the propagated trajectory at every mid-point between states to "
-                f"{self.error_km * 1e6:.2g} mm and {self.error_km_s * 1e6:.2g} mm/s "
+                f"({INTERPOLATION_DEGREE + 1} states of the segment, the window centred on the "
+                "time) reproduces the propagated trajectory at every mid-point between states "
+                f"to {self.error_km * 1e6:.2g} mm and {self.error_km_s * 1e6:.2g} mm/s "
                 f"(required: {INTERPOLATION_TOL_KM * 1e6:g} mm, "
                 f"{INTERPOLATION_TOL_KM_S * 1e6:g} mm/s).")
+
+
+def segment_slices(segment: np.ndarray) -> tuple[slice, ...]:
+    """The runs of equal values of ``segment`` (N,) int, as slices, in order."""
+    cuts = [0, *(np.flatnonzero(np.diff(segment)) + 1).tolist(), int(np.size(segment))]
+    return tuple(slice(a, b) for a, b in zip(cuts, cuts[1:], strict=False))
 
 
 def event_comments(epoch: Epoch, events: Events) -> tuple[str, ...]:
@@ -153,7 +181,8 @@ def lagrange_interpolate(t_nodes, y_nodes, t, degree: int) -> np.ndarray:
 def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
                ref_frame: str, interpolation: str, interpolation_degree: int,
                originator: str = "TAPP", comments: tuple[str, ...] = (),
-               meta_comments: tuple[str, ...] = ()) -> str:
+               meta_comments: tuple[str, ...] = (), segment=None,
+               segment_comments: tuple[tuple[str, ...], ...] = ()) -> str:
     """Return the text of an OEM 2.0 (KVN) of an Earth-centred inertial trajectory.
 
     Parameters
@@ -161,7 +190,8 @@ def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
     epoch : Epoch
         UTC of t = 0.
     t_s : array_like, shape (N,)
-        Strictly increasing times, s from the epoch.
+        Times, s from the epoch, strictly increasing within a segment; a segment starts at or
+        after the last time of the one before.
     states : array_like, shape (N, 6)
         Position km and velocity km/s, Earth-centred, in ``ref_frame``.
     object_name, object_id : str
@@ -170,27 +200,43 @@ def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
         ``REF_FRAME`` (CCSDS SANA name: "GCRF", "EME2000", ...).
     interpolation, interpolation_degree : str, int
         ``INTERPOLATION`` (one of :data:`INTERPOLATIONS`) and ``INTERPOLATION_DEGREE``
-        (>= 1; Lagrange needs degree + 1 <= N states).
+        (>= 1; Lagrange needs degree + 1 <= the states of each segment).
     originator : str
         Creating agency.
     comments, meta_comments : tuple of str
-        COMMENT lines of the header (after ``CCSDS_OEM_VERS``) and of the metadata (after
-        ``META_START``).
+        COMMENT lines of the header (after ``CCSDS_OEM_VERS``) and of every segment's
+        metadata (after ``META_START``).
+    segment : array_like of int, shape (N,), optional
+        The segment of each state, 0, 1, ... in order (default: one segment).
+    segment_comments : tuple of tuple of str
+        COMMENT lines of each segment's metadata, after ``meta_comments`` (none when empty).
 
     Raises
     ------
     InputError
-        Mismatched shapes, non-finite values, times not strictly increasing, empty names or
-        frame, an unknown interpolation or a degree the states cannot carry.
+        Mismatched shapes, non-finite values, times not increasing as above, segments not
+        numbered 0, 1, ..., empty names or frame, an unknown interpolation or a degree the
+        states of a segment cannot carry.
     """
     t = np.asarray(t_s, dtype=float)
     x = np.asarray(states, dtype=float)
-    if t.ndim != 1 or t.size == 0 or x.shape != (t.size, 6):
-        raise InputError("OEM", "states", "times (N,) and states (N, 6)", (t.shape, x.shape))
+    seg = np.zeros(t.shape, dtype=int) if segment is None else np.asarray(segment)
+    if t.ndim != 1 or t.size == 0 or x.shape != (t.size, 6) or seg.shape != t.shape:
+        raise InputError("OEM", "states", "times (N,), states (N, 6) and segments (N,)",
+                         (t.shape, x.shape, seg.shape))
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
         raise InputError("OEM", "states", "finite times and states")
-    if np.any(np.diff(t) <= 0):
-        raise InputError("OEM", "t_s", "strictly increasing times")
+    steps = np.diff(seg)
+    if seg[0] != 0 or np.any((steps != 0) & (steps != 1)):
+        raise InputError("OEM", "segment", "segments numbered 0, 1, ... in order")
+    dt = np.diff(t)
+    if np.any((dt <= 0) & (steps == 0)) or np.any((dt < 0) & (steps == 1)):
+        raise InputError("OEM", "t_s", "times strictly increasing within a segment, each "
+                         "segment starting at or after the end of the one before")
+    spans = segment_slices(seg)
+    if segment_comments and len(segment_comments) != len(spans):
+        raise InputError("OEM", "segment_comments", f"one tuple per segment ({len(spans)})",
+                         len(segment_comments))
     for field, value in (("OBJECT_NAME", object_name), ("OBJECT_ID", object_id),
                          ("REF_FRAME", ref_frame)):
         if not value.strip():
@@ -198,28 +244,31 @@ def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
     if interpolation not in INTERPOLATIONS:
         raise InputError("OEM", "INTERPOLATION", f"one of {', '.join(INTERPOLATIONS)}",
                          interpolation)
-    if not 1 <= interpolation_degree < t.size:
-        raise InputError("OEM", "INTERPOLATION_DEGREE",
-                         f"a degree from 1 to the number of states less one ({t.size - 1})",
-                         interpolation_degree)
+    fewest = min(s.stop - s.start for s in spans)
+    if not 1 <= interpolation_degree < fewest:
+        raise InputError("OEM", "INTERPOLATION_DEGREE", "a degree from 1 to the number of "
+                         f"states of a segment less one ({fewest - 1})", interpolation_degree)
     created = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S")
     lines = ["CCSDS_OEM_VERS = 2.0", *(f"COMMENT {c}" for c in comments),
-             f"CREATION_DATE = {created}", f"ORIGINATOR = {originator}", "",
-             "META_START", *(f"COMMENT {c}" for c in meta_comments),
-             f"OBJECT_NAME = {object_name}",
-             f"OBJECT_ID = {object_id}",
-             "CENTER_NAME = EARTH",
-             f"REF_FRAME = {ref_frame}",
-             "TIME_SYSTEM = UTC",
-             f"START_TIME = {epoch.iso_after(float(t[0]), EPOCH_DECIMALS)}",
-             f"STOP_TIME = {epoch.iso_after(float(t[-1]), EPOCH_DECIMALS)}",
-             f"INTERPOLATION = {interpolation}",
-             f"INTERPOLATION_DEGREE = {interpolation_degree}",
-             "META_STOP", ""]
-    for ti, row in zip(t, x, strict=True):
-        lines.append(f"{epoch.iso_after(float(ti), EPOCH_DECIMALS)} " + " ".join(
-            [f"{v:.9f}" for v in row[:3]] + [f"{v:.12f}" for v in row[3:]]))
-    return "\n".join(lines) + "\n"
+             f"CREATION_DATE = {created}", f"ORIGINATOR = {originator}", ""]
+    for k, span in enumerate(spans):
+        own = segment_comments[k] if segment_comments else ()
+        lines += ["META_START", *(f"COMMENT {c}" for c in (*meta_comments, *own)),
+                  f"OBJECT_NAME = {object_name}",
+                  f"OBJECT_ID = {object_id}",
+                  "CENTER_NAME = EARTH",
+                  f"REF_FRAME = {ref_frame}",
+                  "TIME_SYSTEM = UTC",
+                  f"START_TIME = {epoch.iso_after(float(t[span][0]), EPOCH_DECIMALS)}",
+                  f"STOP_TIME = {epoch.iso_after(float(t[span][-1]), EPOCH_DECIMALS)}",
+                  f"INTERPOLATION = {interpolation}",
+                  f"INTERPOLATION_DEGREE = {interpolation_degree}",
+                  "META_STOP", ""]
+        for ti, row in zip(t[span], x[span], strict=True):
+            lines.append(f"{epoch.iso_after(float(ti), EPOCH_DECIMALS)} " + " ".join(
+                [f"{v:.9f}" for v in row[:3]] + [f"{v:.12f}" for v in row[3:]]))
+        lines.append("")
+    return "\n".join(lines[:-1]) + "\n"
 
 
 def write_oem(path: Path | str, text: str) -> Path:

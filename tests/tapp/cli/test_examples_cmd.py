@@ -21,7 +21,8 @@ def test_examples_copies_every_shipped_file_and_lists_its_kind(tmp_path: Path) -
     out = tmp_path / "start"
     result = runner.invoke(app, ["examples", str(out)])
     assert result.exit_code == 0, result.output
-    assert sorted(p.name for p in out.iterdir()) == sorted(FILES)
+    copied = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
+    assert copied == sorted(FILES)
     for name, kind in FILES.items():
         assert (out / name).read_bytes() == (EXAMPLES / name).read_bytes()
         assert f"{kind}" in result.output and str(out / name) in result.output

@@ -127,17 +127,17 @@ class Solution:
         raise ValueError(f"t = {t_s} s outside the reference")
 
 
-def integrate(orbit: SrpOrbit, x0: np.ndarray, t_s: np.ndarray, tol: float = 1e-13
-              ) -> Solution:
-    """The reference from t = 0 through the increasing times ``t_s``, restarting at each
-    boundary (module docstring).
+def integrate(orbit: SrpOrbit, x0: np.ndarray, t_s: np.ndarray, tol: float = 1e-13,
+              t0_s: float = 0.0) -> Solution:
+    """The reference from (t0_s, x0) through the increasing times ``t_s``, restarting at each
+    boundary (module docstring); ``orbit`` gives ``rhs`` and ``boundaries``.
 
     After a crossing the function just crossed sits at zero to rounding, so it watches only
     for the opposite crossing until another one is met (SciPy's ``direction``).
     """
     kw = dict(method="DOP853", rtol=tol, atol=tol)
     out = np.full((t_s.size, 6), np.nan)
-    t, y = 0.0, np.asarray(x0, dtype=float)
+    t, y = t0_s, np.asarray(x0, dtype=float)
     crossings, pieces = [], []
     events = orbit.boundaries()
     for g in events:

@@ -31,7 +31,7 @@ def _circle(et: np.ndarray) -> np.ndarray:
 def spk(tmp_path: Path) -> Path:
     path = tmp_path / "circle.bsp"
     et = ET0 + np.arange(0.0, 3601.0, 60.0)
-    write_spk(path, BODY, et, _circle(et))
+    write_spk(path, BODY, [(et, _circle(et))])
     return path
 
 

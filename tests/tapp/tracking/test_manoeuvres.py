@@ -17,7 +17,10 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+import spiceypy
 import tomli_w
+from astropy.time import Time, TimeDelta
+from oem import OrbitEphemerisMessage
 from typer.testing import CliRunner
 
 import tapp.cli.simulate_cmd  # noqa: F401  (registers the commands until tapp.cli imports it)
@@ -26,10 +29,16 @@ from tapp.dynamics import Propagator
 from tapp.dynamics.gates import pointing_axes
 from tapp.dynamics.manoeuvres import THRUST_PARAMETERS, ImpulsiveBurn
 from tapp.errors import InputError, TapeError
-from tapp.io.ccsds.oem import INTERPOLATION_TOL_KM, INTERPOLATION_TOL_KM_S
+from tapp.io.ccsds.oem import (
+    INTERPOLATION,
+    INTERPOLATION_DEGREE,
+    INTERPOLATION_TOL_KM,
+    INTERPOLATION_TOL_KM_S,
+    format_oem,
+)
 from tapp.io.tape.t13 import summary, validate
 from tapp.io.tape.t13_hdf5 import read_t13, write_t13
-from tapp.tracking.oem_states import oem_trajectory
+from tapp.tracking.oem_states import oem_trajectory, segment_comments, write_trajectory_spk
 from tapp.tracking.simulate import equinoctial_elements, simulate
 from tests.tapp.dynamics.burn_reference import axes, executed, turned
 from tests.tapp.tracking.helpers import leo_document, leo_scenario
@@ -319,17 +328,114 @@ def test_without_burns_nothing_changes(tmp_path: Path):
     assert "execution" not in tape.parameters.kind and tape.manoeuvres == ()
 
 
-def test_an_oem_flies_a_finite_burn_and_refuses_an_impulsive_one(simulation):
-    """Across ignition and cut-off the acceleration jumps: the states are halved there until
-    the interpolation holds (1 mm, 1 µm/s), and they are the simulation's trajectory. An
-    impulsive burn's velocity jump cannot be interpolated in one OEM segment."""
+def test_an_oem_flies_a_finite_burn_in_a_segment_of_its_own():
+    """At ignition and cut-off the acceleration jumps: the OEM's segments end there (the same
+    state on both sides), so the states need no halving about them, the interpolation holds
+    (1 mm, 1 µm/s), and they are the simulation's trajectory."""
     finite = leo_scenario(manoeuvre=MANOEUVRES[1:], times=TIMES)
     oem = oem_trajectory(finite, 10800.0)
     assert oem.error_km <= INTERPOLATION_TOL_KM and oem.error_km_s <= INTERPOLATION_TOL_KM_S
-    assert oem.min_step_s < 1.0 < oem.max_step_s  # halved about the burn only
+    assert oem.min_step_s == oem.max_step_s == 20.0
+    assert [(oem.t_s[s][0], oem.t_s[s][-1]) for s in oem.spans] == [
+        (0.0, 5000.0), (5000.0, 5600.0), (5600.0, 10800.0)]
+    for end, start in zip(oem.spans, oem.spans[1:], strict=False):
+        np.testing.assert_array_equal(oem.states[end][-1], oem.states[start][0])
     sim = simulate(finite)
-    at = np.isin(sim.t_s, oem.t_s)
-    np.testing.assert_allclose(oem.states[np.isin(oem.t_s, sim.t_s[at])], sim.states[at],
+    t, once = np.unique(oem.t_s, return_index=True)  # a cut's state (the same twice) once
+    at = np.isin(sim.t_s, t)
+    np.testing.assert_allclose(oem.states[once][np.isin(t, sim.t_s[at])], sim.states[at],
                                rtol=0, atol=1e-9)
-    with pytest.raises(InputError, match=r"manoeuvre: expected no impulsive burn with an OEM"):
-        oem_trajectory(simulation.scenario, 10800.0)
+
+
+#: OEM states are printed to 1e-9 km and 1e-12 km/s: rounding of half of that.
+PRINTED_KM, PRINTED_KM_S = 0.5e-9, 0.5e-12
+#: SPICE's state at a burn's epoch is the later segment's: within what the ET's rounding and
+#: the TDB rate move a velocity (3.3e-10 of 7.6 km/s, and 6e-8 s of 8e-3 km/s²) of the state
+#: after the burn, 2.3 m/s from the one before.
+ET_RATE_km_s = 1e-8
+
+
+@pytest.fixture(scope="module")
+def segmented(simulation, tmp_path_factory):
+    """The OEM (as text, read by the ``oem`` package) and SPK of the scenario with the
+    impulsive TCM1 at 2000 s and the finite BURN."""
+    d = tmp_path_factory.mktemp("segmented")
+    sc = simulation.scenario
+    traj = oem_trajectory(sc, 10800.0)
+    text = format_oem(sc.epoch, traj.t_s, traj.states, object_name="SC", object_id="SC",
+                      ref_frame=traj.ref_frame, interpolation=INTERPOLATION,
+                      interpolation_degree=INTERPOLATION_DEGREE, meta_comments=traj.comments,
+                      segment=traj.segment, segment_comments=segment_comments(traj, sc))
+    (d / "s.oem").write_text(text)
+    write_trajectory_spk(d / "s.bsp", sc, traj, -5)
+    return traj, OrbitEphemerisMessage.open(d / "s.oem"), d / "s.bsp"
+
+
+def test_an_impulsive_burn_ends_a_segment_and_starts_the_next(simulation, segmented):
+    """The OEM of TCM1 (2.3 m/s in VNB axes at 2000 s) and BURN: segments meeting at 2000 s,
+    the first ending with the state before the burn (the simulation's), the second starting
+    with it plus Δv in the VNB axes of this test's own NumPy; each interpolates within its
+    tolerances at every mid-point."""
+    traj, _, _ = segmented
+    first, second = traj.spans[:2]
+    assert [(traj.t_s[s][0], traj.t_s[s][-1]) for s in traj.spans] == [
+        (0.0, 2000.0), (2000.0, 5000.0), (5000.0, 5600.0), (5600.0, 10800.0)]
+    assert traj.error_km <= INTERPOLATION_TOL_KM and traj.error_km_s <= INTERPOLATION_TOL_KM_S
+    before = simulation.states[np.searchsorted(simulation.t_s, 2000.0)]
+    np.testing.assert_allclose(traj.states[first][-1], before, rtol=0, atol=1e-12)
+    burn = simulation.scenario.manoeuvres[0]
+    jump = axes(before[:3], before[3:], "vnb") @ np.array(burn.dv_km_s)
+    np.testing.assert_allclose(traj.states[second][0], before + np.r_[0, 0, 0, jump], rtol=0,
+                               atol=1e-15)
+    last = np.r_[np.diff(traj.segment) > 0, True]  # the state before each cut, and the end
+    at = last | ~np.isin(traj.t_s, traj.t_s[last])
+    at &= np.isin(traj.t_s, simulation.t_s)
+    np.testing.assert_allclose(traj.states[at], simulation.states[np.isin(
+        simulation.t_s, traj.t_s[at])], rtol=0, atol=1e-9)
+
+
+def test_the_oem_package_reads_a_segment_per_arc(simulation, segmented):
+    """Read by the ``oem`` package: a segment per arc, each interpolated by it (Lagrange,
+    degree 7, within its own states) at the simulation's times within the OEM's tolerances."""
+    _, message, _ = segmented
+    epoch = Time("2026-01-01T00:00:00", scale="utc")
+    for segment, (a, b) in zip(message.segments, [(0.0, 2000.0), (2000.0, 5000.0),
+                                                  (5000.0, 5600.0), (5600.0, 10800.0)],
+                               strict=True):
+        assert abs((segment.metadata["START_TIME"] - epoch).sec - a) < 1e-6
+        assert abs((segment.metadata["STOP_TIME"] - epoch).sec - b) < 1e-6
+        take = (simulation.t_s > a) & (simulation.t_s < b)
+        for t, x in zip(simulation.t_s[take][::5], simulation.states[take][::5], strict=True):
+            got = segment(epoch + TimeDelta(t, format="sec"))
+            np.testing.assert_allclose(got.position, x[:3], rtol=0,
+                                       atol=INTERPOLATION_TOL_KM + PRINTED_KM)
+            np.testing.assert_allclose(got.velocity, x[3:], rtol=0,
+                                       atol=INTERPOLATION_TOL_KM_S + PRINTED_KM_S)
+
+
+def test_the_spk_holds_a_segment_per_arc_and_gives_the_later_at_the_burn(segmented):
+    """The SPK has a type 13 segment per arc, consecutive ones meeting at an ET; SPICE gives
+    the state after TCM1 at its ET."""
+    traj, _, path = segmented
+    first, second = traj.spans[:2]
+    handle = spiceypy.dafopr(str(path))
+    try:
+        spiceypy.dafbfs(handle)
+        spans = []
+        while spiceypy.daffna():
+            et, ints = spiceypy.dafus(spiceypy.dafgs(), 2, 6)
+            assert tuple(ints[:4]) == (-5, 399, 1, 13)  # body, centre, J2000, type 13
+            spans.append(tuple(et))
+    finally:
+        spiceypy.dafcls(handle)
+    assert len(spans) == 4
+    assert all(a[1] == b[0] for a, b in zip(spans, spans[1:], strict=False))
+    assert abs(spans[0][1] - spans[0][0] - 2000.0) < 1e-6
+    spiceypy.furnsh(str(path))
+    try:
+        state, _ = spiceypy.spkezr("-5", spans[1][0], "J2000", "NONE", "399")
+    finally:
+        spiceypy.unload(str(path))
+    after, before = traj.states[second][0], traj.states[first][-1]
+    assert np.abs(np.array(state[3:]) - after[3:]).max() < ET_RATE_km_s
+    assert np.abs(np.array(state[3:]) - before[3:]).max() > 1e3 * ET_RATE_km_s

@@ -61,13 +61,14 @@ ONE_M_m = 1.0
 ONE_MM_km = 1e-6
 
 
-def _simulate(*args: str | Path) -> dict:
+def simulate_json(*args: str | Path) -> dict:
+    """``tapp simulate ARGS --json -``'s JSON (exit 0 asserted)."""
     res = runner.invoke(app, ["simulate", *map(str, args), "--json", "-"])
     assert res.exit_code == 0, res.output
     return json.loads(res.stdout)
 
 
-def _write(path: Path, doc: dict) -> Path:
+def write_toml(path: Path, doc: dict) -> Path:
     path.write_text(tomli_w.dumps(doc))
     return path
 
@@ -79,25 +80,26 @@ def round_trip(tmp_path_factory) -> dict:
     """The LEO scenario flown, its OEM and SPK written, and flown again from each."""
     d = tmp_path_factory.mktemp("round_trip")
     doc = leo_document()
-    _simulate(_write(d / "leo.toml", doc), "-o", d / "leo.t13.h5", "--oem", d / "leo.oem",
+    simulate_json(write_toml(d / "leo.toml", doc), "-o", d / "leo.t13.h5", "--oem", d / "leo.oem",
               "--spk", d / "leo.bsp")
     runs = {"original": (d / "leo.t13.h5", None)}
     for kind, table in (("OEM", {"file": "leo.oem"}), ("SPK", {"file": "leo.bsp",
                                                                "object": -999})):
-        scenario = _write(d / f"from_{kind}.toml", leo_document(injection=None, reference=table))
+        scenario = write_toml(d / f"from_{kind}.toml",
+                              leo_document(injection=None, reference=table))
         out = d / f"from_{kind}.t13.h5"
-        info = _simulate(scenario, "-o", out, "--oem", d / f"from_{kind}.oem", "--spk",
+        info = simulate_json(scenario, "-o", out, "--oem", d / f"from_{kind}.oem", "--spk",
                          d / f"from_{kind}.bsp")
         runs[kind] = (out, info)
     return {"folder": d, "runs": runs}
 
 
-def _scaled_information(r_a: np.ndarray, r_b: np.ndarray) -> float:
+def _scaled_information(r_a: np.ndarray, r_b: np.ndarray, columns: np.ndarray) -> float:
     """max |ΔN_ij| / √(N_ii N_jj) over the information matrices N = RᵀR (rows of zero
-    information left out): a square-root factor itself is not unique where a pair's data
-    leave the information singular."""
-    n_a = np.einsum("...ki,...kj->...ij", r_a, r_a)
-    n_b = np.einsum("...ki,...kj->...ij", r_b, r_b)
+    information left out), i and j among ``columns`` (bool mask): a square-root factor itself
+    is not unique where a pair's data leave the information singular."""
+    n_a = np.einsum("...ki,...kj->...ij", r_a, r_a)[..., columns, :][..., columns]
+    n_b = np.einsum("...ki,...kj->...ij", r_b, r_b)[..., columns, :][..., columns]
     d = np.sqrt(np.abs(np.diagonal(n_a, axis1=-2, axis2=-1)))
     scale = d[..., :, None] * d[..., None, :]
     keep = scale > 0
@@ -113,10 +115,12 @@ def _log_sensitivity(m_a: np.ndarray, m_b: np.ndarray, nominal: np.ndarray) -> f
     return float(np.abs(a - b).max() / np.abs(a).max())
 
 
-def tape_differences(a, b) -> dict[str, float]:
-    """The scaled differences of two T13 tapes, dataset by dataset."""
+def tape_differences(a, b, columns: np.ndarray | None = None) -> dict[str, float]:
+    """The scaled differences of two T13 tapes, dataset by dataset; the information over the
+    parameters ``columns`` (bool mask, default all)."""
     nominal = a.parameters.nominal
     info = a.records.info
+    columns = np.ones(nominal.size, dtype=bool) if columns is None else columns
     return {
         "records/info": float((np.abs(info - b.records.info) / np.abs(info).max(axis=0)).max()),
         "records/U": _log_sensitivity(a.records.U, b.records.U, nominal),
@@ -125,9 +129,9 @@ def tape_differences(a, b) -> dict[str, float]:
                                      / np.abs(a.miss.nominal))),
         "parameters/nominal": float(np.max(np.abs(nominal - b.parameters.nominal)
                                            / np.maximum(np.abs(nominal), 1.0))),
-        "pairs/R": _scaled_information(a.pairs.R, b.pairs.R),
-        "pairs/Rt": _scaled_information(a.pairs.Rt, b.pairs.Rt),
-        "pairs/Rt_parts": _scaled_information(a.pairs.Rt_parts, b.pairs.Rt_parts),
+        "pairs/R": _scaled_information(a.pairs.R, b.pairs.R, columns),
+        "pairs/Rt": _scaled_information(a.pairs.Rt, b.pairs.Rt, columns),
+        "pairs/Rt_parts": _scaled_information(a.pairs.Rt_parts, b.pairs.Rt_parts, columns),
     }
 
 
@@ -189,13 +193,15 @@ def _two_body_j2(_t: float, x: np.ndarray) -> np.ndarray:
     return np.concatenate([x[3:], a])
 
 
-def _et(t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """ET of scenario times by astropy, as (rounded ET, what it leaves out, dET/dt)."""
-    tdb = (Time(EPOCH, scale="utc") + TimeDelta(t_s, format="sec")).tdb - J2000_TDB
+def scenario_et(t_s: np.ndarray, epoch: str = EPOCH) -> tuple[np.ndarray, np.ndarray,
+                                                               np.ndarray]:
+    """ET of scenario times (SI seconds from the UTC ``epoch``) by astropy, as (rounded ET,
+    what it leaves out, dET/dt)."""
+    tdb = (Time(epoch, scale="utc") + TimeDelta(t_s, format="sec")).tdb - J2000_TDB
     whole, part = tdb.jd1 * 86400.0, tdb.jd2 * 86400.0
     et = whole + part
     remainder = part - (et - whole)
-    tt = Time(EPOCH, scale="utc") + TimeDelta(t_s, format="sec")
+    tt = Time(epoch, scale="utc") + TimeDelta(t_s, format="sec")
     step = TimeDelta(60.0, format="sec")
     rate = (((tt + step).tdb - (tt - step).tdb).sec / 120.0)
     return et, remainder, rate
@@ -211,7 +217,7 @@ def independent(tmp_path_factory) -> dict:
     x0 = np.array(leo_document()["injection"]["r_km"] + leo_document()["injection"]["v_km_s"])
     x0[4] += 0.05  # not tapp's own injection: an e = 0.013 orbit
     t = np.arange(-120.0, 10920.0 + 1.0, 30.0)
-    et, remainder, rate = _et(t)
+    et, remainder, rate = scenario_et(t)
     at = t - remainder  # the instant each rounded ET names
     x = np.empty((t.size, 6))
     for side in (at < 0.0, at >= 0.0):  # from t = 0 backwards and forwards
@@ -226,7 +232,7 @@ def independent(tmp_path_factory) -> dict:
     spiceypy.spkw13(handle, NAIF_ID, 399, "J2000", et[0], et[-1], "scipy", 7, et.size,
                     j2000, et)
     spiceypy.spkcls(handle)
-    info = _simulate(_write(d / "scipy.toml", doc), "-o", d / "scipy.t13.h5", "--oem",
+    info = simulate_json(write_toml(d / "scipy.toml", doc), "-o", d / "scipy.t13.h5", "--oem",
                      d / "tapp.oem")
     return {"folder": d, "info": info, "bias": b}
 
@@ -236,23 +242,31 @@ def test_the_fit_to_an_independent_integration_is_within_a_metre(independent) ->
         assert arc["max_m"] < ONE_M_m and arc["points"] == 10800 // 60 + 1
 
 
+def oem_against_spk(oem: Path, spk: Path, naif_id: int, epoch: str = EPOCH
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The states of every segment of ``oem`` read by the ``oem`` package: their times (N,), s
+    from ``epoch``, their positions (N, 3), km, and ``spiceypy.spkezr``'s positions of
+    ``naif_id`` in ``spk`` at the same instants (J2000 about the Earth, km: at the rounded ET,
+    moved by what it leaves out)."""
+    states = [s for segment in OrbitEphemerisMessage.open(oem).segments for s in segment.states]
+    start = Time(epoch, scale="utc")
+    t = np.array([(s.epoch - start).sec for s in states])
+    et, remainder, _ = scenario_et(t, epoch)
+    spiceypy.furnsh(str(spk))
+    try:
+        spice, _ = spiceypy.spkezr(str(naif_id), et, "J2000", "NONE", "399")
+    finally:
+        spiceypy.unload(str(spk))
+    spice = np.array(spice)
+    return (t, np.array([s.position for s in states]),
+            spice[:, :3] + remainder[:, None] * spice[:, 3:])
+
+
 def test_tapps_oem_is_within_a_millimetre_of_spkezr_at_every_epoch(independent) -> None:
     d = independent["folder"]
-    (segment,) = OrbitEphemerisMessage.open(d / "tapp.oem").segments
-    states = list(segment.states)
-    start = Time(EPOCH, scale="utc")
-    t = np.array([(s.epoch - start).sec for s in states])
-    et, remainder, _ = _et(t)
-    spiceypy.furnsh(str(d / "scipy.bsp"))
-    try:
-        spice, _ = spiceypy.spkezr(str(NAIF_ID), et, "J2000", "NONE", "399")
-    finally:
-        spiceypy.unload(str(d / "scipy.bsp"))
-    spice = np.array(spice)
-    r = (spice[:, :3] + remainder[:, None] * spice[:, 3:]) @ independent["bias"].T
-    tapp_r = np.array([s.position for s in states])
+    t, tapp_r, r = oem_against_spk(d / "tapp.oem", d / "scipy.bsp", NAIF_ID)
     assert t.size == 10800 // 20 + 1
-    assert np.linalg.norm(tapp_r - r, axis=1).max() < ONE_MM_km
+    assert np.linalg.norm(tapp_r - r @ independent["bias"].T, axis=1).max() < ONE_MM_km
 
 
 # --- another tool's OEM -----------------------------------------------------------------------
