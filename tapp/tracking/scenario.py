@@ -43,7 +43,7 @@ ISO strings or TOML dates)::
                        (tapp.io.stations_file)
     [tracking]         stations = [names], observables = ["range", "range_rate", "azimuth",
                        "elevation"], light_time = "none" | "one_way" | "two_way",
-                       data_interval_s, start, end, min_pass_s, max_pass_s,
+                       band = "S" | "X" | "Ka" (tapp.measurements.bands), data_interval_s, start, end, min_pass_s, max_pass_s,
                        blackouts = [[start, end], ...], schedule (a pass schedule, CSV:
                        tapp.io.schedule_file), use = "visibility" | "schedule" | "both",
                        allow_partial (tapp.tracking.schedule)
@@ -128,6 +128,7 @@ from tapp.io.stations_file import StationsSection
 from tapp.io.tomlfile import read_toml
 from tapp.io.trajectory_file import Reference, ReferenceTable
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
+from tapp.measurements.bands import BAND_NAMES, DEFAULT_BAND
 from tapp.measurements.stations import Station
 from tapp.orbit.bplane import REFERENCE_POLES
 from tapp.targeting.program import BPlaneSearch
@@ -189,6 +190,7 @@ class TrackingStation:
     biases : kinds among ("range", "range_rate") whose bias is in q.
     range_bias_km, range_rate_bias_km_s : nominal bias values added to the observables.
     blackouts_s : ((start, end), ...) s, no data (the scenario's and the station's own).
+    band : its radio band, "S", "X" or "Ka" (:mod:`tapp.measurements.bands`).
     """
 
     number: int
@@ -201,6 +203,7 @@ class TrackingStation:
     range_bias_km: float
     range_rate_bias_km_s: float
     blackouts_s: tuple[tuple[float, float], ...]
+    band: str = DEFAULT_BAND
 
     def parameters(self) -> tuple[Parameter, ...]:
         """Its parameters in q: location then biases, named ``<station>.<name>``."""
@@ -400,6 +403,7 @@ Window = Annotated[list[Time], Field(min_length=2, max_length=2)]
 Kind = Literal[KINDS]  # type: ignore[valid-type]
 BiasKind = Literal[BIAS_KINDS]  # type: ignore[valid-type]
 LocationMode = Literal[LOCATION_MODES]  # type: ignore[valid-type]
+BandName = Literal[BAND_NAMES]  # type: ignore[valid-type]
 
 _LOCATION = ("How station locations enter q: \"cylindrical\" (distance from the spin axis, "
              "longitude, height along the axis), \"ecef\" (x, y, z) or \"none\".")
@@ -436,6 +440,7 @@ class StationTracking(Schema):
                                         "its range rate.")
     blackouts: list[Window] = Field([], description=_BLACKOUTS + " at this station (beside "
                                     "tracking.blackouts).")
+    band: BandName | None = Field(None, description="Its radio band; default: tracking.band.")
     fit: FitTable = Field(FitTable(), description="Its fit-world σ, overriding [noise.fit].")
     real: RealTable = Field(RealTable(), description="Its real-world noise, overriding "
                             "[noise.real].")
@@ -453,6 +458,9 @@ class TrackingTable(Schema):
         ["range", "range_rate"], description="What every station measures.")
     light_time: Literal[LIGHT_TIME_MODES] = Field(  # type: ignore[valid-type]
         "none", description="Light-time correction of the observables.")
+    band: BandName = Field(DEFAULT_BAND, description="The stations' radio band, \"S\", \"X\" "
+                           "or \"Ka\": the carrier frequencies of their links (uplink, and "
+                           "downlink by the DSN's turnaround ratio).")
     data_interval_s: Positive = Field(description="Time between samples of each station.")
     start: Time = Field(0.0, description="First sample time.")
     end: Time | None = Field(None, description="Last sample time; default: the last T13 time.")
@@ -720,7 +728,8 @@ def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
             location=location, biases=biases,
             range_bias_km=own.range_bias_m * 1e-3,
             range_rate_bias_km_s=own.range_rate_bias_mm_s * 1e-6,
-            blackouts_s=blackouts + p.windows(own.blackouts, f"{where}.blackouts")))
+            blackouts_s=blackouts + p.windows(own.blackouts, f"{where}.blackouts"),
+            band=trk.band if own.band is None else own.band))
     return tuple(out)
 
 

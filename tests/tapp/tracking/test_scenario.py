@@ -190,7 +190,7 @@ def test_a_misspelled_key_is_named_with_the_allowed_keys() -> None:
     doc = _with(("tracking", "data_intervl_s"), 30.0)
     text = _message(doc)
     assert text.startswith(f"{SOURCE}: tracking.data_intervl_s: expected no such key (allowed: "
-                           "stations, observables, light_time, data_interval_s, ")
+                           "stations, observables, light_time, band, data_interval_s, ")
     assert _message(_with(("noise", "extra"), {})).startswith(
         f"{SOURCE}: noise.extra: expected no such key (allowed: fit, real)")
 
