@@ -1,5 +1,6 @@
 """Tracking measurements: stations, observables with partials (ΔDOR on a baseline:
-:mod:`tapp.measurements.ddor`), visibility and passes.
+:mod:`tapp.measurements.ddor`; troposphere and ionosphere: :mod:`tapp.measurements.media`),
+visibility and passes.
 
 Numerical kernels only (pure NumPy, no I/O), shared by the tracking simulator (TAPP I) and the
 orbit-determination code. Conventions: km, km/s, s, rad; time-major arrays (N, ...); spacecraft
@@ -7,6 +8,7 @@ states in the inertial frame (GCRS); Earth orientation by :mod:`tapp.frames.orie
 """
 
 from tapp.measurements.ddor import DdorModel, projected_baseline_km, quasar_direction
+from tapp.measurements.media import MEDIA_PARAMETER_NAMES, MediaModel
 from tapp.measurements.observables import (
     BIAS_NAMES,
     OBSERVABLE_UNITS,
@@ -36,12 +38,14 @@ from tapp.measurements.visibility import find_passes, is_visible, pass_labels
 
 __all__ = [
     "BIAS_NAMES",
+    "MEDIA_PARAMETER_NAMES",
     "OBSERVABLE_UNITS",
     "STATION_PARAMETER_NAMES",
     "DdorModel",
     "LightTime",
     "LightTimeSolution",
     "MeasurementModel",
+    "MediaModel",
     "Observable",
     "Station",
     "azimuth_elevation_partials",

@@ -56,6 +56,7 @@ import numpy as np
 from tapp.constants import C_LIGHT_km_s, GM_EARTH_km3_s2
 from tapp.errors import DivergenceError, InputError
 from tapp.frames.orientation import EarthAttitude, EarthOrientation, as_orientation
+from tapp.measurements.media import LegMedia, MediaModel
 from tapp.measurements.stations import (
     Station,
     StationParameters,
@@ -411,6 +412,16 @@ def light_time_range_rate_km_s(solution: LightTimeSolution, two_way: bool = True
     return 0.5 * C_LIGHT_km_s * (tau_u_dot + tau_d_dot)
 
 
+def _cross_matrix(a):
+    """Return [a×], the matrix of y -> a × y, shape (..., 3, 3) from a (..., 3)."""
+    a = np.asarray(a, dtype=float)
+    out = np.zeros(a.shape + (3,))
+    out[..., 0, 1], out[..., 0, 2] = -a[..., 2], a[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = a[..., 2], -a[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -a[..., 1], a[..., 0]
+    return out
+
+
 # ---------------------------------------------------------------------------------------------
 # The measurement model: one station, a list of observable kinds
 # ---------------------------------------------------------------------------------------------
@@ -425,6 +436,7 @@ class _Geometry:
     attitude_rx: EarthAttitude
     solution: LightTimeSolution | None
     legs: tuple[tuple[float, np.ndarray, EarthAttitude], ...]
+    t_s: np.ndarray | None = None
 
     def enu(self, station: Station):
         """Down-leg station-to-spacecraft vector in the station's ENU axes at reception, km."""
@@ -455,6 +467,12 @@ class MeasurementModel:
         None: instantaneous geometry (observation and signal at the receive time).
     range_bias_km, range_rate_bias_km_s : float
         Constant biases added to range and range-rate.
+    media : MediaModel or None
+        The troposphere and ionosphere of the station's links (:mod:`tapp.measurements.media`),
+        added to range and range-rate; None: none. Each leg takes its own elevation and
+        carrier: with two-way light time, the down-leg (f_R) at reception and the up-leg (f_T)
+        at transmission, half each; one-way, the down-leg; without light time, one leg at the
+        mean of the two carriers' 1 / f². Angles are left without refraction.
 
     Examples
     --------
@@ -471,6 +489,7 @@ class MeasurementModel:
     light_time: LightTime | None = None
     range_bias_km: float = 0.0
     range_rate_bias_km_s: float = 0.0
+    media: MediaModel | None = None
 
     def __post_init__(self) -> None:
         try:
@@ -494,14 +513,14 @@ class MeasurementModel:
         if self.light_time is None:
             station = station_state_eci(self.station.r_ecef_km, attitude_rx)
             return _Geometry(x, np.zeros(t.shape), attitude_rx, None,
-                             ((1.0, station, attitude_rx),))
+                             ((1.0, station, attitude_rx),), t)
         sol = solve_light_time(t, x, self.station.r_ecef_km, self.orientation, self.light_time)
         legs = ((1.0, sol.station_receive_eci, attitude_rx),)
         if self.light_time.two_way:
             attitude_tx = self.orientation.attitude(t - sol.tau_down_s - sol.tau_up_s)
             legs = ((0.5, sol.station_receive_eci, attitude_rx),
                     (0.5, sol.station_transmit_eci, attitude_tx))
-        return _Geometry(sol.spacecraft_eci, sol.tau_down_s, attitude_rx, sol, legs)
+        return _Geometry(sol.spacecraft_eci, sol.tau_down_s, attitude_rx, sol, legs, t)
 
     def _observables(self, t_s, state_eci, kinds):
         """Return {kind: values (N,)} without biases, solving the light time once."""
@@ -523,6 +542,88 @@ class MeasurementModel:
             out[Observable.AZIMUTH], out[Observable.ELEVATION] = azimuth_elevation_rad(
                 geo.enu(self.station)
             )
+        if self.media is not None:
+            for kind, value in self._media_terms(geo, kinds).items():
+                out[kind] = out[kind] + value
+        return out
+
+    def _media_terms(self, geo: _Geometry, kinds) -> dict[Observable, np.ndarray]:
+        """Return {kind: the media's share (N,)} of the range and range-rate among ``kinds``."""
+        out = {k: np.zeros(geo.tau_down_s.shape) for k in kinds
+               if k in (Observable.RANGE, Observable.RANGE_RATE)}
+        if out:
+            for weight, leg, _ in self._media_legs(geo):
+                if Observable.RANGE in out:
+                    out[Observable.RANGE] += weight * leg.range_km
+                if Observable.RANGE_RATE in out:
+                    out[Observable.RANGE_RATE] += weight * leg.rate_km_s
+        return out
+
+    def media_corrections(self, t_s, state_eci):
+        """Return the media's share of the observables, shape (N, m), units of
+        OBSERVABLE_UNITS (zero in the angle columns; all zero without media)."""
+        if self.media is None:
+            return np.zeros(np.shape(t_s) + (len(self.kinds),))
+        terms = self._media_terms(self._geometry(t_s, state_eci), self.kinds)
+        zero = np.zeros(np.shape(t_s))
+        return np.stack([terms.get(k, zero) for k in self.kinds], axis=-1)
+
+    def _media_legs(self, geo: _Geometry) -> list[tuple[float, LegMedia, np.ndarray]]:
+        """Per leg: (weight, its media terms, the partials of (p, ṗ) w.r.t. the spacecraft
+        state (N, 6, 6)), p the station-to-spacecraft vector in the station's ENU axes at the
+        leg's time and ṗ = M_enu [Δv - ω ĉ × Δr] its rate seen from the rotating Earth
+        (:mod:`tapp.measurements.media`)."""
+        if geo.solution is None:
+            links = ("two_way",)
+        else:
+            links = ("down", "up") if self.light_time.two_way else ("down",)
+        out = []
+        for (weight, station, attitude), link in zip(geo.legs, links, strict=True):
+            rot = self.station.enu_from_eci(attitude)
+            rel = geo.spacecraft - station
+            spin = attitude.omega_rad_s * attitude.spin_axis
+            w = rel[..., 3:] - np.cross(spin, rel[..., :3])
+            p = np.einsum("...ij,...j->...i", rot, rel[..., :3])
+            p_dot = np.einsum("...ij,...j->...i", rot, w)
+            # d(p, ṗ)/d(r, v): [[M, 0], [-M [ω ĉ ×], M]]
+            jac = np.zeros(rot.shape[:-2] + (6, 6))
+            jac[..., :3, :3] = rot
+            jac[..., 3:, 3:] = rot
+            jac[..., 3:, :3] = -rot @ _cross_matrix(spin)
+            out.append((weight, self.media.leg(geo.t_s, p, p_dot, link), jac))
+        return out
+
+    def _media_rows(self, leg: LegMedia, jac: np.ndarray) -> np.ndarray:
+        """Return a leg's d(media terms)/d(spacecraft state), (N, m, 6), zero but in the
+        range and range-rate rows."""
+        rows = np.zeros(jac.shape[:-2] + (len(self.kinds), 6))
+        for row, kind in enumerate(self.kinds):
+            if kind is Observable.RANGE:
+                rows[..., row, :] = np.einsum("...i,...ij->...j", leg.range_p, jac[..., :3, :])
+            elif kind is Observable.RANGE_RATE:
+                grad = np.concatenate([leg.rate_p, leg.rate_pdot], axis=-1)
+                rows[..., row, :] = np.einsum("...i,...ij->...j", grad, jac)
+        return rows
+
+    def media_partials(self, t_s, state_eci):
+        """Return d observables / d zenith parameters (dry km, wet km, TEC TECU), shape
+        (N, m, 3), columns named by :data:`tapp.measurements.media.MEDIA_PARAMETER_NAMES`.
+
+        Raises
+        ------
+        InputError
+            The model has no media.
+        """
+        if self.media is None:
+            raise InputError("MeasurementModel", "media", "a MediaModel for media partials")
+        geo = self._geometry(t_s, state_eci)
+        out = np.zeros(geo.tau_down_s.shape + (len(self.kinds), 3))
+        for weight, leg, _ in self._media_legs(geo):
+            for row, kind in enumerate(self.kinds):
+                if kind is Observable.RANGE:
+                    out[..., row, :] += weight * leg.range_zenith
+                elif kind is Observable.RANGE_RATE:
+                    out[..., row, :] += weight * leg.rate_zenith
         return out
 
     def azimuth_elevation(self, t_s, state_eci):
@@ -570,6 +671,9 @@ class MeasurementModel:
                 elif number == 0:
                     rows[..., row, :] = angles[..., 0 if kind is Observable.AZIMUTH else 1, :]
             out.append((attitude, rows))
+        if self.media is not None:
+            for (_, rows), (weight, leg, jac) in zip(out, self._media_legs(geo), strict=True):
+                rows += weight * self._media_rows(leg, jac)
         return out
 
     def state_partials(self, t_s, state_eci):
