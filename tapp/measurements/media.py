@@ -134,17 +134,17 @@ def standard_atmosphere(h_km: float) -> tuple[float, float, float]:
             STANDARD_TEMPERATURE_K - 6.5e-3 * h_m, STANDARD_HUMIDITY)
 
 
-def check_meteorology(where: str, pressure_hpa: float, temperature_k: float,
+def check_meteorology(source: str, where: str, pressure_hpa: float, temperature_k: float,
                       relative_humidity: float) -> None:
     """Refuse meteorology out of :data:`PRESSURE_RANGE_hPa`, :data:`TEMPERATURE_RANGE_K` or a
-    relative humidity out of [0, 1], with an InputError naming ``where``'s key."""
+    relative humidity out of [0, 1]: an InputError naming ``source`` and ``where.<key>``."""
     for key, value, (lo, hi), unit in (
             ("pressure_hpa", pressure_hpa, PRESSURE_RANGE_hPa, "hPa"),
             ("temperature_k", temperature_k, TEMPERATURE_RANGE_K, "K"),
-            ("relative_humidity", relative_humidity, (0.0, 1.0), "")):
+            ("relative_humidity", relative_humidity, (0.0, 1.0), "(a fraction)")):
         if not lo <= value <= hi:
-            raise InputError(where, key, f"a station's value in [{lo:g}, {hi:g}] {unit}".strip(),
-                             value)
+            raise InputError(source, f"{where}.{key}",
+                             f"a station's value in [{lo:g}, {hi:g}] {unit}", value)
 
 
 def day_of_year(epoch: Epoch) -> float:

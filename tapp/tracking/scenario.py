@@ -38,18 +38,29 @@ ISO strings or TOML dates)::
     [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", "Cr", "Cd", ...]
                        (tapp.dynamics.forces names), station_location = "cylindrical" |
                        "ecef" | "none", station_biases = ["range", "range_rate"],
+                       media = ["troposphere", "ionosphere"] (each station's zenith
+                       parameters <STATION>.zenith_dry_km, .zenith_wet_km, kind
+                       "troposphere", and .zenith_tec_tecu, kind "ionosphere"; needs
+                       the effect on in [media]),
                        [parameters.values] non-nominal values of dynamic parameters
     [stations.NAME]    lat_deg, lon_deg, h_km (-0.5 to 10 km), elev_mask_deg
                        (tapp.io.stations_file)
     [tracking]         stations = [names], observables = ["range", "range_rate", "azimuth",
                        "elevation"], light_time = "none" | "one_way" | "two_way",
-                       band = "S" | "X" | "Ka" (tapp.measurements.bands), data_interval_s, start, end, min_pass_s, max_pass_s,
+                       band = "S" | "X" | "Ka" (tapp.measurements.bands), data_interval_s,
+                       start, end, min_pass_s, max_pass_s,
                        blackouts = [[start, end], ...], schedule (a pass schedule, CSV:
                        tapp.io.schedule_file), use = "visibility" | "schedule" | "both",
                        allow_partial (tapp.tracking.schedule)
     [tracking.station.NAME]  per-station observables, location, biases, range_bias_m,
                        range_rate_bias_mm_s (nominal bias values), blackouts, and fit / real
-                       tables overriding [noise.fit] / [noise.real] keys
+                       tables overriding [noise.fit] / [noise.real] keys; the media's
+                       pressure_hpa, temperature_k, relative_humidity (default: the
+                       standard atmosphere at its height) and zenith_tec_tecu
+    [media]            optional: troposphere = true, ionosphere = true (both default false)
+                       add their delays to every station's range and range-rate (not to
+                       ΔDOR); shell_height_km (350), zenith_tec_tecu (10)
+                       (tapp.measurements.media)
     [noise.fit]        sigma_range_m, sigma_range_rate_mm_s, sigma_azimuth_deg,
                        sigma_elevation_deg (white noise: W = diag(1/σ²))
     [noise.real]       sigma_<kind>_<unit> (white, default the fit σ), bias_<kind>_<unit>
@@ -129,6 +140,16 @@ from tapp.io.tomlfile import read_toml
 from tapp.io.trajectory_file import Reference, ReferenceTable
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.bands import BAND_NAMES, DEFAULT_BAND
+from tapp.measurements.media import (
+    MEDIA_KINDS,
+    MEDIA_PARAMETER_NAMES,
+    ZENITH_TEC_TECU,
+    MediaModel,
+    SHELL_HEIGHT_km,
+    check_meteorology,
+    day_of_year,
+    standard_atmosphere,
+)
 from tapp.measurements.stations import Station
 from tapp.orbit.bplane import REFERENCE_POLES
 from tapp.targeting.program import BPlaneSearch
@@ -142,6 +163,9 @@ KINDS = tuple(o.value for o in Observable)
 #: Kinds that can carry a station bias in q (names and units: ``BIAS_NAMES``).
 BIAS_KINDS = ("range", "range_rate")
 LOCATION_MODES = ("cylindrical", "ecef", "none")
+#: The media whose zenith parameters may be in q ([parameters] media), and their units.
+MEDIA_EFFECTS = ("troposphere", "ionosphere")
+MEDIA_UNITS = ("km", "km", "TECU")
 #: Most T13 input times a scenario may ask for (each is a tape record, held in memory).
 MAX_INPUT_TIMES = 100_000
 LIGHT_TIME_MODES = ("none", "one_way", "two_way")
@@ -165,8 +189,9 @@ MISS_QUANTITIES = {
 class Parameter:
     """One TAPP I parameter: name (with unit), unit, kind, nominal value, station number.
 
-    ``kind`` is "orbit", "dynamic", "location", "bias" or "stochastic"; ``station`` is the
-    station number s (1-based) of a location or bias parameter, 0 otherwise.
+    ``kind`` is "orbit", "dynamic", "location", "bias", "troposphere", "ionosphere",
+    "stochastic" or "execution"; ``station`` is the station number s (1-based) of a location,
+    bias or zenith (media) parameter, 0 otherwise.
     """
 
     name: str
@@ -191,6 +216,9 @@ class TrackingStation:
     range_bias_km, range_rate_bias_km_s : nominal bias values added to the observables.
     blackouts_s : ((start, end), ...) s, no data (the scenario's and the station's own).
     band : its radio band, "S", "X" or "Ka" (:mod:`tapp.measurements.bands`).
+    media : the troposphere and ionosphere of its links (None: neither is on).
+    media_parameters : effects among ("troposphere", "ionosphere") whose zenith parameters
+        are in q.
     """
 
     number: int
@@ -204,9 +232,12 @@ class TrackingStation:
     range_rate_bias_km_s: float
     blackouts_s: tuple[tuple[float, float], ...]
     band: str = DEFAULT_BAND
+    media: MediaModel | None = None
+    media_parameters: tuple[str, ...] = ()
 
     def parameters(self) -> tuple[Parameter, ...]:
-        """Its parameters in q: location then biases, named ``<station>.<name>``."""
+        """Its parameters in q: location, biases, then zenith (media) parameters, named
+        ``<station>.<name>``."""
         out = []
         if self.location != "none":
             values = self.station.location(self.location)
@@ -219,6 +250,12 @@ class TrackingStation:
             if kind in self.biases:
                 out.append(Parameter(f"{self.station.name}.{bname}", _unit_of(bname), "bias",
                                      nominal[kind], self.number))
+        if self.media_parameters:
+            for zname, kind, unit, value in zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS,
+                                                MEDIA_UNITS, self.media.zenith, strict=True):
+                if kind in self.media_parameters:
+                    out.append(Parameter(f"{self.station.name}.{zname}", unit, kind,
+                                         float(value), self.number))
         return tuple(out)
 
 
@@ -420,6 +457,10 @@ class ParametersTable(Schema):
         "\"Cd\" (with a model.atmosphere).")
     station_location: LocationMode = Field("none", description=_LOCATION)
     station_biases: Annotated[list[BiasKind], Unique] = Field([], description=_BIASES)
+    media: Annotated[list[Literal[MEDIA_EFFECTS]], Unique] = Field(  # type: ignore[valid-type]
+        [], description="Media whose per-station zenith parameters are in q: "
+        "\"troposphere\" (zenith_dry_km, zenith_wet_km), \"ionosphere\" (zenith_tec_tecu); "
+        "each needs its effect on in [media].")
     values: dict[str, float] = Field(
         {}, description="Values other than nominal of dynamic parameters, by name (GM in "
         "km³/s²).")
@@ -444,6 +485,16 @@ class StationTracking(Schema):
     fit: FitTable = Field(FitTable(), description="Its fit-world σ, overriding [noise.fit].")
     real: RealTable = Field(RealTable(), description="Its real-world noise, overriding "
                             "[noise.real].")
+    pressure_hpa: Positive | None = Field(
+        None, description="Surface pressure for the zenith hydrostatic delay (300 to 1100 "
+        "hPa); default: the standard atmosphere at its height.")
+    temperature_k: Positive | None = Field(
+        None, description="Surface temperature for the zenith wet delay (180 to 340 K); "
+        "default: the standard atmosphere at its height.")
+    relative_humidity: NonNegative | None = Field(
+        None, description="Relative humidity, a fraction 0 to 1; default: 0.5.")
+    zenith_tec_tecu: NonNegative | None = Field(
+        None, description="Its nominal zenith TEC (TECU); default: media.zenith_tec_tecu.")
 
 
 class TrackingTable(Schema):
@@ -485,6 +536,21 @@ class TrackingTable(Schema):
     allow_partial: bool = Field(
         False, description="Drop the samples of a scheduled pass that the station cannot see "
         "(counted under elevation_mask) instead of refusing the schedule.")
+
+
+class MediaTable(Schema):
+    """``[media]``: the troposphere and ionosphere on every station's range and range-rate
+    (tapp.measurements.media; ΔDOR is left without them)."""
+
+    troposphere: bool = Field(False, description="Saastamoinen-Davis zenith delays from each "
+                              "station's weather, mapped by Niell (1996).")
+    ionosphere: bool = Field(False, description="A thin-shell ionosphere: 40.3 TEC / f² at "
+                             "each leg's carrier, a delay on range and an advance on "
+                             "range-rate.")
+    shell_height_km: Positive = Field(SHELL_HEIGHT_km, description="Height of the thin shell.")
+    zenith_tec_tecu: NonNegative = Field(
+        ZENITH_TEC_TECU, description="Every station's nominal zenith TEC, TECU (1e16 /m²); "
+        "10 is Klobuchar's night-time floor, a mid-latitude day 20-50.")
 
 
 class TimesTable(Schema):
@@ -576,6 +642,8 @@ class ScenarioFile(StationsSection):
     targeting: TargetingTable | None = Field(
         None, description="Retarget the injection velocity by SEARCH before simulating.")
     ddor: DdorTable | None = Field(None, description="ΔDOR on baselines of tracked stations.")
+    media: MediaTable = Field(MediaTable(), description="Troposphere and ionosphere on the "
+                              "stations' range and range-rate.")
     stochastic: StochasticTable | None = Field(
         None, description="Stochastic accelerations, estimated or considered by TAPP III.")
     manoeuvre: Annotated[list[ManoeuvreTable], Field(max_length=MAX_MANOEUVRES)] = Field(
@@ -729,8 +797,36 @@ def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
             range_bias_km=own.range_bias_m * 1e-3,
             range_rate_bias_km_s=own.range_rate_bias_mm_s * 1e-6,
             blackouts_s=blackouts + p.windows(own.blackouts, f"{where}.blackouts"),
-            band=trk.band if own.band is None else own.band))
+            band=trk.band if own.band is None else own.band,
+            media=_station_media(p, doc.media, own, known[name],
+                                 trk.band if own.band is None else own.band, where),
+            media_parameters=tuple(par.media)))
     return tuple(out)
+
+
+def _station_media(p: _Parser, media: MediaTable, own: StationTracking, station: Station,
+                   band: str, where: str) -> MediaModel | None:
+    """A station's :class:`MediaModel` (None with both effects off): its weather, else the
+    standard atmosphere at its height; its zenith TEC, else the scenario's."""
+    if not (media.troposphere or media.ionosphere):
+        return None
+    standard = standard_atmosphere(station.h_km)
+    weather = tuple(s if v is None else float(v) for v, s in zip(
+        (own.pressure_hpa, own.temperature_k, own.relative_humidity), standard, strict=True))
+    check_meteorology(p.source, where, *weather)
+    tec = media.zenith_tec_tecu if own.zenith_tec_tecu is None else own.zenith_tec_tecu
+    return MediaModel.from_meteorology(
+        station.lat_rad, station.h_km, day_of_year(p.epoch), *weather, zenith_tec_tecu=tec,
+        band=band, troposphere=media.troposphere, ionosphere=media.ionosphere,
+        shell_height_km=media.shell_height_km)
+
+
+def _media_parameters(p: _Parser, doc: ScenarioFile) -> None:
+    """Refuse zenith parameters in q of an effect that is off."""
+    for i, effect in enumerate(doc.parameters.media):
+        if not getattr(doc.media, effect):
+            p.fail(f"parameters.media[{i}]", f"media.{effect} = true for the {effect}'s zenith "
+                   "parameters", effect)
 
 
 def _times(p: _Parser, tim: TimesTable) -> TapeTimes:
@@ -947,6 +1043,7 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     state_model, var_model = doc.model.force_models(p.source, model)
     rtol, atol = doc.model.rtol, doc.model.atol
     dynamic, values = _dynamic(p, doc.parameters, state_model)
+    _media_parameters(p, doc)
     stations = _stations(p, doc, doc.parameters)
     times = _times(p, doc.times)
     last_s = float(times.t13_s[-1])

@@ -46,7 +46,12 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    .. math::
 
        A = \\Big[\\, H\\,\\Phi(t, t_j),\\; H\\,S_j(t),\\; \\partial h/\\partial(\\text{location}),
-       \\; \\partial h/\\partial(\\text{bias}),\\; H\\,S_{s,j}(t) \\,\\Big].
+       \\; \\partial h/\\partial(\\text{bias}),\\; \\partial h/\\partial(\\text{zenith}),
+       \\; H\\,S_{s,j}(t) \\,\\Big].
+
+   With a ``[media]`` table the stations' range and range-rate carry the troposphere and
+   ionosphere (:mod:`tapp.measurements.media`; ΔDOR does not), and their zenith parameters
+   (``[parameters] media``) their columns ∂h/∂(zenith dry, wet km, TEC TECU).
 
 3. **Square-root information.** Per (record k, station s): upper-triangular factors R and R̃
    with RᵀR = ΔJ = AᵀWA and R̃ᵀR̃ = ΔJ̃ = AᵀWMWA over the observations in (t_{k-1}, t_k],
@@ -112,6 +117,7 @@ from tapp.measurements.ddor import (
     projected_baseline_km,
     quasar_direction,
 )
+from tapp.measurements.media import MEDIA_KINDS, MEDIA_PARAMETER_NAMES
 from tapp.orbit.bplane import b_plane
 from tapp.orbit.elements import cartesian_to_elements
 from tapp.targeting.program import BPlaneProgram
@@ -350,7 +356,7 @@ def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
                        ) -> MeasurementModel:
     light_time = _light_time(scenario, prop, scenario.schedule.light_time == "two_way")
     return MeasurementModel(ts.station, scenario.orientation, ts.kinds, light_time,
-                            ts.range_bias_km, ts.range_rate_bias_km_s)
+                            ts.range_bias_km, ts.range_rate_bias_km_s, media=ts.media)
 
 
 def _state_rows(h: np.ndarray, arc: _Arc, p: np.ndarray, scenario: Scenario,
@@ -410,6 +416,11 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     for kind in ts.biases:
         i = BIAS_KINDS.index(kind)
         a[..., columns[f"{name}.{BIAS_NAMES[i]}"]] = bias[..., i]
+    if ts.media_parameters:
+        zenith = model.media_partials(t, x)
+        for i, (zname, kind) in enumerate(zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS, strict=True)):
+            if kind in ts.media_parameters:
+                a[..., columns[f"{name}.{zname}"]] = zenith[..., i]
     record, segment = _segments(t, label, t13)
     counts = np.full(times.size, len(ts.kinds)) if taken is None else taken.sum(axis=1)
     pass_list = [(float(times[a_]), float(times[b_ - 1]), int(counts[a_:b_].sum()))

@@ -100,10 +100,12 @@ __all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PART
 class TapeParameters:
     """The n_o TAPP I parameters x = [p; q]: names (with units), units, kinds, nominal values.
 
-    ``kind`` is "orbit" (p), "dynamic" (model constants), "location" or "bias" (station
-    parameters, with ``station`` their station number; 0 otherwise), "stochastic" (the
-    accelerations of :attr:`T13.stochastic`) or "execution" (the execution errors of the burns
-    of :attr:`T13.manoeuvres`).
+    ``kind`` is "orbit" (p), "dynamic" (model constants), "location", "bias", "troposphere"
+    or "ionosphere" (station parameters, with ``station`` their station number; 0 otherwise:
+    the media's are a station's zenith dry and wet delays, km, and zenith TEC, TECU:
+    :mod:`tapp.measurements.media`), "stochastic" (the accelerations of :attr:`T13.stochastic`)
+    or "execution" (the execution errors of the burns of :attr:`T13.manoeuvres`). The kind is
+    free text on the tape: a tape of any of these kinds reads.
     """
 
     name: tuple[str, ...]

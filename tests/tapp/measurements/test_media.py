@@ -94,11 +94,11 @@ def test_wet_delay_of_a_humid_day_is_some_centimetres():
 
 def test_impossible_meteorology_is_refused_by_key():
     with pytest.raises(InputError, match="pressure_hpa"):
-        check_meteorology("stations.X", 93000.0, 283.0, 0.5)  # Pa for hPa
+        check_meteorology("s.toml", "tracking.station.X", 93000.0, 283.0, 0.5)  # Pa for hPa
     with pytest.raises(InputError, match="temperature_k"):
-        check_meteorology("stations.X", 930.0, 10.0, 0.5)  # C for K
+        check_meteorology("s.toml", "tracking.station.X", 930.0, 10.0, 0.5)  # C for K
     with pytest.raises(InputError, match="relative_humidity"):
-        check_meteorology("stations.X", 930.0, 283.0, 50.0)  # % for a fraction
+        check_meteorology("s.toml", "tracking.station.X", 930.0, 283.0, 50.0)  # % for a fraction
 
 
 def test_day_of_year_counts_from_one_at_new_year():

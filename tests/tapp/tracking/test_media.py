@@ -1,0 +1,146 @@
+"""The troposphere and ionosphere in TAPP I: the [media] table, the stations' zenith parameters
+in q, their rows on the tape, and TAPP III considering a zenith wet delay error.
+
+The geometry is the 3-hour LEO arc of :func:`helpers.leo_document` (three equatorial stations).
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from tapp.errors import InputError
+from tapp.io.tape.t13_hdf5 import read_t13, write_t13
+from tapp.measurements import MeasurementModel
+from tapp.measurements.media import standard_atmosphere
+from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.simulate import simulate
+from tests.tapp.processor.helpers import SIGMA, SIGMA_STATION, run
+from tests.tapp.tracking.helpers import SOURCE, leo_document
+
+#: The real world's zenith wet delay error TAPP III considers, km (5 cm).
+WET_SIGMA_km = 5e-5
+MEDIA = {"troposphere": True, "ionosphere": True, "zenith_tec_tecu": 20.0}
+ZENITH = ("zenith_dry_km", "zenith_wet_km", "zenith_tec_tecu")
+
+
+def _document(**changes) -> dict:
+    doc = leo_document(media=dict(MEDIA), **changes)
+    doc["parameters"]["media"] = ["troposphere", "ionosphere"]
+    doc["tracking"]["station"]["QUITO"] = {"pressure_hpa": 650.0, "temperature_k": 285.0,
+                                           "relative_humidity": 0.6, "zenith_tec_tecu": 35.0}
+    return doc
+
+
+@pytest.fixture(scope="module")
+def simulation():
+    return simulate(parse_scenario(_document(), SOURCE), raw=True)
+
+
+def test_zenith_parameters_are_station_parameters_on_the_tape(simulation, tmp_path):
+    tape = simulation.tape
+    names = tape.parameters.name
+    for number, station in enumerate(("QUITO", "KOUROU", "MALINDI"), start=1):
+        at = [names.index(f"{station}.{z}") for z in ZENITH]
+        assert [tape.parameters.kind[i] for i in at] == ["troposphere", "troposphere",
+                                                         "ionosphere"]
+        assert [tape.parameters.unit[i] for i in at] == ["km", "km", "TECU"]
+        assert np.all(tape.parameters.station[at] == number)
+        # after the station's location and biases
+        assert at[0] == names.index(f"{station}.range_rate_bias_km_s") + 1
+    media = {ts.station.name: ts.media for ts in simulation.scenario.stations}
+    nominal = dict(zip(names, tape.parameters.nominal, strict=True))
+    assert nominal["QUITO.zenith_tec_tecu"] == 35.0 and nominal["KOUROU.zenith_tec_tecu"] == 20.0
+    # Quito's weather (650 hPa at 3.55 km: 1.48 m dry); Kourou's standard atmosphere at 15 m.
+    assert nominal["QUITO.zenith_dry_km"] == pytest.approx(1.48e-3, abs=0.01e-3)
+    assert nominal["KOUROU.zenith_dry_km"] == media["KOUROU"].zenith_dry_km
+    assert standard_atmosphere(0.015)[0] == pytest.approx(1011.4, abs=0.1)
+    assert nominal["KOUROU.zenith_dry_km"] == pytest.approx(2.31e-3, abs=0.01e-3)
+    # The tape with the new kinds writes and reads back.
+    back = read_t13(write_t13(tmp_path / "media.t13.h5", tape))
+    assert back.parameters.kind == tape.parameters.kind
+    np.testing.assert_array_equal(back.parameters.station, tape.parameters.station)
+
+
+def test_rows_are_the_media_partials_and_values_carry_the_delays(simulation):
+    tape, scenario = simulation.tape, simulation.scenario
+    raw = tape.raw
+    names = tape.parameters.name
+    for ts in scenario.stations:
+        rows = raw.station == ts.number
+        t = np.unique(raw.t_s[rows])
+        x = simulation.states[np.searchsorted(simulation.t_s, t)]
+        with_media = MeasurementModel(ts.station, scenario.orientation, ts.kinds,
+                                      media=ts.media)
+        bare = MeasurementModel(ts.station, scenario.orientation, ts.kinds)
+        cols = [names.index(f"{ts.station.name}.{z}") for z in ZENITH]
+        a = raw.A[rows][:, cols].reshape(t.size, len(ts.kinds), 3)
+        np.testing.assert_array_equal(a, with_media.media_partials(t, x))
+        values = raw.value[rows].reshape(t.size, len(ts.kinds))
+        # (with - without) of ranges of 1e3 km: rounding 1e-13 km (measured 6e-14)
+        np.testing.assert_allclose(values - bare.compute(t, x),
+                                   with_media.media_corrections(t, x), rtol=0, atol=1e-12)
+        # range delays of metres above 5 deg (measured 2.6 to 23 m; X band, 20-35 TECU)
+        delay_m = 1e3 * (values - bare.compute(t, x))[:, 0]
+        assert 1.0 < delay_m.min() and delay_m.max() < 40.0
+
+
+def test_tapp3_considers_a_zenith_wet_delay_error(simulation):
+    # The fit holds the zenith parameters fixed (σ = 0); the real world has a 5 cm zenith wet
+    # error at each station: the budget shows each as a source, adding to the real variance.
+    tape = simulation.tape
+    fit, real = {}, {}
+    for name in tape.parameters.name:
+        key = name.split(".", 1)[1] if "." in name else name
+        fit[name] = 0.0 if key in ZENITH else SIGMA.get(key, SIGMA_STATION.get(key))
+        real[name] = (WET_SIGMA_km if key == "zenith_wet_km" else fit[name])
+    doc = {"fit": {"apriori": {"sigma": fit}}, "real": {"apriori": {"sigma": real}},
+           "times": {"print": [3]}, "commands": {"print": ["cov-real o@current"]}}
+    ent = run(tape, doc).blocks[-1].entities[0]
+    budget = ent.budget
+    held = budget.total > 0  # the certain parameters' rows are zero
+    closure = np.max(np.abs(budget.variances.sum(axis=0) - budget.total)[held]
+                     / budget.total[held])
+    assert closure < 1e-9, closure
+    shares = []
+    for station in ("QUITO", "KOUROU", "MALINDI"):
+        source = f"{station}.zenith_wet_km (a priori)"
+        assert source in budget.sources
+        shares.append(np.max(budget.variances[budget.sources.index(source)][:3]
+                             / budget.total[:3]))
+    # 5 cm of wet delay, mapped up to 10x at 5 deg, against 15 m range noise: a visible
+    # share of the position variance (measured 0.3 to 1.5 % per station)
+    assert min(shares) > 1e-3, shares
+    assert "QUITO.zenith_dry_km (a priori)" not in budget.sources  # certain: no source
+
+
+@pytest.mark.parametrize("change, field, expected", [
+    ({"media": {"troposphere": False, "ionosphere": True}}, "parameters.media[0]",
+     "media.troposphere = true"),
+    ({"media": None}, "parameters.media[0]", "media.troposphere = true"),
+])
+def test_media_parameters_need_the_media_on(change, field, expected):
+    doc = _document()
+    if change["media"] is None:
+        doc.pop("media")
+    else:
+        doc["media"] = change["media"]
+    with pytest.raises(InputError, match=re.escape(f"{field}: expected {expected}")):
+        parse_scenario(doc, SOURCE)
+
+
+@pytest.mark.parametrize("key, value", [("pressure_hpa", 65000.0), ("temperature_k", 12.0),
+                                        ("relative_humidity", 60.0)])
+def test_impossible_weather_names_the_station_key(key, value):
+    doc = _document()
+    doc["tracking"]["station"]["QUITO"][key] = value
+    with pytest.raises(InputError, match=f"tracking.station.QUITO.{key}"):
+        parse_scenario(doc, SOURCE)
+
+
+def test_media_off_leaves_the_tape_as_before():
+    plain = parse_scenario(leo_document(), SOURCE)
+    assert all(ts.media is None for ts in plain.stations)
+    assert not any(p.kind in ("troposphere", "ionosphere") for p in plain.parameters)
