@@ -29,7 +29,8 @@ slant delay Z_h m_h(E) + Z_w m_w(E), with
   the hydrostatic coefficients a(φ, t) = ā(φ) - a_A(φ) cos(2π (DOY - 28) / 365.25) (half a
   year later in the southern hemisphere) from Niell's table 3, linear in |φ| between 15° and
   75° and constant beyond, plus the height correction (1 / sin E - m(E; a_ht, b_ht, c_ht)) h;
-  the wet coefficients (table 4) without season or height terms.
+  the wet coefficients (table 4) without season or height terms. Niell fitted them down to
+  3° elevation; below, they are extrapolated (a station's mask should stay above 3°).
 
 Ionosphere (dispersive): a thin shell at height H over a sphere of radius R (the Earth's mean
 radius, 6371 km, as Orekit's single-layer model), mapping the zenith total electron content

@@ -43,6 +43,15 @@ and weighted as in the observable, then chained through x(t - tau_d) ~ x(t) - ta
 (dh/dt)(d tau/dx) with d tau/dx ~ rho_hat / c: a relative O(v / c) ~ 3e-5 per block, at most
 |rho_dot| / c per km in range and |rho_ddot| / c (< 3e-7 1/s in LEO) per km in range-rate.
 That only slows Gauss-Newton convergence and does not bias an estimate.
+
+Media (``MeasurementModel.media``, :mod:`tapp.measurements.media`): the troposphere and the
+ionosphere add to range and range-rate, each leg at its own elevation and carrier (the range's
+legs weighted as in the range). Their partials w.r.t. the spacecraft state go through the
+leg's ENU vector p and its rate (exact for the media model); w.r.t. the station location they
+are minus those (the station moves; its ENU axes and the latitude and height of the mapping
+functions stay: the tilt of the zenith with a survey error, Z m'(E) / R per km, up to 5e-5
+km/km at 5 deg and 5e-7 at 45 deg against the geometric 1 km/km, is left out);
+``media_partials`` gives those w.r.t. the zenith parameters.
 """
 
 from __future__ import annotations
