@@ -84,38 +84,34 @@ def sample_errors(dv_km_s: np.ndarray, normals: np.ndarray, errors: ExecutionErr
         (:meth:`tapp.dynamics.gates.GatesErrors.sample`).
     errors : the 1σ values.
 
-    The rows of :func:`error_columns` (the same numbers: see there).
+    A zero Δv gets no proportional or pointing error. Row i of the result depends on row i
+    of the inputs only (element-wise operations), whatever n is.
     """
-    return error_columns(np.asarray(dv_km_s, dtype=float).T, np.asarray(normals).T, errors).T
+    return errors.gates.sample(dv_km_s, normals)
 
 
-def error_columns(dv_km_s: np.ndarray, normals: np.ndarray, errors: ExecutionErrors
-                  ) -> np.ndarray:
-    """Return execution errors ε (3, n), km/s, of corrections Δv (3, n), km/s, one sample a
-    column, given its normals (7, n): n, then g (3), then f (3).
+def proportional_errors(dv_km_s: np.ndarray, normals: np.ndarray, errors: ExecutionErrors
+                        ) -> np.ndarray:
+    """Return the proportional part p (3, n), km/s, of the execution errors of corrections Δv
+    (3, n), km/s, one sample a column, from 3 independent standard normals h (3, n) each.
 
-    Gates' error as :meth:`tapp.dynamics.gates.GatesErrors.sample` draws it from the same
-    normals, with σ₂ = σ₄ = σ_f and |Δv| û = Δv:
+    .. math:: p = \\sigma_\\theta \\lvert\\Delta v\\rvert\\, h + (\\sigma_p
+        - \\sigma_\\theta)\\,\\frac{\\Delta v\\cdot h}{\\lvert\\Delta v\\rvert}
+        \\,\\Delta v
 
-    .. math:: \\varepsilon = \\left(\\sigma_p n - \\sigma_\\theta
-        \\frac{\\Delta v\\cdot g}{\\lvert\\Delta v\\rvert}\\right)\\Delta v
-        + \\sigma_\\theta \\lvert\\Delta v\\rvert\\, g + \\sigma_f f
-
-    (the quotient taken as 0 for Δv = 0: the fixed error only), equal to that method's to
-    rounding (tests). Written for TAPP II's Monte Carlo (:mod:`tapp.guidance.montecarlo`):
-    each operation a NumPy element-wise one on rows of n samples, with no reduction, so that
-    column i of the result is the same IEEE arithmetic on column i of the inputs whatever n
-    and the memory layout, and the (n, 3) form's 3-wide inner loops are gone (0.23 s of the
-    1.1 s of 10⁶ samples, 2026-11-28).
+    (the quotient taken as 0 for Δv = 0): given Δv, N(0, |Δv|² (σ_p² ûûᵀ + σ_θ² (I − ûûᵀ))),
+    û = Δv/|Δv|, the law of Gates' error (module docstring) without its fixed part σ_f f,
+    which TAPP II's Monte Carlo draws with the Gaussian part of its outcomes
+    (:mod:`tapp.guidance.montecarlo`). Element-wise NumPy operations on rows of n samples,
+    with no reduction: column i of the result is the same IEEE arithmetic on column i of the
+    inputs whatever n and the memory layout.
     """
-    n, g, f = normals[0], normals[1:4], normals[4:7]
     size = np.sqrt(dv_km_s[0] * dv_km_s[0] + dv_km_s[1] * dv_km_s[1]
                    + dv_km_s[2] * dv_km_s[2])
-    along = dv_km_s[0] * g[0] + dv_km_s[1] * g[1] + dv_km_s[2] * g[2]
+    along = dv_km_s[0] * normals[0] + dv_km_s[1] * normals[1] + dv_km_s[2] * normals[2]
     np.divide(along, size, out=along, where=size > 0)
-    scale = errors.sigma_proportional * n - errors.sigma_pointing_rad * along
-    return (scale * dv_km_s + (errors.sigma_pointing_rad * size) * g
-            + errors.sigma_fixed_km_s * f)
+    s_p, s_t = errors.sigma_proportional, errors.sigma_pointing_rad
+    return (s_t * size) * normals + ((s_p - s_t) * along) * dv_km_s
 
 
 def error_second_moment(P: np.ndarray, errors: ExecutionErrors) -> np.ndarray:
@@ -132,5 +128,5 @@ def error_second_moment(P: np.ndarray, errors: ExecutionErrors) -> np.ndarray:
     return errors.gates.second_moment(P)
 
 
-__all__ = ["NORMALS_PER_MANOEUVRE", "ExecutionErrors", "error_columns", "error_second_moment",
-           "sample_errors"]
+__all__ = ["NORMALS_PER_MANOEUVRE", "ExecutionErrors", "error_second_moment",
+           "proportional_errors", "sample_errors"]

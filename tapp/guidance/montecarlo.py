@@ -29,15 +29,38 @@ So y = Y(a, ν) is one fixed function of a = A g and ν = [ν₁; …; ν_M]: in
 independent; any a′ ~ N(0, A Aᵀ) independent of ν gives (a′, ν) the joint law of (a, ν), and
 Y(a′, ν) the joint law of y: every outcome of a sample, jointly, and so every statistic of the
 samples (magnitudes, percentiles, corridor counts, covariances), has the law it has when the
-whole state is drawn. A sample draws
+whole state is drawn. So
 
 .. math:: a' = F u, \\qquad u \\sim N(0, I_{n_y}), \\qquad F F^T = A A^T,
 
-n_y + 7M normals (33 for three manoeuvres and three miss components) instead of
-n_o(1 + K) + 7M (297 at n_o = 69, K = 3), and its arithmetic does not grow with n_o. Its
-second moments are those of the linear covariance (:mod:`tapp.guidance.linear`):
-Cov(y) = F Fᵀ + C diag(E[ε_jε_jᵀ]) Cᵀ, since E[ε_j | a, ν_{<j}] = 0 leaves ε_j uncorrelated
-with a and with every other ε_i.
+will do, and its arithmetic does not grow with n_o. Its second moments are those of the linear
+covariance (:mod:`tapp.guidance.linear`): Cov(y) = F Fᵀ + C diag(E[ε_jε_jᵀ]) Cᵀ, since
+E[ε_j | a, ν_{<j}] = 0 leaves ε_j uncorrelated with a and with every other ε_i.
+
+The execution errors in fewer normals (exact)
+---------------------------------------------
+Gates' error with σ₂ = σ₄ = σ_f (:mod:`tapp.guidance.execution`) is ε_j = p_j + σ_f f_j: a
+fixed part, f_j ~ N(0, I₃), and a proportional part whose law given Δv_j is
+N(0, |Δv_j|² (σ_p² ûûᵀ + σ_θ² (I − ûûᵀ))), û = Δv_j/|Δv_j|. The fixed parts act on y only
+through C, linearly, and are independent of everything else: b = a + σ_f C f, f = [f₁; …;
+f_M], is Gaussian and independent of the proportional parts' normals, and y is the same
+function of b as it was of a, with p_j for ε_j (C_ji = 0 for the rows of Δv_j, j ≤ i, so
+Δv_j = b_j + Σ_{i<j} C_ji p_i still). A sample therefore draws
+
+.. math:: b' = F_s u, \\qquad u \\sim N(0, I_{n_y}), \\qquad F_s F_s^T = F F^T
+    + \\sigma_f^2\\,C C^T,
+
+and the proportional part from 3 normals h_j ~ N(0, I₃), independent of u and of one another,
+by :func:`tapp.guidance.execution.proportional_errors`:
+
+.. math:: p_j = \\sigma_\\theta \\lvert\\Delta v_j\\rvert\\, h_j + (\\sigma_p
+    - \\sigma_\\theta)\\,(\\hat u\\cdot h_j)\\,\\Delta v_j,
+
+whose law given Δv_j is the one above (û·h_j ~ N(0, 1) and (I − ûûᵀ) h_j ~ N(0, I − ûûᵀ),
+independent). So y has the law of the whole-state model still, from n_y + 3M normals (21
+for three manoeuvres and three miss components; Gates' seven a manoeuvre made it 33) instead
+of n_o(1 + K) + 7M (297 at n_o = 69, K = 3): the normals were 0.40 s of CPU of the 0.73 s
+that 10⁶ samples took at 33 (2026-11-28).
 
 :func:`outcome_maps` forms F and C once per problem, as :mod:`tapp.guidance.linear` forms its
 square-root covariance: the columns of a factor of the Gaussian part of [d; e; y] go through
@@ -48,23 +71,23 @@ so A Aᵀ is never formed. Householder QR of a transpose is backward stable row 
 row of F keeps the digits of its own norm, so the Gaussian parts of the later corrections and
 of the miss (what the nulling leaves, 1e-4 of the first correction on the deep-space study)
 are not rounded against the larger ones. C is the same maps acting on unit execution errors,
-with no QR.
+with no QR. F_s is the lower-triangular factor of [F, σ_f C] the same way.
 
 Randomness comes in fixed blocks of :data:`BLOCK_SAMPLES` samples: block b draws one
-(n_b, n_y + 7M) array of standard normals, row-major, from its own generator
+(n_b, n_y + 3M) array of standard normals, row-major, from its own generator
 ``np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(b,)))`` (the b-th child of
 the root ``SeedSequence(seed)``). Sample s is row s mod :data:`BLOCK_SAMPLES` of block
-s // :data:`BLOCK_SAMPLES`; its columns are u (n_y), then ν_j (7) of each manoeuvre in time
+s // :data:`BLOCK_SAMPLES`; its columns are u (n_y), then h_j (3) of each manoeuvre in time
 order.
 
 A run propagates :data:`CHUNK_BLOCKS` blocks at a time with the samples as columns: the
 normals of each block are transposed into an (n_normals, n) array, and every operation is a
 NumPy element-wise one (+, −, ×, ÷, √) on rows of n samples, in a fixed order per sample:
-products with F and C column by column (:func:`_apply`), the execution errors by
-:func:`tapp.guidance.execution.error_columns`; no reduction, no einsum, no BLAS (whose
+products with F_s and C column by column (:func:`_apply`), the proportional errors by
+:func:`tapp.guidance.execution.proportional_errors`; no reduction, no einsum, no BLAS (whose
 rounding depends on the number of rows and threads). Each sample's numbers are then the same
-IEEE arithmetic on its own normals whatever the chunk, block, shard or worker count, and F and
-C are formed once, in the process that plans the shards: the samples are bitwise the same for
+IEEE arithmetic on its own normals whatever the chunk, block, shard or worker count, and F_s
+and C are formed once, in the process that plans the shards: the samples are bitwise the same for
 any of those, and the first N samples of a larger run are those of a run of N.
 """
 
@@ -76,15 +99,17 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tapp.estimation.factors import triangularize
-from tapp.guidance.execution import NORMALS_PER_MANOEUVRE, ExecutionErrors, error_columns
+from tapp.guidance.execution import ExecutionErrors, proportional_errors
 from tapp.guidance.model import Problem
 
 #: Samples per RNG block; shards are whole numbers of blocks.
 BLOCK_SAMPLES = 1000
+#: Standard normals a sample draws per manoeuvre: h_j (module docstring).
+NORMALS_PER_MANOEUVRE = 3
 #: RNG blocks propagated at once (module docstring). Measured on 10⁶ samples of three
-#: manoeuvres (CPU time, 2026-11-28): 1 block 0.42 s, 4 0.25 s, 8 0.20 s, 16 0.30 s, 50
-#: 0.45 s; NumPy's cost per call dominates small chunks, and from 16 blocks the 33 rows of
-#: 8 bytes a sample no longer stay in cache.
+#: manoeuvres (:func:`simulate_blocks`, CPU time, 2026-11-28): 1 block 0.67 s, 4 0.50 s,
+#: 8 0.48 s, 12 0.57 s, 32 0.63 s; NumPy's cost per call dominates small chunks, and from 12
+#: blocks a chunk's arrays (21 normals and 12 outcomes of 8 bytes a sample) leave the cache.
 CHUNK_BLOCKS = 8
 
 
@@ -122,11 +147,14 @@ class OutcomeMaps:
         y = [Δv₁; …; Δv_M; m] (km/s and miss units).
     error_map : (n_y, 3 n_man) C = ∂y/∂ε, strictly block lower triangular.
     errors : the execution errors.
+    sample_factor : (n_y, n_y) F_s, lower triangular, F_s F_sᵀ = F Fᵀ + σ_f² C Cᵀ: the
+        Gaussian part with the fixed execution errors, what a sample draws.
     """
 
     gauss_factor: np.ndarray
     error_map: np.ndarray
     errors: ExecutionErrors
+    sample_factor: np.ndarray
 
     @property
     def n_man(self) -> int:
@@ -140,7 +168,7 @@ class OutcomeMaps:
 
     @property
     def n_normals(self) -> int:
-        """Standard normals one sample draws: u (n_y), then 7 per manoeuvre."""
+        """Standard normals one sample draws: u (n_y), then 3 per manoeuvre."""
         return self.n_y + NORMALS_PER_MANOEUVRE * self.n_man
 
 
@@ -188,7 +216,9 @@ def _outcome_maps(problem: Problem) -> OutcomeMaps:
         j += 1
     for block in (gauss, unit):                      # m = B_final d
         block[y0 + 3 * n_man:] = problem.B_final @ block[:n]
-    return OutcomeMaps(triangularize(gauss[y0:].T).T, unit[y0:], problem.errors)
+    F, C = triangularize(gauss[y0:].T).T, unit[y0:]
+    return OutcomeMaps(F, C, problem.errors,
+                       triangularize(F.T, problem.errors.sigma_fixed_km_s * C.T).T)
 
 
 def block_normals(seed: int, block: int, n: int, n_normals: int) -> np.ndarray:
@@ -214,20 +244,20 @@ def outcome_columns(maps: OutcomeMaps, normals: np.ndarray) -> np.ndarray:
     """Return the outcomes y (n_y, n) of samples given their normals as columns
     (``maps.n_normals``, n) (module docstring): rows Δv₁, …, Δv_M (3 each), then m.
 
-    a = F u; in turn Δv_j = a_j + Σ_{i<j} C_ji ε_i, ε_j = ε(Δv_j, ν_j); m = a_m + C_m ε.
+    b = F_s u; in turn Δv_j = b_j + Σ_{i<j} C_ji p_i, p_j = p(Δv_j, h_j); m = b_m + C_m p.
     """
     n_y, n_man = maps.n_y, maps.n_man
     C = maps.error_map
-    y = _apply(maps.gauss_factor, normals[:n_y], lower=True)
-    eps = np.empty((3 * n_man, normals.shape[1]))
+    y = _apply(maps.sample_factor, normals[:n_y], lower=True)
+    p = np.empty((3 * n_man, normals.shape[1]))
     col = n_y
     for j in range(n_man):
         rows = slice(3 * j, 3 * j + 3)
-        y[rows] += _apply(C[rows, :3 * j], eps[:3 * j])
-        eps[rows] = error_columns(y[rows], normals[col:col + NORMALS_PER_MANOEUVRE],
-                                  maps.errors)
+        y[rows] += _apply(C[rows, :3 * j], p[:3 * j])
+        p[rows] = proportional_errors(y[rows], normals[col:col + NORMALS_PER_MANOEUVRE],
+                                      maps.errors)
         col += NORMALS_PER_MANOEUVRE
-    y[3 * n_man:] += _apply(C[3 * n_man:], eps)
+    y[3 * n_man:] += _apply(C[3 * n_man:], p)
     return y
 
 
@@ -264,5 +294,5 @@ def simulate_blocks(maps: OutcomeMaps, seed: int, first_block: int, n_blocks: in
     return Samples(dv, miss)
 
 
-__all__ = ["BLOCK_SAMPLES", "CHUNK_BLOCKS", "OutcomeMaps", "Samples", "block_normals",
-           "outcome_columns", "outcome_maps", "propagate", "simulate_blocks"]
+__all__ = ["BLOCK_SAMPLES", "CHUNK_BLOCKS", "NORMALS_PER_MANOEUVRE", "OutcomeMaps", "Samples",
+           "block_normals", "outcome_columns", "outcome_maps", "propagate", "simulate_blocks"]

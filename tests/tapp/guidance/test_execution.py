@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from tapp.dynamics.gates import GatesErrors
 from tapp.guidance.execution import (
     NORMALS_PER_MANOEUVRE,
     ExecutionErrors,
-    error_columns,
     error_second_moment,
+    proportional_errors,
     sample_errors,
 )
 
@@ -60,20 +61,14 @@ def test_a_zero_correction_gets_the_fixed_error_only():
     np.testing.assert_array_equal(eps, np.full((2, 3), ERRORS.sigma_fixed_km_s))
 
 
-def test_the_column_form_is_gates_sample_to_rounding():
-    """error_columns against the shared kernel's GatesErrors.sample (σ₂ = σ₄ = σ_f) on the
-    same normals, |Δv| 0 and 1 µm/s to tens of m/s: the same terms in another order, so within a few
-    rounding units of the terms' size σ_p|Δv||n| + σ_θ|Δv||g| + σ_f|f| (ε itself can be
-    smaller, where they cancel; measured 3.4e-16; limit 1e-15)."""
-    rng = np.random.default_rng(13)
-    dv = rng.standard_normal((N, 3)) * 10.0 ** rng.uniform(-9, -2, (N, 1))
-    dv[:10] = 0.0
-    normals = rng.standard_normal((N, NORMALS_PER_MANOEUVRE))
-    want = ERRORS.gates.sample(dv, normals)
-    got = sample_errors(dv, normals, ERRORS)
-    size = np.linalg.norm(dv, axis=1)
-    scale = (ERRORS.sigma_proportional * size * np.abs(normals[:, 0])
-             + ERRORS.sigma_pointing_rad * size * np.linalg.norm(normals[:, 1:4], axis=1)
-             + ERRORS.sigma_fixed_km_s * np.linalg.norm(normals[:, 4:7], axis=1))[:, None]
-    assert np.max(np.abs(got - want) / scale) < 1e-15
-    np.testing.assert_array_equal(error_columns(dv.T, normals.T, ERRORS), got.T)
+def test_the_proportional_part_has_gates_law_given_the_correction():
+    """Given Δv, TAPP II's Monte Carlo draws the proportional part from 3 normals
+    (tapp.guidance.montecarlo): its covariance must be the shared kernel's E[εεᵀ | Δv] with
+    the fixed σ's zero (GatesErrors.covariance, G diag(σ²) Gᵀ), for Δv along no axis and
+    along one, and it must vanish for Δv = 0."""
+    rng = np.random.default_rng(14)
+    without_fixed = GatesErrors(ERRORS.sigma_proportional, 0.0, ERRORS.sigma_pointing_rad, 0.0)
+    for dv in (np.array([3e-3, -4e-3, 1e-3]), np.array([0.0, 0.0, 2e-3])):
+        p = proportional_errors(np.tile(dv, (N, 1)).T, rng.standard_normal((3, N)), ERRORS).T
+        assert np.all(np.abs(_z(p, without_fixed.covariance(dv))) < Z_LIMIT)
+    assert not np.any(proportional_errors(np.zeros((3, 4)), np.ones((3, 4)), ERRORS))
