@@ -271,16 +271,23 @@ def propagate(maps: OutcomeMaps, normals: np.ndarray) -> Samples:
 
 
 def simulate_blocks(maps: OutcomeMaps, seed: int, first_block: int, n_blocks: int,
-                    n_samples: int) -> Samples:
+                    n_samples: int, out: Samples | None = None) -> Samples:
     """Return the samples of RNG blocks first_block .. first_block + n_blocks − 1 of a run
     of ``n_samples`` samples (the last block of the run may be partial): one shard,
-    :data:`CHUNK_BLOCKS` blocks at a time (module docstring)."""
+    :data:`CHUNK_BLOCKS` blocks at a time (module docstring).
+
+    ``out``: the whole run's samples (``n_samples`` of them), whose rows of these blocks are
+    written and returned (views) instead of new arrays: a serial run fills its result in
+    place, with no copy to gather.
+    """
     start = first_block * BLOCK_SAMPLES
     stop = min((first_block + n_blocks) * BLOCK_SAMPLES, n_samples)
     n_dv = 3 * maps.n_man
-    dv = np.empty((stop - start, maps.n_man, 3))
-    miss = np.empty((stop - start, maps.n_y - n_dv))
-    dv_rows = dv.reshape(-1, n_dv)
+    if out is None:
+        out = Samples(np.empty((stop - start, maps.n_man, 3)),
+                      np.empty((stop - start, maps.n_y - n_dv)))
+    else:
+        out = Samples(out.dv_km_s[start:stop], out.miss[start:stop])
     for lo in range(start, stop, CHUNK_BLOCKS * BLOCK_SAMPLES):
         hi = min(lo + CHUNK_BLOCKS * BLOCK_SAMPLES, stop)
         normals = np.empty((maps.n_normals, hi - lo))
@@ -289,9 +296,10 @@ def simulate_blocks(maps: OutcomeMaps, seed: int, first_block: int, n_blocks: in
             normals[:, b_lo - lo:b_hi - lo] = block_normals(
                 seed, b_lo // BLOCK_SAMPLES, b_hi - b_lo, maps.n_normals).T
         y = outcome_columns(maps, normals)
-        dv_rows[lo - start:hi - start] = y[:n_dv].T
-        miss[lo - start:hi - start] = y[n_dv:].T
-    return Samples(dv, miss)
+        rows = slice(lo - start, hi - start)
+        out.dv_km_s[rows] = y[:n_dv].T.reshape(-1, maps.n_man, 3)
+        out.miss[rows] = y[n_dv:].T
+    return out
 
 
 __all__ = ["BLOCK_SAMPLES", "CHUNK_BLOCKS", "NORMALS_PER_MANOEUVRE", "OutcomeMaps", "Samples",
