@@ -37,11 +37,12 @@ SHARDS_PER_SLOT = 4
 MAX_AUTO_SHARD_BLOCKS = 50
 #: Fewest samples an automatic execution runs on a local Dask cluster: below, this process
 #: is faster. Since a sample draws only in the space of the outcomes (tapp.guidance.montecarlo)
-#: it costs about 2.6 µs in this process, and a local cluster of 2 workers on 2 cores gathers
-#: the outcomes at 0.73x that rate before its 10 s of start-up (``make bench`` section
-#: ``guidance``, 2026-11-27): it repays no run up to the largest one (MAX_SAMPLES, 5 million),
-#: so an automatic execution stays here; ``--workers N`` or ``--scheduler`` still choose one.
-#: (When a sample took 3.5 to 12 µs, the crossover was 3 to 5.5 million.)
+#: it costs about 1 µs in this process (0.5 µs of CPU), and a local cluster of 2 workers on
+#: 2 cores gathers the outcomes at 0.53x that rate, after 3 to 10 s of start-up (``make
+#: bench`` section ``guidance``, 2026-11-28, load average 7): it repays no run up to the
+#: largest one (MAX_SAMPLES, 5 million), so an automatic execution stays here; ``--workers N``
+#: or ``--scheduler`` still choose one. (When a sample took 3.5 to 12 µs, the crossover was 3
+#: to 5.5 million; at 2.6 µs, a cluster gathered at 0.73x.)
 DASK_MIN_SAMPLES = 10_000_000
 
 
