@@ -46,9 +46,10 @@ holds the manoeuvre's execution-error covariance (:mod:`tapp.guidance.navigation
 stay linear and everything else is unchanged.
 
 The Monte Carlo (:mod:`tapp.guidance.montecarlo`) draws in the space of the outcomes: the
-state errors reach the corrections and the miss through fixed linear maps, so a sample draws
-their Gaussian image there (n_y = 3 per manoeuvre + the miss components) and only the execution
-errors step by step, with the joint law of the whole-state model exactly; it draws the samples
+state errors and the fixed execution errors reach the corrections and the miss through fixed
+linear maps, so a sample draws their Gaussian image there (n_y = 3 per manoeuvre + the miss
+components) and only the execution errors proportional to |Δv| step by step (3 normals a
+manoeuvre), with the joint law of the whole-state model exactly; it draws the samples
 in fixed RNG blocks and runs them in shards on Dask (:mod:`tapp.guidance.shards`),
 reproducibly whatever the workers and shard size; the linear covariance
 (:mod:`tapp.guidance.linear`) propagates the exact second moments of [d; e] through the same

@@ -90,6 +90,30 @@ def sample_errors(dv_km_s: np.ndarray, normals: np.ndarray, errors: ExecutionErr
     return errors.gates.sample(dv_km_s, normals)
 
 
+def proportional_errors(dv_km_s: np.ndarray, normals: np.ndarray, errors: ExecutionErrors
+                        ) -> np.ndarray:
+    """Return the proportional part p (3, n), km/s, of the execution errors of corrections Δv
+    (3, n), km/s, one sample a column, from 3 independent standard normals h (3, n) each.
+
+    .. math:: p = \\sigma_\\theta \\lvert\\Delta v\\rvert\\, h + (\\sigma_p
+        - \\sigma_\\theta)\\,\\frac{\\Delta v\\cdot h}{\\lvert\\Delta v\\rvert}
+        \\,\\Delta v
+
+    (the quotient taken as 0 for Δv = 0): given Δv, N(0, |Δv|² (σ_p² ûûᵀ + σ_θ² (I − ûûᵀ))),
+    û = Δv/|Δv|, the law of Gates' error (module docstring) without its fixed part σ_f f,
+    which TAPP II's Monte Carlo draws with the Gaussian part of its outcomes
+    (:mod:`tapp.guidance.montecarlo`). Element-wise NumPy operations on rows of n samples,
+    with no reduction: column i of the result is the same IEEE arithmetic on column i of the
+    inputs whatever n and the memory layout.
+    """
+    size = np.sqrt(dv_km_s[0] * dv_km_s[0] + dv_km_s[1] * dv_km_s[1]
+                   + dv_km_s[2] * dv_km_s[2])
+    along = dv_km_s[0] * normals[0] + dv_km_s[1] * normals[1] + dv_km_s[2] * normals[2]
+    np.divide(along, size, out=along, where=size > 0)
+    s_p, s_t = errors.sigma_proportional, errors.sigma_pointing_rad
+    return (s_t * size) * normals + ((s_p - s_t) * along) * dv_km_s
+
+
 def error_second_moment(P: np.ndarray, errors: ExecutionErrors) -> np.ndarray:
     """Return E[εεᵀ] (3, 3), km²/s², for zero-mean corrections of covariance ``P``, km²/s².
 
@@ -104,4 +128,5 @@ def error_second_moment(P: np.ndarray, errors: ExecutionErrors) -> np.ndarray:
     return errors.gates.second_moment(P)
 
 
-__all__ = ["NORMALS_PER_MANOEUVRE", "ExecutionErrors", "error_second_moment", "sample_errors"]
+__all__ = ["NORMALS_PER_MANOEUVRE", "ExecutionErrors", "error_second_moment",
+           "proportional_errors", "sample_errors"]

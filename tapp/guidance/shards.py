@@ -7,9 +7,10 @@ worker forms its own, with its own BLAS); shards run on
 the executor of :func:`iter.execute.open_executor` (serially, on a local Dask cluster, or on
 a running cluster given its scheduler address; by default in this process below
 :data:`DASK_MIN_SAMPLES` samples and on a local cluster from there), complete in any order,
-and are gathered in sample order. Since every sample depends on its own block's generator
-and row only, the gathered samples, and every statistic of them, are bitwise the same
-whatever the shard size and the number of workers.
+and are copied into their rows of the result (in this process, written there in place).
+Since every sample depends on its own block's generator and row only, the gathered samples,
+and every statistic of them, are bitwise the same whatever the shard size and the number of
+workers.
 """
 
 from __future__ import annotations
@@ -36,11 +37,12 @@ SHARDS_PER_SLOT = 4
 MAX_AUTO_SHARD_BLOCKS = 50
 #: Fewest samples an automatic execution runs on a local Dask cluster: below, this process
 #: is faster. Since a sample draws only in the space of the outcomes (tapp.guidance.montecarlo)
-#: it costs about 2.6 µs in this process, and a local cluster of 2 workers on 2 cores gathers
-#: the outcomes at 0.73x that rate before its 10 s of start-up (``make bench`` section
-#: ``guidance``, 2026-11-27): it repays no run up to the largest one (MAX_SAMPLES, 5 million),
-#: so an automatic execution stays here; ``--workers N`` or ``--scheduler`` still choose one.
-#: (When a sample took 3.5 to 12 µs, the crossover was 3 to 5.5 million.)
+#: it costs about 1 µs in this process (0.5 µs of CPU), and a local cluster of 2 workers on
+#: 2 cores gathers the outcomes at 0.53x that rate, after 3 to 10 s of start-up (``make
+#: bench`` section ``guidance``, 2026-11-28, load average 7): it repays no run up to the
+#: largest one (MAX_SAMPLES, 5 million), so an automatic execution stays here; ``--workers N``
+#: or ``--scheduler`` still choose one. (When a sample took 3.5 to 12 µs, the crossover was 3
+#: to 5.5 million; at 2.6 µs, a cluster gathered at 0.73x.)
 DASK_MIN_SAMPLES = 10_000_000
 
 
@@ -100,34 +102,40 @@ def run_shards(problem: Problem, seed: int, n_samples: int, execution: Execution
     """
     small = too_small("samples", n_samples, DASK_MIN_SAMPLES)
     maps = outcome_maps(problem)
+    samples = Samples(np.empty((n_samples, maps.n_man, 3)),
+                      np.empty((n_samples, maps.n_y - 3 * maps.n_man)))
     with open_executor(execution, small=small) as executor:
         size = shard_samples or default_shard_samples(n_samples, executor.slots)
         shards = plan_shards(n_samples, size)
-        parts: list[Samples | None] = [None] * len(shards)
         done = 0
 
-        def record(shard: Shard, part: Samples) -> None:
+        def record(n_done: int) -> None:
             nonlocal done
-            parts[shard.index] = part
-            done += part.n
+            done += n_done
             if progress is not None:
                 progress(done, n_samples)
 
+        def gather(shard: Shard, part: Samples) -> None:
+            """Copy a shard computed elsewhere into its rows."""
+            rows = slice(shard.first_block * BLOCK_SAMPLES,
+                         shard.first_block * BLOCK_SAMPLES + part.n)
+            samples.dv_km_s[rows] = part.dv_km_s
+            samples.miss[rows] = part.miss
+            record(part.n)
+
         if isinstance(executor, DaskExecutor):
-            _on_dask(executor, maps, seed, n_samples, shards, record)
+            _on_dask(executor, maps, seed, n_samples, shards, gather)
         else:
             for shard in shards:
-                record(shard, simulate_blocks(maps, seed, shard.first_block,
-                                              shard.n_blocks, n_samples))
+                record(simulate_blocks(maps, seed, shard.first_block, shard.n_blocks,
+                                       n_samples, out=samples).n)
         where = executor.description
-    samples = Samples(np.concatenate([p.dv_km_s for p in parts]),
-                      np.concatenate([p.miss for p in parts]))
     return ShardRun(samples, size, where)
 
 
 def _on_dask(executor: DaskExecutor, maps: OutcomeMaps, seed: int, n_samples: int,
-             shards: tuple[Shard, ...], record: Callable[[Shard, Samples], None]) -> None:
-    """Submit every shard (the maps scattered once); record each as it completes."""
+             shards: tuple[Shard, ...], gather: Callable[[Shard, Samples], None]) -> None:
+    """Submit every shard (the maps scattered once); gather each as it completes."""
     from distributed import as_completed
 
     client = executor.client
@@ -136,7 +144,7 @@ def _on_dask(executor: DaskExecutor, maps: OutcomeMaps, seed: int, n_samples: in
                              n_samples, pure=False): s for s in shards}
     try:
         for future in as_completed(list(pending), loop=client.loop):
-            record(pending.pop(future), future.result())
+            gather(pending.pop(future), future.result())
             future.release()
     finally:
         if pending:

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from tapp.dynamics.gates import GatesErrors
 from tapp.guidance.execution import (
     NORMALS_PER_MANOEUVRE,
     ExecutionErrors,
     error_second_moment,
+    proportional_errors,
     sample_errors,
 )
 
@@ -57,3 +59,16 @@ def test_a_zero_correction_gets_the_fixed_error_only():
     normals = np.ones((2, NORMALS_PER_MANOEUVRE))
     eps = sample_errors(np.zeros((2, 3)), normals, ERRORS)
     np.testing.assert_array_equal(eps, np.full((2, 3), ERRORS.sigma_fixed_km_s))
+
+
+def test_the_proportional_part_has_gates_law_given_the_correction():
+    """Given Δv, TAPP II's Monte Carlo draws the proportional part from 3 normals
+    (tapp.guidance.montecarlo): its covariance must be the shared kernel's E[εεᵀ | Δv] with
+    the fixed σ's zero (GatesErrors.covariance, G diag(σ²) Gᵀ), for Δv along no axis and
+    along one, and it must vanish for Δv = 0."""
+    rng = np.random.default_rng(14)
+    without_fixed = GatesErrors(ERRORS.sigma_proportional, 0.0, ERRORS.sigma_pointing_rad, 0.0)
+    for dv in (np.array([3e-3, -4e-3, 1e-3]), np.array([0.0, 0.0, 2e-3])):
+        p = proportional_errors(np.tile(dv, (N, 1)).T, rng.standard_normal((3, N)), ERRORS).T
+        assert np.all(np.abs(_z(p, without_fixed.covariance(dv))) < Z_LIMIT)
+    assert not np.any(proportional_errors(np.zeros((3, 4)), np.ones((3, 4)), ERRORS))

@@ -1,6 +1,7 @@
 """Reproducibility: the same seed gives bitwise the same samples and statistics whatever the
-shard size and the number of Dask workers (serial; the default local cluster, one worker
-process; a running cluster of two worker threads reached by its address)."""
+shard size, the number of Dask workers (serial; the default local cluster, one worker
+process; a running cluster of two worker threads reached by its address) and the chunk of
+blocks propagated at once."""
 
 from __future__ import annotations
 
@@ -10,7 +11,15 @@ import numpy as np
 import pytest
 
 from iter.execute import Execution
-from tapp.guidance.montecarlo import BLOCK_SAMPLES
+from tapp.guidance.guidefile import bind
+from tapp.guidance.montecarlo import (
+    BLOCK_SAMPLES,
+    CHUNK_BLOCKS,
+    block_normals,
+    outcome_maps,
+    propagate,
+    simulate_blocks,
+)
 from tapp.guidance.shards import DASK_MIN_SAMPLES, plan_shards
 from tapp.guidance.study import guidance_study
 from tapp.report.guidance import guidance_dict
@@ -94,3 +103,20 @@ def test_shards_cover_the_blocks_once_in_order():
     shards = plan_shards(10_500, 3 * BLOCK_SAMPLES)
     assert [(s.index, s.first_block, s.n_blocks) for s in shards] == \
         [(0, 0, 3), (1, 3, 3), (2, 6, 3), (3, 9, 2)]
+
+
+def test_chunks_and_the_row_form_do_not_change_a_bit():
+    """A shard of ten blocks (propagated as CHUNK_BLOCKS, then the rest, the last block
+    partial) against each block on its own and against propagate on the block's rows."""
+    maps = outcome_maps(bind(guide(), deep_space_t32(), "guide.toml").problem)
+    n = 9 * BLOCK_SAMPLES + 500
+    assert CHUNK_BLOCKS < 10
+    whole = simulate_blocks(maps, SEED, 0, 10, n)
+    for b in range(10):
+        rows = slice(b * BLOCK_SAMPLES, min((b + 1) * BLOCK_SAMPLES, n))
+        one = simulate_blocks(maps, SEED, b, 1, n)
+        by_rows = propagate(maps, block_normals(SEED, b, rows.stop - rows.start,
+                                                maps.n_normals))
+        for part in (one, by_rows):
+            np.testing.assert_array_equal(part.dv_km_s, whole.dv_km_s[rows])
+            np.testing.assert_array_equal(part.miss, whole.miss[rows])
