@@ -32,7 +32,8 @@ and ê₂), units (1, km/s, rad, rad, km/s, km/s),
 
 so that E[εεᵀ | Δv] = G diag(σ²) Gᵀ = (σ₁²|Δv|² + σ₂²) ûûᵀ + (σ₃²|Δv|² + σ₄²)(I − ûûᵀ).
 TAPP I flies the six as parameters of each manoeuvre (:mod:`tapp.dynamics.manoeuvres`), TAPP II
-samples them (:mod:`tapp.guidance.execution`); the model is the same code for both.
+samples them (:mod:`tapp.guidance.execution`) with this code; its Monte Carlo draws the same law
+in a reduced form (:mod:`tapp.guidance.montecarlo`), tested against :class:`GatesErrors`.
 
 Over zero-mean corrections of covariance P = E[ΔvΔvᵀ] the second moment is, when the two fixed
 σ's are equal (σ₂ = σ₄: the fixed error is then isotropic, σ₂² I),
