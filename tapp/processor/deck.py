@@ -101,11 +101,24 @@ from tapp.estimation.factors import scaled_min_eigenvalue
 from tapp.estimation.gauss_markov import KIND as STOCHASTIC
 from tapp.frames.time import parse_epoch
 from tapp.io.schema import InfFloat, Schema, load
+from tapp.io.station_covariance import (
+    StationCovariance,
+    block_m2,
+    check_covariance,
+    read_station_covariance,
+)
 from tapp.io.tape.packing import symmetry_defect
+from tapp.measurements import STATION_PARAMETER_NAMES
 from tapp.processor.commands import ROC, Command, Side, parse_command
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.plan import Plan, StationOff
 from tapp.processor.representations import ISOLATED_SETS, Systems
+from tapp.processor.station_apriori import (
+    PER_PPB,
+    RAD_PER_MAS,
+    parameter_covariance,
+    position_km,
+)
 
 Ref = int | str
 TimeRef = int | float | str
@@ -219,6 +232,47 @@ class Common(Schema):
     constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
 
 
+class StationBlock(Schema):
+    """``[<world>.apriori.stations.station.NAME]``: the covariance of one station's position
+    (m), in its ``axes``: σ's with correlations, or the 3 x 3 matrix."""
+
+    axes: Literal["ecef", "cylindrical"] = Field(
+        "ecef", description="\"ecef\": Earth-fixed (ITRF) x, y, z; \"cylindrical\": the "
+        "station's spin radius, east arc along the parallel (r_s λ) and z along the spin axis.")
+    sigma_m: Annotated[list[float], Field(min_length=3, max_length=3)] | None = Field(
+        None, description="σ along the three axes, m.")
+    correlation: Annotated[list[float], Field(min_length=3, max_length=3)] = Field(
+        [0.0, 0.0, 0.0], description="Correlations [ρ12, ρ13, ρ23] of the three axes (with "
+        "sigma_m).")
+    covariance_m2: list[list[float]] | None = Field(
+        None, description="The 3 x 3 covariance along the axes, m² (instead of sigma_m).")
+
+
+class FrameError(Schema):
+    """``[<world>.apriori.stations.frame]``: a common-frame error (a 7-parameter Helmert
+    transformation shared by every station of the table, independent components): it
+    correlates the stations, e.g. the complexes of a network surveyed in one frame."""
+
+    translation_m: Annotated[list[float], Field(min_length=3, max_length=3)] = Field(
+        [0.0, 0.0, 0.0], description="σ of the translation along ITRF x, y, z, m.")
+    rotation_mas: Annotated[list[float], Field(min_length=3, max_length=3)] = Field(
+        [0.0, 0.0, 0.0], description="σ of the rotation about ITRF x, y, z, milliarcseconds.")
+    scale_ppb: float = Field(0.0, description="σ of the scale, parts per billion.")
+
+
+class StationsApriori(Schema):
+    """``[<world>.apriori.stations]``: the a priori of station locations as full 3 x 3 blocks
+    with correlations between stations (module docstring), from a file and/or inline."""
+
+    file: str | None = Field(None, description="A station covariance file, relative to the "
+                             "deck: CSV (.csv) or a SINEX excerpt (.snx, .sinex) "
+                             "(tapp.io.station_covariance).")
+    station: dict[str, StationBlock] = Field({}, description="Per station of the tape (by "
+                                             "name): its covariance.")
+    frame: FrameError = Field(FrameError(), description="The common-frame error of all "
+                              "the stations of the table.")
+
+
 class FitApriori(Schema):
     """``[fit.apriori]``: the fit world's a priori information: σ's or a normal matrix."""
 
@@ -228,6 +282,9 @@ class FitApriori(Schema):
                                                                             "parameter's"})
     normal: list[list[float]] | None = Field(None, description="The n_f1 x n_f1 a priori "
                                              "normal matrix S₀ (symmetric).")
+    stations: StationsApriori | None = Field(None, description="Station locations as full "
+                                             "blocks (with sigma as a table; their σ's are "
+                                             "not in it).")
 
 
 class Fit(Schema):
@@ -261,6 +318,9 @@ class RealApriori(Schema):
         [], description="Triples [a, b, ρ]: the correlation of parameters a and b.")
     covariance: list[list[float]] | None = Field(
         None, description="The n_r1 x n_r1 a priori covariance Λ₀ (positive semi-definite).")
+    stations: StationsApriori | None = Field(None, description="Station locations as full "
+                                             "blocks (with sigma as a table; their σ's are "
+                                             "not in it).")
 
 
 class Real(Schema):
@@ -359,7 +419,8 @@ class _Generated:
         acceleration"); ``article`` goes before ``one`` ("a", "an").
     correlated : why the deck gives them no correlations.
     names : their names, in the tape's order.
-    covariance, information : their a priori P (n, n) and P⁻¹, in their units squared.
+    covariance, information : their a priori P (n, n) and P⁻¹, in their units squared
+        (None: a real world's station block, whose inverse no one needs).
     sources : the error budget's sources among them: (label, names).
     """
 
@@ -370,7 +431,7 @@ class _Generated:
     correlated: str
     names: tuple[str, ...]
     covariance: np.ndarray
-    information: np.ndarray
+    information: np.ndarray | None
     sources: tuple[tuple[str, tuple[str, ...]], ...]
 
 
@@ -416,6 +477,8 @@ class _Binder:
         self.positional: list[str] = []
         #: The parameters whose a priori the tape defines, by kind.
         self.generated = _generated(header, self.names)
+        #: The station-location block of each world that has one (:meth:`_station_block`).
+        self.station_blocks: dict[str, _Generated] = {}
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -629,7 +692,135 @@ class _Binder:
                 raise self.fail(f"{world}.{g.key}", f"the {g.plural} in the {world} world's set "
                                 "(not fixed, certain or eliminated)", outside[0])
             out.append(([bare.index(n) for n in g.names], g))
+        station = self._station_block(order, n1, field, world, sigma)
+        if station is not None:
+            out.append(station)
         return out
+
+    def _station_covariances(self, table: StationsApriori, where: str
+                             ) -> tuple[StationCovariance, ...]:
+        """The station covariances of a ``stations`` table: its file's (relative to the deck)
+        and its inline stations', checked (:func:`tapp.io.station_covariance.check_covariance`)."""
+        out = []
+        if table.file is not None:
+            out.append(read_station_covariance(Path(self.source).parent / table.file))
+        names, axes, blocks = [], [], []
+        for name, blk in table.station.items():
+            at = f"{where}.station.{name}"
+            if (blk.sigma_m is None) == (blk.covariance_m2 is None):
+                raise self.fail(at, "exactly one of sigma_m or covariance_m2")
+            if blk.covariance_m2 is not None:
+                if any(blk.correlation):
+                    raise self.fail(f"{at}.correlation", "no correlations with covariance_m2")
+                m = np.array(blk.covariance_m2, dtype=float) if all(
+                    len(r) == 3 for r in blk.covariance_m2) else None
+                if m is None or m.shape != (3, 3):
+                    raise self.fail(f"{at}.covariance_m2", "a 3 x 3 matrix, m²",
+                                    blk.covariance_m2)
+            else:
+                if any(v < 0 for v in blk.sigma_m) or any(not -1 <= r <= 1
+                                                          for r in blk.correlation):
+                    raise self.fail(at, "σ's >= 0 and correlations within -1..1",
+                                    {"sigma_m": blk.sigma_m, "correlation": blk.correlation})
+                m = block_m2(blk.sigma_m, blk.correlation)
+            names.append(name)
+            axes.append(blk.axes)
+            blocks.append(m)
+        if names:
+            cov = np.zeros((3 * len(names), 3 * len(names)))
+            for i, m in enumerate(blocks):
+                cov[3 * i:3 * i + 3, 3 * i:3 * i + 3] = m
+            inline = StationCovariance(self.source, tuple(names), tuple(axes), cov)
+            check_covariance(inline, f"{where}.station")
+            out.append(inline)
+        if not out:
+            raise self.fail(where, "a file or at least one station")
+        if len(out) == 2:
+            twice = [n for n in out[1].stations if n in out[0].stations]
+            if twice:
+                raise self.fail(f"{where}.station.{twice[0]}", f"a station not also in the "
+                                f"file {table.file}")
+        return tuple(out)
+
+    def _station_block(self, order: list[str], n1: int, field: str, world: str, sigma
+                       ) -> tuple[list[int], _Generated] | None:
+        """The station-location block of a world's a priori (``{field}.stations``): its
+        positions in ``order`` and its covariance in the tape's location parameters, to first
+        order at the tape's nominal locations (:mod:`tapp.processor.station_apriori`); None
+        when the world has no such table.
+
+        Refused: a σ list or matrix (the block completes a σ table), a station not on the
+        tape or whose location is not a parameter of q, a σ given both ways (in the σ table
+        and by the block), a station parameter outside the world's set (fixed, certain,
+        eliminated), a negative frame σ, and in the fit world a block that is not positive
+        definite (its a priori information is the inverse)."""
+        table = getattr(self.deck, world).apriori.stations
+        if table is None:
+            return None
+        where = f"{field}.stations"
+        if not isinstance(sigma, dict):
+            raise self.fail(f"{field}.sigma", f"a σ table with {where} (the station blocks "
+                            "complete it; no list or matrix)")
+        frame = table.frame
+        frame_sigma = np.array([*frame.translation_m,
+                                *(np.array(frame.rotation_mas) * RAD_PER_MAS),
+                                frame.scale_ppb * PER_PPB])
+        if np.any(frame_sigma < 0):
+            raise self.fail(f"{where}.frame", "σ's >= 0", frame.model_dump())
+        st, par = self.h.stations, self.h.parameters
+        names, positions, kinds, axes, covs = [], [], [], [], []
+        for given in self._station_covariances(table, where):
+            axes += given.axes
+            covs.append(given.covariance_m2)
+            for station in given.stations:
+                at = f"{where}.station.{station}" if given.source == self.source else station
+                if station not in st.name:
+                    raise InputError(given.source, at, "a station of the tape ("
+                                     + ", ".join(st.name) + ")", station)
+                number = int(st.id[list(st.name).index(station)])
+                mine = [i for i, (k, s) in enumerate(zip(par.kind, par.station, strict=True))
+                        if k == "location" and int(s) == number]
+                suffixes = tuple(self.names[i].split(".", 1)[1] for i in mine)
+                kind = next((k for k, v in STATION_PARAMETER_NAMES.items() if v == suffixes),
+                            None)
+                if kind is None:
+                    raise InputError(given.source, at, "a station whose location is a "
+                                     "parameter of the tape (its scenario's location is "
+                                     "\"none\")", "no location parameters")
+                names += [self.names[i] for i in mine]
+                positions.append(position_km(par.nominal[mine], kind))
+                kinds.append(kind)
+        cov = np.zeros((len(names), len(names)))
+        at = 0
+        for c in covs:
+            cov[at:at + c.shape[0], at:at + c.shape[0]] = c
+            at += c.shape[0]
+        block = parameter_covariance(np.array(positions), tuple(kinds), tuple(axes), cov,
+                                     frame_sigma)
+        both = [k for k in sigma if self._key(k, field) in names]
+        if both:
+            raise self.fail(f"{field}.sigma.{both[0]}", f"no σ for a station location given "
+                            f"by {where} (one a priori per parameter: the σ table or the "
+                            "block)", sigma[both[0]])
+        bare = [n.rstrip("'") for n in order[:n1]]
+        outside = [n for n in names if n not in bare]
+        if outside:
+            raise self.fail(where, f"station locations in the {world} world's set (not "
+                            "fixed, certain or eliminated)", outside[0])
+        information = None
+        if world == "fit":
+            smallest = scaled_min_eigenvalue(block)
+            if not smallest > PSD_TOL:
+                raise self.fail(where, "a positive definite covariance of the station "
+                                "locations in the fit world (its a priori information is its "
+                                "inverse)", f"smallest eigenvalue {smallest:.3g} of its "
+                                "correlation matrix")
+            information = np.linalg.solve(block, np.eye(len(names)))
+        g = _Generated("apriori.stations", "station locations", "station location", "a",
+                       f"their correlations are {where}'s", tuple(names), block, information,
+                       (("station locations", tuple(names)),))
+        self.station_blocks[world] = g
+        return [bare.index(n) for n in names], g
 
     def _sigmas(self, sigma, order: list[str], n1: int, field: str,
                 generated: list[tuple[list[int], _Generated]] = ()) -> np.ndarray:
@@ -829,7 +1020,8 @@ class _Binder:
             seen |= set(idx)
             out.append((name, idx))
         bare = [n.rstrip("'") for n in order]
-        for g in self.generated:
+        real = [self.station_blocks["real"]] if "real" in self.station_blocks else []
+        for g in (*self.generated, *real):
             for label, names in g.sources:
                 rest = tuple(i for i in (bare.index(n) for n in names)
                              if systems.n_p <= i < systems.n_r1 and i not in seen)
