@@ -168,6 +168,8 @@ def parse_csv(text: str, source: str) -> StationCovariance:
             raise InputError(source, f"row {n}.axes", " or ".join(map(repr, AXES)), ax)
         values = [_number(v, source, f"row {n}.{col}")
                   for v, col in zip(row[2:], _CSV_COLUMNS[2:], strict=True)]
+        if any(v < 0 for v in values[:3]):
+            raise InputError(source, f"{name}.sigma", "σ's >= 0, m", values[:3])
         if any(not -1.0 <= r <= 1.0 for r in values[3:]):
             raise InputError(source, f"{name}.rho", "correlations within -1..1", values[3:])
         names.append(name)

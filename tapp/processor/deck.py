@@ -45,6 +45,11 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     sigma = { x_km = 1.0, "GM_moon_km3_s2" = 1e-4 }  # σ = 0: certain
     correlation = [["x_km", "y_km", 0.3]]
     # covariance = [[...]]      # the n_r1 x n_r1 covariance Λ₀
+    [real.apriori.stations]     # (or [fit.apriori.stations]) station locations as 3 x 3 blocks
+    file = "dsn.csv"            # optional: CSV or SINEX excerpt, relative to the deck
+    station.GOLDSTONE = { sigma_m = [0.03, 0.03, 0.05], correlation = [0.1, 0.0, 0.2] }
+    station.MADRID = { axes = "cylindrical", covariance_m2 = [[...], [...], [...]] }
+    frame = { translation_m = [0.02, 0.02, 0.02], rotation_mas = [0.3, 0.3, 0.3] }
     [miss]
     partitions = { m1 = [0, 2], m2 = ["b_dot_t_km", "flight_time_s"] }  # [t, h] or names
     [budget]
@@ -75,6 +80,20 @@ has them with (ignore, ignore); (estimate, ignore) is a filter that estimates wh
 there. Their a priori is generated in the σ-table form only (not with matrices given whole);
 the σ tables and correlation triples must not name them (σ = 0 is accepted where they are
 fixed), and the error budget counts them as one source, "stochastic accelerations".
+
+Station locations may be given as full blocks in either world (``[fit.apriori.stations]``,
+``[real.apriori.stations]``): per station the covariance of its Earth-fixed position in metres,
+in ITRF x, y, z (``axes = "ecef"``) or in its cylindrical axes (spin radius, east arc r_s λ, z),
+from a CSV file, a SINEX excerpt (:mod:`tapp.io.station_covariance`) or the deck, plus a
+common-frame error (σ's of a Helmert translation, rotation and scale shared by all the stations
+of the table) that correlates the complexes. They are mapped to the tape's location
+parameters (km or (r_s km, lon rad, z km)) to first order at the tape's nominal locations
+(:mod:`tapp.processor.station_apriori`) and complete the world's σ table, which must then give
+these stations no σ; the correlation triples must not name them. The stations must be on the
+tape with their location in q and in the world's set; a block must be symmetric positive
+semi-definite (positive definite in the fit world, whose a priori information is its
+inverse). The error budget counts them as one source, "station locations" (split by
+``[budget.groups]``, the correlations between groups are one more source).
 
 The execution errors of the burns TAPP I flew (parameters of kind "execution", defined on the
 tape by the scenario's ``[[manoeuvre]]`` tables: :mod:`tapp.dynamics.manoeuvres`, Gates'
@@ -245,7 +264,8 @@ class StationBlock(Schema):
         [0.0, 0.0, 0.0], description="Correlations [ρ12, ρ13, ρ23] of the three axes (with "
         "sigma_m).")
     covariance_m2: list[list[float]] | None = Field(
-        None, description="The 3 x 3 covariance along the axes, m² (instead of sigma_m).")
+        None, description="The 3 x 3 covariance along the axes (instead of sigma_m).",
+        json_schema_extra={"unit": "m²"})
 
 
 class FrameError(Schema):
@@ -256,13 +276,17 @@ class FrameError(Schema):
     translation_m: Annotated[list[float], Field(min_length=3, max_length=3)] = Field(
         [0.0, 0.0, 0.0], description="σ of the translation along ITRF x, y, z, m.")
     rotation_mas: Annotated[list[float], Field(min_length=3, max_length=3)] = Field(
-        [0.0, 0.0, 0.0], description="σ of the rotation about ITRF x, y, z, milliarcseconds.")
-    scale_ppb: float = Field(0.0, description="σ of the scale, parts per billion.")
+        [0.0, 0.0, 0.0], description="σ of the rotation about ITRF x, y, z.",
+        json_schema_extra={"unit": "mas"})
+    scale_ppb: float = Field(0.0, description="σ of the scale.",
+                             json_schema_extra={"unit": "ppb"})
 
 
 class StationsApriori(Schema):
     """``[<world>.apriori.stations]``: the a priori of station locations as full 3 x 3 blocks
-    with correlations between stations (module docstring), from a file and/or inline."""
+    of their Earth-fixed positions (m), from a file and/or inline, with a common-frame error
+    that correlates the stations; mapped to the tape's location parameters to first order at
+    its nominal locations. The world's σ table then gives no σ for these stations."""
 
     file: str | None = Field(None, description="A station covariance file, relative to the "
                              "deck: CSV (.csv) or a SINEX excerpt (.snx, .sinex) "
