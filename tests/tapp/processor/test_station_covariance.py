@@ -53,12 +53,14 @@ Z_LIMIT = 5.0
 #: Central differences of the parameter map with a 10 m step: truncation (h/r)² ~ 3e-12,
 #: rounding ε r/h ~ 1e-10 of the derivative: 1e-8 bounds both with margin.
 CENTRAL_REL = 1e-8
-#: A covariance mapped by :func:`_mapped` (central differences with 1 m steps: rounding
-#: ε r/h ~ 1.4e-9 of each derivative) against the package's analytic map: measured 1.3e-9.
+#: A covariance mapped by :func:`_mapped` (central differences with 100 m steps: rounding
+#: ε r/h ~ 1.4e-11, truncation (h/r)² ~ 2.5e-10 of each derivative) against the package's
+#: analytic map: measured 1.8e-10 (the SINEX excerpt at k = 0).
 MAPPED = 1e-8
 #: TAPP III (the tape's square-root factors, sequential) against the closed form from the
-#: raw rows, on the scale √(C_ii C_jj): both in float64 from the same rows; measured 1.0e-9
-#: (the diagonal a priori of the same σ's is 0.27-0.39 away).
+#: raw rows, on the scale √(C_ii C_jj): both in float64 from the same rows, Λ̄ through
+#: :func:`_mapped`; measured 3.8e-10 (real world), 4.0e-10 (fit world) (the diagonal a priori
+#: of the same σ's is 0.27-0.39 away).
 CLOSED_FORM = 1e-8
 #: Largest |Σ source variances − total| / total of an error budget: measured 1.9e-14.
 BUDGET = 1e-12
@@ -295,12 +297,13 @@ def _tape_stations(tape) -> tuple[list[int], list[str], np.ndarray, list[str]]:
 
 def _mapped(tape, cart: np.ndarray) -> np.ndarray:
     """A Cartesian covariance (m², the tape's stations in order) in the tape's location
-    parameters, by the exact map's Jacobian from central differences (step 1 m)."""
+    parameters, by the exact map's Jacobian from central differences (step 100 m)."""
     _, _, r_m, kinds = _tape_stations(tape)
     g = np.zeros_like(cart)
     for i, (r, kind) in enumerate(zip(r_m, kinds, strict=True)):
         g[3 * i:3 * i + 3, 3 * i:3 * i + 3] = np.stack(
-            [(_exact(r + e, kind) - _exact(r - e, kind)) / 2.0 for e in np.eye(3)], axis=-1)
+            [(_exact(r + 100.0 * e, kind) - _exact(r - 100.0 * e, kind)) / 200.0
+             for e in np.eye(3)], axis=-1)
     return g @ cart @ g.T
 
 
@@ -344,11 +347,13 @@ def _real_deck(tape, *, stations: dict | None, print_: list[str]):
     return doc
 
 
-def _closed_form(tape, lam_bar: np.ndarray, k: int) -> np.ndarray:
+def _closed_form(tape, lam_bar: np.ndarray, k: int, s0: np.ndarray | None = None
+                 ) -> np.ndarray:
     """Λ' = (I − KA) Λ̄ (I − KA)ᵀ + K M Kᵀ over the raw rows up to record k (module
-    docstring), S₀ = diag(1/σ²) of the fit world's σ table."""
+    docstring), S₀ = diag(1/σ²) of the fit world's σ table unless given."""
     raw = tape.raw
-    s0 = np.diag([1.0 / sigmas(tape)[n] ** 2 for n in tape.parameters.name])
+    if s0 is None:
+        s0 = np.diag([1.0 / sigmas(tape)[n] ** 2 for n in tape.parameters.name])
     rows = raw.record <= k
     a, w = raw.A[rows], raw.weight[rows]
     gain = np.linalg.solve(s0 + a.T @ (w[:, None] * a), (w[:, None] * a).T)  # K
@@ -442,17 +447,35 @@ def test_refuses_station_parameters_outside_the_world(tape):
     assert err.field == "real.apriori.stations" and err.got == "KOUROU.y_km"
 
 
-def test_fit_world_blocks_must_be_positive_definite(tape):
+def test_fit_world_blocks_give_the_a_priori_information_of_the_closed_form(tape):
+    """The blocks in the fit world: its a priori information over the station parameters is
+    the inverse of the block (closed form with that S₀, the real world diagonal), within
+    :data:`CLOSED_FORM`; a block that is only semi-definite is refused there."""
+    loc, block = _apriori_independent(tape)
+    base = sigmas(tape)
+    s0 = np.diag([1.0 / base[n] ** 2 for n in tape.parameters.name])
+    s0[np.ix_(loc, loc)] = np.linalg.inv(block)
+    lam_bar = np.diag([base[n] ** 2 for n in tape.parameters.name])
     doc = _real_deck(tape, stations=None, print_=["cov-real o@epoch"])
-    loc = set(_location_names(tape))
-    doc["fit"]["apriori"] = {"sigma": {k: v for k, v in sigmas(tape).items() if k not in loc},
+    names = set(_location_names(tape))
+    doc["fit"]["apriori"] = {"sigma": {k: v for k, v in base.items() if k not in names},
                              "stations": {"station": STATIONS, "frame": FRAME}}
-    assert final(run(tape, doc), "cov-real o@epoch").shape == (tape.n_o, tape.n_o)
+    for b in (b for b in run(tape, doc).blocks if b.kind == "print" and b.k > 0):
+        assert scaled_err(b.entities[0].matrix,
+                          _closed_form(tape, lam_bar, b.k, s0)) < CLOSED_FORM
     doc["fit"]["apriori"]["stations"]["station"] = {
         **STATIONS, "QUITO": {"sigma_m": [3.0, 0.0, 5.0]}}
     doc["fit"]["apriori"]["stations"]["frame"] = {}
     err = _refused(tape, doc, "positive definite")
     assert err.field == "fit.apriori.stations"
+
+
+def test_refuses_a_station_whose_location_is_not_a_parameter():
+    """KOUROU tracked with location = "none": its location is not in q."""
+    tape = leo_tape(tracking={"station": {"KOUROU": {"location": "none"}}})
+    doc = _real_deck(tape, stations={"station": {"KOUROU": STATIONS["KOUROU"]}}, print_=[])
+    err = _refused(tape, doc, "location is a parameter of the tape")
+    assert err.field == "real.apriori.stations.station.KOUROU"
 
 
 def test_a_station_file_relative_to_the_deck(tape, tmp_path):
