@@ -527,3 +527,42 @@ def test_a_sinex_file_gives_the_cross_station_terms(tape, tmp_path):
     with pytest.raises(InputError) as err:
         run(tape, _real_deck(tape, stations={"file": "missing.snx"}, print_=[]), source)
     assert "missing.snx" in str(err.value)
+
+
+def test_tapp_process_reads_the_tables_and_a_bad_file_is_exit_2(tape, tmp_path):
+    """The deck's TOML as documented (station tables, frame, a CSV beside the deck) runs with
+    ``tapp process``; a CSV row that is not positive semi-definite is one line, exit 2,
+    naming the CSV file and the station."""
+    from typer.testing import CliRunner
+
+    import tapp.cli  # noqa: F401  (registers every command)
+    from tapp.cli.common import app
+    from tapp.io.tape.t13_hdf5 import write_t13
+
+    write_t13(tmp_path / "leo.t13.h5", tape)
+    (tmp_path / "net.csv").write_text(
+        "station,axes,sigma1_m,sigma2_m,sigma3_m,rho12,rho13,rho23\n"
+        "QUITO,ecef,3.0,4.0,5.0,0.3,0.1,-0.2\n")
+    names = set(_location_names(tape))
+    real = "\n".join(f'"{k}" = {v!r}' for k, v in sigmas(tape).items() if k not in names)
+    fit = "\n".join(f'"{k}" = {v!r}' for k, v in sigmas(tape).items())
+    (tmp_path / "deck.toml").write_text(
+        '[times]\nprint = [1, 2, 3]\n[commands]\nprint = ["cov real orbit@current"]\n'
+        f"[fit.apriori.sigma]\n{fit}\n[real.apriori.sigma]\n{real}\n"
+        '[real.apriori.stations]\nfile = "net.csv"\n'
+        'station.KOUROU = { axes = "cylindrical", sigma_m = [2.0, 6.0, 4.0] }\n'
+        "station.MALINDI = { covariance_m2 = [[16.0, 4.0, 0.0], [4.0, 9.0, -3.0], "
+        "[0.0, -3.0, 25.0]] }\n"
+        "frame = { translation_m = [3.0, 3.0, 5.0], rotation_mas = [0.2, 0.2, 0.3] }\n")
+    args = ["process", str(tmp_path / "leo.t13.h5"), str(tmp_path / "deck.toml"),
+            "--print", str(tmp_path / "o3.txt"), "--tape", str(tmp_path / "o.t32.h5")]
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 0, res.output
+    assert "station locations" in (tmp_path / "o3.txt").read_text()
+    (tmp_path / "net.csv").write_text(
+        "station,axes,sigma1_m,sigma2_m,sigma3_m,rho12,rho13,rho23\n"
+        "QUITO,ecef,3.0,4.0,5.0,0.9,0.9,-0.9\n")
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 2
+    assert len(res.stderr.strip().splitlines()) == 1
+    assert "net.csv" in res.stderr and "station.QUITO" in res.stderr
