@@ -434,15 +434,18 @@ def read_deck(path: Path | str) -> Deck:
 @dataclass(frozen=True, slots=True, eq=False)
 class _Generated:
     """Parameters of one kind whose a priori the tape defines (module docstring): the deck's
-    ``fit.<key>`` and ``real.<key>`` turn them on, their σ's and correlations are generated.
+    ``fit.<key>`` and ``real.<key>`` turn them on, their σ's and correlations are generated;
+    or a world's station-location block, which the deck's ``<world>.apriori.stations`` gives
+    (key "apriori.stations", :meth:`_Binder._station_block`).
 
     Attributes
     ----------
-    key : the deck's key in [fit] and [real] ("stochastic", "manoeuvres").
+    key : the deck's key in [fit] and [real] ("stochastic", "manoeuvres"), or
+        "apriori.stations".
     plural, one : what they are, for messages ("stochastic accelerations", "stochastic
         acceleration"); ``article`` goes before ``one`` ("a", "an").
     correlated : why the deck gives them no correlations.
-    names : their names, in the tape's order.
+    names : their names, in the tape's order (a station block: in its rows' order).
     covariance, information : their a priori P (n, n) and P⁻¹, in their units squared
         (None: a real world's station block, whose inverse no one needs).
     sources : the error budget's sources among them: (label, names).
