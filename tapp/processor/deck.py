@@ -45,6 +45,11 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     sigma = { x_km = 1.0, "GM_moon_km3_s2" = 1e-4 }  # σ = 0: certain
     correlation = [["x_km", "y_km", 0.3]]
     # covariance = [[...]]      # the n_r1 x n_r1 covariance Λ₀
+    [real.apriori.stations]     # (or [fit.apriori.stations]) station locations as 3 x 3 blocks
+    file = "dsn.csv"            # optional: CSV or SINEX excerpt, relative to the deck
+    station.GOLDSTONE = { sigma_m = [0.03, 0.03, 0.05], correlation = [0.1, 0.0, 0.2] }
+    station.MADRID = { axes = "cylindrical", covariance_m2 = [[...], [...], [...]] }
+    frame = { translation_m = [0.02, 0.02, 0.02], rotation_mas = [0.3, 0.3, 0.3] }
     [miss]
     partitions = { m1 = [0, 2], m2 = ["b_dot_t_km", "flight_time_s"] }  # [t, h] or names
     [budget]
@@ -76,6 +81,20 @@ there. Their a priori is generated in the σ-table form only (not with matrices 
 the σ tables and correlation triples must not name them (σ = 0 is accepted where they are
 fixed), and the error budget counts them as one source, "stochastic accelerations".
 
+Station locations may be given as full blocks in either world (``[fit.apriori.stations]``,
+``[real.apriori.stations]``): per station the covariance of its Earth-fixed position in metres,
+in ITRF x, y, z (``axes = "ecef"``) or in its cylindrical axes (spin radius, east arc r_s λ, z),
+from a CSV file, a SINEX excerpt (:mod:`tapp.io.station_covariance`) or the deck, plus a
+common-frame error (σ's of a Helmert translation, rotation and scale shared by all the stations
+of the table) that correlates the complexes. They are mapped to the tape's location
+parameters (km or (r_s km, lon rad, z km)) to first order at the tape's nominal locations
+(:mod:`tapp.processor.station_apriori`) and complete the world's σ table, which must then give
+these stations no σ; the correlation triples must not name them. The stations must be on the
+tape with their location in q and in the world's set; a block must be symmetric positive
+semi-definite (positive definite in the fit world, whose a priori information is its
+inverse). The error budget counts them as one source, "station locations" (split by
+``[budget.groups]``, the correlations between groups are one more source).
+
 The execution errors of the burns TAPP I flew (parameters of kind "execution", defined on the
 tape by the scenario's ``[[manoeuvre]]`` tables: :mod:`tapp.dynamics.manoeuvres`, Gates'
 model :mod:`tapp.dynamics.gates`) are generated the same way, with ``fit.manoeuvres`` and
@@ -101,11 +120,24 @@ from tapp.estimation.factors import scaled_min_eigenvalue
 from tapp.estimation.gauss_markov import KIND as STOCHASTIC
 from tapp.frames.time import parse_epoch
 from tapp.io.schema import InfFloat, Schema, load
+from tapp.io.station_covariance import (
+    StationCovariance,
+    block_m2,
+    check_covariance,
+    read_station_covariance,
+)
 from tapp.io.tape.packing import symmetry_defect
+from tapp.measurements import STATION_PARAMETER_NAMES
 from tapp.processor.commands import ROC, Command, Side, parse_command
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.plan import Plan, StationOff
 from tapp.processor.representations import ISOLATED_SETS, Systems
+from tapp.processor.station_apriori import (
+    PER_PPB,
+    RAD_PER_MAS,
+    parameter_covariance,
+    position_km,
+)
 
 Ref = int | str
 TimeRef = int | float | str
@@ -219,6 +251,52 @@ class Common(Schema):
     constraints: list[list[Ref | float]] = Field([], description=_CONSTRAINTS)
 
 
+class StationBlock(Schema):
+    """``[<world>.apriori.stations.station.NAME]``: the covariance of one station's position
+    (m), in its ``axes``: σ's with correlations, or the 3 x 3 matrix."""
+
+    axes: Literal["ecef", "cylindrical"] = Field(
+        "ecef", description="\"ecef\": Earth-fixed (ITRF) x, y, z; \"cylindrical\": the "
+        "station's spin radius, east arc along the parallel (r_s λ) and z along the spin axis.")
+    sigma_m: Annotated[list[float], Field(min_length=3, max_length=3)] | None = Field(
+        None, description="σ along the three axes, m.")
+    correlation: Annotated[list[float], Field(min_length=3, max_length=3)] = Field(
+        [0.0, 0.0, 0.0], description="Correlations [ρ12, ρ13, ρ23] of the three axes (with "
+        "sigma_m).")
+    covariance_m2: list[list[float]] | None = Field(
+        None, description="The 3 x 3 covariance along the axes (instead of sigma_m).",
+        json_schema_extra={"unit": "m²"})
+
+
+class FrameError(Schema):
+    """``[<world>.apriori.stations.frame]``: a common-frame error (a 7-parameter Helmert
+    transformation shared by every station of the table, independent components): it
+    correlates the stations, e.g. the complexes of a network surveyed in one frame."""
+
+    translation_m: Annotated[list[float], Field(min_length=3, max_length=3)] = Field(
+        [0.0, 0.0, 0.0], description="σ of the translation along ITRF x, y, z, m.")
+    rotation_mas: Annotated[list[float], Field(min_length=3, max_length=3)] = Field(
+        [0.0, 0.0, 0.0], description="σ of the rotation about ITRF x, y, z.",
+        json_schema_extra={"unit": "mas"})
+    scale_ppb: float = Field(0.0, description="σ of the scale.",
+                             json_schema_extra={"unit": "ppb"})
+
+
+class StationsApriori(Schema):
+    """``[<world>.apriori.stations]``: the a priori of station locations as full 3 x 3 blocks
+    of their Earth-fixed positions (m), from a file and/or inline, with a common-frame error
+    that correlates the stations; mapped to the tape's location parameters to first order at
+    its nominal locations. The world's σ table then gives no σ for these stations."""
+
+    file: str | None = Field(None, description="A station covariance file, relative to the "
+                             "deck: CSV (.csv) or a SINEX excerpt (.snx, .sinex) "
+                             "(tapp.io.station_covariance).")
+    station: dict[str, StationBlock] = Field({}, description="Per station of the tape (by "
+                                             "name): its covariance.")
+    frame: FrameError = Field(FrameError(), description="The common-frame error of all "
+                              "the stations of the table.")
+
+
 class FitApriori(Schema):
     """``[fit.apriori]``: the fit world's a priori information: σ's or a normal matrix."""
 
@@ -228,6 +306,9 @@ class FitApriori(Schema):
                                                                             "parameter's"})
     normal: list[list[float]] | None = Field(None, description="The n_f1 x n_f1 a priori "
                                              "normal matrix S₀ (symmetric).")
+    stations: StationsApriori | None = Field(None, description="Station locations as full "
+                                             "blocks (with sigma as a table; their σ's are "
+                                             "not in it).")
 
 
 class Fit(Schema):
@@ -261,6 +342,9 @@ class RealApriori(Schema):
         [], description="Triples [a, b, ρ]: the correlation of parameters a and b.")
     covariance: list[list[float]] | None = Field(
         None, description="The n_r1 x n_r1 a priori covariance Λ₀ (positive semi-definite).")
+    stations: StationsApriori | None = Field(None, description="Station locations as full "
+                                             "blocks (with sigma as a table; their σ's are "
+                                             "not in it).")
 
 
 class Real(Schema):
@@ -350,16 +434,20 @@ def read_deck(path: Path | str) -> Deck:
 @dataclass(frozen=True, slots=True, eq=False)
 class _Generated:
     """Parameters of one kind whose a priori the tape defines (module docstring): the deck's
-    ``fit.<key>`` and ``real.<key>`` turn them on, their σ's and correlations are generated.
+    ``fit.<key>`` and ``real.<key>`` turn them on, their σ's and correlations are generated;
+    or a world's station-location block, which the deck's ``<world>.apriori.stations`` gives
+    (key "apriori.stations", :meth:`_Binder._station_block`).
 
     Attributes
     ----------
-    key : the deck's key in [fit] and [real] ("stochastic", "manoeuvres").
+    key : the deck's key in [fit] and [real] ("stochastic", "manoeuvres"), or
+        "apriori.stations".
     plural, one : what they are, for messages ("stochastic accelerations", "stochastic
         acceleration"); ``article`` goes before ``one`` ("a", "an").
     correlated : why the deck gives them no correlations.
-    names : their names, in the tape's order.
-    covariance, information : their a priori P (n, n) and P⁻¹, in their units squared.
+    names : their names, in the tape's order (a station block: in its rows' order).
+    covariance, information : their a priori P (n, n) and P⁻¹, in their units squared
+        (None: a real world's station block, whose inverse no one needs).
     sources : the error budget's sources among them: (label, names).
     """
 
@@ -370,7 +458,7 @@ class _Generated:
     correlated: str
     names: tuple[str, ...]
     covariance: np.ndarray
-    information: np.ndarray
+    information: np.ndarray | None
     sources: tuple[tuple[str, tuple[str, ...]], ...]
 
 
@@ -416,6 +504,8 @@ class _Binder:
         self.positional: list[str] = []
         #: The parameters whose a priori the tape defines, by kind.
         self.generated = _generated(header, self.names)
+        #: The station-location block of each world that has one (:meth:`_station_block`).
+        self.station_blocks: dict[str, _Generated] = {}
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -629,7 +719,135 @@ class _Binder:
                 raise self.fail(f"{world}.{g.key}", f"the {g.plural} in the {world} world's set "
                                 "(not fixed, certain or eliminated)", outside[0])
             out.append(([bare.index(n) for n in g.names], g))
+        station = self._station_block(order, n1, field, world, sigma)
+        if station is not None:
+            out.append(station)
         return out
+
+    def _station_covariances(self, table: StationsApriori, where: str
+                             ) -> tuple[StationCovariance, ...]:
+        """The station covariances of a ``stations`` table: its file's (relative to the deck)
+        and its inline stations', checked (:func:`tapp.io.station_covariance.check_covariance`)."""
+        out = []
+        if table.file is not None:
+            out.append(read_station_covariance(Path(self.source).parent / table.file))
+        names, axes, blocks = [], [], []
+        for name, blk in table.station.items():
+            at = f"{where}.station.{name}"
+            if (blk.sigma_m is None) == (blk.covariance_m2 is None):
+                raise self.fail(at, "exactly one of sigma_m or covariance_m2")
+            if blk.covariance_m2 is not None:
+                if any(blk.correlation):
+                    raise self.fail(f"{at}.correlation", "no correlations with covariance_m2")
+                m = np.array(blk.covariance_m2, dtype=float) if all(
+                    len(r) == 3 for r in blk.covariance_m2) else None
+                if m is None or m.shape != (3, 3):
+                    raise self.fail(f"{at}.covariance_m2", "a 3 x 3 matrix, m²",
+                                    blk.covariance_m2)
+            else:
+                if any(v < 0 for v in blk.sigma_m) or any(not -1 <= r <= 1
+                                                          for r in blk.correlation):
+                    raise self.fail(at, "σ's >= 0 and correlations within -1..1",
+                                    {"sigma_m": blk.sigma_m, "correlation": blk.correlation})
+                m = block_m2(blk.sigma_m, blk.correlation)
+            names.append(name)
+            axes.append(blk.axes)
+            blocks.append(m)
+        if names:
+            cov = np.zeros((3 * len(names), 3 * len(names)))
+            for i, m in enumerate(blocks):
+                cov[3 * i:3 * i + 3, 3 * i:3 * i + 3] = m
+            inline = StationCovariance(self.source, tuple(names), tuple(axes), cov)
+            check_covariance(inline, f"{where}.station")
+            out.append(inline)
+        if not out:
+            raise self.fail(where, "a file or at least one station")
+        if len(out) == 2:
+            twice = [n for n in out[1].stations if n in out[0].stations]
+            if twice:
+                raise self.fail(f"{where}.station.{twice[0]}", f"a station not also in the "
+                                f"file {table.file}")
+        return tuple(out)
+
+    def _station_block(self, order: list[str], n1: int, field: str, world: str, sigma
+                       ) -> tuple[list[int], _Generated] | None:
+        """The station-location block of a world's a priori (``{field}.stations``): its
+        positions in ``order`` and its covariance in the tape's location parameters, to first
+        order at the tape's nominal locations (:mod:`tapp.processor.station_apriori`); None
+        when the world has no such table.
+
+        Refused: a σ list or matrix (the block completes a σ table), a station not on the
+        tape or whose location is not a parameter of q, a σ given both ways (in the σ table
+        and by the block), a station parameter outside the world's set (fixed, certain,
+        eliminated), a negative frame σ, and in the fit world a block that is not positive
+        definite (its a priori information is the inverse)."""
+        table = getattr(self.deck, world).apriori.stations
+        if table is None:
+            return None
+        where = f"{field}.stations"
+        if not isinstance(sigma, dict):
+            raise self.fail(f"{field}.sigma", f"a σ table with {where} (the station blocks "
+                            "complete it; no list or matrix)")
+        frame = table.frame
+        frame_sigma = np.array([*frame.translation_m,
+                                *(np.array(frame.rotation_mas) * RAD_PER_MAS),
+                                frame.scale_ppb * PER_PPB])
+        if np.any(frame_sigma < 0):
+            raise self.fail(f"{where}.frame", "σ's >= 0", frame.model_dump())
+        st, par = self.h.stations, self.h.parameters
+        names, positions, kinds, axes, covs = [], [], [], [], []
+        for given in self._station_covariances(table, where):
+            axes += given.axes
+            covs.append(given.covariance_m2)
+            for station in given.stations:
+                at = f"{where}.station.{station}" if given.source == self.source else station
+                if station not in st.name:
+                    raise InputError(given.source, at, "a station of the tape ("
+                                     + ", ".join(st.name) + ")", station)
+                number = int(st.id[list(st.name).index(station)])
+                mine = [i for i, (k, s) in enumerate(zip(par.kind, par.station, strict=True))
+                        if k == "location" and int(s) == number]
+                suffixes = tuple(self.names[i].split(".", 1)[1] for i in mine)
+                kind = next((k for k, v in STATION_PARAMETER_NAMES.items() if v == suffixes),
+                            None)
+                if kind is None:
+                    raise InputError(given.source, at, "a station whose location is a "
+                                     "parameter of the tape (its scenario's location is "
+                                     "\"none\")", "no location parameters")
+                names += [self.names[i] for i in mine]
+                positions.append(position_km(par.nominal[mine], kind))
+                kinds.append(kind)
+        cov = np.zeros((len(names), len(names)))
+        at = 0
+        for c in covs:
+            cov[at:at + c.shape[0], at:at + c.shape[0]] = c
+            at += c.shape[0]
+        block = parameter_covariance(np.array(positions), tuple(kinds), tuple(axes), cov,
+                                     frame_sigma)
+        both = [k for k in sigma if self._key(k, field) in names]
+        if both:
+            raise self.fail(f"{field}.sigma.{both[0]}", f"no σ for a station location given "
+                            f"by {where} (one a priori per parameter: the σ table or the "
+                            "block)", sigma[both[0]])
+        bare = [n.rstrip("'") for n in order[:n1]]
+        outside = [n for n in names if n not in bare]
+        if outside:
+            raise self.fail(where, f"station locations in the {world} world's set (not "
+                            "fixed, certain or eliminated)", outside[0])
+        information = None
+        if world == "fit":
+            smallest = scaled_min_eigenvalue(block)
+            if not smallest > PSD_TOL:
+                raise self.fail(where, "a positive definite covariance of the station "
+                                "locations in the fit world (its a priori information is its "
+                                "inverse)", f"smallest eigenvalue {smallest:.3g} of its "
+                                "correlation matrix")
+            information = np.linalg.solve(block, np.eye(len(names)))
+        g = _Generated("apriori.stations", "station locations", "station location", "a",
+                       f"their correlations are {where}'s", tuple(names), block, information,
+                       (("station locations", tuple(names)),))
+        self.station_blocks[world] = g
+        return [bare.index(n) for n in names], g
 
     def _sigmas(self, sigma, order: list[str], n1: int, field: str,
                 generated: list[tuple[list[int], _Generated]] = ()) -> np.ndarray:
@@ -829,7 +1047,8 @@ class _Binder:
             seen |= set(idx)
             out.append((name, idx))
         bare = [n.rstrip("'") for n in order]
-        for g in self.generated:
+        real = [self.station_blocks["real"]] if "real" in self.station_blocks else []
+        for g in (*self.generated, *real):
             for label, names in g.sources:
                 rest = tuple(i for i in (bare.index(n) for n in names)
                              if systems.n_p <= i < systems.n_r1 and i not in seen)
