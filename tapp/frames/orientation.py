@@ -414,6 +414,9 @@ def orientation_for(model: str, epoch: Epoch, eop: str = "iers", base_dir: Path 
 #: The Earth orientation parameters whose constant offsets from the IERS values (or, under
 #: gmst, from UT1 = UTC) are differentiable: UT1 − UTC (s) and the pole coordinates (rad).
 EOP_PARAMETERS = ("ut1_s", "xp_rad", "yp_rad")
+#: Their units, and the kind of the parameters (``eop.<name>``) on the T13 tape.
+EOP_UNITS = {"ut1_s": "s", "xp_rad": "rad", "yp_rad": "rad"}
+EOP_KIND = "eop"
 
 
 def check_eop_parameters(model: str, names, source: str = "earth orientation",
@@ -431,6 +434,18 @@ def check_eop_parameters(model: str, names, source: str = "earth orientation",
             raise InputError(source, field_name, " or ".join(f'"{n}"' for n in allowed)
                              + f" under earth_orientation = \"{model}\"{why}", name)
     return names
+
+
+def eop_parameters_of(model: str, setting: bool | list[str], source: str = "scenario",
+                      field_name: str = "parameters.earth_orientation") -> tuple[str, ...]:
+    """Return the EOP parameters a scenario's ``setting`` asks for: none (False), every one
+    that has a meaning under ``model`` (True: the three under iau2006, "ut1_s" under gmst)
+    or the listed ones, checked by :func:`check_eop_parameters`."""
+    if setting is True:
+        return EOP_PARAMETERS if model == "iau2006" else EOP_PARAMETERS[:1]
+    if setting is False:
+        return ()
+    return check_eop_parameters(model, setting, source, field_name)
 
 
 def eop_generators(attitude: EarthAttitude, names=EOP_PARAMETERS) -> np.ndarray:
