@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from tapp.frames.eop import MAS_rad, MJD_OFFSET
+from tapp.frames.eop import MJD_OFFSET, MAS_rad
 from tapp.measurements import Station
 from tapp.measurements.stations import station_eop_partials
 from tests import orekit_session
