@@ -1,9 +1,9 @@
 """Earth orientation offsets and ΔDOR quasar positions as TAPP I parameters: the scenario
-keys, the tape's columns (the models' partials), the HDF5 round trip, and a TAPP III deck
-that considers σ(UT1) = 0.5 ms, σ(x_p, y_p) = 5 nrad with "eop" in the error budget.
+keys, the tape's columns (the models' partials), the HDF5 round trip, and TAPP III decks
+that consider σ(UT1) = 0.5 ms, σ(x_p, y_p) = 5 nrad with "eop" in the error budget.
 
 The geometry is the GEO track of :func:`helpers.geo_document` (two stations, one ΔDOR
-baseline, iau2006 with the IERS EOP).
+baseline, iau2006 with the IERS EOP), and the lunar transfer of the deep_space example.
 """
 
 import math
@@ -14,10 +14,12 @@ import pytest
 from tapp.errors import InputError
 from tapp.io.tape.t13 import T13
 from tapp.io.tape.t13_hdf5 import read_t13, write_t13
+from tapp.io.tomlfile import read_toml
 from tapp.measurements import MeasurementModel
 from tapp.measurements.ddor import DdorModel, quasar_direction
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import simulate
+from tests.tapp.guidance.helpers import SCENARIOS
 from tests.tapp.processor.helpers import deck, run, sigmas
 from tests.tapp.tracking.helpers import SOURCE, geo_document
 
@@ -136,3 +138,36 @@ def test_tapp3_considers_eop_and_the_budget_shows_it(simulated) -> None:
                                commands={"print": out}))
     ref = [b for b in reference.blocks if b.kind == "print"][-1].entities[0].matrix
     assert np.all(np.diag(entity.matrix)[:3] > np.diag(ref)[:3])
+
+
+def test_deep_space_with_eop_and_ddor_through_tapp3() -> None:
+    """The example deep_space.toml (without its stochastic accelerations, as the fast tests
+    of test_reference) with ``earth_orientation = true`` and ΔDOR on Goldstone-Canberra with
+    its quasar position: the tape has the three EOP columns, and tapp3_deep_space.toml with
+    σ(UT1) = 0.5 ms, σ(x_p, y_p) = 5 nrad, σ(quasar) = 1 nrad considered (fit σ = 0) runs,
+    with "eop" a source of the orbit's budget: measured 6.4, 1.7, 0.6 m in x, y, z at day 1
+    (of σ 60, 48, 95 m), falling to < 1 mm once the range biases and the lunar-distance
+    Doppler take over; the quasar's share is 2.4 and 5.3 m in y, z at day 30."""
+    doc = read_toml(SCENARIOS / "deep_space.toml")
+    doc.pop("stochastic")
+    doc["parameters"]["earth_orientation"] = True
+    doc["ddor"] = {"baselines": [["GOLDSTONE", "CANBERRA"]], "interval_s": 21600.0,
+                   "min_window_s": 1800.0, "quasar_position": True, "fit": {"sigma_ns": 0.06}}
+    tape = simulate(parse_scenario(doc, str(SCENARIOS / "deep_space.toml"))).tape
+    kinds = dict(zip(tape.parameters.name, tape.parameters.kind, strict=True))
+    assert [n for n, k in kinds.items() if k == "eop"] == list(EOP)
+    quasar = ("GOLDSTONE-CANBERRA.quasar_ra_rad", "GOLDSTONE-CANBERRA.quasar_dec_rad")
+    deck_doc = read_toml(SCENARIOS / "tapp3_deep_space.toml")
+    deck_doc["tape"].pop("n_o")
+    deck_doc["fit"]["stochastic"] = deck_doc["real"]["stochastic"] = "ignore"
+    deck_doc["fit"]["apriori"]["sigma"].update(dict.fromkeys(EOP + quasar, 0.0))
+    deck_doc["real"]["apriori"]["sigma"].update(
+        {**SIGMA_EOP, **dict.fromkeys(quasar, SIGMA_QUASAR)})
+    deck_doc["budget"] = {"groups": {"eop": list(EOP), "quasar": list(quasar)}}
+    result = run(tape, deck_doc)
+    day1 = next(e for b in result.blocks if b.kind == "print" and b.k == 1
+                for e in b.entities if e.command.alias() == "cov-real p@current")
+    budget = day1.budget
+    eop_m = np.sqrt(budget.variances[budget.sources.index("eop (a priori)")][:3]) * 1e3
+    assert np.all(eop_m > 0.1) and np.all(eop_m < 0.2 * np.sqrt(budget.total[:3]) * 1e3)
+    np.testing.assert_allclose(budget.variances.sum(axis=0), budget.total, rtol=1e-9)
