@@ -407,3 +407,83 @@ def orientation_for(model: str, epoch: Epoch, eop: str = "iers", base_dir: Path 
         table = finals2000a((base_dir / path) if base_dir and not path.is_absolute() else path)
     return EarthOrientation.of(model, epoch, table, source)
 
+
+
+# --- partials w.r.t. constant offsets of the Earth orientation parameters ------------------
+
+#: The Earth orientation parameters whose constant offsets from the IERS values (or, under
+#: gmst, from UT1 = UTC) are differentiable: UT1 − UTC (s) and the pole coordinates (rad).
+EOP_PARAMETERS = ("ut1_s", "xp_rad", "yp_rad")
+#: Their units, and the kind of the parameters (``eop.<name>``) on the T13 tape.
+EOP_UNITS = {"ut1_s": "s", "xp_rad": "rad", "yp_rad": "rad"}
+EOP_KIND = "eop"
+
+
+def check_eop_parameters(model: str, names, source: str = "earth orientation",
+                         field_name: str = "eop") -> tuple[str, ...]:
+    """Return ``names`` as a tuple if each is one of :data:`EOP_PARAMETERS` and has a meaning
+    under ``model``; else raise InputError naming ``field_name``.
+
+    The gmst model has no polar motion (W = I): only "ut1_s" is offered there.
+    """
+    names = tuple(names)
+    allowed = EOP_PARAMETERS if model == "iau2006" else EOP_PARAMETERS[:1]
+    for name in names:
+        if name not in allowed:
+            why = "" if name not in EOP_PARAMETERS else " (the gmst model has no polar motion)"
+            raise InputError(source, field_name, " or ".join(f'"{n}"' for n in allowed)
+                             + f" under earth_orientation = \"{model}\"{why}", name)
+    return names
+
+
+def eop_parameters_of(model: str, setting: bool | list[str], source: str = "scenario",
+                      field_name: str = "parameters.earth_orientation") -> tuple[str, ...]:
+    """Return the EOP parameters a scenario's ``setting`` asks for: none (False), every one
+    that has a meaning under ``model`` (True: the three under iau2006, "ut1_s" under gmst)
+    or the listed ones, checked by :func:`check_eop_parameters`."""
+    if setting is True:
+        return EOP_PARAMETERS if model == "iau2006" else EOP_PARAMETERS[:1]
+    if setting is False:
+        return ()
+    return check_eop_parameters(model, setting, source, field_name)
+
+
+def eop_generators(attitude: EarthAttitude, names=EOP_PARAMETERS) -> np.ndarray:
+    """Return the inertial rotation vectors g_p of constant EOP offsets, (N, k, 3), rad per
+    unit of each parameter (s for ``ut1_s``, rad for ``xp_rad``, ``yp_rad``).
+
+    Any Earth-fixed point r_f, at inertial r = Mᵀ r_f, moves by dr/dp = g_p × r.
+
+    .. math::
+
+        \\frac{\\partial M}{\\partial p} = -[\\mathbf a_p\\times]\\,M,\\quad
+        \\mathbf g_p = M^T\\mathbf a_p,\\qquad
+        \\mathbf a_{UT1} = \\omega\\,W\\hat{\\mathbf z},\\quad
+        \\mathbf a_{x_p} = -R_1(-y_p)\\,\\hat{\\mathbf y},\\quad
+        \\mathbf a_{y_p} = -\\hat{\\mathbf x}
+
+    from M = W R_3(ERA) C, W = R_1(−y_p) R_2(−x_p) R_3(s') (IERS Conventions 2010, ch. 5,
+    eqs. 5.1, 5.3, 5.15) and dR_k(α)/dα = −[ê_k×] R_k(α): the ERA of UT1 grows at
+    ω = dERA/dUT1 = 2π · 1.00273781191135448 / 86400 rad/s (the gmst model: ω_E, its own
+    rate: a UT1 offset δ turns its angle by ω_E δ, 1.2e-7 below GMST-82's rate), so
+    g_UT1 = ω ĉ, the spin axis (CIP) in inertial axes, and dr/dUT1 is the station's velocity.
+    W ẑ = (sin x_p, −sin y_p cos x_p, cos y_p cos x_p) is the CIP in the ITRS, = M ĉ; so
+    R_1(−y_p) ŷ = (0, cos y_p, sin y_p) comes from the attitude alone. Under gmst
+    (W = I) only the UT1 column means anything (:func:`check_eop_parameters`).
+
+    Parameters
+    ----------
+    attitude : EarthAttitude
+        The Earth's orientation at N instants.
+    names : sequence of str
+        Columns, among :data:`EOP_PARAMETERS`.
+    """
+    m = attitude.itrs_from_gcrs
+    cip_itrs = np.einsum("...ij,...j->...i", m, attitude.spin_axis)  # W ẑ
+    axes = {"ut1_s": attitude.omega_rad_s * cip_itrs,
+            "xp_rad": -np.stack([np.zeros_like(cip_itrs[..., 0]), cip_itrs[..., 2],
+                                 -cip_itrs[..., 1]], -1)
+            / np.hypot(cip_itrs[..., 1], cip_itrs[..., 2])[..., None],
+            "yp_rad": np.broadcast_to([-1.0, 0.0, 0.0], cip_itrs.shape)}
+    a = np.stack([axes[name] for name in names], axis=-2)  # (N, k, 3), ITRS
+    return np.einsum("...ji,...kj->...ki", m, a)  # g = Mᵀ a

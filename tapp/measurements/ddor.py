@@ -65,7 +65,12 @@ import numpy as np
 
 from tapp.constants import C_LIGHT_km_s
 from tapp.errors import DivergenceError, InputError
-from tapp.frames.orientation import EarthOrientation, as_orientation
+from tapp.frames.orientation import (
+    EOP_PARAMETERS,
+    EarthOrientation,
+    as_orientation,
+    check_eop_parameters,
+)
 from tapp.measurements.observables import (
     LIGHT_TIME_MAX_ITERATIONS,
     LightTime,
@@ -75,6 +80,7 @@ from tapp.measurements.observables import (
 from tapp.measurements.stations import (
     Station,
     StationParameters,
+    station_eop_partials,
     station_state_eci,
     station_state_partials,
 )
@@ -82,6 +88,9 @@ from tapp.measurements.stations import (
 #: The observable's kind code and unit (a range-equivalent delay).
 DDOR_KIND = "ddor"
 DDOR_UNIT = "km"
+#: Names and units of the quasar position offsets, in the order of ``quasar_partials``' last
+#: axis: Δα cos δ and Δδ, rad.
+QUASAR_PARAMETER_NAMES = ("quasar_ra_rad", "quasar_dec_rad")
 #: The quasar's delay iteration stops when a change is below this many seconds (1e-18 s is
 #: 3e-13 km: rounding of a 1e4 km baseline); it contracts by |v_B| / c ~ 1.5e-6.
 _QUASAR_DELAY_TOL_s = 1e-18
@@ -278,3 +287,69 @@ class DdorModel:
         wrt_b = (np.einsum("...i,...ij->...j", s_q, dr(self.station_b, geo.t_b_quasar_s))
                  - np.einsum("...i,...ij->...j", d_b, dr(self.station_b, geo.t_b_s)))
         return wrt_a[..., None, :], wrt_b[..., None, :]
+
+    def eop_partials(self, t_s, state_eci, quasar_eci, names=EOP_PARAMETERS):
+        """Return d ddor / d constant EOP offsets, shape (N, 1, k).
+
+        Columns ``names`` among ("ut1_s", "xp_rad", "yp_rad") (only "ut1_s" under gmst), km
+        per s and km per rad. The chain rule of :meth:`station_partials` with both stations
+        moved by the same rotation (:func:`tapp.measurements.stations.station_eop_partials`):
+
+        .. math::
+
+            \\frac{\\partial\\,\\mathrm{ddor}}{\\partial p} =
+            (\\hat{\\mathbf d}_A - \\hat{\\mathbf s}_q)\\cdot\\mathbf g_p\\times\\mathbf r_A(t)
+            + \\hat{\\mathbf s}_q\\cdot\\mathbf g_p\\times\\mathbf r_B(t + \\Delta t_q)
+            - \\hat{\\mathbf d}_B\\cdot\\mathbf g_p\\times\\mathbf r_B(t_B),
+
+        to first order (ŝ_sc − ŝ_q)·(g_p × b): an EOP error is a baseline orientation error,
+        which the quasar removes but for the separation (Thornton & Border 2003, ch. 7).
+
+        Raises
+        ------
+        InputError
+            A name that is not an EOP parameter of the orientation model.
+        """
+        names = check_eop_parameters(self.orientation.model, names, "DdorModel", "eop")
+        t = np.asarray(t_s, dtype=float)
+        geo = self.geometry(t, state_eci, quasar_eci)
+        s_q = _unit(np.asarray(quasar_eci, dtype=float))
+        d_a, d_b = self._lines_of_sight(geo)
+
+        def dr(station, times):
+            return station_eop_partials(station.r_ecef_km, self.orientation.attitude(times),
+                                        names)[..., :3, :]
+
+        out = (np.einsum("...i,...ij->...j", d_a - s_q, dr(self.station_a, t))
+               + np.einsum("...i,...ij->...j", s_q, dr(self.station_b, geo.t_b_quasar_s))
+               - np.einsum("...i,...ij->...j", d_b, dr(self.station_b, geo.t_b_s)))
+        return out[..., None, :]
+
+    def quasar_partials(self, t_s, state_eci, quasar_eci):
+        """Return d ddor / d(Δα cos δ, Δδ) of the quasar, km/rad, shape (N, 1, 2).
+
+        Offsets of the quasar's right ascension (times cos δ) and declination in the inertial
+        frame (:data:`QUASAR_PARAMETER_NAMES`): ŝ_q moves by ê (east, ẑ × ŝ_q normalised)
+        and n̂ = ŝ_q × ê (north). From c Δt_q = −ŝ_q · (r_B(t + Δt_q) − r_A(t)):
+
+        .. math::
+
+            \\frac{\\partial\\,\\mathrm{ddor}}{\\partial\\hat{\\mathbf s}_q} =
+            \\frac{c\\,\\mathbf b_q}{c + \\hat{\\mathbf s}_q\\cdot\\mathbf v_B},
+            \\qquad \\mathbf b_q = \\mathbf r_B(t + \\Delta t_q) - \\mathbf r_A(t)
+
+        (exact for the model; without light time Δt_q = 0, so v_B drops out). A quasar error
+        of δθ is a delay error of |b_proj| δθ, 1 nrad on an 8,000 km baseline 8 mm
+        (Thornton & Border 2003, ch. 7). Undefined at the celestial poles, where east is.
+        """
+        geo = self.geometry(t_s, state_eci, quasar_eci)
+        s_q = _unit(np.asarray(quasar_eci, dtype=float))
+        east = _unit(np.cross([0.0, 0.0, 1.0], s_q))
+        north = np.cross(s_q, east)
+        b_q = geo.station_b_quasar[..., :3] - geo.station_a[..., :3]
+        if self.light_time is None:
+            grad = b_q
+        else:
+            v_b = geo.station_b_quasar[..., 3:]
+            grad = C_LIGHT_km_s * b_q / (C_LIGHT_km_s + np.sum(s_q * v_b, -1))[..., None]
+        return np.stack([np.sum(grad * east, -1), np.sum(grad * north, -1)], -1)[..., None, :]

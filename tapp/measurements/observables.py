@@ -64,11 +64,19 @@ import numpy as np
 
 from tapp.constants import C_LIGHT_km_s, GM_EARTH_km3_s2
 from tapp.errors import DivergenceError, InputError
-from tapp.frames.orientation import EarthAttitude, EarthOrientation, as_orientation
+from tapp.frames.orientation import (
+    EOP_PARAMETERS,
+    EarthAttitude,
+    EarthOrientation,
+    as_orientation,
+    check_eop_parameters,
+    eop_generators,
+)
 from tapp.measurements.media import LegMedia, MediaModel
 from tapp.measurements.stations import (
     Station,
     StationParameters,
+    station_eop_partials,
     station_state_eci,
     station_state_partials,
 )
@@ -734,3 +742,38 @@ class MeasurementModel:
     def visible(self, t_s, state_eci):
         """Return True where the elevation is strictly above the station's mask, (N,) bool."""
         return is_visible(self.elevation_rad(t_s, state_eci), self.station.elev_mask_rad)
+
+    def eop_partials(self, t_s, state_eci, names=EOP_PARAMETERS):
+        """Return d observables / d constant EOP offsets, shape (N, m, k).
+
+        Columns ``names`` among ("ut1_s", "xp_rad", "yp_rad") (:data:`EOP_PARAMETERS`; only
+        "ut1_s" under gmst): per s of UT1 − UTC and per rad of pole coordinate.
+
+        Range and range-rate: the chain rule per leg as :meth:`station_partials`, with the
+        station's state partials of :func:`station_eop_partials` at the leg's attitude.
+        Angles: the ENU vector E M (r − r_st) changes only through M (the ENU axes turn with
+        the Earth), d(ENU)/dp = −E M (g_p × r) (:func:`eop_generators`), i.e. the angle
+        rows of :meth:`state_partials` at the bounce times (−g_p × r). Exact without light
+        time; with light time the neglected dτ/dp is relative O(v/c), as for the station
+        partials. With media, their rows follow the range's (station moved, ENU axes held):
+        the turn of the elevation with the Earth, δE ~ 7e-8 rad per ms of UT1, changes a
+        10-degree troposphere by ~5 μm, 2e-5 of the geometric 0.3 m, and is left out.
+
+        Raises
+        ------
+        InputError
+            A name that is not an EOP parameter of the orientation model.
+        """
+        names = check_eop_parameters(self.orientation.model, names, "MeasurementModel", "eop")
+        geo = self._geometry(t_s, state_eci)
+        r_ecef = self.station.r_ecef_km
+        angle = np.array([k in (Observable.AZIMUTH, Observable.ELEVATION) for k in self.kinds])
+        out = 0.0
+        for number, (attitude, rows) in enumerate(self._leg_partials(geo)):
+            out = out - np.where(angle[:, None], 0.0,
+                                 rows @ station_eop_partials(r_ecef, attitude, names))
+            if number == 0 and angle.any():
+                moved = -np.cross(eop_generators(attitude, names), geo.spacecraft[..., None, :3])
+                out = out + np.where(angle[:, None], rows[..., :3] @ np.swapaxes(moved, -1, -2),
+                                     0.0)
+        return out

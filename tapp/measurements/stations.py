@@ -28,7 +28,13 @@ import numpy as np
 
 from tapp.errors import InputError
 from tapp.frames.geodesy import ecef_to_geodetic, enu_matrix, geodetic_to_ecef
-from tapp.frames.orientation import EarthAttitude, EarthOrientation, as_orientation
+from tapp.frames.orientation import (
+    EOP_PARAMETERS,
+    EarthAttitude,
+    EarthOrientation,
+    as_orientation,
+    eop_generators,
+)
 
 StationParameters = Literal["cylindrical", "ecef"]
 _PARAMETER_CHOICES = '"cylindrical" or "ecef"'
@@ -104,6 +110,34 @@ def station_state_partials(r_ecef_km, attitude: EarthAttitude,
     dr = attitude.gcrs_from_itrs @ location_jacobian(r_ecef_km, parameters)
     dv = attitude.omega_rad_s * np.cross(attitude.spin_axis[..., :, None], dr, axis=-2)
     return np.concatenate([dr, dv], axis=-2)
+
+
+def station_eop_partials(r_ecef_km, attitude: EarthAttitude, names=EOP_PARAMETERS):
+    """Return d[r_eci, v_eci]/d(constant EOP offsets), shape (N, 6, k).
+
+    Parameters
+    ----------
+    r_ecef_km : array_like, shape (3,)
+        Earth-fixed position, km.
+    attitude : EarthAttitude
+        The Earth's orientation at the N times.
+    names : sequence of str
+        Columns among ("ut1_s", "xp_rad", "yp_rad"): km/s (UT1 − UTC offset in s) and km/rad
+        (pole coordinates); check them against the model with
+        :func:`tapp.frames.orientation.check_eop_parameters` first.
+
+    Notes
+    -----
+    dr/dp = g_p × r with g_p the inertial rotation vector of the offset
+    (:func:`tapp.frames.orientation.eop_generators`, IERS Conventions 2010 ch. 5), and
+    dv/dp = ω ĉ × dr/dp (ĉ, the CIP, does not depend on UT1 or the pole coordinates): the
+    derivatives of :func:`station_state_eci`. dr/dUT1 is the station's velocity, 0.465 m per
+    ms of UT1 at the equator.
+    """
+    r = station_state_eci(r_ecef_km, attitude)[..., None, :3]
+    dr = np.cross(eop_generators(attitude, names), r)  # (N, k, 3)
+    dv = attitude.omega_rad_s * np.cross(attitude.spin_axis[..., None, :], dr)
+    return np.swapaxes(np.concatenate([dr, dv], axis=-1), -1, -2)
 
 
 @dataclass(frozen=True, slots=True)

@@ -14,11 +14,19 @@ Its partials w.r.t. the two stations' locations go to those stations' parameters
     min_window_s = 1800.0         # mutual windows shorter than this give no point
     quasar_separation_deg = 5.0   # the reference quasar's angle from the spacecraft ...
     quasar_position_angle_deg = 0.0   # ... and its direction (north through east)
+    quasar_position = true        # the quasar's (Δα cos δ, Δδ) as parameters of each baseline
     [ddor.fit]
     sigma_ns = 0.06               # or sigma_nrad (× the projected baseline length)
     [ddor.real]
     sigma_ns = 0.06               # white σ (default: the fit σ)
     bias_ns = 0.03                # constant over each mutual-visibility window, σ
+
+With ``quasar_position = true`` each baseline has two parameters in q, ``A-B.quasar_ra_rad``
+and ``A-B.quasar_dec_rad`` (kind "quasar", nominal 0, the baseline's tape number as their
+station): the error of its reference quasar's catalogue position, Δα cos δ and Δδ in rad,
+constant over the arc (one quasar's error, though the model keeps the quasar at its stated
+angle from the moving spacecraft), with the partials of
+:meth:`tapp.measurements.ddor.DdorModel.quasar_partials`.
 
 Noise in ns is a delay, c σ km; noise in nrad is an angle, whose delay σ |b_proj| km grows
 with the baseline length seen from the spacecraft (:func:`projected_baseline_km`). Fit and
@@ -41,13 +49,15 @@ from tapp.constants import C_LIGHT_km_s
 from tapp.errors import InputError
 from tapp.io.noise_file import NonNegative, Positive
 from tapp.io.schema import Schema
-from tapp.measurements.ddor import DDOR_KIND
+from tapp.measurements.ddor import DDOR_KIND, QUASAR_PARAMETER_NAMES
 from tapp.measurements.stations import Station
 from tapp.tracking.noise import FitNoise, RealNoise
 
 #: Factors from the edge units to the noise units: ns -> km (× c), nrad -> rad.
 NS_km = C_LIGHT_km_s * 1e-9
 NRAD_rad = 1e-9
+#: The kind of the quasar-position parameters on the tape.
+QUASAR_KIND = "quasar"
 #: Largest quasar separation accepted, deg: ΔDOR's reference sources are within ~10 deg.
 MAX_SEPARATION_deg = 30.0
 
@@ -90,6 +100,9 @@ class DdorTable(Schema):
     quasar_position_angle_deg: float = Field(
         0.0, description="Direction of the quasar from the spacecraft, from north through "
         "east.")
+    quasar_position: bool = Field(
+        False, description="The reference quasar's position error (Δα cos δ, Δδ, rad) as two "
+        "parameters of each baseline in q.")
     fit: DdorFitTable = Field(description="Fit-world σ (ns or nrad).")
     real: DdorRealTable = Field(DdorRealTable(), description="Real-world noise; default: the "
                                 "fit world's white noise.")
@@ -110,6 +123,7 @@ class TrackingBaseline:
     interval_s : a point every this many seconds, or None: one per window.
     min_window_s : windows shorter than this give no point.
     separation_rad, position_angle_rad : where the quasar is from the spacecraft.
+    quasar_position : whether the quasar's position error is in q (:attr:`quasar_parameters`).
     """
 
     number: int
@@ -124,6 +138,13 @@ class TrackingBaseline:
     min_window_s: float
     separation_rad: float
     position_angle_rad: float
+    quasar_position: bool = False
+
+    @property
+    def quasar_parameters(self) -> tuple[str, ...]:
+        """Names of its quasar-position parameters in q (``A-B.quasar_ra_rad``, ...), rad."""
+        return (tuple(f"{self.name}.{n}" for n in QUASAR_PARAMETER_NAMES)
+                if self.quasar_position else ())
 
 
 def _fail(source: str, field: str, expected: str, got: object = None) -> NoReturn:
@@ -194,5 +215,6 @@ def tracking_baselines(source: str, table: DdorTable | None, stations: tuple[Sta
             real=(real,), per_nrad=per_nrad, interval_s=interval,
             min_window_s=table.min_window_s,
             separation_rad=math.radians(table.quasar_separation_deg),
-            position_angle_rad=math.radians(table.quasar_position_angle_deg)))
+            position_angle_rad=math.radians(table.quasar_position_angle_deg),
+            quasar_position=table.quasar_position))
     return tuple(out)

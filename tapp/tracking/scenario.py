@@ -42,6 +42,8 @@ ISO strings or TOML dates)::
                        parameters <STATION>.zenith_dry_km, .zenith_wet_km, kind
                        "troposphere", and .zenith_tec_tecu, kind "ionosphere"; needs
                        the effect on in [media]),
+                       earth_orientation = true | ["ut1_s", "xp_rad", "yp_rad"] (constant
+                       EOP offsets eop.*, kind "eop"; gmst: ut1_s only),
                        [parameters.values] non-nominal values of dynamic parameters
     [stations.NAME]    lat_deg, lon_deg, h_km (-0.5 to 10 km), elev_mask_deg
                        (tapp.io.stations_file)
@@ -67,7 +69,8 @@ ISO strings or TOML dates)::
                        (constant per pass), correlated_<kind>_<unit> with tau_<kind>_s
                        (exponentially correlated)
     [ddor]             optional: ΔDOR on baselines of tracked stations (baselines, interval_s,
-                       min_window_s, quasar_separation_deg, quasar_position_angle_deg;
+                       min_window_s, quasar_separation_deg, quasar_position_angle_deg,
+                       quasar_position = true: A-B.quasar_ra_rad, .quasar_dec_rad in q;
                        [ddor.fit] sigma_ns or sigma_nrad, [ddor.real] sigma_*, bias_*;
                        tapp.tracking.ddor)
     [times]            input = [times] or input_step_s with end; epochs = [times] (epoch times
@@ -119,7 +122,14 @@ from tapp.dynamics.manoeuvres import KIND as EXECUTION
 from tapp.dynamics.manoeuvres import THRUST_NAMES, Burn
 from tapp.errors import InputError
 from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
-from tapp.frames.orientation import EarthOrientation, orientation_for
+from tapp.frames.orientation import (
+    EOP_KIND,
+    EOP_PARAMETERS,
+    EOP_UNITS,
+    EarthOrientation,
+    eop_parameters_of,
+    orientation_for,
+)
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.frames.timescales import seconds_after
 from tapp.io.models_file import ModelTable
@@ -154,7 +164,7 @@ from tapp.measurements.stations import Station
 from tapp.orbit.bplane import REFERENCE_POLES
 from tapp.targeting.program import BPlaneSearch
 from tapp.targeting.searchfile import TargetingTable, scenario_targeting
-from tapp.tracking.ddor import DdorTable, TrackingBaseline, tracking_baselines
+from tapp.tracking.ddor import QUASAR_KIND, DdorTable, TrackingBaseline, tracking_baselines
 from tapp.tracking.manoeuvres import MAX_MANOEUVRES, ManoeuvreTable, scenario_manoeuvres
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
@@ -362,6 +372,8 @@ class Scenario:
         force model over each arc between the burns (:mod:`tapp.tracking.reference`); ``x0``
         is then its state at t = 0, and ``manoeuvres`` the tables', until the fit replaces
         them; None without one.
+    eop : the Earth orientation parameters whose constant offsets are in q (parameters
+        ``eop.<name>``, kind "eop": :func:`tapp.frames.orientation.eop_parameters_of`).
     """
 
     source: str
@@ -387,6 +399,7 @@ class Scenario:
     method: str = "dop853"
     manoeuvres: tuple[Burn, ...] = ()
     reference: Reference | None = None
+    eop: tuple[str, ...] = ()
 
     def propagator(self) -> Propagator:
         """The (state model, variational model, dynamic parameters) propagator."""
@@ -395,8 +408,9 @@ class Scenario:
 
     @property
     def parameters(self) -> tuple[Parameter, ...]:
-        """x = [p; q]: orbit state at the epoch, dynamic parameters, station parameters,
-        stochastic accelerations, execution errors of the manoeuvres."""
+        """x = [p; q]: orbit state at the epoch, dynamic parameters, station parameters, EOP
+        offsets, quasar positions, stochastic accelerations, execution errors of the
+        manoeuvres (the segment parameters last)."""
         out = [Parameter(name, unit, "orbit", float(v))
                for (name, unit), v in zip(ORBIT_PARAMETERS, self.x0, strict=True)]
         values = default_parameters(self.state_model, self.dynamic)
@@ -407,6 +421,9 @@ class Scenario:
                                  "dynamic", values[name]))
         for st in self.stations:
             out.extend(st.parameters())
+        out.extend(Parameter(f"eop.{name}", EOP_UNITS[name], EOP_KIND, 0.0) for name in self.eop)
+        out.extend(Parameter(name, "rad", QUASAR_KIND, 0.0, bl.number)
+                   for bl in self.baselines for name in bl.quasar_parameters)
         if self.stochastic is not None:
             out.extend(Parameter(name, UNIT, KIND, 0.0) for name in self.stochastic.names)
         out.extend(Parameter(name, unit, EXECUTION, 0.0) for burn in self.manoeuvres
@@ -464,6 +481,11 @@ class ParametersTable(Schema):
     values: dict[str, float] = Field(
         {}, description="Values other than nominal of dynamic parameters, by name (GM in "
         "km³/s²).")
+    earth_orientation: bool | Annotated[list[Literal[EOP_PARAMETERS]],  # type: ignore[valid-type]
+                                        Unique] = Field(
+        False, description="Constant offsets of the Earth orientation parameters from the IERS "
+        "values in q (eop.ut1_s, eop.xp_rad, eop.yp_rad): true for all (\"ut1_s\" alone under "
+        "gmst), or a list of them.")
 
 
 class StationTracking(Schema):
@@ -1069,7 +1091,9 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,
                     dynamic, values, stations, schedule, times, miss, document, targeting,
-                    baselines, stochastic, doc.model.method, manoeuvres, reference)
+                    baselines, stochastic, doc.model.method, manoeuvres, reference,
+                    eop=eop_parameters_of(orientation.model, doc.parameters.earth_orientation,
+                                          source))
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

@@ -39,7 +39,9 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    (:mod:`tapp.tracking.ddor`) is an entry after the stations: its points fall on the same
    grid where both stations see the spacecraft (a mutual-visibility window is its pass), its
    rows come from :class:`tapp.measurements.ddor.DdorModel` (one-way legs; partials w.r.t.
-   both stations' locations), the reference quasar at its stated angle from the nominal
+   both stations' locations and, with ``quasar_position``, its quasar's position), the
+   columns of constant EOP offsets (``[parameters] earth_orientation``) filled for every
+   station and baseline, the reference quasar at its stated angle from the nominal
    geocentric direction of the spacecraft. One row of A per scalar observation, referred to
    the epoch t_j of its record:
 
@@ -421,6 +423,7 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
         for i, (zname, kind) in enumerate(zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS, strict=True)):
             if kind in ts.media_parameters:
                 a[..., columns[f"{name}.{zname}"]] = zenith[..., i]
+    _eop_rows(a, scenario, columns, lambda names: model.eop_partials(t, x, names))
     record, segment = _segments(t, label, t13)
     counts = np.full(times.size, len(ts.kinds)) if taken is None else taken.sum(axis=1)
     pass_list = [(float(times[a_]), float(times[b_ - 1]), int(counts[a_:b_].sum()))
@@ -481,6 +484,10 @@ def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, a
         if ts.location != "none":
             first = columns[f"{ts.station.name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
             a[..., first:first + 3] = model.station_partials(t, x, quasar, ts.location)[which]
+    _eop_rows(a, scenario, columns, lambda names: model.eop_partials(t, x, quasar, names))
+    if bl.quasar_position:
+        first = columns[bl.quasar_parameters[0]]
+        a[..., first:first + 2] = model.quasar_partials(t, x, quasar)
     scale = None
     if bl.per_nrad:
         r_a, r_b = (ts.station.state_eci(scenario.orientation, t)[:, :3] for ts in pair)
@@ -849,3 +856,12 @@ def _editing_table(editing: list[Editing]) -> TapeEditing:
                        np.array([e.removed_obs for e in editing]),
                        np.array([e.removed_passes for e in editing]),
                        np.array([e.added_passes for e in editing]))
+
+
+def _eop_rows(a: np.ndarray, scenario: Scenario, columns: dict[str, int],
+              partials: Callable[[tuple[str, ...]], np.ndarray]) -> None:
+    """Fill the columns ``eop.<name>`` of rows A (n, m, n_o) with ``partials(names)``
+    (n, m, k): a station's or a baseline's d h / d(EOP offsets), when the scenario has them."""
+    if scenario.eop:
+        first = columns[f"eop.{scenario.eop[0]}"]
+        a[..., first:first + len(scenario.eop)] = partials(scenario.eop)

@@ -103,9 +103,12 @@ class TapeParameters:
     ``kind`` is "orbit" (p), "dynamic" (model constants), "location", "bias", "troposphere"
     or "ionosphere" (station parameters, with ``station`` their station number; 0 otherwise:
     the media's are a station's zenith dry and wet delays, km, and zenith TEC, TECU:
-    :mod:`tapp.measurements.media`), "stochastic" (the accelerations of :attr:`T13.stochastic`)
-    or "execution" (the execution errors of the burns of :attr:`T13.manoeuvres`). The kind is
-    free text on the tape: a tape of any of these kinds reads.
+    :mod:`tapp.measurements.media`), "stochastic" (the accelerations of :attr:`T13.stochastic`),
+    "execution" (the execution errors of the burns of :attr:`T13.manoeuvres`), "eop" (constant
+    offsets of UT1 − UTC and the pole coordinates from the IERS values, ``eop.ut1_s`` s,
+    ``eop.xp_rad``, ``eop.yp_rad`` rad, station 0) or "quasar" (a ΔDOR baseline's quasar
+    position error, ``A-B.quasar_ra_rad``, ``A-B.quasar_dec_rad``, station: the baseline's
+    entry number). The kind is free text on the tape: a tape of any of these kinds reads.
     """
 
     name: tuple[str, ...]
