@@ -375,6 +375,37 @@ def _tapp3(ex: _Extraction) -> None:
     ex.real("tapp3.budget_closure_elsewhere", closures[1][0], 1)
 
 
+#: The sources of the mission's budget table: the deck's groups and TAPP III's own sources,
+#: in the README's order, and the noise sources summed (their variances add).
+MISSION_SOURCES = ("Cr (a priori)", "GM_moon_km3_s2 (a priori)", "station biases (a priori)",
+                   "Earth orientation (a priori)", "quasar (a priori)", "troposphere (a priori)",
+                   "station locations (a priori)", "ionosphere (a priori)",
+                   "GM_km3_s2 (a priori)", "manoeuvre DV1 (a priori)", "orbit (a priori)")
+_NOISE = "noise: "
+
+
+def _mission(ex: _Extraction) -> None:
+    """The error budget of the mission's final miss (the last print): σ(B·R), σ(B·T) of each
+    consider source, the noise, and the total, m."""
+    run = ex.json("results/mission/process.json")
+    last = [b for b in run["blocks"] if b["kind"] == "print"][-1]
+    ent = next(e for e in last["entities"] if e["alias"] == "cov-real m")
+    rows = [ent["rows"].index(q) for q in ("b_dot_r_km", "b_dot_t_km")]
+    sigma = {s: np.asarray(sig) for s, sig in zip(ent["budget"]["sources"],
+                                                  ent["budget"]["sigma"], strict=True)}
+    noise = np.sqrt(sum(sig**2 for s, sig in sigma.items() if s.startswith(_NOISE)))
+    listed = [s for s in MISSION_SOURCES if s in sigma]
+    ex.claim("mission: the README's budget table names every a priori source of the run",
+             set(listed) == {s for s in sigma if not s.startswith(_NOISE)})
+    ex.exact("mission.budget.day", last["t_s"] / _DAY_S)
+    ex.exact("mission.budget.sources", [s.removesuffix(" (a priori)") for s in listed])
+    for name, i in zip(("b_dot_r_m", "b_dot_t_m"), rows, strict=True):
+        ex.real(f"mission.budget.{name}", [_M_PER_KM * sigma[s][i] for s in listed], 2)
+        ex.real(f"mission.budget.noise_{name}", _M_PER_KM * noise[i], 2)
+        ex.real(f"mission.budget.total_{name}", _M_PER_KM * ent["sigma"][i], 3)
+    ex.real("mission.budget.closure", ent["budget"]["closure"], 1)
+
+
 def _pipeline(ex: _Extraction) -> None:
     _day3_sigma_b_dot_r(ex, ex.json("results/pipeline/process.json"), "pipeline",
                         "the pipeline")
@@ -472,6 +503,6 @@ def extract(root: Path = ROOT) -> Figures:
         A results file is missing (``make scenario`` did not run, or not to the end).
     """
     ex = _Extraction(root)
-    for section in (_approx_stm, _tapp3, _pipeline, _search, _tapp1, _sweeps):
+    for section in (_approx_stm, _tapp3, _pipeline, _search, _tapp1, _sweeps, _mission):
         section(ex)
     return Figures(ex.figures, ex.claims)

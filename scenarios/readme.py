@@ -126,6 +126,23 @@ def _row(f: _Reader, row: OutcomeRow) -> list[str]:
     return [row.label, outcome, row.sep.join(rho_text)]
 
 
+def _mission_budget(f: _Reader) -> str:
+    """The mission's error budget as a table: σ(B·R), σ(B·T) of each source, the noise, the
+    total."""
+    rows = [[source, br, bt] for source, br, bt in zip(
+        f["mission.budget.sources"].texts, f["mission.budget.b_dot_r_m"].texts,
+        f["mission.budget.b_dot_t_m"].texts, strict=True)]
+    rows.append(["tracking noise (white, per-pass biases, correlated; every station and ΔDOR)",
+                 f["mission.budget.noise_b_dot_r_m"].texts[0],
+                 f["mission.budget.noise_b_dot_t_m"].texts[0]])
+    rows.append(["**total** (root sum of squares; budget closes to "
+                 f"{f['mission.budget.closure'].texts[0]})",
+                 f["mission.budget.total_b_dot_r_m"].texts[0],
+                 f["mission.budget.total_b_dot_t_m"].texts[0]])
+    return ("\n\n" + table([f"source (at day {f['mission.budget.day'].texts[0]})",
+                             "σ B·R (m)", "σ B·T (m)"], rows) + "\n")
+
+
 def _outcome_table(f: _Reader) -> str:
     return "\n\n" + table(["runs", "outcome", "ρ"], [_row(f, row) for row in OUTCOME_ROWS]) + "\n"
 
@@ -183,6 +200,7 @@ BLOCKS: dict[str, Renderer] = {
     "approx-stm-eccentric-rms": _template("{approx_stm.eccentric_first_rms}"),
     "approx-stm-noise-test": _noise_test,
     "approx-stm-outcomes": _outcome_table,
+    "mission-budget": _mission_budget,
     "approx-stm-predicted": _predicted,
     "approx-stm-linear-agreement": _template("{approx_stm.linear_worst_percent} %"),
     "approx-stm-arc": _template("for {approx_stm.arc.models} it exceeds 1 from "
