@@ -16,6 +16,11 @@ Observables (biases are added: observed = model + bias)
   [-pi/2, pi/2], in the station's topocentric East-North-Up frame (geodetic normal "up").
   With light time they are taken along the down-leg, from the station at reception to the
   spacecraft at transmission (no aberration, no refraction).
+- ``doppler``: km/s, count-based two-/three-way Doppler as an equivalent range-rate: the
+  change of the two-way range over a count interval centred on the sample time, divided by
+  it (:mod:`tapp.measurements.doppler`: the equations, the sign, Hz). Needs a two-way light
+  time model. Partials: the difference of the range partials at the ends of the interval,
+  mapped to the centre by :func:`tapp.measurements.doppler.local_transition`.
 
 Light time (:class:`LightTime`), following the iterative light-time solution of Moyer (2003),
 Formulation for Observed and Computed Values of DSN Data Types, JPL DESCANSO Monograph 2,
@@ -48,14 +53,16 @@ That only slows Gauss-Newton convergence and does not bias an estimate.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import StrEnum
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tapp.constants import C_LIGHT_km_s, GM_EARTH_km3_s2
 from tapp.errors import DivergenceError, InputError
 from tapp.frames.orientation import EarthAttitude, EarthOrientation, as_orientation
+from tapp.measurements.doppler import DEFAULT_COUNT_TIME_s, local_transition
 from tapp.measurements.stations import (
     Station,
     StationParameters,
@@ -63,6 +70,9 @@ from tapp.measurements.stations import (
     station_state_partials,
 )
 from tapp.measurements.visibility import is_visible
+
+if TYPE_CHECKING:
+    from tapp.measurements.relativity import Relativity
 
 #: Light-time iterations stop when the change is below this fraction of tau (the contraction
 #: factor is v/c ~ 3e-5, so 3 to 4 iterations reach it).
@@ -77,6 +87,7 @@ class Observable(StrEnum):
     RANGE_RATE = "range_rate"
     AZIMUTH = "azimuth"
     ELEVATION = "elevation"
+    DOPPLER = "doppler"
 
 
 #: Units of each observable, for tapes and reports.
@@ -85,6 +96,7 @@ OBSERVABLE_UNITS = {
     Observable.RANGE_RATE: "km/s",
     Observable.AZIMUTH: "rad",
     Observable.ELEVATION: "rad",
+    Observable.DOPPLER: "km/s",
 }
 #: Names and units of the bias parameters, in the order of ``bias_partials``' last axis.
 BIAS_NAMES = ("range_bias_km", "range_rate_bias_km_s")
@@ -256,11 +268,15 @@ class LightTime:
         about the receive-time state.
     mu_km3_s2 : float
         Gravitational parameter of the Taylor expansion, km^3/s^2.
+    relativity : Relativity or None
+        None: the Newtonian solution above (geocentric, one time scale). Otherwise the
+        barycentric TDB solution with the Shapiro delays (:mod:`tapp.measurements.relativity`).
     """
 
     two_way: bool = True
     state_at: StateCallback | None = None
     mu_km3_s2: float = GM_EARTH_km3_s2
+    relativity: Relativity | None = None
 
     def spacecraft_state(self, t_s, state_eci, tau_s):
         """Return the spacecraft state at t_s - tau_s, shape (N, 6)."""
@@ -325,6 +341,7 @@ def solve_light_time(
     r_station_ecef_km,
     orientation: EarthOrientation | float,
     light_time: LightTime,
+    r_transmit_ecef_km=None,
 ) -> LightTimeSolution:
     """Return the light-time geometry for receive times t_s (N,) at a station.
 
@@ -339,7 +356,10 @@ def solve_light_time(
     orientation : EarthOrientation or float
         The scenario's Earth orientation (a float: the gmst model's angle at the epoch, rad).
     light_time : LightTime
-        The model.
+        The model (with ``relativity``: :meth:`tapp.measurements.relativity.Relativity.solve`).
+    r_transmit_ecef_km : array_like, shape (3,), or None
+        Earth-fixed position of the station transmitting the up-leg (three-way), km; None:
+        the receiving station (two-way).
 
     Raises
     ------
@@ -349,6 +369,10 @@ def solve_light_time(
     t = np.asarray(t_s, dtype=float)
     x = np.asarray(state_eci, dtype=float)
     orientation = as_orientation(orientation)
+    r_tx = r_station_ecef_km if r_transmit_ecef_km is None else r_transmit_ecef_km
+    if light_time.relativity is not None:
+        return light_time.relativity.solve(t, x, light_time, r_station_ecef_km, r_tx,
+                                           orientation)
     station_rx = station_state_eci(r_station_ecef_km, orientation.attitude(t))
 
     def down_distance(tau):
@@ -361,7 +385,7 @@ def solve_light_time(
         return LightTimeSolution(tau_d, np.zeros_like(tau_d), bounce, station_rx, station_rx)
 
     def station_at(tau_u):
-        return station_state_eci(r_station_ecef_km, orientation.attitude(t - tau_d - tau_u))
+        return station_state_eci(r_tx, orientation.attitude(t - tau_d - tau_u))
 
     def up_distance(tau_u):
         return np.linalg.norm(bounce[..., :3] - station_at(tau_u)[..., :3], axis=-1)
@@ -455,6 +479,11 @@ class MeasurementModel:
         None: instantaneous geometry (observation and signal at the receive time).
     range_bias_km, range_rate_bias_km_s : float
         Constant biases added to range and range-rate.
+    uplink : Station or None
+        Three-way tracking: the station that transmits the up-leg (``station`` receives);
+        needs a two-way light-time model. None: ``station`` transmits too.
+    count_time_s : float
+        Count interval T_c of the ``doppler`` kind, s.
 
     Examples
     --------
@@ -471,6 +500,8 @@ class MeasurementModel:
     light_time: LightTime | None = None
     range_bias_km: float = 0.0
     range_rate_bias_km_s: float = 0.0
+    uplink: Station | None = None
+    count_time_s: float = DEFAULT_COUNT_TIME_s
 
     def __post_init__(self) -> None:
         try:
@@ -482,6 +513,18 @@ class MeasurementModel:
             ) from err
         object.__setattr__(self, "kinds", kinds)
         object.__setattr__(self, "orientation", as_orientation(self.orientation))
+        if self.uplink is not None and (self.light_time is None or not self.light_time.two_way):
+            raise InputError("MeasurementModel", "uplink",
+                             "a two-way light-time model with an uplink station (three-way)",
+                             self.light_time)
+        if Observable.DOPPLER in kinds:
+            if self.light_time is None or not self.light_time.two_way:
+                raise InputError("MeasurementModel", "kinds",
+                                 "a two-way light-time model with doppler (count-based "
+                                 "two-/three-way Doppler)", self.light_time)
+            if not self.count_time_s > 0.0:
+                raise InputError("MeasurementModel", "count_time_s", "a count time > 0 s",
+                                 self.count_time_s)
 
     def station_eci(self, t_s):
         """Return the station inertial state at t_s (N,), shape (N, 6)."""
@@ -495,7 +538,8 @@ class MeasurementModel:
             station = station_state_eci(self.station.r_ecef_km, attitude_rx)
             return _Geometry(x, np.zeros(t.shape), attitude_rx, None,
                              ((1.0, station, attitude_rx),))
-        sol = solve_light_time(t, x, self.station.r_ecef_km, self.orientation, self.light_time)
+        sol = solve_light_time(t, x, self.station.r_ecef_km, self.orientation, self.light_time,
+                               None if self.uplink is None else self.uplink.r_ecef_km)
         legs = ((1.0, sol.station_receive_eci, attitude_rx),)
         if self.light_time.two_way:
             attitude_tx = self.orientation.attitude(t - sol.tau_down_s - sol.tau_up_s)
@@ -523,7 +567,44 @@ class MeasurementModel:
             out[Observable.AZIMUTH], out[Observable.ELEVATION] = azimuth_elevation_rad(
                 geo.enu(self.station)
             )
+        if Observable.DOPPLER in kinds:
+            (t_s_, x_s), (t_e, x_e) = self._count_ends(t_s, state_eci)
+            ranges = self._ranging()
+            out[Observable.DOPPLER] = (ranges.compute(t_e, x_e)[..., 0]
+                                       - ranges.compute(t_s_, x_s)[..., 0]) / self.count_time_s
         return out
+
+    def _ranging(self) -> MeasurementModel:
+        """This model measuring the two-/three-way range only (no bias): Doppler's ends."""
+        return replace(self, kinds=(Observable.RANGE,), range_bias_km=0.0,
+                       range_rate_bias_km_s=0.0)
+
+    def _count_ends(self, t_s, state_eci):
+        """Return ((t_s, states), (t_e, states)) at the ends t -/+ T_c / 2 of the count
+        intervals: the states from the light-time model's trajectory (its ``state_at``, or
+        its Taylor expansion about the state at t)."""
+        t = np.asarray(t_s, dtype=float)
+        x = np.asarray(state_eci, dtype=float)
+        half = 0.5 * self.count_time_s
+        return tuple((t + sign * half, self.light_time.spacecraft_state(t, x, -sign * half))
+                     for sign in (-1.0, 1.0))
+
+    def _doppler_rows(self, t_s, state_eci, which: str, parameters: StationParameters):
+        """Doppler's partials (N, 3 or 6): (dR/dp at t_e - at t_s) / T_c, the state partials
+        mapped to the centre by the local transition (:mod:`tapp.measurements.doppler`)."""
+        ranges = self._ranging()
+        x = np.asarray(state_eci, dtype=float)
+        out = 0.0
+        for sign, (t_end, x_end) in zip((-1.0, 1.0), self._count_ends(t_s, x), strict=True):
+            if which == "state":
+                rows = ranges.state_partials(t_end, x_end)[..., 0, :] @ local_transition(
+                    x, sign * 0.5 * self.count_time_s, self.light_time.mu_km3_s2)
+            elif which == "station":
+                rows = ranges.station_partials(t_end, x_end, parameters)[..., 0, :]
+            else:
+                rows = ranges.uplink_station_partials(t_end, x_end, parameters)[..., 0, :]
+            out = out + sign * rows
+        return out / self.count_time_s
 
     def azimuth_elevation(self, t_s, state_eci):
         """Return (azimuth, elevation), rad, each (N,), along the down-leg if light time is on."""
@@ -567,7 +648,7 @@ class MeasurementModel:
                     rows[..., row, :] = (
                         weight * range_rate_partials(geo.spacecraft, station)[..., 0, :]
                     )
-                elif number == 0:
+                elif number == 0 and kind is not Observable.DOPPLER:
                     rows[..., row, :] = angles[..., 0 if kind is Observable.AZIMUTH else 1, :]
             out.append((attitude, rows))
         return out
@@ -582,7 +663,15 @@ class MeasurementModel:
         # x(t - tau) ~ x(t) - tau [v, 0]: d/dv = d/dv_B - tau d/dr_B.
         h = h_bounce.copy()
         h[..., 3:] -= geo.tau_down_s[..., None, None] * h_bounce[..., :3]
+        self._put_doppler(h, t_s, state_eci, "state")
         return h
+
+    def _put_doppler(self, out, t_s, state_eci, which: str,
+                     parameters: StationParameters = "cylindrical") -> None:
+        """Fill the doppler rows of ``out`` (N, m, n) in place (:meth:`_doppler_rows`)."""
+        if Observable.DOPPLER in self.kinds:
+            row = self.kinds.index(Observable.DOPPLER)
+            out[..., row, :] = self._doppler_rows(t_s, state_eci, which, parameters)
 
     def station_partials(self, t_s, state_eci, parameters: StationParameters = "cylindrical"):
         """Return d observables / d station location, shape (N, m, 3).
@@ -590,14 +679,40 @@ class MeasurementModel:
         Columns named by ``STATION_PARAMETER_NAMES[parameters]``: (r_s km, lon rad, z km) or
         Earth-fixed (x, y, z) km. Chain rule per leg: dh/dp = (dh/d station state at the leg's
         time) (d station state / dp at that time's attitude), with dh/d station state =
-        -dh/d spacecraft state for every kind (angles: axes held fixed).
+        -dh/d spacecraft state for every kind (angles: axes held fixed). Three-way (an
+        ``uplink`` station): the down-leg part only (:meth:`uplink_station_partials`).
         """
-        geo = self._geometry(t_s, state_eci)
+        legs = self._leg_partials(self._geometry(t_s, state_eci))
+        if self.uplink is not None:
+            legs = legs[:1]
         r_ecef = self.station.r_ecef_km
-        return -sum(
+        out = -sum(
             rows @ station_state_partials(r_ecef, attitude, parameters)
-            for attitude, rows in self._leg_partials(geo)
+            for attitude, rows in legs
         )
+        self._put_doppler(out, t_s, state_eci, "station", parameters)
+        return out
+
+    def uplink_station_partials(self, t_s, state_eci,
+                                parameters: StationParameters = "cylindrical"):
+        """Return d observables / d uplink station location (three-way), shape (N, m, 3).
+
+        The up-leg part of :meth:`station_partials`' chain rule, at the transmit attitude.
+        """
+        attitude, rows = self._leg_partials(self._geometry(t_s, state_eci))[1]
+        out = -rows @ station_state_partials(self.uplink.r_ecef_km, attitude, parameters)
+        self._put_doppler(out, t_s, state_eci, "uplink", parameters)
+        return out
+
+    def uplink_elevation_rad(self, t_s, state_eci):
+        """Return the elevation (N,), rad, of the spacecraft at the bounce seen from the
+        transmitting station (``uplink``, or ``station``) at transmission, along the up-leg."""
+        geo = self._geometry(t_s, state_eci)
+        _, station, attitude = geo.legs[-1]
+        transmitter = self.station if self.uplink is None else self.uplink
+        relative = geo.spacecraft[..., :3] - station[..., :3]
+        enu = np.einsum("...ij,...j->...i", transmitter.enu_from_eci(attitude), relative)
+        return azimuth_elevation_rad(enu)[1]
 
     def bias_partials(self, t_s):
         """Return d observables / d (range_bias_km, range_rate_bias_km_s), shape (N, m, 2)."""
