@@ -41,13 +41,15 @@ the bounce state by tau^2 a_p / 2 and tau a_p (J2 in LEO: < 1e-8 km and < 1e-6 k
 callback where that matters. Station positions at every time are exact (rotation).
 
 Partials are analytic. Without light time they are exact. With light time they are those of
-the first-order light-time model: the instantaneous partials of each leg, taken at the solved
-geometry (spacecraft at the bounce, station at reception and, for the up-leg, at transmission)
-and weighted as in the observable, then chained through x(t - tau_d) ~ x(t) - tau_d [v, 0]
-(d/dv picks up -tau_d d/dr). They neglect the dependence of tau on the state, the terms
-(dh/dt)(d tau/dx) with d tau/dx ~ rho_hat / c: a relative O(v / c) ~ 3e-5 per block, at most
-|rho_dot| / c per km in range and |rho_ddot| / c (< 3e-7 1/s in LEO) per km in range-rate.
-That only slows Gauss-Newton convergence and does not bias an estimate.
+the first-order light-time model: the partials of each leg, taken at the solved geometry
+(spacecraft at the bounce, station at reception and, for the up-leg, at transmission) and
+weighted as in the observable, then chained through x(t - tau_d) ~ x(t) - tau_d [v, 0]
+(d/dv picks up -tau_d d/dr). The range's keep the light times' dependence on the geometry
+(:func:`light_time_range_leg_partials`: exact to first order). The range-rate's and the
+angles' neglect it, the terms (dh/dt)(d tau/dx) with d tau/dx ~ rho_hat / c: a relative
+O(v / c) ~ 3e-5 per block, at most |rho_ddot| / c (< 3e-7 1/s in LEO) per km in range-rate.
+That only slows Gauss-Newton convergence and does not bias an estimate. Count-based Doppler
+differences the range's partials (:mod:`tapp.measurements.doppler`).
 """
 
 from __future__ import annotations
@@ -66,6 +68,7 @@ from tapp.measurements.doppler import DEFAULT_COUNT_TIME_s, local_transition
 from tapp.measurements.stations import (
     Station,
     StationParameters,
+    location_jacobian,
     station_state_eci,
     station_state_partials,
 )
@@ -435,6 +438,40 @@ def light_time_range_rate_km_s(solution: LightTimeSolution, two_way: bool = True
     return 0.5 * C_LIGHT_km_s * (tau_u_dot + tau_d_dot)
 
 
+def light_time_range_leg_partials(solution: LightTimeSolution, two_way: bool = True):
+    """Return the range's partials w.r.t. the bounce position carried by each leg, (N, 3) each.
+
+    The light times' own dependence on the geometry is kept (first order in the solved
+    geometry; Shapiro's and TDB's gradients, < 2e-6 relative at 1.5 deg from the Sun, left
+    out). With V_2 the spacecraft's velocity at the bounce and V_1 the transmitter's at
+    transmission (in the solution's frame), g_d = rho_hat_d / (1 + rho_hat_d . V_2 / c),
+    k = rho_hat_u . (V_2 - V_1) / c, D_u = 1 - rho_hat_u . V_1 / c:
+
+    .. math::
+
+        d\\rho_d = g_d\\cdot(d\\mathbf r_2 - d\\mathbf r_3),\\qquad
+        d\\rho_u = \\frac{\\hat\\rho_u\\cdot(d\\mathbf r_2 - d\\mathbf r_1) - k\\,d\\rho_d}{D_u},
+
+    from differentiating c tau_d = |r_2(t - tau_d) - r_3(t)| and
+    c tau_u = |r_2 - r_1(t - tau_d - tau_u)|. Returns (leg 0: -d range / d r_3, leg 1:
+    -d range / d r_1): their sum is d range / d r_2 (a translation moves nothing), each the
+    negative of its station's partial. One-way: (g_d,).
+    """
+    sc = solution.spacecraft_eci
+    d_down = sc[..., :3] - solution.station_receive_eci[..., :3]
+    rho_d = d_down / np.linalg.norm(d_down, axis=-1)[..., None]
+    v2 = sc[..., 3:]
+    g_d = rho_d / (1.0 + np.sum(rho_d * v2, -1) / C_LIGHT_km_s)[..., None]
+    if not two_way:
+        return (g_d,)
+    d_up = sc[..., :3] - solution.station_transmit_eci[..., :3]
+    rho_u = d_up / np.linalg.norm(d_up, axis=-1)[..., None]
+    v1 = solution.station_transmit_eci[..., 3:]
+    d_u = (1.0 - np.sum(rho_u * v1, -1) / C_LIGHT_km_s)[..., None]
+    k = np.sum(rho_u * (v2 - v1), -1)[..., None] / C_LIGHT_km_s
+    return (0.5 * (1.0 - k / d_u) * g_d, 0.5 * rho_u / d_u)
+
+
 # ---------------------------------------------------------------------------------------------
 # The measurement model: one station, a list of observable kinds
 # ---------------------------------------------------------------------------------------------
@@ -638,11 +675,15 @@ class MeasurementModel:
         if Observable.AZIMUTH in self.kinds or Observable.ELEVATION in self.kinds:
             rot = self.station.enu_from_eci(geo.attitude_rx)
             angles = azimuth_elevation_partials(geo.enu(self.station), rot)
+        ranges = (None if geo.solution is None
+                  else light_time_range_leg_partials(geo.solution, self.light_time.two_way))
         out = []
         for number, (weight, station, attitude) in enumerate(geo.legs):
             rows = np.zeros(geo.tau_down_s.shape + (len(self.kinds), 6))
             for row, kind in enumerate(self.kinds):
-                if kind is Observable.RANGE:
+                if kind is Observable.RANGE and ranges is not None:
+                    rows[..., row, :3] = ranges[number]
+                elif kind is Observable.RANGE:
                     rows[..., row, :] = weight * range_partials(geo.spacecraft, station)[..., 0, :]
                 elif kind is Observable.RANGE_RATE:
                     rows[..., row, :] = (
@@ -690,8 +731,33 @@ class MeasurementModel:
             rows @ station_state_partials(r_ecef, attitude, parameters)
             for attitude, rows in legs
         )
+        self._put_clock(out, t_s, state_eci, "receiver", parameters)
+        if self.uplink is None:
+            self._put_clock(out, t_s, state_eci, "transmitter", parameters)
         self._put_doppler(out, t_s, state_eci, "station", parameters)
         return out
+
+    def _put_clock(self, out, t_s, state_eci, end: str, parameters: StationParameters) -> None:
+        """Add to the range rows of ``out`` (N, m, 3) the part through the station's own
+        TDB - TT (relativistic light time only): the receiver's clock term moves every event
+        by d(TDB)/dp and the range by -c w d(TDB)/dp (w = 1/2 two-/three-way, 1 one-way); the
+        transmitter's moves t_1 and the range by +c/2 d(TDB)/dp
+        (:meth:`tapp.measurements.relativity.Relativity.tdb_site_gradient_s_km`)."""
+        if (self.light_time is None or self.light_time.relativity is None
+                or Observable.RANGE not in self.kinds):
+            return
+        t = np.asarray(t_s, dtype=float)
+        two_way = self.light_time.two_way
+        if end == "receiver":
+            station, when, factor = self.station, t, -(0.5 if two_way else 1.0)
+        else:
+            sol = self._geometry(t, state_eci).solution
+            station = self.station if self.uplink is None else self.uplink
+            when, factor = t - sol.tau_down_s - sol.tau_up_s, 0.5
+        gradient = self.light_time.relativity.tdb_site_gradient_s_km(when, station.r_ecef_km)
+        row = self.kinds.index(Observable.RANGE)
+        out[..., row, :] += factor * C_LIGHT_km_s * gradient @ location_jacobian(
+            station.r_ecef_km, parameters)
 
     def uplink_station_partials(self, t_s, state_eci,
                                 parameters: StationParameters = "cylindrical"):
@@ -701,6 +767,7 @@ class MeasurementModel:
         """
         attitude, rows = self._leg_partials(self._geometry(t_s, state_eci))[1]
         out = -rows @ station_state_partials(self.uplink.r_ecef_km, attitude, parameters)
+        self._put_clock(out, t_s, state_eci, "transmitter", parameters)
         self._put_doppler(out, t_s, state_eci, "uplink", parameters)
         return out
 

@@ -45,10 +45,18 @@ geocentric value (its own location terms, v_E . r / c², are the Lorentz term ab
 solved light times are differences of scenario (station clock) times, so the round-trip
 light time is the observable ρ = t_3 - t_1 of Moyer ch. 11, and the range c ρ / 2.
 
-Sizes (measured in tests/tapp/measurements/test_relativity.py): the Earth's Shapiro term
-is ~ 2 cm one way at the Moon's distance, the Sun's ~ 20 m at 1.5 AU opposite the Sun and
-tens of microseconds (km in range) within 2 deg of the Sun; TDB - TT's rate, up to
-3.3e-10, changes a 1000 s light time by 0.3 us (100 m).
+Sizes (measured in tests/tapp/measurements/test_relativity.py, two-way range from
+Goldstone): the Earth's Shapiro term 37 mm at 380,000 km and 0.1 m at 1.5 AU; the Sun's 7.5 m
+at 380,000 km (see the approximation above), 4.2 km at 1.5 AU and 27 km (90 us one way) with
+the spacecraft beyond the Sun 1.5 deg from it; relativistic minus Newtonian range 10.7 m,
+5.6 km and 24 km there. TDB - TT's rate, up to 3.3e-10, changes a 1000 s light time by
+0.3 us (100 m).
+
+The instantaneous range-rate (:func:`tapp.measurements.observables.light_time_range_rate_km_s`
+at this solution) leaves out the rates of the Shapiro delays and of TDB - TT: it differs from
+the derivative of the round-trip light time by 0.025 mm/s at 380,000 km, 0.9 mm/s at 1.5 AU,
+40 mm/s 1.5 deg from the Sun. The count-based ``doppler``, a difference of two solutions, has
+them all.
 """
 
 from __future__ import annotations
@@ -144,6 +152,34 @@ class Relativity:
         ut = np.mod(self.tt0_jd[0] - 0.5 + fraction + self.ut_minus_tt_s / SECONDS_PER_DAY,
                     1.0)
         return erfa.dtdb(self.tt0_jd[0], fraction, ut, math.atan2(y, x), math.hypot(x, y), z)
+
+    def tdb_site_gradient_s_km(self, t_s, r_ecef_km):
+        """Return d(TDB - TT)/d(Earth-fixed site position) at t_s (N,), s/km, shape (N, 3).
+
+        ERFA's topocentric terms are linear in the distances u (from the spin axis) and v
+        (from the equator) and periodic in the longitude: the u and v slopes are differences
+        at unit distance (exact), the longitude slope a central difference (step 1e-3 rad,
+        truncation 2e-7 relative); then chained through u = hypot(x, y), lon = atan2(y, x),
+        v = z. Size ~ |v_E| / c² = 3.3e-10 s/km: the receiver's and transmitter's clocks
+        move the range by c / 2 times it, 5e-5 of a station partial in three-way.
+        """
+        fraction = self.tt0_jd[1] + np.asarray(t_s, dtype=float) / SECONDS_PER_DAY
+        ut = np.mod(self.tt0_jd[0] - 0.5 + fraction + self.ut_minus_tt_s / SECONDS_PER_DAY,
+                    1.0)
+        x, y, _ = (float(c) for c in r_ecef_km)
+        u, lon = math.hypot(x, y), math.atan2(y, x)
+
+        def topo(lon_rad, u_km, v_km):
+            return (erfa.dtdb(self.tt0_jd[0], fraction, ut, lon_rad, u_km, v_km)
+                    - erfa.dtdb(self.tt0_jd[0], fraction, ut, lon_rad, 0.0, 0.0))
+
+        step = 1e-3
+        d_u, d_v = topo(lon, 1.0, 0.0), topo(lon, 0.0, 1.0)
+        d_lon = u * (topo(lon + step, 1.0, 0.0) - topo(lon - step, 1.0, 0.0)) / (2.0 * step)
+        c, s_ = math.cos(lon), math.sin(lon)
+        # du/d(x, y) = (cos lon, sin lon), dlon/d(x, y) = (-sin lon, cos lon) / u.
+        return np.stack([d_u * c - d_lon * s_ / u, d_u * s_ + d_lon * c / u,
+                         d_v * np.ones_like(d_u)], axis=-1)
 
     def body_state(self, body: str, t_s, tdb_minus_tt_s):
         """Return the barycentric state (N, 6) of ``body`` at TDB = TT(t_s) + tdb_minus_tt_s."""
