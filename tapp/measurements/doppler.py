@@ -74,9 +74,8 @@ def local_transition(state_eci, dt_s: float, mu_km3_s2: float):
         The central body's GM.
     """
     x = np.asarray(state_eci, dtype=float)
-    r = x[..., :3]
-    r_norm = np.linalg.norm(r, axis=-1)[..., None, None]
-    r_hat = r[..., :, None] / r_norm[..., 0]
+    r_norm = np.linalg.norm(x[..., :3], axis=-1)[..., None, None]
+    r_hat = x[..., :3, None] / r_norm
     eye = np.eye(3)
     g = mu_km3_s2 / r_norm**3 * (3.0 * r_hat * np.swapaxes(r_hat, -1, -2) - eye)
     phi = np.zeros(x.shape[:-1] + (6, 6))

@@ -634,8 +634,9 @@ class MeasurementModel:
         out = 0.0
         for sign, (t_end, x_end) in zip((-1.0, 1.0), self._count_ends(t_s, x), strict=True):
             if which == "state":
-                rows = ranges.state_partials(t_end, x_end)[..., 0, :] @ local_transition(
-                    x, sign * 0.5 * self.count_time_s, self.light_time.mu_km3_s2)
+                rows = np.einsum("...i,...ij->...j", ranges.state_partials(t_end, x_end)[
+                    ..., 0, :], local_transition(x, sign * 0.5 * self.count_time_s,
+                                                 self.light_time.mu_km3_s2))
             elif which == "station":
                 rows = ranges.station_partials(t_end, x_end, parameters)[..., 0, :]
             else:

@@ -42,16 +42,20 @@ ISO strings or TOML dates)::
     [stations.NAME]    lat_deg, lon_deg, h_km (-0.5 to 10 km), elev_mask_deg
                        (tapp.io.stations_file)
     [tracking]         stations = [names], observables = ["range", "range_rate", "azimuth",
-                       "elevation"], light_time = "none" | "one_way" | "two_way",
-                       band = "S" | "X" | "Ka" (tapp.measurements.bands), data_interval_s, start, end, min_pass_s, max_pass_s,
+                       "elevation", "doppler"], light_time = "none" | "one_way" | "two_way",
+                       band = "S" | "X" | "Ka" (tapp.measurements.bands), data_interval_s,
+                       start, end, min_pass_s, max_pass_s,
                        blackouts = [[start, end], ...], schedule (a pass schedule, CSV:
                        tapp.io.schedule_file), use = "visibility" | "schedule" | "both",
-                       allow_partial (tapp.tracking.schedule)
+                       allow_partial (tapp.tracking.schedule), relativity = "auto" | true |
+                       false (tapp.measurements.relativity), count_time_s (doppler)
     [tracking.station.NAME]  per-station observables, location, biases, range_bias_m,
-                       range_rate_bias_mm_s (nominal bias values), blackouts, and fit / real
+                       range_rate_bias_mm_s (nominal bias values), blackouts, uplink (the
+                       station transmitting its three-way up-leg), and fit / real
                        tables overriding [noise.fit] / [noise.real] keys
     [noise.fit]        sigma_range_m, sigma_range_rate_mm_s, sigma_azimuth_deg,
-                       sigma_elevation_deg (white noise: W = diag(1/σ²))
+                       sigma_elevation_deg, sigma_doppler_mm_s or sigma_doppler_hz (white
+                       noise: W = diag(1/σ²))
     [noise.real]       sigma_<kind>_<unit> (white, default the fit σ), bias_<kind>_<unit>
                        (constant per pass), correlated_<kind>_<unit> with tau_<kind>_s
                        (exponentially correlated)
@@ -128,7 +132,8 @@ from tapp.io.stations_file import StationsSection
 from tapp.io.tomlfile import read_toml
 from tapp.io.trajectory_file import Reference, ReferenceTable
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
-from tapp.measurements.bands import BAND_NAMES, DEFAULT_BAND
+from tapp.measurements.bands import BAND_NAMES, BANDS, DEFAULT_BAND
+from tapp.measurements.doppler import range_rate_from_hz
 from tapp.measurements.stations import Station
 from tapp.orbit.bplane import REFERENCE_POLES
 from tapp.targeting.program import BPlaneSearch
@@ -191,6 +196,7 @@ class TrackingStation:
     range_bias_km, range_rate_bias_km_s : nominal bias values added to the observables.
     blackouts_s : ((start, end), ...) s, no data (the scenario's and the station's own).
     band : its radio band, "S", "X" or "Ka" (:mod:`tapp.measurements.bands`).
+    uplink : the station transmitting its three-way up-leg; None: itself (two-way).
     """
 
     number: int
@@ -204,6 +210,7 @@ class TrackingStation:
     range_rate_bias_km_s: float
     blackouts_s: tuple[tuple[float, float], ...]
     band: str = DEFAULT_BAND
+    uplink: Station | None = None
 
     def parameters(self) -> tuple[Parameter, ...]:
         """Its parameters in q: location then biases, named ``<station>.<name>``."""
@@ -236,7 +243,8 @@ class Schedule:
 
     ``use`` "schedule" or "both" takes the samples of the stations in ``passes`` from their
     passes instead (``allow_partial``: drop the samples a station cannot see instead of
-    refusing them; :mod:`tapp.tracking.schedule`).
+    refusing them; :mod:`tapp.tracking.schedule`). ``relativity``: True, False or "auto"
+    (:mod:`tapp.measurements.relativity`); ``count_time_s``: the doppler count interval.
     """
 
     data_interval_s: float
@@ -248,6 +256,8 @@ class Schedule:
     use: str = "visibility"
     passes: PassSchedule | None = None
     allow_partial: bool = False
+    relativity: str | bool = "auto"
+    count_time_s: float = 60.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -444,6 +454,11 @@ class StationTracking(Schema):
     fit: FitTable = Field(FitTable(), description="Its fit-world σ, overriding [noise.fit].")
     real: RealTable = Field(RealTable(), description="Its real-world noise, overriding "
                             "[noise.real].")
+    uplink: str | None = Field(
+        None, description="Three-way tracking: the [stations.NAME] station that transmits the "
+        "up-leg this station receives (light_time = \"two_way\"; the up-leg's location "
+        "partials go to its columns when it is tracked with location parameters); default: "
+        "itself (two-way).")
 
 
 class TrackingTable(Schema):
@@ -485,6 +500,14 @@ class TrackingTable(Schema):
     allow_partial: bool = Field(
         False, description="Drop the samples of a scheduled pass that the station cannot see "
         "(counted under elevation_mask) instead of refusing the schedule.")
+    relativity: Literal["auto"] | bool = Field(
+        "auto", description="Relativistic light time (barycentric, TDB, Shapiro delays: "
+        "tapp.measurements.relativity): true, false, or \"auto\": on with light_time = "
+        "\"two_way\" when the spacecraft goes beyond the Moon's distance (384,400 km) in "
+        "the tracking span.")
+    count_time_s: Positive = Field(
+        60.0, description="Count interval of the doppler observable (centred on each sample), "
+        "s, at most data_interval_s.")
 
 
 class TimesTable(Schema):
@@ -663,28 +686,41 @@ def _noise_key(prefix: str, kind: str) -> str:
     return f"{prefix}_{kind}_{EDGE_UNITS[kind][0]}"
 
 
-def _noise(p: _Parser, kind: str, name: str, noise: NoiseTable, own: StationTracking
-           ) -> tuple[FitNoise, RealNoise]:
-    """Fit and real noise of one kind at one station: station tables override the globals."""
+def _noise(p: _Parser, kind: str, name: str, noise: NoiseTable, own: StationTracking,
+           band: str = DEFAULT_BAND) -> tuple[FitNoise, RealNoise]:
+    """Fit and real noise of one kind at one station: station tables override the globals.
+    Doppler's keys may be given in Hz instead, converted at the station's ``band``."""
     factor = EDGE_UNITS[kind][1]
     key = _noise_key("sigma", kind)
-    sigma = getattr(own.fit, key)
+
+    def lookup(table: FitTable | RealTable, prefix: str, where: str) -> float | None:
+        value = getattr(table, _noise_key(prefix, kind))
+        hz = getattr(table, f"{prefix}_{kind}_hz", None)
+        if hz is None:
+            return value
+        if value is not None:
+            p.fail(f"{where}.{prefix}_{kind}_hz",
+                   f"one of {_noise_key(prefix, kind)} or {prefix}_{kind}_hz, not both", hz)
+        return float(range_rate_from_hz(hz, BANDS[band])) / factor
+
+    sigma = lookup(own.fit, "sigma", f"tracking.station.{name}.fit")
     if sigma is None:
-        sigma = getattr(noise.fit, key)
+        sigma = lookup(noise.fit, "sigma", "noise.fit")
     if sigma is None:
         p.fail(f"noise.fit.{key}", f"the fit σ of every observable tracked ({kind} at {name})")
 
-    def real(key: str) -> tuple[float | None, str]:
-        value = getattr(own.real, key)
-        if value is not None:
-            return value, f"tracking.station.{name}.real"
-        return getattr(noise.real, key), "noise.real"
+    def real(prefix: str) -> float | None:
+        value = lookup(own.real, prefix, f"tracking.station.{name}.real")
+        return lookup(noise.real, prefix, "noise.real") if value is None else value
 
     values = {}
     for prefix, default in (("sigma", sigma), ("bias", 0.0), ("correlated", 0.0)):
-        value, _ = real(_noise_key(prefix, kind))
+        value = real(prefix)
         values[prefix] = default if value is None else value
-    tau, where = real(f"tau_{kind}_s")
+    tau = getattr(own.real, f"tau_{kind}_s")
+    where = f"tracking.station.{name}.real"
+    if tau is None:
+        tau, where = getattr(noise.real, f"tau_{kind}_s"), "noise.real"
     if values["correlated"] > 0 and tau is None:
         p.fail(f"{where}.tau_{kind}_s", f"the time constant of the correlated {kind} noise "
                "(a finite number > 0)")
@@ -721,7 +757,15 @@ def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
                        else "parameters.station_biases",
                        f"biases of observables that {name} measures ({', '.join(kinds)})",
                        kind)
-        pairs = [_noise(p, kind, name, doc.noise, own) for kind in kinds]
+        band = trk.band if own.band is None else own.band
+        pairs = [_noise(p, kind, name, doc.noise, own, band) for kind in kinds]
+        if ("doppler" in kinds or own.uplink is not None) and trk.light_time != "two_way":
+            p.fail("tracking.light_time", f'"two_way" with the count-based doppler or a '
+                   f"three-way uplink ({name})", trk.light_time)
+        if own.uplink is not None and (own.uplink not in known or own.uplink == name):
+            p.fail(f"{where}.uplink", "the name of another [stations.*] table (the station "
+                   f"transmitting {name}'s up-leg: {', '.join(n for n in known if n != name)})",
+                   own.uplink)
         out.append(TrackingStation(
             number=number, station=known[name], kinds=kinds,
             fit=tuple(f for f, _ in pairs), real=tuple(r for _, r in pairs),
@@ -729,7 +773,7 @@ def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
             range_bias_km=own.range_bias_m * 1e-3,
             range_rate_bias_km_s=own.range_rate_bias_mm_s * 1e-6,
             blackouts_s=blackouts + p.windows(own.blackouts, f"{where}.blackouts"),
-            band=trk.band if own.band is None else own.band))
+            band=band, uplink=None if own.uplink is None else known[own.uplink]))
     return tuple(out)
 
 
@@ -787,8 +831,12 @@ def _schedule(p: _Parser, trk: TrackingTable, last_s: float,
                                epoch=p.epoch,
                                stations={ts.station.name: ts.kinds for ts in stations},
                                data_interval_s=trk.data_interval_s, clock_s=start)
+    if trk.count_time_s > trk.data_interval_s:
+        p.fail("tracking.count_time_s", f"a count interval of at most data_interval_s = "
+               f"{trk.data_interval_s:g} s (consecutive counts do not overlap)",
+               trk.count_time_s)
     return Schedule(trk.data_interval_s, start, end, trk.min_pass_s, max_pass, trk.light_time,
-                    use, passes, trk.allow_partial)
+                    use, passes, trk.allow_partial, trk.relativity, trk.count_time_s)
 
 
 def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -> MissSpec:
