@@ -599,7 +599,8 @@ class MeasurementModel:
             if Observable.RANGE in kinds:
                 out[Observable.RANGE] = light_time_range_km(geo.solution, two_way)
             if Observable.RANGE_RATE in kinds:
-                out[Observable.RANGE_RATE] = light_time_range_rate_km_s(geo.solution, two_way)
+                out[Observable.RANGE_RATE] = (light_time_range_rate_km_s(geo.solution, two_way)
+                                              + self._clock_rate_km_s(t_s, geo.solution))
         if Observable.AZIMUTH in kinds or Observable.ELEVATION in kinds:
             out[Observable.AZIMUTH], out[Observable.ELEVATION] = azimuth_elevation_rad(
                 geo.enu(self.station)
@@ -610,6 +611,23 @@ class MeasurementModel:
             out[Observable.DOPPLER] = (ranges.compute(t_e, x_e)[..., 0]
                                        - ranges.compute(t_s_, x_s)[..., 0]) / self.count_time_s
         return out
+
+    def _clock_rate_km_s(self, t_s, solution: LightTimeSolution):
+        """Return the range-rate from the clocks' TDB - TT rates (relativistic light time;
+        0 otherwise), km/s, (N,): the light times are solved in TDB and read on TT clocks,
+        so d(t_3 - t_1)/dt_3 = (dET_1/dET_3 geometric) + dΔ_tx(t_1)/dt - dΔ_rx(t_3)/dt to
+        first order (one-way: the spacecraft's geocentric Δ at t_2 for the transmitter's):
+        up to (c / 2) |v_E| ω R_E / c² = 2e-5 km/s between two stations (three-way)."""
+        relativity = None if self.light_time is None else self.light_time.relativity
+        if relativity is None:
+            return 0.0
+        t = np.asarray(t_s, dtype=float)
+        receive = relativity.tdb_rate(t, self.station.r_ecef_km)
+        if not self.light_time.two_way:
+            return C_LIGHT_km_s * (relativity.tdb_rate(t - solution.tau_down_s) - receive)
+        transmitter = self.station if self.uplink is None else self.uplink
+        t1 = t - solution.tau_down_s - solution.tau_up_s
+        return 0.5 * C_LIGHT_km_s * (relativity.tdb_rate(t1, transmitter.r_ecef_km) - receive)
 
     def _ranging(self) -> MeasurementModel:
         """This model measuring the two-/three-way range only (no bias): Doppler's ends."""

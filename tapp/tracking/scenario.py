@@ -133,7 +133,7 @@ from tapp.io.tomlfile import read_toml
 from tapp.io.trajectory_file import Reference, ReferenceTable
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.bands import BAND_NAMES, BANDS, DEFAULT_BAND
-from tapp.measurements.doppler import range_rate_from_hz
+from tapp.measurements.doppler import DEFAULT_COUNT_TIME_s, range_rate_from_hz
 from tapp.measurements.stations import Station
 from tapp.orbit.bplane import REFERENCE_POLES
 from tapp.targeting.program import BPlaneSearch
@@ -257,7 +257,7 @@ class Schedule:
     passes: PassSchedule | None = None
     allow_partial: bool = False
     relativity: str | bool = "auto"
-    count_time_s: float = 60.0
+    count_time_s: float = DEFAULT_COUNT_TIME_s
 
 
 @dataclass(frozen=True, slots=True)
@@ -505,9 +505,9 @@ class TrackingTable(Schema):
         "tapp.measurements.relativity): true, false, or \"auto\": on with light_time = "
         "\"two_way\" when the spacecraft goes beyond the Moon's distance (384,400 km) in "
         "the tracking span.")
-    count_time_s: Positive = Field(
-        60.0, description="Count interval of the doppler observable (centred on each sample), "
-        "s, at most data_interval_s.")
+    count_time_s: Positive | None = Field(
+        None, description="Count interval of the doppler observable (centred on each sample), "
+        "s, at most data_interval_s; default: 60 s or data_interval_s if shorter.")
 
 
 class TimesTable(Schema):
@@ -831,12 +831,15 @@ def _schedule(p: _Parser, trk: TrackingTable, last_s: float,
                                epoch=p.epoch,
                                stations={ts.station.name: ts.kinds for ts in stations},
                                data_interval_s=trk.data_interval_s, clock_s=start)
-    if trk.count_time_s > trk.data_interval_s:
-        p.fail("tracking.count_time_s", f"a count interval of at most data_interval_s = "
-               f"{trk.data_interval_s:g} s (consecutive counts do not overlap)",
-               trk.count_time_s)
+    count_time = min(DEFAULT_COUNT_TIME_s, trk.data_interval_s)
+    if trk.count_time_s is not None:
+        if trk.count_time_s > trk.data_interval_s:
+            p.fail("tracking.count_time_s", f"a count interval of at most data_interval_s = "
+                   f"{trk.data_interval_s:g} s (consecutive counts do not overlap)",
+                   trk.count_time_s)
+        count_time = trk.count_time_s
     return Schedule(trk.data_interval_s, start, end, trk.min_pass_s, max_pass, trk.light_time,
-                    use, passes, trk.allow_partial, trk.relativity, trk.count_time_s)
+                    use, passes, trk.allow_partial, trk.relativity, count_time)
 
 
 def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -> MissSpec:
