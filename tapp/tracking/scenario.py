@@ -490,8 +490,8 @@ class TrackingTable(Schema):
         None, description="A pass schedule (CSV, relative to the scenario's folder): a header, "
         "then one row per pass: station, start, end (UTC dates or seconds from the epoch), "
         "data_types (observables separated by spaces; empty: the station's), data_interval_s "
-        "(empty: tracking.data_interval_s), uplink_station (empty or the station itself: "
-        "three-way tracking is not modelled); tapp.io.schedule_file.")
+        "(empty: tracking.data_interval_s), uplink_station (empty, the station itself, or its "
+        "tracking.station.NAME.uplink for three-way); tapp.io.schedule_file.")
     use: Literal[USES] | None = Field(  # type: ignore[valid-type]
         None, description="Which samples: \"visibility\" (the grid, wherever a station sees "
         "the spacecraft), \"schedule\" (the schedule's passes only) or \"both\" (the stations "
@@ -830,7 +830,9 @@ def _schedule(p: _Parser, trk: TrackingTable, last_s: float,
         passes = read_schedule(path if path.is_absolute() else Path(p.source).parent / path,
                                epoch=p.epoch,
                                stations={ts.station.name: ts.kinds for ts in stations},
-                               data_interval_s=trk.data_interval_s, clock_s=start)
+                               data_interval_s=trk.data_interval_s, clock_s=start,
+                               uplinks={ts.station.name: ts.uplink.name for ts in stations
+                                        if ts.uplink is not None})
     count_time = min(DEFAULT_COUNT_TIME_s, trk.data_interval_s)
     if trk.count_time_s is not None:
         if trk.count_time_s > trk.data_interval_s:
