@@ -2,7 +2,7 @@
 
 Shapes are time-major: N observation times, spacecraft states (N, 6) = [r km, v km/s] in
 EME2000 at the receive times, observables (N, m), partials (N, m, 6) w.r.t. the spacecraft
-state, (N, m, 3) w.r.t. the station location, (N, m, 2) w.r.t. the biases. Kernels are pure
+state, (N, m, 3) w.r.t. the station location, (N, m, 3) w.r.t. the biases. Kernels are pure
 NumPy and noise-free.
 
 Observables (biases are added: observed = model + bias)
@@ -102,7 +102,9 @@ OBSERVABLE_UNITS = {
     Observable.DOPPLER: "km/s",
 }
 #: Names and units of the bias parameters, in the order of ``bias_partials``' last axis.
-BIAS_NAMES = ("range_bias_km", "range_rate_bias_km_s")
+BIAS_NAMES = ("range_bias_km", "range_rate_bias_km_s", "doppler_bias_km_s")
+#: The kinds those biases add to, in the same order.
+BIASED_KINDS = (Observable.RANGE, Observable.RANGE_RATE, Observable.DOPPLER)
 
 
 def wrap_angle_rad(angle_rad):
@@ -499,7 +501,7 @@ class MeasurementModel:
 
     The interface TAPP I and the orbit-determination code share: ``compute`` gives h(x) (N, m),
     ``state_partials`` H = dh/dx (N, m, 6), ``station_partials`` dh/d(location) (N, m, 3),
-    ``bias_partials`` dh/d(range bias, range-rate bias) (N, m, 2), ``residual`` the
+    ``bias_partials`` dh/d(range, range-rate, Doppler bias) (N, m, 3), ``residual`` the
     angle-wrapping observed - computed, and ``visible`` the mask test (N,). Columns follow
     ``kinds``; pass the visible samples, grouped by :func:`find_passes`, to the estimator.
 
@@ -521,6 +523,8 @@ class MeasurementModel:
         needs a two-way light-time model. None: ``station`` transmits too.
     count_time_s : float
         Count interval T_c of the ``doppler`` kind, s.
+    doppler_bias_km_s : float
+        Constant bias added to the count-based Doppler.
 
     Examples
     --------
@@ -539,6 +543,7 @@ class MeasurementModel:
     range_rate_bias_km_s: float = 0.0
     uplink: Station | None = None
     count_time_s: float = DEFAULT_COUNT_TIME_s
+    doppler_bias_km_s: float = 0.0
 
     def __post_init__(self) -> None:
         try:
@@ -631,8 +636,7 @@ class MeasurementModel:
 
     def _ranging(self) -> MeasurementModel:
         """This model measuring the two-/three-way range only (no bias): Doppler's ends."""
-        return replace(self, kinds=(Observable.RANGE,), range_bias_km=0.0,
-                       range_rate_bias_km_s=0.0)
+        return replace(self, kinds=(Observable.RANGE,), range_bias_km=0.0)
 
     def _count_ends(self, t_s, state_eci):
         """Return ((t_s, states), (t_e, states)) at the ends t -/+ T_c / 2 of the count
@@ -678,10 +682,8 @@ class MeasurementModel:
             Spacecraft inertial states at t_s, [km, km/s].
         """
         obs = self._observables(t_s, state_eci, self.kinds)
-        bias = {
-            Observable.RANGE: self.range_bias_km,
-            Observable.RANGE_RATE: self.range_rate_bias_km_s,
-        }
+        bias = dict(zip(BIASED_KINDS, (self.range_bias_km, self.range_rate_bias_km_s,
+                                       self.doppler_bias_km_s), strict=True))
         return np.stack([obs[k] + bias.get(k, 0.0) for k in self.kinds], axis=-1)
 
     def _leg_partials(self, geo: _Geometry):
@@ -801,14 +803,12 @@ class MeasurementModel:
         return azimuth_elevation_rad(enu)[1]
 
     def bias_partials(self, t_s):
-        """Return d observables / d (range_bias_km, range_rate_bias_km_s), shape (N, m, 2)."""
+        """Return d observables / d (the biases of :data:`BIAS_NAMES`), shape (N, m, 3)."""
         t = np.asarray(t_s, dtype=float)
-        out = np.zeros(t.shape + (len(self.kinds), 2))
+        out = np.zeros(t.shape + (len(self.kinds), len(BIAS_NAMES)))
         for row, kind in enumerate(self.kinds):
-            if kind is Observable.RANGE:
-                out[..., row, 0] = 1.0
-            elif kind is Observable.RANGE_RATE:
-                out[..., row, 1] = 1.0
+            if kind in BIASED_KINDS:
+                out[..., row, BIASED_KINDS.index(kind)] = 1.0
         return out
 
     def residual(self, observed, computed):

@@ -37,7 +37,7 @@ ISO strings or TOML dates)::
                        "harris_priester")
     [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", "Cr", "Cd", ...]
                        (tapp.dynamics.forces names), station_location = "cylindrical" |
-                       "ecef" | "none", station_biases = ["range", "range_rate"],
+                       "ecef" | "none", station_biases = ["range", "range_rate", "doppler"],
                        [parameters.values] non-nominal values of dynamic parameters
     [stations.NAME]    lat_deg, lon_deg, h_km (-0.5 to 10 km), elev_mask_deg
                        (tapp.io.stations_file)
@@ -145,7 +145,7 @@ from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 #: Observable kinds, in the order of ``tapp.measurements.Observable``.
 KINDS = tuple(o.value for o in Observable)
 #: Kinds that can carry a station bias in q (names and units: ``BIAS_NAMES``).
-BIAS_KINDS = ("range", "range_rate")
+BIAS_KINDS = ("range", "range_rate", "doppler")
 LOCATION_MODES = ("cylindrical", "ecef", "none")
 #: Most T13 input times a scenario may ask for (each is a tape record, held in memory).
 MAX_INPUT_TIMES = 100_000
@@ -197,6 +197,7 @@ class TrackingStation:
     blackouts_s : ((start, end), ...) s, no data (the scenario's and the station's own).
     band : its radio band, "S", "X" or "Ka" (:mod:`tapp.measurements.bands`).
     uplink : the station transmitting its three-way up-leg; None: itself (two-way).
+    doppler_bias_km_s : nominal bias added to its count-based Doppler.
     """
 
     number: int
@@ -211,6 +212,7 @@ class TrackingStation:
     blackouts_s: tuple[tuple[float, float], ...]
     band: str = DEFAULT_BAND
     uplink: Station | None = None
+    doppler_bias_km_s: float = 0.0
 
     def parameters(self) -> tuple[Parameter, ...]:
         """Its parameters in q: location then biases, named ``<station>.<name>``."""
@@ -221,7 +223,8 @@ class TrackingStation:
                                     strict=True):
                 out.append(Parameter(f"{self.station.name}.{pname}", _unit_of(pname),
                                      "location", float(value), self.number))
-        nominal = {"range": self.range_bias_km, "range_rate": self.range_rate_bias_km_s}
+        nominal = {"range": self.range_bias_km, "range_rate": self.range_rate_bias_km_s,
+                   "doppler": self.doppler_bias_km_s}
         for kind, bname in zip(BIAS_KINDS, BIAS_NAMES, strict=True):
             if kind in self.biases:
                 out.append(Parameter(f"{self.station.name}.{bname}", _unit_of(bname), "bias",
@@ -451,6 +454,8 @@ class StationTracking(Schema):
     blackouts: list[Window] = Field([], description=_BLACKOUTS + " at this station (beside "
                                     "tracking.blackouts).")
     band: BandName | None = Field(None, description="Its radio band; default: tracking.band.")
+    doppler_bias_mm_s: float = Field(0.0, description="Nominal bias added to its count-based "
+                                     "Doppler.")
     fit: FitTable = Field(FitTable(), description="Its fit-world σ, overriding [noise.fit].")
     real: RealTable = Field(RealTable(), description="Its real-world noise, overriding "
                             "[noise.real].")
@@ -773,7 +778,8 @@ def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
             range_bias_km=own.range_bias_m * 1e-3,
             range_rate_bias_km_s=own.range_rate_bias_mm_s * 1e-6,
             blackouts_s=blackouts + p.windows(own.blackouts, f"{where}.blackouts"),
-            band=band, uplink=None if own.uplink is None else known[own.uplink]))
+            band=band, uplink=None if own.uplink is None else known[own.uplink],
+            doppler_bias_km_s=own.doppler_bias_mm_s * 1e-6))
     return tuple(out)
 
 

@@ -386,7 +386,7 @@ def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
                              relativity)
     return MeasurementModel(ts.station, scenario.orientation, ts.kinds, light_time,
                             ts.range_bias_km, ts.range_rate_bias_km_s, ts.uplink,
-                            scenario.schedule.count_time_s)
+                            scenario.schedule.count_time_s, ts.doppler_bias_km_s)
 
 
 def _state_rows(h: np.ndarray, arc: _Arc, p: np.ndarray, scenario: Scenario,

@@ -26,7 +26,8 @@ SIGMA_HZ = 0.003
 
 def _document(relativity="auto", **station) -> dict:
     doc = geo_document()
-    doc["parameters"].update(station_location="cylindrical", station_biases=["range"])
+    doc["parameters"].update(station_location="cylindrical",
+                             station_biases=["range", "doppler"])
     doc["tracking"].update(observables=["range", "doppler"], light_time="two_way",
                            count_time_s=60.0, relativity=relativity,
                            station={"EAST": {"uplink": "UNDER", **station}})
@@ -64,6 +65,19 @@ def test_three_way_rows_are_the_model_and_the_up_leg_goes_to_the_uplink(run):
         assert np.allclose(raw.A[k, first_east:first_east + 3], own[:, column], rtol=1e-12)
         assert np.allclose(raw.A[k, first_under:first_under + 3], up[:, column], rtol=1e-12)
         assert np.all(np.abs(raw.A[k, first_under]) > 0.0)
+        bias = raw.A[k, names.index("EAST.doppler_bias_km_s")]
+        assert np.all(bias == (1.0 if kind == "doppler" else 0.0))
+
+
+def test_a_nominal_doppler_bias_adds_to_the_doppler():
+    scenario = parse_scenario(_document(doppler_bias_mm_s=0.5), SOURCE)
+    east = scenario.stations[1]
+    assert east.doppler_bias_km_s == pytest.approx(0.5e-6)
+    model = _measurement_model(east, scenario, scenario.propagator(), None)
+    t = np.array([3600.0])
+    x = model.light_time.state_at(t)
+    plain = replace(model, doppler_bias_km_s=0.0)
+    assert (model.compute(t, x) - plain.compute(t, x))[0] == pytest.approx([0.0, 0.5e-6])
 
 
 def test_doppler_sigma_in_hz_is_converted_at_the_band(run):
