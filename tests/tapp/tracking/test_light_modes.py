@@ -14,12 +14,14 @@ import numpy as np
 import pytest
 
 from tapp.constants import C_LIGHT_km_s
+from tapp.dynamics.ephemeris import position_km, utc_to_tdb_jd
 from tapp.errors import InputError
+from tapp.frames.time import parse_epoch
 from tapp.measurements.bands import BANDS
 from tapp.measurements.doppler import hz_per_km_s
 from tapp.tracking.scenario import parse_scenario
 from tapp.tracking.simulate import _measurement_model, relativity_choice, simulate
-from tests.tapp.tracking.helpers import SOURCE, geo_document
+from tests.tapp.tracking.helpers import SOURCE, geo_document, leo_document
 
 SIGMA_HZ = 0.003
 
@@ -168,3 +170,35 @@ def test_scenario_errors(change, field, expected):
         parse_scenario(doc, SOURCE)
     assert info.value.field == field
     assert expected in info.value.expected
+
+
+def test_a_solar_conjunction_shows_the_suns_shapiro_delay_on_the_tape():
+    """A spacecraft 2.4 AU away, 1.5 deg from the Sun (two-body, one day of QUITO's range):
+    relativistic minus Newtonian two-way range is the Sun's Shapiro delay, (1 + γ) μ_S / c³
+    ln((r_E + r_p + ρ) / (r_E + r_p - ρ)) per leg ~ 90 µs one way, 27 km, less the ~3 km of the
+    barycentric/TDB terms (test_relativity.py measures both): between 15 and 40 km."""
+    epoch = parse_epoch("2026-01-01T00:00:00")
+    sun = position_km("sun", "earth", utc_to_tdb_jd(epoch.jd))[0]
+    u = sun / np.linalg.norm(sun)
+    side = np.cross(u, [0.0, 0.0, 1.0])
+    side /= np.linalg.norm(side)
+    sep = np.radians(1.5)
+    r = 2.4 * 149597870.7 * (np.cos(sep) * u + np.sin(sep) * side)
+    doc = leo_document(
+        injection={"r_km": list(r), "v_km_s": list(side)},
+        model={"gravity": "J0", "var_gravity": "J0"},
+        parameters={"dynamic": [], "station_location": "none", "station_biases": []},
+        tracking={"stations": ["QUITO"], "observables": ["range"], "light_time": "two_way",
+                  "data_interval_s": 1800.0, "station": {}},
+        noise={"fit": {"sigma_range_m": 1.0}, "real": {}},
+        times={"input": [86400.0], "input_step_s": None, "end": None},
+        miss={"kind": "classical", "quantities": ["e"]})
+    ranges = {}
+    for relativity in (True, False):
+        doc["tracking"]["relativity"] = relativity
+        tape = simulate(parse_scenario(doc, SOURCE), raw=True).tape
+        ranges[relativity] = tape.raw.value
+        assert tape.provenance["relativity"].startswith("on" if relativity else "off")
+    assert ranges[True].size > 10
+    excess = ranges[True] - ranges[False]
+    assert np.all((excess > 15.0) & (excess < 40.0))
