@@ -35,7 +35,10 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    counted under the first of :data:`EDITING_RULES` that removed it (the tape's
    ``editing/``, :class:`tapp.io.tape.t13.TapeEditing`). Observables and their partials come from
    :class:`tapp.measurements.MeasurementModel` (state, station location, biases; light time
-   optional, with the bounce state from the integrated trajectory). A ΔDOR baseline
+   optional, with the bounce state from the integrated trajectory; relativistic as
+   :func:`relativity_choice` decides; a three-way station's up-leg partials go to its uplink
+   station's location columns, and its samples need the uplink to see the spacecraft at
+   transmission: :func:`_uplink_above`). A ΔDOR baseline
    (:mod:`tapp.tracking.ddor`) is an entry after the stations: its points fall on the same
    grid where both stations see the spacecraft (a mutual-visibility window is its pass), its
    rows come from :class:`tapp.measurements.ddor.DdorModel` (one-way legs; partials w.r.t.
