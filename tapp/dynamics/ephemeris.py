@@ -116,6 +116,26 @@ def _barycentric_km(body: str, jd: np.ndarray, jd2: np.ndarray) -> np.ndarray:
     return total.T
 
 
+def barycentric_state(body: str, jd_tdb: float | np.ndarray,
+                      jd_tdb2: float | np.ndarray = 0.0) -> np.ndarray:
+    """Return the state (N, 6) [km, km/s] of ``body`` relative to the solar-system barycentre.
+
+    The TDB date is split as in :func:`position_km`; the velocity is jplephem's derivative of
+    the Chebyshev series (km/day, converted). For the barycentric light time
+    (:mod:`tapp.measurements.relativity`).
+    """
+    jd, jd2 = np.broadcast_arrays(np.atleast_1d(np.asarray(jd_tdb, dtype=float)),
+                                  np.atleast_1d(np.asarray(jd_tdb2, dtype=float)))
+    check_coverage(jd, jd2)
+    kernel = _kernel()
+    total = np.zeros((6, jd.size))
+    for center, target in _PATHS[body]:
+        position, velocity = kernel[center, target].compute_and_differentiate(jd, jd2)
+        total[:3] += position
+        total[3:] += velocity / SECONDS_PER_DAY
+    return total.T
+
+
 def position_km(body: str, center: str, jd_tdb: float | np.ndarray,
                 jd_tdb2: float | np.ndarray = 0.0) -> np.ndarray:
     """Return the position (N, 3), km, of ``body`` relative to ``center``.

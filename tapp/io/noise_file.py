@@ -1,7 +1,9 @@
 """The ``[noise]`` table of tracking scenarios and of the study file: measurement noise.
 
 Keys are ``<part>_<kind>_<unit>``, the kinds and edge units of
-:data:`tapp.tracking.noise.EDGE_UNITS` (range in m, range rate in mm/s, angles in deg)::
+:data:`tapp.tracking.noise.EDGE_UNITS` (range in m, range rate and count-based Doppler in
+mm/s, angles in deg; Doppler also ``<part>_doppler_hz``, converted at the station's band by
+:func:`tapp.measurements.doppler.range_rate_from_hz`, one of the two)::
 
     [noise.fit]                  # the fit world: white noise, weights W = diag(1/σ²)
     sigma_range_m = 1.0
@@ -38,6 +40,10 @@ class FitTable(Schema):
     sigma_azimuth_deg: Positive | None = Field(None, description="σ of azimuth observations.")
     sigma_elevation_deg: Positive | None = Field(
         None, description="σ of elevation observations.")
+    sigma_doppler_mm_s: Positive | None = Field(
+        None, description="σ of count-based Doppler (equivalent range-rate), or:")
+    sigma_doppler_hz: Positive | None = Field(
+        None, description="the same σ in Hz at the station's band (2 M₂ f_T / c per km/s).")
 
 
 _WHITE = "White-noise σ of {} observations in the real world; default: the fit world's."
@@ -72,6 +78,17 @@ class RealTable(Schema):
     tau_range_rate_s: Positive | None = Field(None, description=_TAU.format("range-rate"))
     tau_azimuth_s: Positive | None = Field(None, description=_TAU.format("azimuth"))
     tau_elevation_s: Positive | None = Field(None, description=_TAU.format("elevation"))
+    sigma_doppler_mm_s: NonNegative | None = Field(None, description=_WHITE.format("Doppler"))
+    sigma_doppler_hz: NonNegative | None = Field(None, description=_WHITE.format("Doppler")
+                                                 + " In Hz at the station's band.")
+    bias_doppler_mm_s: NonNegative | None = Field(None, description=_BIAS.format("Doppler"))
+    bias_doppler_hz: NonNegative | None = Field(None, description=_BIAS.format("Doppler")
+                                                + " In Hz at the station's band.")
+    correlated_doppler_mm_s: NonNegative | None = Field(
+        None, description=_CORRELATED.format("Doppler"))
+    correlated_doppler_hz: NonNegative | None = Field(
+        None, description=_CORRELATED.format("Doppler") + " In Hz at the station's band.")
+    tau_doppler_s: Positive | None = Field(None, description=_TAU.format("Doppler"))
 
 
 class NoiseTable(Schema):

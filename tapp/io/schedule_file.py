@@ -17,8 +17,10 @@ Columns (named by the header, in any order; the first three required, each at mo
   spaces; empty: all of them;
 - ``data_interval_s``: seconds between samples, at least :data:`MIN_INTERVAL_S`; empty: the
   scenario's ``tracking.data_interval_s``;
-- ``uplink_station``: empty or the station itself (two-way); another station (three-way
-  tracking) is refused: the measurement models are one-station, two-way.
+- ``uplink_station``: empty, the station itself (two-way) or, for a station the scenario
+  tracks three-way (``[tracking.station.NAME] uplink``), that uplink station: a station's
+  passes all share its link (one measurement model per station), so any other station is
+  refused.
 
 The samples of a pass fall on the scenario's sample clock, t = ``tracking.start`` + i Δt with
 Δt the pass's interval, from its start to its end (both ends catch a sample time within
@@ -115,11 +117,12 @@ class _Rows:
     column."""
 
     def __init__(self, source: str, epoch: Epoch, stations: Mapping[str, tuple[str, ...]],
-                 data_interval_s: float):
+                 data_interval_s: float, uplinks: Mapping[str, str] | None = None):
         self.source = source
         self.epoch = epoch
         self.stations = stations
         self.data_interval_s = data_interval_s
+        self.uplinks = {} if uplinks is None else uplinks
 
     def fail(self, row: int, column: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, f"row {row}: {column}", expected, got)
@@ -174,10 +177,15 @@ class _Rows:
         return value
 
     def uplink(self, row: int, station: str, cell: str) -> None:
-        if cell and cell != station:
+        uplink = self.uplinks.get(station)
+        if uplink is None and cell and cell != station:
             raise self.fail(row, "uplink_station", f"empty or {station}, the pass's own "
-                            "station (three-way tracking, with another station's uplink, is "
-                            "not modelled yet)", cell)
+                            "station (three-way tracking from another station: that station "
+                            f"as tracking.station.{station}.uplink)", cell)
+        if uplink is not None and cell and cell != uplink:
+            raise self.fail(row, "uplink_station", f"empty or {uplink}, the uplink of "
+                            f"{station} (tracking.station.{station}.uplink: its passes share "
+                            "its link)", cell)
 
 
 def _header(rows: _Rows, line: int, cells: list[str]) -> dict[str, int]:
@@ -192,7 +200,7 @@ def _header(rows: _Rows, line: int, cells: list[str]) -> dict[str, int]:
 
 def parse_schedule(text: str, source: str, *, epoch: Epoch,
                    stations: Mapping[str, tuple[str, ...]], data_interval_s: float,
-                   clock_s: float) -> PassSchedule:
+                   clock_s: float, uplinks: Mapping[str, str] | None = None) -> PassSchedule:
     """Return the passes of a schedule's text, validated (module docstring).
 
     Parameters
@@ -203,6 +211,7 @@ def parse_schedule(text: str, source: str, *, epoch: Epoch,
     stations : the observables of each station of ``tracking.stations``, in its order.
     data_interval_s : the scenario's data interval, s (a pass's default).
     clock_s : the scenario's ``tracking.start``, s: the sample clock.
+    uplinks : the uplink station of each three-way station (others: two-way).
 
     Raises
     ------
@@ -214,7 +223,7 @@ def parse_schedule(text: str, source: str, *, epoch: Epoch,
         station, a pass without a sample, passes of one station that overlap, more than
         :data:`MAX_SCHEDULE_SAMPLES` samples; a file without a pass.
     """
-    rows = _Rows(source, epoch, stations, data_interval_s)
+    rows = _Rows(source, epoch, stations, data_interval_s, uplinks)
     lines = [(n, line) for n, line in enumerate(text.removeprefix("\ufeff").splitlines(),
                                                  start=1)
              if line.strip() and not line.lstrip().startswith("#")]
@@ -267,10 +276,11 @@ def parse_schedule(text: str, source: str, *, epoch: Epoch,
 
 
 def read_schedule(path: Path | str, *, epoch: Epoch, stations: Mapping[str, tuple[str, ...]],
-                  data_interval_s: float, clock_s: float) -> PassSchedule:
+                  data_interval_s: float, clock_s: float,
+                  uplinks: Mapping[str, str] | None = None) -> PassSchedule:
     """Read and validate a schedule file (:func:`parse_schedule`); a FIFO, a device, a
     directory or a file larger than :data:`MAX_SCHEDULE_BYTES` is refused unread."""
     text = read_text(path, "pass schedule (CSV)", max_bytes=MAX_SCHEDULE_BYTES,
                      error=InputError)
     return parse_schedule(text, str(path), epoch=epoch, stations=stations,
-                          data_interval_s=data_interval_s, clock_s=clock_s)
+                          data_interval_s=data_interval_s, clock_s=clock_s, uplinks=uplinks)

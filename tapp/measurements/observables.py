@@ -2,7 +2,7 @@
 
 Shapes are time-major: N observation times, spacecraft states (N, 6) = [r km, v km/s] in
 EME2000 at the receive times, observables (N, m), partials (N, m, 6) w.r.t. the spacecraft
-state, (N, m, 3) w.r.t. the station location, (N, m, 2) w.r.t. the biases. Kernels are pure
+state, (N, m, 3) w.r.t. the station location, (N, m, 3) w.r.t. the biases. Kernels are pure
 NumPy and noise-free.
 
 Observables (biases are added: observed = model + bias)
@@ -16,6 +16,11 @@ Observables (biases are added: observed = model + bias)
   [-pi/2, pi/2], in the station's topocentric East-North-Up frame (geodetic normal "up").
   With light time they are taken along the down-leg, from the station at reception to the
   spacecraft at transmission (no aberration, no refraction).
+- ``doppler``: km/s, count-based two-/three-way Doppler as an equivalent range-rate: the
+  change of the two-way range over a count interval centred on the sample time, divided by
+  it (:mod:`tapp.measurements.doppler`: the equations, the sign, Hz). Needs a two-way light
+  time model. Partials: the difference of the range partials at the ends of the interval,
+  mapped to the centre by :func:`tapp.measurements.doppler.local_transition`.
 
 Light time (:class:`LightTime`), following the iterative light-time solution of Moyer (2003),
 Formulation for Observed and Computed Values of DSN Data Types, JPL DESCANSO Monograph 2,
@@ -36,13 +41,15 @@ the bounce state by tau^2 a_p / 2 and tau a_p (J2 in LEO: < 1e-8 km and < 1e-6 k
 callback where that matters. Station positions at every time are exact (rotation).
 
 Partials are analytic. Without light time they are exact. With light time they are those of
-the first-order light-time model: the instantaneous partials of each leg, taken at the solved
-geometry (spacecraft at the bounce, station at reception and, for the up-leg, at transmission)
-and weighted as in the observable, then chained through x(t - tau_d) ~ x(t) - tau_d [v, 0]
-(d/dv picks up -tau_d d/dr). They neglect the dependence of tau on the state, the terms
-(dh/dt)(d tau/dx) with d tau/dx ~ rho_hat / c: a relative O(v / c) ~ 3e-5 per block, at most
-|rho_dot| / c per km in range and |rho_ddot| / c (< 3e-7 1/s in LEO) per km in range-rate.
-That only slows Gauss-Newton convergence and does not bias an estimate.
+the first-order light-time model: the partials of each leg, taken at the solved geometry
+(spacecraft at the bounce, station at reception and, for the up-leg, at transmission) and
+weighted as in the observable, then chained through x(t - tau_d) ~ x(t) - tau_d [v, 0]
+(d/dv picks up -tau_d d/dr). The range's keep the light times' dependence on the geometry
+(:func:`light_time_range_leg_partials`: exact to first order). The range-rate's and the
+angles' neglect it, the terms (dh/dt)(d tau/dx) with d tau/dx ~ rho_hat / c: a relative
+O(v / c) ~ 3e-5 per block, at most |rho_ddot| / c (< 3e-7 1/s in LEO) per km in range-rate.
+That only slows Gauss-Newton convergence and does not bias an estimate. Count-based Doppler
+differences the range's partials (:mod:`tapp.measurements.doppler`).
 
 Media (``MeasurementModel.media``, :mod:`tapp.measurements.media`): the troposphere and the
 ionosphere add to range and range-rate, each leg at its own elevation and carrier (the range's
@@ -57,8 +64,9 @@ km/km at 5 deg and 5e-7 at 45 deg against the geometric 1 km/km, is left out);
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import StrEnum
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -72,15 +80,20 @@ from tapp.frames.orientation import (
     check_eop_parameters,
     eop_generators,
 )
+from tapp.measurements.doppler import DEFAULT_COUNT_TIME_s, local_transition
 from tapp.measurements.media import LegMedia, MediaModel
 from tapp.measurements.stations import (
     Station,
     StationParameters,
+    location_jacobian,
     station_eop_partials,
     station_state_eci,
     station_state_partials,
 )
 from tapp.measurements.visibility import is_visible
+
+if TYPE_CHECKING:
+    from tapp.measurements.relativity import Relativity
 
 #: Light-time iterations stop when the change is below this fraction of tau (the contraction
 #: factor is v/c ~ 3e-5, so 3 to 4 iterations reach it).
@@ -95,6 +108,7 @@ class Observable(StrEnum):
     RANGE_RATE = "range_rate"
     AZIMUTH = "azimuth"
     ELEVATION = "elevation"
+    DOPPLER = "doppler"
 
 
 #: Units of each observable, for tapes and reports.
@@ -103,9 +117,12 @@ OBSERVABLE_UNITS = {
     Observable.RANGE_RATE: "km/s",
     Observable.AZIMUTH: "rad",
     Observable.ELEVATION: "rad",
+    Observable.DOPPLER: "km/s",
 }
 #: Names and units of the bias parameters, in the order of ``bias_partials``' last axis.
-BIAS_NAMES = ("range_bias_km", "range_rate_bias_km_s")
+BIAS_NAMES = ("range_bias_km", "range_rate_bias_km_s", "doppler_bias_km_s")
+#: The kinds those biases add to, in the same order.
+BIASED_KINDS = (Observable.RANGE, Observable.RANGE_RATE, Observable.DOPPLER)
 
 
 def wrap_angle_rad(angle_rad):
@@ -274,11 +291,15 @@ class LightTime:
         about the receive-time state.
     mu_km3_s2 : float
         Gravitational parameter of the Taylor expansion, km^3/s^2.
+    relativity : Relativity or None
+        None: the Newtonian solution above (geocentric, one time scale). Otherwise the
+        barycentric TDB solution with the Shapiro delays (:mod:`tapp.measurements.relativity`).
     """
 
     two_way: bool = True
     state_at: StateCallback | None = None
     mu_km3_s2: float = GM_EARTH_km3_s2
+    relativity: Relativity | None = None
 
     def spacecraft_state(self, t_s, state_eci, tau_s):
         """Return the spacecraft state at t_s - tau_s, shape (N, 6)."""
@@ -343,6 +364,7 @@ def solve_light_time(
     r_station_ecef_km,
     orientation: EarthOrientation | float,
     light_time: LightTime,
+    r_transmit_ecef_km=None,
 ) -> LightTimeSolution:
     """Return the light-time geometry for receive times t_s (N,) at a station.
 
@@ -357,7 +379,10 @@ def solve_light_time(
     orientation : EarthOrientation or float
         The scenario's Earth orientation (a float: the gmst model's angle at the epoch, rad).
     light_time : LightTime
-        The model.
+        The model (with ``relativity``: :meth:`tapp.measurements.relativity.Relativity.solve`).
+    r_transmit_ecef_km : array_like, shape (3,), or None
+        Earth-fixed position of the station transmitting the up-leg (three-way), km; None:
+        the receiving station (two-way).
 
     Raises
     ------
@@ -367,6 +392,10 @@ def solve_light_time(
     t = np.asarray(t_s, dtype=float)
     x = np.asarray(state_eci, dtype=float)
     orientation = as_orientation(orientation)
+    r_tx = r_station_ecef_km if r_transmit_ecef_km is None else r_transmit_ecef_km
+    if light_time.relativity is not None:
+        return light_time.relativity.solve(t, x, light_time, r_station_ecef_km, r_tx,
+                                           orientation)
     station_rx = station_state_eci(r_station_ecef_km, orientation.attitude(t))
 
     def down_distance(tau):
@@ -379,7 +408,7 @@ def solve_light_time(
         return LightTimeSolution(tau_d, np.zeros_like(tau_d), bounce, station_rx, station_rx)
 
     def station_at(tau_u):
-        return station_state_eci(r_station_ecef_km, orientation.attitude(t - tau_d - tau_u))
+        return station_state_eci(r_tx, orientation.attitude(t - tau_d - tau_u))
 
     def up_distance(tau_u):
         return np.linalg.norm(bounce[..., :3] - station_at(tau_u)[..., :3], axis=-1)
@@ -437,6 +466,38 @@ def _cross_matrix(a):
     out[..., 1, 0], out[..., 1, 2] = a[..., 2], -a[..., 0]
     out[..., 2, 0], out[..., 2, 1] = -a[..., 1], a[..., 0]
     return out
+def light_time_range_leg_partials(solution: LightTimeSolution, two_way: bool = True):
+    """Return the range's partials w.r.t. the bounce position carried by each leg, (N, 3) each.
+
+    The light times' own dependence on the geometry is kept (first order in the solved
+    geometry; Shapiro's and TDB's gradients, < 2e-6 relative at 1.5 deg from the Sun, left
+    out). With V_2 the spacecraft's velocity at the bounce and V_1 the transmitter's at
+    transmission (in the solution's frame), g_d = rho_hat_d / (1 + rho_hat_d . V_2 / c),
+    k = rho_hat_u . (V_2 - V_1) / c, D_u = 1 - rho_hat_u . V_1 / c:
+
+    .. math::
+
+        d\\rho_d = g_d\\cdot(d\\mathbf r_2 - d\\mathbf r_3),\\qquad
+        d\\rho_u = \\frac{\\hat\\rho_u\\cdot(d\\mathbf r_2 - d\\mathbf r_1) - k\\,d\\rho_d}{D_u},
+
+    from differentiating c tau_d = |r_2(t - tau_d) - r_3(t)| and
+    c tau_u = |r_2 - r_1(t - tau_d - tau_u)|. Returns (leg 0: -d range / d r_3, leg 1:
+    -d range / d r_1): their sum is d range / d r_2 (a translation moves nothing), each the
+    negative of its station's partial. One-way: (g_d,).
+    """
+    sc = solution.spacecraft_eci
+    d_down = sc[..., :3] - solution.station_receive_eci[..., :3]
+    rho_d = d_down / np.linalg.norm(d_down, axis=-1)[..., None]
+    v2 = sc[..., 3:]
+    g_d = rho_d / (1.0 + np.sum(rho_d * v2, -1) / C_LIGHT_km_s)[..., None]
+    if not two_way:
+        return (g_d,)
+    d_up = sc[..., :3] - solution.station_transmit_eci[..., :3]
+    rho_u = d_up / np.linalg.norm(d_up, axis=-1)[..., None]
+    v1 = solution.station_transmit_eci[..., 3:]
+    d_u = (1.0 - np.sum(rho_u * v1, -1) / C_LIGHT_km_s)[..., None]
+    k = np.sum(rho_u * (v2 - v1), -1)[..., None] / C_LIGHT_km_s
+    return (0.5 * (1.0 - k / d_u) * g_d, 0.5 * rho_u / d_u)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -467,7 +528,7 @@ class MeasurementModel:
 
     The interface TAPP I and the orbit-determination code share: ``compute`` gives h(x) (N, m),
     ``state_partials`` H = dh/dx (N, m, 6), ``station_partials`` dh/d(location) (N, m, 3),
-    ``bias_partials`` dh/d(range bias, range-rate bias) (N, m, 2), ``residual`` the
+    ``bias_partials`` dh/d(range, range-rate, Doppler bias) (N, m, 3), ``residual`` the
     angle-wrapping observed - computed, and ``visible`` the mask test (N,). Columns follow
     ``kinds``; pass the visible samples, grouped by :func:`find_passes`, to the estimator.
 
@@ -490,6 +551,13 @@ class MeasurementModel:
         carrier: with two-way light time, the down-leg (f_R) at reception and the up-leg (f_T)
         at transmission, half each; one-way, the down-leg; without light time, one leg at the
         mean of the two carriers' 1 / f². Angles are left without refraction.
+    uplink : Station or None
+        Three-way tracking: the station that transmits the up-leg (``station`` receives);
+        needs a two-way light-time model. None: ``station`` transmits too.
+    count_time_s : float
+        Count interval T_c of the ``doppler`` kind, s.
+    doppler_bias_km_s : float
+        Constant bias added to the count-based Doppler.
 
     Examples
     --------
@@ -507,6 +575,9 @@ class MeasurementModel:
     range_bias_km: float = 0.0
     range_rate_bias_km_s: float = 0.0
     media: MediaModel | None = None
+    uplink: Station | None = None
+    count_time_s: float = DEFAULT_COUNT_TIME_s
+    doppler_bias_km_s: float = 0.0
 
     def __post_init__(self) -> None:
         try:
@@ -518,6 +589,28 @@ class MeasurementModel:
             ) from err
         object.__setattr__(self, "kinds", kinds)
         object.__setattr__(self, "orientation", as_orientation(self.orientation))
+        if self.uplink is not None and (self.light_time is None or not self.light_time.two_way):
+            raise InputError("MeasurementModel", "uplink",
+                             "a two-way light-time model with an uplink station (three-way)",
+                             self.light_time)
+        if Observable.DOPPLER in kinds:
+            if self.light_time is None or not self.light_time.two_way:
+                raise InputError("MeasurementModel", "kinds",
+                                 "a two-way light-time model with doppler (count-based "
+                                 "two-/three-way Doppler)", self.light_time)
+            if not self.count_time_s > 0.0:
+                raise InputError("MeasurementModel", "count_time_s", "a count time > 0 s",
+                                 self.count_time_s)
+        # Not modelled together yet: the up-leg's media belong to the uplink station (its
+        # axes and weather), and Doppler's ionosphere is a phase advance with its own zenith
+        # partials; refused rather than computed with the receiving station's group delay.
+        if self.media is not None and self.uplink is not None:
+            raise InputError("MeasurementModel", "media",
+                             "no media with a three-way uplink (not modelled yet)", self.uplink.name)
+        if self.media is not None and Observable.DOPPLER in kinds:
+            raise InputError("MeasurementModel", "media",
+                             "no media with count-based doppler (not modelled yet: use "
+                             "range_rate)", self.kinds)
 
     def station_eci(self, t_s):
         """Return the station inertial state at t_s (N,), shape (N, 6)."""
@@ -531,7 +624,8 @@ class MeasurementModel:
             station = station_state_eci(self.station.r_ecef_km, attitude_rx)
             return _Geometry(x, np.zeros(t.shape), attitude_rx, None,
                              ((1.0, station, attitude_rx),), t)
-        sol = solve_light_time(t, x, self.station.r_ecef_km, self.orientation, self.light_time)
+        sol = solve_light_time(t, x, self.station.r_ecef_km, self.orientation, self.light_time,
+                               None if self.uplink is None else self.uplink.r_ecef_km)
         legs = ((1.0, sol.station_receive_eci, attitude_rx),)
         if self.light_time.two_way:
             attitude_tx = self.orientation.attitude(t - sol.tau_down_s - sol.tau_up_s)
@@ -554,11 +648,17 @@ class MeasurementModel:
             if Observable.RANGE in kinds:
                 out[Observable.RANGE] = light_time_range_km(geo.solution, two_way)
             if Observable.RANGE_RATE in kinds:
-                out[Observable.RANGE_RATE] = light_time_range_rate_km_s(geo.solution, two_way)
+                out[Observable.RANGE_RATE] = (light_time_range_rate_km_s(geo.solution, two_way)
+                                              + self._clock_rate_km_s(t_s, geo.solution))
         if Observable.AZIMUTH in kinds or Observable.ELEVATION in kinds:
             out[Observable.AZIMUTH], out[Observable.ELEVATION] = azimuth_elevation_rad(
                 geo.enu(self.station)
             )
+        if Observable.DOPPLER in kinds:
+            (t_s_, x_s), (t_e, x_e) = self._count_ends(t_s, state_eci)
+            ranges = self._ranging()
+            out[Observable.DOPPLER] = (ranges.compute(t_e, x_e)[..., 0]
+                                       - ranges.compute(t_s_, x_s)[..., 0]) / self.count_time_s
         if self.media is not None:
             for kind, value in self._media_terms(geo, kinds).items():
                 out[kind] = out[kind] + value
@@ -643,6 +743,55 @@ class MeasurementModel:
                     out[..., row, :] += weight * leg.rate_zenith
         return out
 
+    def _clock_rate_km_s(self, t_s, solution: LightTimeSolution):
+        """Return the range-rate from the clocks' TDB - TT rates (relativistic light time;
+        0 otherwise), km/s, (N,): the light times are solved in TDB and read on TT clocks,
+        so d(t_3 - t_1)/dt_3 = (dET_1/dET_3 geometric) + dΔ_tx(t_1)/dt - dΔ_rx(t_3)/dt to
+        first order (one-way: the spacecraft's geocentric Δ at t_2 for the transmitter's):
+        up to (c / 2) |v_E| ω R_E / c² = 2e-5 km/s between two stations (three-way)."""
+        relativity = None if self.light_time is None else self.light_time.relativity
+        if relativity is None:
+            return 0.0
+        t = np.asarray(t_s, dtype=float)
+        receive = relativity.tdb_rate(t, self.station.r_ecef_km)
+        if not self.light_time.two_way:
+            return C_LIGHT_km_s * (relativity.tdb_rate(t - solution.tau_down_s) - receive)
+        transmitter = self.station if self.uplink is None else self.uplink
+        t1 = t - solution.tau_down_s - solution.tau_up_s
+        return 0.5 * C_LIGHT_km_s * (relativity.tdb_rate(t1, transmitter.r_ecef_km) - receive)
+
+    def _ranging(self) -> MeasurementModel:
+        """This model measuring the two-/three-way range only (no bias): Doppler's ends."""
+        return replace(self, kinds=(Observable.RANGE,), range_bias_km=0.0)
+
+    def _count_ends(self, t_s, state_eci):
+        """Return ((t_s, states), (t_e, states)) at the ends t -/+ T_c / 2 of the count
+        intervals: the states from the light-time model's trajectory (its ``state_at``, or
+        its Taylor expansion about the state at t)."""
+        t = np.asarray(t_s, dtype=float)
+        x = np.asarray(state_eci, dtype=float)
+        half = 0.5 * self.count_time_s
+        return tuple((t + sign * half, self.light_time.spacecraft_state(t, x, -sign * half))
+                     for sign in (-1.0, 1.0))
+
+    def _doppler_rows(self, t_s, state_eci, which: str, parameters: StationParameters):
+        """Doppler's partials (N, 3 or 6): (dR/dp at t_e - at t_s) / T_c, the state partials
+        mapped to the centre by the local transition (:mod:`tapp.measurements.doppler`)."""
+        ranges = self._ranging()
+        x = np.asarray(state_eci, dtype=float)
+        out = 0.0
+        for sign, (t_end, x_end) in zip((-1.0, 1.0), self._count_ends(t_s, x), strict=True):
+            if which == "state":
+                rows = np.einsum("...i,...ij->...j", ranges.state_partials(t_end, x_end)[
+                    ..., 0, :], local_transition(x, sign * 0.5 * self.count_time_s,
+                                                 self.light_time.mu_km3_s2))
+            elif which == "station":
+                rows = ranges.station_partials(t_end, x_end, parameters)[..., 0, :]
+            else:
+                rows = ranges.uplink_station_partials(t_end, x_end, parameters)[..., 0, :]
+            out = out + sign * rows
+        return out / self.count_time_s
+
     def azimuth_elevation(self, t_s, state_eci):
         """Return (azimuth, elevation), rad, each (N,), along the down-leg if light time is on."""
         obs = self._observables(t_s, state_eci, (Observable.AZIMUTH,))
@@ -659,10 +808,8 @@ class MeasurementModel:
             Spacecraft inertial states at t_s, [km, km/s].
         """
         obs = self._observables(t_s, state_eci, self.kinds)
-        bias = {
-            Observable.RANGE: self.range_bias_km,
-            Observable.RANGE_RATE: self.range_rate_bias_km_s,
-        }
+        bias = dict(zip(BIASED_KINDS, (self.range_bias_km, self.range_rate_bias_km_s,
+                                       self.doppler_bias_km_s), strict=True))
         return np.stack([obs[k] + bias.get(k, 0.0) for k in self.kinds], axis=-1)
 
     def _leg_partials(self, geo: _Geometry):
@@ -675,17 +822,21 @@ class MeasurementModel:
         if Observable.AZIMUTH in self.kinds or Observable.ELEVATION in self.kinds:
             rot = self.station.enu_from_eci(geo.attitude_rx)
             angles = azimuth_elevation_partials(geo.enu(self.station), rot)
+        ranges = (None if geo.solution is None
+                  else light_time_range_leg_partials(geo.solution, self.light_time.two_way))
         out = []
         for number, (weight, station, attitude) in enumerate(geo.legs):
             rows = np.zeros(geo.tau_down_s.shape + (len(self.kinds), 6))
             for row, kind in enumerate(self.kinds):
-                if kind is Observable.RANGE:
+                if kind is Observable.RANGE and ranges is not None:
+                    rows[..., row, :3] = ranges[number]
+                elif kind is Observable.RANGE:
                     rows[..., row, :] = weight * range_partials(geo.spacecraft, station)[..., 0, :]
                 elif kind is Observable.RANGE_RATE:
                     rows[..., row, :] = (
                         weight * range_rate_partials(geo.spacecraft, station)[..., 0, :]
                     )
-                elif number == 0:
+                elif number == 0 and kind is not Observable.DOPPLER:
                     rows[..., row, :] = angles[..., 0 if kind is Observable.AZIMUTH else 1, :]
             out.append((attitude, rows))
         if self.media is not None:
@@ -703,7 +854,15 @@ class MeasurementModel:
         # x(t - tau) ~ x(t) - tau [v, 0]: d/dv = d/dv_B - tau d/dr_B.
         h = h_bounce.copy()
         h[..., 3:] -= geo.tau_down_s[..., None, None] * h_bounce[..., :3]
+        self._put_doppler(h, t_s, state_eci, "state")
         return h
+
+    def _put_doppler(self, out, t_s, state_eci, which: str,
+                     parameters: StationParameters = "cylindrical") -> None:
+        """Fill the doppler rows of ``out`` (N, m, n) in place (:meth:`_doppler_rows`)."""
+        if Observable.DOPPLER in self.kinds:
+            row = self.kinds.index(Observable.DOPPLER)
+            out[..., row, :] = self._doppler_rows(t_s, state_eci, which, parameters)
 
     def station_partials(self, t_s, state_eci, parameters: StationParameters = "cylindrical"):
         """Return d observables / d station location, shape (N, m, 3).
@@ -711,24 +870,74 @@ class MeasurementModel:
         Columns named by ``STATION_PARAMETER_NAMES[parameters]``: (r_s km, lon rad, z km) or
         Earth-fixed (x, y, z) km. Chain rule per leg: dh/dp = (dh/d station state at the leg's
         time) (d station state / dp at that time's attitude), with dh/d station state =
-        -dh/d spacecraft state for every kind (angles: axes held fixed).
+        -dh/d spacecraft state for every kind (angles: axes held fixed). Three-way (an
+        ``uplink`` station): the down-leg part only (:meth:`uplink_station_partials`).
         """
-        geo = self._geometry(t_s, state_eci)
+        legs = self._leg_partials(self._geometry(t_s, state_eci))
+        if self.uplink is not None:
+            legs = legs[:1]
         r_ecef = self.station.r_ecef_km
-        return -sum(
+        out = -sum(
             rows @ station_state_partials(r_ecef, attitude, parameters)
-            for attitude, rows in self._leg_partials(geo)
+            for attitude, rows in legs
         )
+        self._put_clock(out, t_s, state_eci, "receiver", parameters)
+        if self.uplink is None:
+            self._put_clock(out, t_s, state_eci, "transmitter", parameters)
+        self._put_doppler(out, t_s, state_eci, "station", parameters)
+        return out
+
+    def _put_clock(self, out, t_s, state_eci, end: str, parameters: StationParameters) -> None:
+        """Add to the range rows of ``out`` (N, m, 3) the part through the station's own
+        TDB - TT (relativistic light time only): the receiver's clock term moves every event
+        by d(TDB)/dp and the range by -c w d(TDB)/dp (w = 1/2 two-/three-way, 1 one-way); the
+        transmitter's moves t_1 and the range by +c/2 d(TDB)/dp
+        (:meth:`tapp.measurements.relativity.Relativity.tdb_site_gradient_s_km`)."""
+        if (self.light_time is None or self.light_time.relativity is None
+                or Observable.RANGE not in self.kinds):
+            return
+        t = np.asarray(t_s, dtype=float)
+        two_way = self.light_time.two_way
+        if end == "receiver":
+            station, when, factor = self.station, t, -(0.5 if two_way else 1.0)
+        else:
+            sol = self._geometry(t, state_eci).solution
+            station = self.station if self.uplink is None else self.uplink
+            when, factor = t - sol.tau_down_s - sol.tau_up_s, 0.5
+        gradient = self.light_time.relativity.tdb_site_gradient_s_km(when, station.r_ecef_km)
+        row = self.kinds.index(Observable.RANGE)
+        out[..., row, :] += factor * C_LIGHT_km_s * gradient @ location_jacobian(
+            station.r_ecef_km, parameters)
+
+    def uplink_station_partials(self, t_s, state_eci,
+                                parameters: StationParameters = "cylindrical"):
+        """Return d observables / d uplink station location (three-way), shape (N, m, 3).
+
+        The up-leg part of :meth:`station_partials`' chain rule, at the transmit attitude.
+        """
+        attitude, rows = self._leg_partials(self._geometry(t_s, state_eci))[1]
+        out = -rows @ station_state_partials(self.uplink.r_ecef_km, attitude, parameters)
+        self._put_clock(out, t_s, state_eci, "transmitter", parameters)
+        self._put_doppler(out, t_s, state_eci, "uplink", parameters)
+        return out
+
+    def uplink_elevation_rad(self, t_s, state_eci):
+        """Return the elevation (N,), rad, of the spacecraft at the bounce seen from the
+        transmitting station (``uplink``, or ``station``) at transmission, along the up-leg."""
+        geo = self._geometry(t_s, state_eci)
+        _, station, attitude = geo.legs[-1]
+        transmitter = self.station if self.uplink is None else self.uplink
+        relative = geo.spacecraft[..., :3] - station[..., :3]
+        enu = np.einsum("...ij,...j->...i", transmitter.enu_from_eci(attitude), relative)
+        return azimuth_elevation_rad(enu)[1]
 
     def bias_partials(self, t_s):
-        """Return d observables / d (range_bias_km, range_rate_bias_km_s), shape (N, m, 2)."""
+        """Return d observables / d (the biases of :data:`BIAS_NAMES`), shape (N, m, 3)."""
         t = np.asarray(t_s, dtype=float)
-        out = np.zeros(t.shape + (len(self.kinds), 2))
+        out = np.zeros(t.shape + (len(self.kinds), len(BIAS_NAMES)))
         for row, kind in enumerate(self.kinds):
-            if kind is Observable.RANGE:
-                out[..., row, 0] = 1.0
-            elif kind is Observable.RANGE_RATE:
-                out[..., row, 1] = 1.0
+            if kind in BIASED_KINDS:
+                out[..., row, BIASED_KINDS.index(kind)] = 1.0
         return out
 
     def residual(self, observed, computed):

@@ -62,6 +62,7 @@ EDGE_UNITS: dict[str, tuple[str, float]] = {
     "range_rate": ("mm_s", 1e-6),
     "azimuth": ("deg", math.pi / 180.0),
     "elevation": ("deg", math.pi / 180.0),
+    "doppler": ("mm_s", 1e-6),
 }
 
 

@@ -37,7 +37,8 @@ ISO strings or TOML dates)::
                        "harris_priester")
     [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", "Cr", "Cd", ...]
                        (tapp.dynamics.forces names), station_location = "cylindrical" |
-                       "ecef" | "none", station_biases = ["range", "range_rate"],
+                       "ecef" | "none", station_biases = ["range", "range_rate",
+                       "doppler"],
                        media = ["troposphere", "ionosphere"] (each station's zenith
                        parameters <STATION>.zenith_dry_km, .zenith_wet_km, kind
                        "troposphere", and .zenith_tec_tecu, kind "ionosphere"; needs
@@ -48,14 +49,16 @@ ISO strings or TOML dates)::
     [stations.NAME]    lat_deg, lon_deg, h_km (-0.5 to 10 km), elev_mask_deg
                        (tapp.io.stations_file)
     [tracking]         stations = [names], observables = ["range", "range_rate", "azimuth",
-                       "elevation"], light_time = "none" | "one_way" | "two_way",
+                       "elevation", "doppler"], light_time = "none" | "one_way" | "two_way",
                        band = "S" | "X" | "Ka" (tapp.measurements.bands), data_interval_s,
                        start, end, min_pass_s, max_pass_s,
                        blackouts = [[start, end], ...], schedule (a pass schedule, CSV:
                        tapp.io.schedule_file), use = "visibility" | "schedule" | "both",
-                       allow_partial (tapp.tracking.schedule)
+                       allow_partial (tapp.tracking.schedule), relativity = "auto" | true |
+                       false (tapp.measurements.relativity), count_time_s (doppler)
     [tracking.station.NAME]  per-station observables, location, biases, range_bias_m,
-                       range_rate_bias_mm_s (nominal bias values), blackouts, and fit / real
+                       range_rate_bias_mm_s (nominal bias values), blackouts, uplink (the
+                       station transmitting its three-way up-leg), and fit / real
                        tables overriding [noise.fit] / [noise.real] keys; the media's
                        pressure_hpa, temperature_k, relative_humidity (default: the
                        standard atmosphere at its height) and zenith_tec_tecu
@@ -64,7 +67,8 @@ ISO strings or TOML dates)::
                        ΔDOR); shell_height_km (350), zenith_tec_tecu (10)
                        (tapp.measurements.media)
     [noise.fit]        sigma_range_m, sigma_range_rate_mm_s, sigma_azimuth_deg,
-                       sigma_elevation_deg (white noise: W = diag(1/σ²))
+                       sigma_elevation_deg, sigma_doppler_mm_s or sigma_doppler_hz (white
+                       noise: W = diag(1/σ²))
     [noise.real]       sigma_<kind>_<unit> (white, default the fit σ), bias_<kind>_<unit>
                        (constant per pass), correlated_<kind>_<unit> with tau_<kind>_s
                        (exponentially correlated)
@@ -149,7 +153,8 @@ from tapp.io.stations_file import StationsSection
 from tapp.io.tomlfile import read_toml
 from tapp.io.trajectory_file import Reference, ReferenceTable
 from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
-from tapp.measurements.bands import BAND_NAMES, DEFAULT_BAND
+from tapp.measurements.bands import BAND_NAMES, BANDS, DEFAULT_BAND
+from tapp.measurements.doppler import DEFAULT_COUNT_TIME_s, range_rate_from_hz
 from tapp.measurements.media import (
     MEDIA_KINDS,
     MEDIA_PARAMETER_NAMES,
@@ -171,7 +176,7 @@ from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 #: Observable kinds, in the order of ``tapp.measurements.Observable``.
 KINDS = tuple(o.value for o in Observable)
 #: Kinds that can carry a station bias in q (names and units: ``BIAS_NAMES``).
-BIAS_KINDS = ("range", "range_rate")
+BIAS_KINDS = ("range", "range_rate", "doppler")
 LOCATION_MODES = ("cylindrical", "ecef", "none")
 #: The media whose zenith parameters may be in q ([parameters] media), and their units.
 MEDIA_EFFECTS = ("troposphere", "ionosphere")
@@ -229,6 +234,8 @@ class TrackingStation:
     media : the troposphere and ionosphere of its links (None: neither is on).
     media_parameters : effects among ("troposphere", "ionosphere") whose zenith parameters
         are in q.
+    uplink : the station transmitting its three-way up-leg; None: itself (two-way).
+    doppler_bias_km_s : nominal bias added to its count-based Doppler.
     """
 
     number: int
@@ -244,6 +251,8 @@ class TrackingStation:
     band: str = DEFAULT_BAND
     media: MediaModel | None = None
     media_parameters: tuple[str, ...] = ()
+    uplink: Station | None = None
+    doppler_bias_km_s: float = 0.0
 
     def parameters(self) -> tuple[Parameter, ...]:
         """Its parameters in q: location, biases, then zenith (media) parameters, named
@@ -255,7 +264,8 @@ class TrackingStation:
                                     strict=True):
                 out.append(Parameter(f"{self.station.name}.{pname}", _unit_of(pname),
                                      "location", float(value), self.number))
-        nominal = {"range": self.range_bias_km, "range_rate": self.range_rate_bias_km_s}
+        nominal = {"range": self.range_bias_km, "range_rate": self.range_rate_bias_km_s,
+                   "doppler": self.doppler_bias_km_s}
         for kind, bname in zip(BIAS_KINDS, BIAS_NAMES, strict=True):
             if kind in self.biases:
                 out.append(Parameter(f"{self.station.name}.{bname}", _unit_of(bname), "bias",
@@ -283,7 +293,8 @@ class Schedule:
 
     ``use`` "schedule" or "both" takes the samples of the stations in ``passes`` from their
     passes instead (``allow_partial``: drop the samples a station cannot see instead of
-    refusing them; :mod:`tapp.tracking.schedule`).
+    refusing them; :mod:`tapp.tracking.schedule`). ``relativity``: True, False or "auto"
+    (:mod:`tapp.measurements.relativity`); ``count_time_s``: the doppler count interval.
     """
 
     data_interval_s: float
@@ -295,6 +306,8 @@ class Schedule:
     use: str = "visibility"
     passes: PassSchedule | None = None
     allow_partial: bool = False
+    relativity: str | bool = "auto"
+    count_time_s: float = DEFAULT_COUNT_TIME_s
 
 
 @dataclass(frozen=True, slots=True)
@@ -504,6 +517,8 @@ class StationTracking(Schema):
     blackouts: list[Window] = Field([], description=_BLACKOUTS + " at this station (beside "
                                     "tracking.blackouts).")
     band: BandName | None = Field(None, description="Its radio band; default: tracking.band.")
+    doppler_bias_mm_s: float = Field(0.0, description="Nominal bias added to its count-based "
+                                     "Doppler.")
     fit: FitTable = Field(FitTable(), description="Its fit-world σ, overriding [noise.fit].")
     real: RealTable = Field(RealTable(), description="Its real-world noise, overriding "
                             "[noise.real].")
@@ -517,6 +532,11 @@ class StationTracking(Schema):
         None, description="Relative humidity, a fraction 0 to 1; default: 0.5.")
     zenith_tec_tecu: NonNegative | None = Field(
         None, description="Its nominal zenith TEC (TECU); default: media.zenith_tec_tecu.")
+    uplink: str | None = Field(
+        None, description="Three-way tracking: the [stations.NAME] station that transmits the "
+        "up-leg this station receives (light_time = \"two_way\"; the up-leg's location "
+        "partials go to its columns when it is tracked with location parameters); default: "
+        "itself (two-way).")
 
 
 class TrackingTable(Schema):
@@ -548,8 +568,8 @@ class TrackingTable(Schema):
         None, description="A pass schedule (CSV, relative to the scenario's folder): a header, "
         "then one row per pass: station, start, end (UTC dates or seconds from the epoch), "
         "data_types (observables separated by spaces; empty: the station's), data_interval_s "
-        "(empty: tracking.data_interval_s), uplink_station (empty or the station itself: "
-        "three-way tracking is not modelled); tapp.io.schedule_file.")
+        "(empty: tracking.data_interval_s), uplink_station (empty, the station itself, or its "
+        "tracking.station.NAME.uplink for three-way); tapp.io.schedule_file.")
     use: Literal[USES] | None = Field(  # type: ignore[valid-type]
         None, description="Which samples: \"visibility\" (the grid, wherever a station sees "
         "the spacecraft), \"schedule\" (the schedule's passes only) or \"both\" (the stations "
@@ -558,6 +578,14 @@ class TrackingTable(Schema):
     allow_partial: bool = Field(
         False, description="Drop the samples of a scheduled pass that the station cannot see "
         "(counted under elevation_mask) instead of refusing the schedule.")
+    relativity: Literal["auto"] | bool = Field(
+        "auto", description="Relativistic light time (barycentric, TDB, Shapiro delays: "
+        "tapp.measurements.relativity): true, false, or \"auto\": on with light_time = "
+        "\"two_way\" when the spacecraft goes beyond the Moon's distance (384,400 km) in "
+        "the tracking span.")
+    count_time_s: Positive | None = Field(
+        None, description="Count interval of the doppler observable (centred on each sample), "
+        "s, at most data_interval_s; default: 60 s or data_interval_s if shorter.")
 
 
 class MediaTable(Schema):
@@ -753,28 +781,41 @@ def _noise_key(prefix: str, kind: str) -> str:
     return f"{prefix}_{kind}_{EDGE_UNITS[kind][0]}"
 
 
-def _noise(p: _Parser, kind: str, name: str, noise: NoiseTable, own: StationTracking
-           ) -> tuple[FitNoise, RealNoise]:
-    """Fit and real noise of one kind at one station: station tables override the globals."""
+def _noise(p: _Parser, kind: str, name: str, noise: NoiseTable, own: StationTracking,
+           band: str = DEFAULT_BAND) -> tuple[FitNoise, RealNoise]:
+    """Fit and real noise of one kind at one station: station tables override the globals.
+    Doppler's keys may be given in Hz instead, converted at the station's ``band``."""
     factor = EDGE_UNITS[kind][1]
     key = _noise_key("sigma", kind)
-    sigma = getattr(own.fit, key)
+
+    def lookup(table: FitTable | RealTable, prefix: str, where: str) -> float | None:
+        value = getattr(table, _noise_key(prefix, kind))
+        hz = getattr(table, f"{prefix}_{kind}_hz", None)
+        if hz is None:
+            return value
+        if value is not None:
+            p.fail(f"{where}.{prefix}_{kind}_hz",
+                   f"one of {_noise_key(prefix, kind)} or {prefix}_{kind}_hz, not both", hz)
+        return float(range_rate_from_hz(hz, BANDS[band])) / factor
+
+    sigma = lookup(own.fit, "sigma", f"tracking.station.{name}.fit")
     if sigma is None:
-        sigma = getattr(noise.fit, key)
+        sigma = lookup(noise.fit, "sigma", "noise.fit")
     if sigma is None:
         p.fail(f"noise.fit.{key}", f"the fit σ of every observable tracked ({kind} at {name})")
 
-    def real(key: str) -> tuple[float | None, str]:
-        value = getattr(own.real, key)
-        if value is not None:
-            return value, f"tracking.station.{name}.real"
-        return getattr(noise.real, key), "noise.real"
+    def real(prefix: str) -> float | None:
+        value = lookup(own.real, prefix, f"tracking.station.{name}.real")
+        return lookup(noise.real, prefix, "noise.real") if value is None else value
 
     values = {}
     for prefix, default in (("sigma", sigma), ("bias", 0.0), ("correlated", 0.0)):
-        value, _ = real(_noise_key(prefix, kind))
+        value = real(prefix)
         values[prefix] = default if value is None else value
-    tau, where = real(f"tau_{kind}_s")
+    tau = getattr(own.real, f"tau_{kind}_s")
+    where = f"tracking.station.{name}.real"
+    if tau is None:
+        tau, where = getattr(noise.real, f"tau_{kind}_s"), "noise.real"
     if values["correlated"] > 0 and tau is None:
         p.fail(f"{where}.tau_{kind}_s", f"the time constant of the correlated {kind} noise "
                "(a finite number > 0)")
@@ -811,7 +852,15 @@ def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
                        else "parameters.station_biases",
                        f"biases of observables that {name} measures ({', '.join(kinds)})",
                        kind)
-        pairs = [_noise(p, kind, name, doc.noise, own) for kind in kinds]
+        band = trk.band if own.band is None else own.band
+        pairs = [_noise(p, kind, name, doc.noise, own, band) for kind in kinds]
+        if ("doppler" in kinds or own.uplink is not None) and trk.light_time != "two_way":
+            p.fail("tracking.light_time", f'"two_way" with the count-based doppler or a '
+                   f"three-way uplink ({name})", trk.light_time)
+        if own.uplink is not None and (own.uplink not in known or own.uplink == name):
+            p.fail(f"{where}.uplink", "the name of another [stations.*] table (the station "
+                   f"transmitting {name}'s up-leg: {', '.join(n for n in known if n != name)})",
+                   own.uplink)
         out.append(TrackingStation(
             number=number, station=known[name], kinds=kinds,
             fit=tuple(f for f, _ in pairs), real=tuple(r for _, r in pairs),
@@ -819,19 +868,26 @@ def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
             range_bias_km=own.range_bias_m * 1e-3,
             range_rate_bias_km_s=own.range_rate_bias_mm_s * 1e-6,
             blackouts_s=blackouts + p.windows(own.blackouts, f"{where}.blackouts"),
-            band=trk.band if own.band is None else own.band,
-            media=_station_media(p, doc.media, own, known[name],
-                                 trk.band if own.band is None else own.band, where),
-            media_parameters=tuple(par.media)))
+            band=band,
+            media=_station_media(p, doc.media, own, known[name], band, where, kinds),
+            media_parameters=tuple(par.media),
+            uplink=None if own.uplink is None else known[own.uplink],
+            doppler_bias_km_s=own.doppler_bias_mm_s * 1e-6))
     return tuple(out)
 
 
 def _station_media(p: _Parser, media: MediaTable, own: StationTracking, station: Station,
-                   band: str, where: str) -> MediaModel | None:
+                   band: str, where: str, kinds: tuple[str, ...]) -> MediaModel | None:
     """A station's :class:`MediaModel` (None with both effects off): its weather, else the
     standard atmosphere at its height; its zenith TEC, else the scenario's."""
     if not (media.troposphere or media.ionosphere):
         return None
+    if own.uplink is not None:
+        p.fail(f"{where}.uplink", "no three-way uplink with [media] (the up-leg's media are "
+               "not modelled yet)", own.uplink)
+    if "doppler" in kinds:
+        p.fail("tracking.observables", "no doppler with [media] (its ionospheric phase "
+               "advance is not modelled yet: use range_rate)", "doppler")
     standard = standard_atmosphere(station.h_km)
     weather = tuple(s if v is None else float(v) for v, s in zip(
         (own.pressure_hpa, own.temperature_k, own.relative_humidity), standard, strict=True))
@@ -904,9 +960,18 @@ def _schedule(p: _Parser, trk: TrackingTable, last_s: float,
         passes = read_schedule(path if path.is_absolute() else Path(p.source).parent / path,
                                epoch=p.epoch,
                                stations={ts.station.name: ts.kinds for ts in stations},
-                               data_interval_s=trk.data_interval_s, clock_s=start)
+                               data_interval_s=trk.data_interval_s, clock_s=start,
+                               uplinks={ts.station.name: ts.uplink.name for ts in stations
+                                        if ts.uplink is not None})
+    count_time = min(DEFAULT_COUNT_TIME_s, trk.data_interval_s)
+    if trk.count_time_s is not None:
+        if trk.count_time_s > trk.data_interval_s:
+            p.fail("tracking.count_time_s", f"a count interval of at most data_interval_s = "
+                   f"{trk.data_interval_s:g} s (consecutive counts do not overlap)",
+                   trk.count_time_s)
+        count_time = trk.count_time_s
     return Schedule(trk.data_interval_s, start, end, trk.min_pass_s, max_pass, trk.light_time,
-                    use, passes, trk.allow_partial)
+                    use, passes, trk.allow_partial, trk.relativity, count_time)
 
 
 def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -> MissSpec:

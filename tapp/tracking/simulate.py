@@ -35,7 +35,10 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    counted under the first of :data:`EDITING_RULES` that removed it (the tape's
    ``editing/``, :class:`tapp.io.tape.t13.TapeEditing`). Observables and their partials come from
    :class:`tapp.measurements.MeasurementModel` (state, station location, biases; light time
-   optional, with the bounce state from the integrated trajectory). A ΔDOR baseline
+   optional, with the bounce state from the integrated trajectory; relativistic as
+   :func:`relativity_choice` decides; a three-way station's up-leg partials go to its uplink
+   station's location columns, and its samples need the uplink to see the spacecraft at
+   transmission: :func:`_uplink_above`). A ΔDOR baseline
    (:mod:`tapp.tracking.ddor`) is an entry after the stations: its points fall on the same
    grid where both stations see the spacecraft (a mutual-visibility window is its pass), its
    rows come from :class:`tapp.measurements.ddor.DdorModel` (one-way legs; partials w.r.t.
@@ -88,6 +91,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from tapp.constants import C_LIGHT_km_s
 from tapp.dynamics import Propagator, Trajectory
 from tapp.dynamics.events import Events
 from tapp.dynamics.forces import default_parameters
@@ -120,6 +124,11 @@ from tapp.measurements.ddor import (
     quasar_direction,
 )
 from tapp.measurements.media import MEDIA_KINDS, MEDIA_PARAMETER_NAMES
+from tapp.measurements.relativity import (
+    SHAPIRO_BODIES,
+    AUTO_DISTANCE_km,
+    Relativity,
+)
 from tapp.orbit.bplane import b_plane
 from tapp.orbit.elements import cartesian_to_elements
 from tapp.targeting.program import BPlaneProgram
@@ -340,7 +349,8 @@ def _above(station: Station, scenario: Scenario, t: np.ndarray, states: np.ndarr
     return is_visible(geometric.elevation_rad(t, states), station.elev_mask_rad)
 
 
-def _light_time(scenario: Scenario, prop: Propagator, two_way: bool) -> LightTime | None:
+def _light_time(scenario: Scenario, prop: Propagator, two_way: bool,
+                relativity: Relativity | None = None) -> LightTime | None:
     """The scenario's light-time model (None: off), the bounce state from the integrated
     trajectory."""
     if scenario.schedule.light_time == "none":
@@ -351,14 +361,44 @@ def _light_time(scenario: Scenario, prop: Propagator, two_way: bool) -> LightTim
         return fly(prop, scenario.manoeuvres, scenario.x0, t_s, param_values=values,
                    orientation=scenario.orientation, epoch_jd_utc=scenario.epoch.jd).states
 
-    return LightTime(two_way=two_way, state_at=state_at)
+    return LightTime(two_way=two_way, state_at=state_at, relativity=relativity)
 
 
-def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
-                       ) -> MeasurementModel:
-    light_time = _light_time(scenario, prop, scenario.schedule.light_time == "two_way")
+def relativity_choice(scenario: Scenario, t_s: np.ndarray, states: np.ndarray
+                      ) -> tuple[Relativity | None, str]:
+    """Return the scenario's relativistic light-time model (None: Newtonian) and a line
+    saying which was used and why, for the tape's provenance and the run's output.
+
+    ``[tracking] relativity``: True or False as given (True needs light time); "auto": on
+    with two-way light time when the spacecraft's geocentric distance exceeds
+    :data:`tapp.measurements.relativity.AUTO_DISTANCE_km` at a time ``t_s`` (N,) of
+    ``states`` (N, 6) in the tracking span. The Shapiro bodies: Sun, Earth, Moon, and
+    Jupiter when it is a third body of the state model.
+    """
+    sch = scenario.schedule
+    mode = sch.relativity
+    if sch.light_time == "none" or mode is False:
+        return None, f"off (relativity = {str(mode).lower()}, light_time = {sch.light_time})"
+    span = (t_s >= sch.start_s) & (t_s <= sch.end_s)
+    reach = float(np.max(np.linalg.norm(states[span, :3], axis=-1), initial=0.0))
+    if mode == "auto" and (sch.light_time != "two_way" or reach <= AUTO_DISTANCE_km):
+        return None, (f"off (auto: light_time = {sch.light_time}, farthest "
+                      f"{reach:,.0f} km, on beyond {AUTO_DISTANCE_km:,.0f} km two-way)")
+    bodies = SHAPIRO_BODIES + (("jupiter",) if "jupiter" in scenario.state_model.third_bodies
+                               else ())
+    why = "relativity = true" if mode is True else f"auto: farthest {reach:,.0f} km"
+    return (Relativity.at(scenario.epoch, bodies),
+            f"on ({why}; barycentric TDB, Shapiro of {', '.join(bodies)})")
+
+
+def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator,
+                       relativity: Relativity | None = None) -> MeasurementModel:
+    light_time = _light_time(scenario, prop, scenario.schedule.light_time == "two_way",
+                             relativity)
     return MeasurementModel(ts.station, scenario.orientation, ts.kinds, light_time,
-                            ts.range_bias_km, ts.range_rate_bias_km_s, media=ts.media)
+                            ts.range_bias_km, ts.range_rate_bias_km_s, media=ts.media,
+                            uplink=ts.uplink, count_time_s=scenario.schedule.count_time_s,
+                            doppler_bias_km_s=ts.doppler_bias_km_s)
 
 
 def _state_rows(h: np.ndarray, arc: _Arc, p: np.ndarray, scenario: Scenario,
@@ -387,15 +427,19 @@ def _segments(t: np.ndarray, label: np.ndarray, t13: np.ndarray
 
 def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc: _Arc,
                   grid: np.ndarray, t13: np.ndarray, columns: dict[str, int], n_scheduled: int,
-                  samples: StationSamples | None = None) -> tuple[_StationData | None, Editing]:
+                  samples: StationSamples | None = None, relativity: Relativity | None = None
+                  ) -> tuple[_StationData | None, Editing]:
     """Rows of A for one station (module docstring, item 2), or None without samples, and
     what the rules removed of its ``n_scheduled`` samples on the ``grid``, or of its
-    scheduled ``samples`` (:mod:`tapp.tracking.schedule`)."""
+    scheduled ``samples`` (:mod:`tapp.tracking.schedule`). A three-way station also needs
+    its uplink station to see the spacecraft at transmission (:func:`_uplink_above`)."""
     sch = scenario.schedule
     times = grid if samples is None else samples.t_s
     pos = np.searchsorted(arc.t_s, times)
     above = (_above(ts.station, scenario, times, arc.states[pos]) if times.size
              else np.zeros(0, dtype=bool))  # a station without a scheduled sample
+    if ts.uplink is not None and times.size:
+        above &= _uplink_above(ts.uplink, scenario, times, arc.states[pos])
     taken = None
     if samples is None:
         passes, editing = edited_passes(above, ts.blackouts_s, sch.min_pass_s, sch.max_pass_s,
@@ -408,12 +452,17 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     label = np.concatenate([np.full(b - a, i) for i, (a, b) in enumerate(passes)])
     t, p = times[take], pos[take]
     x = arc.states[p]
-    model = _measurement_model(ts, scenario, prop)
+    model = _measurement_model(ts, scenario, prop, relativity)
     a = _state_rows(model.state_partials(t, x), arc, p, scenario, columns)
     name = ts.station.name
     if ts.location != "none":
         first = columns[f"{name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
         a[..., first:first + 3] = model.station_partials(t, x, ts.location)
+    uplink = next((u for u in scenario.stations if ts.uplink is not None
+                   and u.station.name == ts.uplink.name and u.location != "none"), None)
+    if uplink is not None:  # the up-leg's part goes to the transmitter's location columns
+        first = columns[f"{uplink.station.name}.{STATION_PARAMETER_NAMES[uplink.location][0]}"]
+        a[..., first:first + 3] += model.uplink_station_partials(t, x, uplink.location)
     bias = model.bias_partials(t)
     for kind in ts.biases:
         i = BIAS_KINDS.index(kind)
@@ -430,6 +479,19 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
                  for a_, b_ in passes]
     return (_StationData(t, model.compute(t, x), a, record, segment, pass_list,
                          taken=None if taken is None else taken[take]), editing)
+
+
+def _uplink_above(uplink: Station, scenario: Scenario, t: np.ndarray, states: np.ndarray
+                  ) -> np.ndarray:
+    """Whether the three-way ``uplink`` station sees the spacecraft strictly above its mask
+    at the transmit time t - 2 |r - r_uplink| / c, (N,) bool: the geometric elevation with
+    the spacecraft at its receive-time position (its motion over the round trip turns the
+    direction by < v tau / rho, 1e-4 rad). Samples it does not see are edited out under the
+    elevation mask, as the receiver's are; a scheduled pass refuses them unless
+    allow_partial (:mod:`tapp.tracking.schedule`)."""
+    geometric = MeasurementModel(uplink, scenario.orientation, ("range",))
+    transmit = t - 2.0 * geometric.compute(t, states)[:, 0] / C_LIGHT_km_s
+    return _above(uplink, scenario, transmit, states)
 
 
 def _ddor_points(bl: TrackingBaseline, windows: list[tuple[int, int]], grid: np.ndarray,
@@ -742,11 +804,12 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         [grid if on_grid else grid[:0], *(s.t_s for s in samples.values())])), tick)
 
     n_scheduled = _n_samples(scenario, scenario.schedule.end_s)
+    relativity, relativity_note = relativity_choice(scenario, arc.t_s, arc.states)
     data: list[_StationData | None] = []
     editing: list[Editing] = []
     for ts in scenario.stations:
         d, e = _station_data(ts, scenario, prop, arc, grid, t13, columns, n_scheduled,
-                             samples.get(ts.number))
+                             samples.get(ts.number), relativity)
         data.append(d)
         editing.append(e)
         tick(f"observations {ts.station.name}")
@@ -829,6 +892,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         manoeuvres=scenario.manoeuvres,
         provenance={"scenario": scenario.document_json, "scenario_source": scenario.source,
                     "earth_orientation": scenario.orientation.model,
+                    "relativity": relativity_note,
                     "eop": scenario.orientation.eop_note + (
                         " (predicted values used)" if scenario.orientation.uses_predicted_eop(
                             t13) else ""), **encounter, **schedule_provenance(scenario.schedule)},

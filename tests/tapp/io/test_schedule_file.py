@@ -98,9 +98,11 @@ def test_passes_are_ordered_by_station_then_start() -> None:
     ("station,start,end\nQUITO,100,nan\n", "row 2: end", "a time within 100 years", "nan"),
     ("station,start,end\nQUITO,100,1e300\n", "row 2: end", "a time within 100 years",
      "1e300"),
+    ("station,start,end,data_types\nQUITO,100,200,phase\n", "row 2: data_types",
+     "observables among range, range_rate, azimuth, elevation, doppler, separated by spaces",
+     "phase"),
     ("station,start,end,data_types\nQUITO,100,200,doppler\n", "row 2: data_types",
-     "observables among range, range_rate, azimuth, elevation, separated by spaces",
-     "doppler"),
+     "observables that QUITO measures (range, range_rate;", "doppler"),
     ("station,start,end,data_types\nKOUROU,100,200,range range_rate\n", "row 2: data_types",
      "observables that KOUROU measures (range; tracking.observables or "
      "tracking.station.KOUROU.observables)", "range range_rate"),
@@ -111,8 +113,8 @@ def test_passes_are_ordered_by_station_then_start() -> None:
     ("station,start,end,data_interval_s\nQUITO,100,200,inf\n", "row 2: data_interval_s",
      "a number of seconds >= 0.001", "inf"),
     ("station,start,end,uplink_station\nQUITO,100,200,KOUROU\n", "row 2: uplink_station",
-     "empty or QUITO, the pass's own station (three-way tracking, with another station's "
-     "uplink, is not modelled yet)", "KOUROU"),
+     "empty or QUITO, the pass's own station (three-way tracking from another station: "
+     "that station as tracking.station.QUITO.uplink)", "KOUROU"),
     ("station,start,end\nQUITO,105,115\n", "row 2: end", "a pass holding a sample time "
      "tracking.start + i × 20 s (none between its start and end)", "115"),
     ("station,start,end\nQUITO,100,200\nKOUROU,0,50\nQUITO,200,300\n", "row 4: start",
@@ -161,3 +163,19 @@ def test_the_file_is_read_bounded_and_must_be_a_regular_file(tmp_path: Path) -> 
             _read(path)
         assert (err.value.source, err.value.field, err.value.expected, err.value.got) == (
             str(path), "file", expected, got)
+
+
+def test_a_three_way_station_takes_its_uplink_and_no_other() -> None:
+    """[tracking.station.QUITO] uplink = "KOUROU": its rows may name KOUROU (or nothing);
+    itself or MALINDI is refused, naming the row."""
+    ok = "station,start,end,uplink_station\nQUITO,100,200,KOUROU\nQUITO,300,400,\n"
+    passes = parse_schedule(ok, "passes.csv", epoch=EPOCH, stations=STATIONS,
+                            data_interval_s=20.0, clock_s=0.0, uplinks={"QUITO": "KOUROU"})
+    assert len(passes.passes) == 2
+    for other in ("QUITO", "MALINDI"):
+        with pytest.raises(InputError) as err:
+            parse_schedule(f"station,start,end,uplink_station\nQUITO,100,200,{other}\n",
+                           "passes.csv", epoch=EPOCH, stations=STATIONS,
+                           data_interval_s=20.0, clock_s=0.0, uplinks={"QUITO": "KOUROU"})
+        assert err.value.field == "row 2: uplink_station"
+        assert "empty or KOUROU, the uplink of QUITO" in err.value.expected

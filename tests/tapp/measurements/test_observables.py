@@ -162,11 +162,11 @@ def test_bias_partials_and_biases():
     diff = biased.compute(T_s, x) - plain.compute(T_s, x)
     assert np.allclose(diff, [[0.012, -3e-5, 0.0, 0.0]] * 3, rtol=1e-9, atol=0)
     partials = biased.bias_partials(T_s)
-    assert partials.shape == (3, 4, 2)
-    assert np.array_equal(partials[0], [[1, 0], [0, 1], [0, 0], [0, 0]])
+    assert partials.shape == (3, 4, 3)
+    assert np.array_equal(partials[0], [[1, 0, 0], [0, 1, 0], [0, 0, 0], [0, 0, 0]])
     assert np.array_equal(
         MeasurementModel(STATIONS["Canberra"], 0.0, ("elevation", "range")).bias_partials(T_s)[1],
-        [[0, 0], [1, 0]],
+        [[0, 0, 0], [1, 0, 0]],
     )
 
 

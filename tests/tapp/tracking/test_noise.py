@@ -107,7 +107,7 @@ def test_absent_noise_terms_have_no_rows() -> None:
 @pytest.mark.parametrize(("make", "field"), [
     (lambda: FitNoise("range", 0.0), "sigma (range)"),
     (lambda: FitNoise("range", -1.0), "sigma (range)"),
-    (lambda: FitNoise("doppler", 1.0), "kind"),
+    (lambda: FitNoise("phase", 1.0), "kind"),
     (lambda: RealNoise("range", -0.1), "sigma_white (range)"),
     (lambda: RealNoise("range", 0.1, 0.0, 0.1, 0.0), "tau_s (range)"),
 ])

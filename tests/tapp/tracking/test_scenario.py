@@ -78,7 +78,7 @@ def _with(path: tuple[str, ...], value) -> dict:
 
 @pytest.mark.parametrize(("path", "value", "field"), [
     (("tracking", "stations"), ["QUITO", "NOWHERE"], "tracking.stations[1]"),
-    (("tracking", "observables"), ["range", "doppler"], "tracking.observables[1]"),
+    (("tracking", "observables"), ["range", "phase"], "tracking.observables[1]"),
     (("tracking", "station", "KOUROU", "observables"), ["angle"],
      "tracking.station.KOUROU.observables[0]"),
     (("tracking", "station", "NOWHERE"), {}, "tracking.station.NOWHERE"),
@@ -263,4 +263,6 @@ def test_the_noise_schema_declares_every_kind_in_its_edge_unit() -> None:
     fit = {f"sigma_{k}_{EDGE_UNITS[k][0]}" for k in KINDS}
     real = fit | {f"{pre}_{k}_{EDGE_UNITS[k][0]}" for pre in ("bias", "correlated")
                   for k in KINDS} | {f"tau_{k}_s" for k in KINDS}
-    assert set(FitTable.model_fields) == fit and set(RealTable.model_fields) == real
+    hz = {f"{pre}_doppler_hz" for pre in ("sigma", "bias", "correlated")}  # Doppler in Hz too
+    assert set(FitTable.model_fields) == fit | {"sigma_doppler_hz"}
+    assert set(RealTable.model_fields) == real | hz
