@@ -606,7 +606,8 @@ class MeasurementModel:
         # partials; refused rather than computed with the receiving station's group delay.
         if self.media is not None and self.uplink is not None:
             raise InputError("MeasurementModel", "media",
-                             "no media with a three-way uplink (not modelled yet)", self.uplink.name)
+                             "no media with a three-way uplink (not modelled yet)",
+                             self.uplink.name)
         if self.media is not None and Observable.DOPPLER in kinds:
             raise InputError("MeasurementModel", "media",
                              "no media with count-based doppler (not modelled yet: use "

@@ -144,3 +144,19 @@ def test_media_off_leaves_the_tape_as_before():
     plain = parse_scenario(leo_document(), SOURCE)
     assert all(ts.media is None for ts in plain.stations)
     assert not any(p.kind in ("troposphere", "ionosphere") for p in plain.parameters)
+
+
+@pytest.mark.parametrize("station, field, expected", [
+    ({"uplink": "KOUROU"}, "tracking.station.QUITO.uplink", "no three-way uplink with [media]"),
+    ({"observables": ["range", "range_rate", "doppler"]}, "tracking.observables",
+     "no doppler with [media]"),
+])
+def test_media_with_what_they_do_not_model_yet_is_refused(station, field, expected):
+    """The up-leg's media belong to the uplink station, and Doppler's ionosphere is a phase
+    advance with its own partials: refused, not computed with the wrong station or sign."""
+    doc = _document()
+    doc["tracking"]["light_time"] = "two_way"
+    doc["noise"]["fit"]["sigma_doppler_mm_s"] = 0.1
+    doc["tracking"]["station"]["QUITO"].update(station)
+    with pytest.raises(InputError, match=re.escape(f"{field}: expected {expected}")):
+        parse_scenario(doc, SOURCE)
