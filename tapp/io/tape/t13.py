@@ -63,8 +63,8 @@ from tapp.io.tape.packing import pack_tr, scaled_difference, tr_diagonal, tr_row
 #: retargeted the injection (a ``[targeting]`` table), its record (JSON: aim point, achieved
 #: values, first and targeted injection velocities, cases; empty otherwise) and the pass
 #: schedule it tracked by (``FILE (sha256 HEX)``; empty by visibility).
-SCENARIO_PROVENANCE = ("scenario", "scenario_source", "earth_orientation", "eop", "targeting",
-                       "schedule")
+SCENARIO_PROVENANCE = ("scenario", "scenario_source", "earth_orientation", "eop", "relativity",
+                       "targeting", "schedule")
 
 
 def frame_of(provenance: dict[str, str]) -> str:

@@ -15,7 +15,8 @@ attrs                                              format="T13", version, iden, 
                                                    units, packing; provenance: tapp_version,
                                                    git_commit, created_utc, scenario (JSON),
                                                    scenario_source, earth_orientation, eop,
-                                                   targeting, schedule (t13.SCENARIO_PROVENANCE)
+                                                   relativity, targeting, schedule
+                                                   (t13.SCENARIO_PROVENANCE)
 parameters/name, unit, kind (n_o,) str             names carry units (``x_km``, ``GM_km3_s2``)
 parameters/station          (n_o,) int             station number s of a station parameter, 0
 parameters/nominal          (n_o,) float           values of x at t_0, units ``unit``
