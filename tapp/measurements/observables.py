@@ -341,17 +341,19 @@ class LightTimeSolution:
     station_transmit_eci: np.ndarray
 
 
-def iterate_light_time(distance_km, tau0_s, what: str):
+def iterate_light_time(distance_km, tau0_s, what: str, floor_s=0.0):
     """Return the fixed point tau = distance_km(tau) / c, s, shape (N,), from tau0_s.
 
     The iteration contracts by v / c (~3e-5); it stops when every change is below
-    :data:`LIGHT_TIME_REL_TOL` of tau, and raises DivergenceError (naming ``what``) after
+    :data:`LIGHT_TIME_REL_TOL` of tau or below ``floor_s`` (s, scalar or (N,)): the rounding
+    of the distance itself, below which the iterates only wander (barycentric positions of
+    1.5e8 km carry 3e-8 km each), and raises DivergenceError (naming ``what``) after
     :data:`LIGHT_TIME_MAX_ITERATIONS`.
     """
     tau = tau0_s
     for _ in range(LIGHT_TIME_MAX_ITERATIONS):
         new = distance_km(tau) / C_LIGHT_km_s
-        done = np.abs(new - tau) <= LIGHT_TIME_REL_TOL * new
+        done = np.abs(new - tau) <= np.maximum(LIGHT_TIME_REL_TOL * new, floor_s)
         tau = new
         if done.all():
             return tau

@@ -62,6 +62,7 @@ solutions, has them all.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -74,6 +75,7 @@ from tapp.frames.orientation import EarthOrientation
 from tapp.frames.time import Epoch
 from tapp.frames.timescales import TT_MINUS_TAI_s
 from tapp.measurements.observables import (
+    LIGHT_TIME_REL_TOL,
     LightTime,
     LightTimeSolution,
     iterate_light_time,
@@ -88,6 +90,40 @@ SHAPIRO_BODIES = ("sun", "earth", "moon")
 #: Geocentric distance (km) beyond which relativity = "auto" turns the model on: the Moon's
 #: mean distance.
 AUTO_DISTANCE_km = 384400.0
+
+
+#: Node spacing (s) of the TDB - TT tables ERFA's series is interpolated from, and nodes per
+#: cached block (one day). Four-point Lagrange interpolation of the site's diurnal term
+#: (A = 1.7 us at 5,200 km from the axis, ω = 7.3e-5 rad/s) errs by at most 9 (ω h)⁴ A / 384:
+#: 6e-16 s at 150 s (measured 9e-15 s at 300 s); the geocentric series varies far slower.
+TDB_STEP_s = 150.0
+TDB_BLOCK = 576
+
+
+@functools.lru_cache(maxsize=4096)
+def _tdb_block(tt0_whole: float, tt0_fraction: float, ut_minus_tt_s: float,
+               site: tuple[float, float, float], block: int) -> np.ndarray:
+    """ERFA's TDB - TT (s) at the nodes of one block: scenario times (block B + i) h, the
+    site (east longitude rad, distance from the spin axis km, from the equator km)."""
+    t = (block * TDB_BLOCK + np.arange(TDB_BLOCK)) * TDB_STEP_s
+    fraction = tt0_fraction + t / SECONDS_PER_DAY
+    ut = np.mod(tt0_whole - 0.5 + fraction + ut_minus_tt_s / SECONDS_PER_DAY, 1.0)
+    return erfa.dtdb(tt0_whole, fraction, ut, *site)
+
+
+#: Node spacing (s) of the barycentric body tables DE421 is interpolated from (cubic Hermite
+#: on positions and velocities), and nodes per cached block (one day). Error h⁴ |r⁗| / 384:
+#: the Moon's barycentric 384,400 km at 2.66e-6 rad/s gives 7e-9 km at 600 s.
+BODY_STEP_s = 600.0
+BODY_BLOCK = 144
+
+
+@functools.lru_cache(maxsize=4096)
+def _body_block(body: str, tt0_whole: float, tt0_fraction: float, block: int) -> np.ndarray:
+    """DE421's barycentric state (km, km/s) of ``body`` at TDB seconds (block B + i) h past
+    the TT Julian date ``tt0``, shape (BODY_BLOCK, 6)."""
+    t = (block * BODY_BLOCK + np.arange(BODY_BLOCK)) * BODY_STEP_s
+    return barycentric_state(body, tt0_whole, tt0_fraction + t / SECONDS_PER_DAY)
 
 
 def shapiro_delay_s(r_i_km, r_j_km, body_i_km, body_j_km, mu_km3_s2: float,
@@ -145,14 +181,33 @@ class Relativity:
 
     def tdb_minus_tt_s(self, t_s, r_ecef_km=None):
         """Return TDB - TT at scenario times t_s (N,), s: at the geocentre, or at the site
-        ``r_ecef_km`` (3,) km with ERFA's topocentric terms."""
-        fraction = self.tt0_jd[1] + np.asarray(t_s, dtype=float) / SECONDS_PER_DAY
+        ``r_ecef_km`` (3,) km with ERFA's topocentric terms (ERFA's series through
+        :meth:`dtdb`)."""
         if r_ecef_km is None:
-            return erfa.dtdb(self.tt0_jd[0], fraction, 0.0, 0.0, 0.0, 0.0)
+            return self.dtdb(t_s, (0.0, 0.0, 0.0))
         x, y, z = (float(c) for c in r_ecef_km)
-        ut = np.mod(self.tt0_jd[0] - 0.5 + fraction + self.ut_minus_tt_s / SECONDS_PER_DAY,
-                    1.0)
-        return erfa.dtdb(self.tt0_jd[0], fraction, ut, math.atan2(y, x), math.hypot(x, y), z)
+        return self.dtdb(t_s, (math.atan2(y, x), math.hypot(x, y), z))
+
+    def dtdb(self, t_s, site: tuple[float, float, float]):
+        """Return ERFA's TDB - TT (``erfa.dtdb``: Fairhead & Bretagnon 1990 with Moyer's
+        topocentric terms) at scenario times t_s, s, same shape, at ``site`` (east longitude
+        rad, distance from the spin axis km, from the equator km): cubic Lagrange
+        interpolation in tables of :data:`TDB_STEP_s` nodes computed once per day and site
+        (the series costs 3.5 us a point, and the light-time solution asks for it ~100 times
+        per sample; interpolation error < 1e-15 s, tested)."""
+        x = np.asarray(t_s, dtype=float) / TDB_STEP_s
+        if x.size == 0:
+            return np.zeros(x.shape)
+        n = np.floor(x).astype(np.int64)
+        first, last = (int(n.min()) - 1) // TDB_BLOCK, (int(n.max()) + 2) // TDB_BLOCK
+        nodes = np.concatenate([_tdb_block(*self.tt0_jd, self.ut_minus_tt_s, site, b)
+                                for b in range(first, last + 1)])
+        i = n - first * TDB_BLOCK
+        s = x - n
+        return (-s * (s - 1.0) * (s - 2.0) / 6.0 * nodes[i - 1]
+                + (s + 1.0) * (s - 1.0) * (s - 2.0) / 2.0 * nodes[i]
+                - (s + 1.0) * s * (s - 2.0) / 2.0 * nodes[i + 1]
+                + (s + 1.0) * s * (s - 1.0) / 6.0 * nodes[i + 2])
 
     def tdb_rate(self, t_s, r_ecef_km=None):
         """Return d(TDB - TT)/dt at t_s (N,), dimensionless: central difference, 1 s steps
@@ -171,15 +226,12 @@ class Relativity:
         v = z. Size ~ |v_E| / c² = 3.3e-10 s/km: the receiver's and transmitter's clocks
         move the range by c / 2 times it, 5e-5 of a station partial in three-way.
         """
-        fraction = self.tt0_jd[1] + np.asarray(t_s, dtype=float) / SECONDS_PER_DAY
-        ut = np.mod(self.tt0_jd[0] - 0.5 + fraction + self.ut_minus_tt_s / SECONDS_PER_DAY,
-                    1.0)
         x, y, _ = (float(c) for c in r_ecef_km)
         u, lon = math.hypot(x, y), math.atan2(y, x)
 
         def topo(lon_rad, u_km, v_km):
-            return (erfa.dtdb(self.tt0_jd[0], fraction, ut, lon_rad, u_km, v_km)
-                    - erfa.dtdb(self.tt0_jd[0], fraction, ut, lon_rad, 0.0, 0.0))
+            return (self.dtdb(t_s, (lon_rad, u_km, v_km))
+                    - self.dtdb(t_s, (lon_rad, 0.0, 0.0)))
 
         step = 1e-3
         d_u, d_v = topo(lon, 1.0, 0.0), topo(lon, 0.0, 1.0)
@@ -190,10 +242,27 @@ class Relativity:
                          d_v * np.ones_like(d_u)], axis=-1)
 
     def body_state(self, body: str, t_s, tdb_minus_tt_s):
-        """Return the barycentric state (N, 6) of ``body`` at TDB = TT(t_s) + tdb_minus_tt_s."""
-        seconds = np.asarray(t_s, dtype=float) + tdb_minus_tt_s
-        return barycentric_state(body, self.tt0_jd[0],
-                                 self.tt0_jd[1] + seconds / SECONDS_PER_DAY)
+        """Return the barycentric state (N, 6) of ``body`` at TDB = TT(t_s) + tdb_minus_tt_s:
+        DE421 (jplephem) interpolated by cubic Hermite polynomials on its positions and
+        velocities every :data:`BODY_STEP_s`, tables computed once per day and body (the
+        light-time solution asks for five bodies' states ~10 times per sample)."""
+        x = (np.asarray(t_s, dtype=float) + tdb_minus_tt_s) / BODY_STEP_s
+        x = np.atleast_1d(x)
+        n = np.floor(x).astype(np.int64)
+        first, last = int(n.min()) // BODY_BLOCK, (int(n.max()) + 1) // BODY_BLOCK
+        nodes = np.concatenate([_body_block(body, *self.tt0_jd, b)
+                                for b in range(first, last + 1)])
+        i = n - first * BODY_BLOCK
+        s = (x - n)[:, None]
+        h = BODY_STEP_s
+        p0, p1 = nodes[i, :3], nodes[i + 1, :3]
+        m0, m1 = h * nodes[i, 3:], h * nodes[i + 1, 3:]
+        s2, s3 = s * s, s * s * s
+        step = p1 - p0  # exact for neighbouring nodes: one rounding of p0's size in all
+        position = p0 + ((3 * s2 - 2 * s3) * step + (s3 - 2 * s2 + s) * m0 + (s3 - s2) * m1)
+        velocity = ((6 * s - 6 * s2) * step + (3 * s2 - 4 * s + 1) * m0
+                    + (3 * s2 - 2 * s) * m1) / h
+        return np.concatenate([position, velocity], axis=-1)
 
     def delay_s(self, r_i_km, t_i_s, dtdb_i_s, r_j_km, t_j_s, dtdb_j_s):
         """Return RLT_ij summed over ``bodies``, s, (N,): ends at scenario times t_i, t_j with
@@ -250,7 +319,9 @@ class Relativity:
             return (np.linalg.norm(r2 - r3, axis=-1) + C_LIGHT_km_s * (
                 self.delay_s(r2, t2, dt2, r3, t3, dt3) + dt2 - dt3))
 
-        tau_d = iterate_light_time(down, range_km(x, station3) / C_LIGHT_km_s, "down")
+        # The barycentric positions' rounding, below which the iterates only wander.
+        floor_s = LIGHT_TIME_REL_TOL * np.linalg.norm(r3, axis=-1) / C_LIGHT_km_s
+        tau_d = iterate_light_time(down, range_km(x, station3) / C_LIGHT_km_s, "down", floor_s)
         t2, dt2, earth2, sc = bounce(tau_d)
         r2 = earth2[..., :3] + sc[..., :3]
         spacecraft = np.concatenate([sc[..., :3], sc[..., 3:] + earth2[..., 3:]], axis=-1)
@@ -275,6 +346,6 @@ class Relativity:
             return (np.linalg.norm(r2 - r1, axis=-1) + C_LIGHT_km_s * (
                 self.delay_s(r1, t1, dt1, r2, t2, dt2) + dt1 - dt2))
 
-        tau_u = iterate_light_time(up, tau_d, "up")
+        tau_u = iterate_light_time(up, tau_d, "up", floor_s)
         _, _, station1, earth1 = transmit(tau_u)
         return LightTimeSolution(tau_d, tau_u, spacecraft, receive, translated(station1, earth1))
