@@ -27,6 +27,7 @@ from tapp.measurements.media import (
     zenith_hydrostatic_delay_m,
     zenith_wet_delay_m,
 )
+from tests.tapp.measurements.helpers import central_differences
 
 #: DSS-63 (Madrid): geodetic latitude, longitude deg, height km.
 MADRID = Station.from_degrees("DSS63", 40.4313, -4.2480, 0.865, 5.0)
@@ -197,15 +198,6 @@ def test_range_rate_correction_is_the_time_derivative_of_the_range_delay(which):
     np.testing.assert_allclose(rate, sign * diff, rtol=1e-7)
 
 
-def _central(f, x, steps):
-    cols = []
-    for i, h in enumerate(steps):
-        e = np.zeros_like(x)
-        e[..., i] = h
-        cols.append((f(x + e) - f(x - e)) / (2 * h))
-    return np.stack(cols, axis=-1)
-
-
 def test_state_partials_of_the_media_match_central_differences():
     # The media's share of H (with - without) against central differences of the media's
     # share of h: steps 1e-2 km and 1e-5 km/s (truncation ~ (h/ρ)² = 2e-10 at ρ > 700 km,
@@ -214,7 +206,7 @@ def test_state_partials_of_the_media_match_central_differences():
     t = np.array([-250.0, -60.0, 120.0])
     x = _passing(t)
     h_media = with_media.state_partials(t, x) - without.state_partials(t, x)
-    numeric = _central(lambda y: with_media.media_corrections(t, y), x,
+    numeric = central_differences(lambda y: with_media.media_corrections(t, y), x,
                        [1e-2, 1e-2, 1e-2, 1e-5, 1e-5, 1e-5])
     scale = np.abs(numeric).max(axis=-1, keepdims=True)
     assert np.all(np.abs(h_media - numeric) <= 1e-7 * scale)
@@ -230,7 +222,7 @@ def test_state_partials_with_two_way_light_time_are_first_order():
     t = np.array([-200.0, 100.0])
     x = _passing(t)
     h_media = with_media.state_partials(t, x) - without.state_partials(t, x)
-    numeric = _central(lambda y: with_media.media_corrections(t, y), x,
+    numeric = central_differences(lambda y: with_media.media_corrections(t, y), x,
                        [1e-2, 1e-2, 1e-2, 1e-5, 1e-5, 1e-5])
     scale = np.abs(numeric).max(axis=-1, keepdims=True)
     assert np.all(np.abs(h_media - numeric) <= 1e-4 * scale)

@@ -33,6 +33,7 @@ from tapp.measurements import LightTime, MeasurementModel, Station
 from tapp.measurements.bands import BANDS
 from tapp.measurements.doppler import doppler_hz, hz_per_km_s, range_rate_from_hz
 from tapp.measurements.relativity import Relativity, shapiro_delay_s
+from tests.tapp.measurements.helpers import central_differences
 
 ONE_MM_km = 1e-6
 HUNDREDTH_MM_S_km_s = 1e-8
@@ -222,15 +223,6 @@ def test_doppler_hz_conversion_at_x_band():
     assert range_rate_from_hz(doppler_hz(0.123, band), band) == pytest.approx(0.123)
 
 
-def _central(f, x, steps):
-    cols = []
-    for i, h in enumerate(steps):
-        e = np.zeros_like(x)
-        e[..., i] = h
-        cols.append((f(x + e) - f(x - e)) / (2 * h))
-    return np.stack(cols, axis=-1)
-
-
 @pytest.mark.parametrize("relativity", [False, True])
 def test_range_and_doppler_state_partials_vs_central_differences(relativity):
     """Range: the first-order light-time partials (light times' own dependence kept);
@@ -244,7 +236,7 @@ def test_range_and_doppler_state_partials_vs_central_differences(relativity):
     model = MeasurementModel(model.station, model.orientation, model.kinds,
                              LightTime(True, None, 398600.4415, model.light_time.relativity))
     h = model.state_partials(T3, x)[0]
-    numeric = _central(lambda s: model.compute(T3, s), x, [10.0] * 3 + [1.0] * 3)[0]
+    numeric = central_differences(lambda s: model.compute(T3, s), x, [10.0] * 3 + [1.0] * 3)[0]
     for row in range(2):
         assert np.max(np.abs(h[row] - numeric[row])) < 1e-7 * np.max(np.abs(numeric[row]))
 
@@ -269,7 +261,7 @@ def test_three_way_station_partials_vs_central_differences(relativity):
             object.__setattr__(shifted, "r_ecef_km", r_ecef[0])
             return replace(model, **{which: shifted}).compute(T3, x)[0]
 
-        numeric = _central(moved, station.r_ecef_km[None, :], [100.0] * 3)
+        numeric = central_differences(moved, station.r_ecef_km[None, :], [100.0] * 3)
         for row in range(2):
             scale = np.max(np.abs(numeric[row]))
             assert np.max(np.abs(computed[which][row] - numeric[row])) < 1e-7 * scale
