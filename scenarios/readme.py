@@ -200,7 +200,6 @@ BLOCKS: dict[str, Renderer] = {
     "approx-stm-eccentric-rms": _template("{approx_stm.eccentric_first_rms}"),
     "approx-stm-noise-test": _noise_test,
     "approx-stm-outcomes": _outcome_table,
-    "mission-budget": _mission_budget,
     "approx-stm-predicted": _predicted,
     "approx-stm-linear-agreement": _template("{approx_stm.linear_worst_percent} %"),
     "approx-stm-arc": _template("for {approx_stm.arc.models} it exceeds 1 from "
@@ -248,6 +247,7 @@ BLOCKS: dict[str, Renderer] = {
     "tracking-b-dot-r-dense":
         _template("{iter.tracking.three_sigma_b_dot_r_sparse_dense_km[1]} km"),
     "tracking-dv99": _template("{iter.tracking.dv_total_99_m_s} m/s"),
+    "mission-budget": _mission_budget,
     "search-trajectories": _template("{search.differenced.trajectories} and "
                                      "{search.analytic.trajectories}"),
     "search-dv": _search_dv,

@@ -89,7 +89,7 @@ def test_tape_info_text(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(("old", "new", "field"), [
     ('stations = ["QUITO", "KOUROU"', 'stations = ["QUITO", "NOWHERE"', "tracking.stations[1]"),
-    ('observables = ["range", "range_rate"]', 'observables = ["range", "doppler"]',
+    ('observables = ["range", "range_rate"]', 'observables = ["range", "phase"]',
      "tracking.observables[1]"),
     ('dynamic = ["GM", "J2"]', 'dynamic = ["GM", "J9"]', "parameters.dynamic[1]"),
     ("sigma_range_m = 15.0", "sigma_range_m = 0.0", "noise.fit.sigma_range_m"),
@@ -462,7 +462,8 @@ def test_a_schedule_of_the_visibility_passes_through_the_cli(
     (lambda rows: "station,start,end,uplink_station\nQUITO,0,100,KOUROU\n" + rows.replace(
         "\n", ",\n"),
      "row 2: uplink_station: expected empty or QUITO, the pass's own station (three-way "
-     "tracking, with another station's uplink, is not modelled yet) (got 'KOUROU')"),
+     "tracking from another station: that station as tracking.station.QUITO.uplink) "
+     "(got 'KOUROU')"),
 ])
 def test_a_bad_schedule_is_one_line_naming_the_row_exit_2_and_nothing_written(
         leo_passes: tuple[Path, str], tmp_path: Path, edit, expected: str) -> None:
