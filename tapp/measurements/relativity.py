@@ -198,6 +198,8 @@ class Relativity:
         x = np.asarray(t_s, dtype=float) / TDB_STEP_s
         if x.size == 0:
             return np.zeros(x.shape)
+        if site[1] == 0.0 and site[2] == 0.0:  # the topocentric terms all scale with u or v
+            site = (0.0, 0.0, 0.0)
         n = np.floor(x).astype(np.int64)
         first, last = (int(n.min()) - 1) // TDB_BLOCK, (int(n.max()) + 2) // TDB_BLOCK
         nodes = np.concatenate([_tdb_block(*self.tt0_jd, self.ut_minus_tt_s, site, b)
