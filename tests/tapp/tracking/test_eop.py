@@ -144,7 +144,8 @@ def test_tapp3_considers_eop_and_the_budget_shows_it(simulated) -> None:
 def test_deep_space_with_eop_and_ddor_through_tapp3() -> None:
     """A reproduction (slow: 30 days with relativistic light time); the fast test that guards
     its contract, EOP columns on the tape and "eop" a source of TAPP III's budget, is
-    :func:`test_tapp3_considers_eop_and_the_budget_shows_it`. The example deep_space.toml (without its stochastic accelerations, as the fast tests
+    :func:`test_tapp3_considers_eop_and_the_budget_shows_it`. The example deep_space.toml
+    (without its stochastic accelerations, as the fast tests
     of test_reference) with ``earth_orientation = true`` and ΔDOR on Goldstone-Canberra with
     its quasar position: the tape has the three EOP columns, and tapp3_deep_space.toml with
     σ(UT1) = 0.5 ms, σ(x_p, y_p) = 5 nrad, σ(quasar) = 1 nrad considered (fit σ = 0) runs,
