@@ -45,6 +45,16 @@ def earth_rotation_angle_rad(theta0_rad, t_s, omega_rad_s: float = OMEGA_EARTH_r
     return np.asarray(theta0_rad, dtype=float) + omega_rad_s * np.asarray(t_s, dtype=float)
 
 
+def cross_matrix(a):
+    """Return [a×], the matrix of y -> a × y, shape (..., 3, 3) from a (..., 3)."""
+    a = np.asarray(a, dtype=float)
+    out = np.zeros(a.shape + (3,))
+    out[..., 0, 1], out[..., 0, 2] = -a[..., 2], a[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = a[..., 2], -a[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -a[..., 1], a[..., 0]
+    return out
+
+
 def r3(angle_rad):
     """Return the frame rotation R3(angle) about z, shape (..., 3, 3).
 

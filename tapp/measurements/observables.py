@@ -80,6 +80,7 @@ from tapp.frames.orientation import (
     check_eop_parameters,
     eop_generators,
 )
+from tapp.frames.rotation import cross_matrix
 from tapp.measurements.doppler import DEFAULT_COUNT_TIME_s, local_transition
 from tapp.measurements.media import LegMedia, MediaModel
 from tapp.measurements.stations import (
@@ -460,14 +461,6 @@ def light_time_range_rate_km_s(solution: LightTimeSolution, two_way: bool = True
     return 0.5 * C_LIGHT_km_s * (tau_u_dot + tau_d_dot)
 
 
-def _cross_matrix(a):
-    """Return [a×], the matrix of y -> a × y, shape (..., 3, 3) from a (..., 3)."""
-    a = np.asarray(a, dtype=float)
-    out = np.zeros(a.shape + (3,))
-    out[..., 0, 1], out[..., 0, 2] = -a[..., 2], a[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = a[..., 2], -a[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -a[..., 1], a[..., 0]
-    return out
 def light_time_range_leg_partials(solution: LightTimeSolution, two_way: bool = True):
     """Return the range's partials w.r.t. the bounce position carried by each leg, (N, 3) each.
 
@@ -709,7 +702,7 @@ class MeasurementModel:
             jac = np.zeros(rot.shape[:-2] + (6, 6))
             jac[..., :3, :3] = rot
             jac[..., 3:, 3:] = rot
-            jac[..., 3:, :3] = -rot @ _cross_matrix(spin)
+            jac[..., 3:, :3] = -rot @ cross_matrix(spin)
             out.append((weight, self.media.leg(geo.t_s, p, p_dot, link), jac))
         return out
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tapp.frames.rotation import cross_matrix
 from tapp.measurements.stations import location_jacobian
 
 #: Metres per km.
@@ -54,8 +55,7 @@ def frame_partials(r_ecef_km) -> np.ndarray:
     """Return H (3, 7) = ∂δr/∂(T, θ, s) of a station at r (km): δr (m) = T + θ × r + s r, T m,
     θ rad, s (a ratio)."""
     r_m = np.asarray(r_ecef_km, dtype=float) * M_PER_KM
-    cross = np.array([[0.0, -r_m[2], r_m[1]], [r_m[2], 0.0, -r_m[0]], [-r_m[1], r_m[0], 0.0]])
-    return np.hstack([np.eye(3), -cross, r_m[:, None]])
+    return np.hstack([np.eye(3), -cross_matrix(r_m), r_m[:, None]])
 
 
 def position_km(values, parameters: str) -> np.ndarray:
