@@ -34,7 +34,6 @@ deck's table) and the station.
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,6 +43,7 @@ from iter.inputfile import read_text
 from tapp.errors import InputError
 from tapp.estimation.factors import scaled_min_eigenvalue
 from tapp.io.tape.packing import symmetry_defect
+from tapp.io.text import finite_number
 
 #: The axes a station's covariance may be given in (module docstring).
 AXES = ("ecef", "cylindrical")
@@ -134,16 +134,6 @@ def check_covariance(c: StationCovariance, field: str) -> None:
                          "correlation matrix")
 
 
-def _number(text: str, source: str, field: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise InputError(source, field, "a number", text) from None
-    if not math.isfinite(value):
-        raise InputError(source, field, "a finite number", text)
-    return value
-
-
 def _index(text: str, source: str, field: str) -> int:
     if not text.isdigit():
         raise InputError(source, field, "a parameter index (a positive integer)", text)
@@ -166,7 +156,7 @@ def parse_csv(text: str, source: str) -> StationCovariance:
             raise InputError(source, f"row {n}.station", "a station name, each once", name)
         if ax not in AXES:
             raise InputError(source, f"row {n}.axes", " or ".join(map(repr, AXES)), ax)
-        values = [_number(v, source, f"row {n}.{col}")
+        values = [finite_number(v, source, f"row {n}.{col}")
                   for v, col in zip(row[2:], _CSV_COLUMNS[2:], strict=True)]
         if any(v < 0 for v in values[:3]):
             raise InputError(source, f"{name}.sigma", "σ's >= 0, m", values[:3])
@@ -259,7 +249,7 @@ def parse_sinex(text: str, source: str) -> StationCovariance:
                 raise InputError(source, "SOLUTION/MATRIX_ESTIMATE", f"the {kind[0]} triangle",
                                  f"element {pair}")
             a, b = position[row], position[col + j]
-            cov[a, b] = cov[b, a] = _number(value, source, f"SOLUTION/MATRIX_ESTIMATE{pair}")
+            cov[a, b] = cov[b, a] = finite_number(value, source, f"SOLUTION/MATRIX_ESTIMATE{pair}")
     out = StationCovariance(source, tuple(sites), ("ecef",) * len(sites), cov)
     check_covariance(out, "SOLUTION/MATRIX_ESTIMATE")
     return out

@@ -27,7 +27,6 @@ without ``INTERPOLATION`` is interpolated by :data:`DEFAULT_INTERPOLATION`.
 
 from __future__ import annotations
 
-import math
 import re
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
@@ -40,6 +39,7 @@ from tapp.errors import InputError
 from tapp.frames.time import Epoch
 from tapp.io.ccsds.oem import INTERPOLATIONS, interpolation_window, lagrange_interpolate
 from tapp.io.ccsds.tdm import parse_epoch_jd
+from tapp.io.text import finite_number
 
 #: OEM versions read.
 VERSIONS = ("1.0", "2.0", "3.0")
@@ -113,16 +113,6 @@ def _epoch(source: str, where: str, text: str) -> tuple[float, float]:
         raise InputError(source, where, "a CCSDS epoch YYYY-MM-DDThh:mm:ss[.d] or "
                          "YYYY-DDDThh:mm:ss[.d] (hh < 24, mm < 60, ss < 60)", text)
     return jd
-
-
-def _number(source: str, where: str, text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise InputError(source, where, "a number", text) from None
-    if not math.isfinite(value):
-        raise InputError(source, where, "a finite number", text)
-    return value
 
 
 # --------------------------------------------------------------------------------------------
@@ -216,7 +206,7 @@ def _segment(source: str, meta: Mapping[str, str], fields: Mapping[str, str],
         jd = _epoch(source, f"line {n}: epoch", tokens[0])
         whole.append(jd[0])
         fraction.append(jd[1])
-        states.append([_number(source, f"line {n}: {name}", tok) for name, tok in
+        states.append([finite_number(tok, source, f"line {n}: {name}") for name, tok in
                        zip(_XML_UNITS, tokens[1:7], strict=True)])
         where.append(f"line {n}: epoch")
     return _checked(source, meta, fields, opening, np.array(whole), np.array(fraction),
@@ -286,7 +276,7 @@ def _xml_segment(source: str, seg: ET.Element, where: str) -> OemSegment:
             given = values[key].get("units")
             if given is not None and given.strip().lower() != unit:
                 raise InputError(source, f"{at}.{key}", f"units=\"{unit}\" (or none)", given)
-            row.append(_number(source, f"{at}.{key}", values[key].text or ""))
+            row.append(finite_number(values[key].text or "", source, f"{at}.{key}"))
         states.append(row)
         epochs.append(f"{at}.EPOCH")
     return _checked(source, meta, fields, where, np.array(whole), np.array(fraction),
