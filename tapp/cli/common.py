@@ -260,20 +260,33 @@ class Interrupted(BaseException):
         super().__init__(signal.Signals(signum).name)
 
 
-def _stop(signum: int, frame: object) -> None:
-    for sig in STOP_SIGNALS:  # a second Ctrl-C would cut the clean-up short
-        signal.signal(sig, signal.SIG_IGN)
-    raise Interrupted(signum)
-
-
 @contextmanager
 def stopping_on_signals() -> Iterator[None]:
     """While the block runs, SIGINT and SIGTERM raise :class:`Interrupted` (once: while the
     run cleans up, further ones are ignored; SIGKILL still stops it, and the next run
-    removes what it left)."""
-    saved = {sig: signal.signal(sig, _stop) for sig in STOP_SIGNALS}
+    removes what it left).
+
+    A signal that arrives while an extension module initialises is not seen as itself:
+    the module's loader (pybind11's, SciPy's HiGHS) replaces the exception the handler
+    raised with ``ImportError: initialization failed``. Any exception that leaves the block
+    after a stop signal is therefore that signal's :class:`Interrupted`, the first one
+    chained as its cause.
+    """
+    received: list[int] = []
+
+    def stop(signum: int, frame: object) -> None:
+        for sig in STOP_SIGNALS:  # a second Ctrl-C would cut the clean-up short
+            signal.signal(sig, signal.SIG_IGN)
+        received.append(signum)
+        raise Interrupted(signum)
+
+    saved = {sig: signal.signal(sig, stop) for sig in STOP_SIGNALS}
     try:
         yield
+    except Exception as exc:
+        if not received:
+            raise
+        raise Interrupted(received[0]) from exc
     finally:
         for sig, handler in saved.items():
             signal.signal(sig, handler)

@@ -344,3 +344,27 @@ def test_numerical_outcomes_keep_their_codes() -> None:
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "24h", "--stm", "J0",
                               "--json", "-"])
     assert res.exit_code == 3
+
+
+def test_a_stop_signal_that_an_extension_loader_hid_still_stops_the_run() -> None:
+    """CI caught SIGTERM landing while SciPy's HiGHS module initialised: pybind11 replaced
+    the handler's Interrupted with ``ImportError: initialization failed``, and the run
+    ended with a traceback instead of one line and exit 143 (tests/test_kill.py, seldom)."""
+    import signal
+
+    from tapp.cli.common import Interrupted, stopping_on_signals
+
+    with pytest.raises(Interrupted) as stopped, stopping_on_signals():
+        try:
+            signal.raise_signal(signal.SIGTERM)
+        except Interrupted as exc:  # as the loader does: the signal's exception replaced
+            raise ImportError("initialization failed") from exc
+    assert stopped.value.exit_code == 128 + signal.SIGTERM
+    assert isinstance(stopped.value.__cause__, ImportError)
+
+
+def test_an_error_without_a_stop_signal_is_left_as_it_is() -> None:
+    from tapp.cli.common import stopping_on_signals
+
+    with pytest.raises(ImportError), stopping_on_signals():
+        raise ImportError("initialization failed")
