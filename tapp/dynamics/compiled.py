@@ -1,13 +1,15 @@
 """C code generation, compilation and on-disk caching of the propagator.
 
-The CasADi functions of :mod:`tapp.dynamics.equations` are emitted as C, joined with the code
-shared by the drivers (``driver_common.c``) and the driver of the integration method
+The CasADi functions of :mod:`tapp.dynamics.equations` are emitted as C and compiled by the
+system C compiler (``$CC``, default ``cc``); the driver of the integration method
 (:data:`METHODS`: ``dop853_driver.c`` for first-order systems, ``rkn12_driver.c`` for
-second-order ones) and compiled once by the system C compiler (``$CC``, default
-``cc``) into a shared library loaded with ctypes. The library is cached under
-``$TAPP_CACHE_DIR`` (default ``~/.cache/tapp``) by a hash of its source and the compiler
-flags, so a second run, or another process, pays no compile cost. The cache file is written
-to a temporary name and renamed: concurrent workers never load a half-written library.
+second-order ones) with the code the drivers share (``driver_common.c``) and its tableau is
+compiled once per method, apart, and linked with them into a shared library loaded with
+ctypes. Both are cached under ``$TAPP_CACHE_DIR`` (default ``~/.cache/tapp``) by a hash of
+their source and the compiler flags, so a second run, or another process, pays no compile
+cost, and a new force model pays only for its own functions (the driver was half of each
+compile). A cache file is written to a temporary name and renamed, so concurrent workers
+never load a half-written library, and made under a lock, so they do not compile it twice.
 
 Status codes returned by the driver:
 
@@ -31,11 +33,13 @@ arrays of :data:`MAX_EVENTS` entries.
 from __future__ import annotations
 
 import ctypes
+import fcntl
 import hashlib
 import os
 import shutil
 import subprocess
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from importlib.resources import files
@@ -49,7 +53,7 @@ from tapp.dynamics.rkn12_tableau import rkn12
 from tapp.errors import TappError
 from tapp.frames.chebyshev import ChebyshevTable
 
-#: Integration methods: name -> the driver file joined with the generated right-hand side.
+#: Integration methods: name -> the driver file linked with the generated right-hand side.
 #: ``dop853`` integrates x' = f(t, x); ``rkn12`` integrates r'' = a(t, r) (second-order form).
 METHODS = {"dop853": "dop853_driver.c", "rkn12": "rkn12_driver.c"}
 
@@ -67,7 +71,7 @@ STATUS = {
 #: Harris-Priester orbit that rises and falls through the table heights a few hundred.
 MAX_EVENTS = 1_000_000
 
-_CFLAGS = ("-O3", "-fPIC", "-shared", "-fno-math-errno")
+_CFLAGS = ("-O3", "-fPIC", "-fno-math-errno")
 #: A C ``double *``, passed as an address (:func:`_address`).
 _DOUBLE_P = ctypes.c_void_p
 
@@ -121,17 +125,21 @@ def _rkn12_tableau() -> str:
 _TABLEAUX = {"dop853": _dop853_tableau, "rkn12": _rkn12_tableau}
 
 
-def generate_source(f_state: ca.Function, f_var: ca.Function, f_event: ca.Function,
-                    method: str = "dop853") -> str:
-    """Return the full C source: CasADi functions, tableau, shared code and the driver of
-    ``method`` (a key of :data:`METHODS`)."""
+def generate_source(f_state: ca.Function, f_var: ca.Function, f_event: ca.Function) -> str:
+    """Return the C source of the CasADi functions (``driver_common.c`` declares them)."""
     cg = ca.CodeGenerator("tapp_rhs.c", {"with_header": False, "casadi_real": "double",
                                          "casadi_int": "long long int"})
     cg.add(f_state)
     cg.add(f_var)
     cg.add(f_event)
+    return cg.dump()
+
+
+def driver_source(method: str) -> str:
+    """Return the C source of the driver of ``method`` (a key of :data:`METHODS`): its
+    tableau, the shared code and the driver."""
     here = files("tapp.dynamics")
-    return "\n".join([cg.dump(), _TABLEAUX[method](), here.joinpath("driver_common.c").read_text(),
+    return "\n".join([_TABLEAUX[method](), here.joinpath("driver_common.c").read_text(),
                       here.joinpath(METHODS[method]).read_text()])
 
 
@@ -140,20 +148,46 @@ def cache_dir() -> Path:
     return Path(os.environ.get("TAPP_CACHE_DIR", Path.home() / ".cache" / "tapp"))
 
 
-def _compile(source: str, target: Path) -> None:
+def _cached(target: Path, make: Callable[[Path], None]) -> Path:
+    """Return ``target``, made first by ``make(temporary path)`` when it is not there: under
+    an exclusive lock on ``target``'s lock file (a second process waits for the first's
+    file instead of compiling it again), written to a temporary name and renamed."""
+    if target.exists():
+        return target
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with open(target.with_name(f".{target.name}.lock"), "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not target.exists():
+            with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+                out = Path(tmp) / target.name
+                make(out)
+                os.replace(out, target)
+    return target
+
+
+def _cc(*args: str | Path) -> None:
     cc = os.environ.get("CC", "cc")
     if shutil.which(cc) is None:
         raise CompileError(f"C compiler {cc!r} not found: install gcc or set $CC")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
-        src = Path(tmp) / "rhs.c"
-        out = Path(tmp) / "rhs.so"
+    proc = subprocess.run([cc, *map(str, args)], capture_output=True, text=True, check=False)
+    if proc.returncode != 0:
+        raise CompileError(f"{cc} failed ({proc.returncode}): {proc.stderr[-2000:]}")
+
+
+def _digest(*parts: str) -> str:
+    return hashlib.sha256(" ".join([*parts, *_CFLAGS]).encode()).hexdigest()[:20]
+
+
+def _driver_object(method: str) -> Path:
+    """The cached object file of the driver of ``method``."""
+    source = driver_source(method)
+
+    def make(out: Path) -> None:
+        src = out.with_suffix(".c")
         src.write_text(source)
-        proc = subprocess.run([cc, *_CFLAGS, "-o", str(out), str(src), "-lm"],
-                              capture_output=True, text=True, check=False)
-        if proc.returncode != 0:
-            raise CompileError(f"{cc} failed ({proc.returncode}): {proc.stderr[-2000:]}")
-        os.replace(out, target)
+        _cc(*_CFLAGS, "-c", "-o", out, src)
+
+    return _cached(cache_dir() / f"{method}_{_digest(source)}.o", make)
 
 
 @dataclass(frozen=True, slots=True)
@@ -227,9 +261,12 @@ def compiled_propagator(f_state: ca.Function, f_var: ca.Function, f_event: ca.Fu
     driver of ``method``, compiling only on a cache miss. The pair must suit the method:
     first-order right-hand sides for ``dop853``, accelerations of the second-order form for
     ``rkn12``."""
-    source = generate_source(f_state, f_var, f_event, method)
-    digest = hashlib.sha256((source + " ".join(_CFLAGS)).encode()).hexdigest()[:20]
-    path = cache_dir() / f"rhs_{digest}.so"
-    if not path.exists():
-        _compile(source, path)
-    return _load(path)
+    driver = _driver_object(method)
+    source = generate_source(f_state, f_var, f_event)
+
+    def make(out: Path) -> None:
+        src = out.with_suffix(".c")
+        src.write_text(source)
+        _cc(*_CFLAGS, "-shared", "-o", out, src, driver, "-lm")
+
+    return _load(_cached(cache_dir() / f"rhs_{_digest(source, driver.name)}.so", make))

@@ -12,6 +12,20 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The CasADi-generated functions, compiled apart and linked in (tapp.dynamics.compiled), with
+ * the types its code generator is given there. */
+#define casadi_real double
+#define casadi_int long long int
+#define GENERATED(name)                                                                     \
+    int name(const casadi_real **arg, casadi_real **res, casadi_int *iw, casadi_real *w,     \
+             int mem);                                                                      \
+    int name##_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,              \
+                    casadi_int *sz_w);
+GENERATED(f_state)
+GENERATED(f_var)
+GENERATED(f_event)
+#undef GENERATED
+
 /* Entries of the series evaluated at a time: 3 per body or orientation series (at most 16). */
 #define MAX_SERIES 48
 

@@ -118,7 +118,7 @@ eqs = build_equations(model, model)
 if method == "rkn12":
     eqs = second_order(eqs)
 t2 = time.perf_counter()
-generate_source(eqs.f_state, eqs.f_var, eqs.f_event, method)
+generate_source(eqs.f_state, eqs.f_var, eqs.f_event)
 t3 = time.perf_counter()
 print(json.dumps({"compiled_s": t1 - t0, "equations_s": t2 - t1, "c_source_s": t3 - t2}))
 """
