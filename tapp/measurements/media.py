@@ -40,7 +40,8 @@ TEC (TECU, 1e16 electrons/m²) to the slant by
           \\delta_I = 40.3\\,\\mathrm{TEC}\\,m_I(E) / f^2\\ \\text{m (SI)},
 
 at the leg's own carrier f (uplink f_T, downlink f_R: :mod:`tapp.measurements.bands`), a group
-delay on range (+) and a phase advance on range-rate (-). H defaults to 350 km
+delay on range (+) and a phase advance on range-rate and on the count-based Doppler's phase
+ranges (-, :attr:`MediaModel.phase`). H defaults to 350 km
 (:data:`SHELL_HEIGHT_km`), the nominal TEC to 10 TECU (:data:`ZENITH_TEC_TECU`): the night-time
 floor of Klobuchar's broadcast model (5 ns at L1 = 9.2 TECU; Klobuchar 1987, IEEE Trans.
 Aerosp. Electron. Syst. AES-23(3) 325-331); a mid-latitude day reaches 20-50 TECU.
@@ -316,6 +317,10 @@ class MediaModel:
         Which effects are on (an effect off adds nothing, and its partials are zero).
     shell_height_km : float
         Height of the ionosphere's thin shell, km.
+    phase : bool
+        The range of a phase-derived observable (count-based Doppler's ends): the ionosphere
+        a phase advance, subtracted from the range as from the range-rate; False: a group
+        delay on the range (ranging).
     """
 
     zenith_dry_km: float
@@ -328,6 +333,7 @@ class MediaModel:
     troposphere: bool = True
     ionosphere: bool = True
     shell_height_km: float = SHELL_HEIGHT_km
+    phase: bool = False
 
     @classmethod
     def from_meteorology(cls, lat_rad: float, h_km: float, day_of_year: float,
@@ -366,8 +372,8 @@ class MediaModel:
         """Return a leg's media terms (:class:`LegMedia`) from its station-to-spacecraft ENU
         vector p (N, 3) km and its rate ṗ (N, 3) km/s seen from the rotating Earth.
 
-        Range: Z_h m_h + Z_w m_w + κ TEC m_I; range-rate: (Z_h m_h' + Z_w m_w' - κ TEC m_I') ṡ,
-        κ = :meth:`iono_km_per_tecu` (primes: d/ds).
+        Range: Z_h m_h + Z_w m_w ± κ TEC m_I (+ group delay, - with ``phase``); range-rate:
+        (Z_h m_h' + Z_w m_w' - κ TEC m_I') ṡ, κ = :meth:`iono_km_per_tecu` (primes: d/ds).
         """
         geo = SineGeometry.from_enu(p_enu_km, p_dot_enu_km_s)
         maps = self.mappings(geo.s, t_s)
@@ -375,7 +381,7 @@ class MediaModel:
         # The range delay's and the rate's coefficient of each mapping function (per zenith
         # unit), the ionosphere's sign flipped on the phase-derived rate.
         kappa = self.iono_km_per_tecu(link)
-        unit_range = np.array([tropo, tropo, kappa])
+        unit_range = np.array([tropo, tropo, -kappa if self.phase else kappa])
         unit_rate = np.array([tropo, tropo, -kappa])
         m = np.stack([mp.m for mp in maps], axis=-1)
         m_s = np.stack([mp.m_s for mp in maps], axis=-1)

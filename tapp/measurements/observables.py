@@ -51,7 +51,8 @@ O(v / c) ~ 3e-5 per block, at most |rho_ddot| / c (< 3e-7 1/s in LEO) per km in 
 That only slows Gauss-Newton convergence and does not bias an estimate. Count-based Doppler
 differences the range's partials (:mod:`tapp.measurements.doppler`).
 
-Media (``MeasurementModel.media``, :mod:`tapp.measurements.media`): the troposphere and the
+Media (``MeasurementModel.media``, :mod:`tapp.measurements.media`; a three-way up-leg's from
+``uplink_media``; Doppler differences its phase ranges'): the troposphere and the
 ionosphere add to range and range-rate, each leg at its own elevation and carrier (the range's
 legs weighted as in the range). Their partials w.r.t. the spacecraft state go through the
 leg's ENU vector p and its rate (exact for the media model); w.r.t. the station location they
@@ -549,6 +550,10 @@ class MeasurementModel:
     uplink : Station or None
         Three-way tracking: the station that transmits the up-leg (``station`` receives);
         needs a two-way light-time model. None: ``station`` transmits too.
+    uplink_media : MediaModel or None
+        Three-way tracking with media: the troposphere and ionosphere of the uplink station,
+        which the up-leg crosses (its weather, latitude and band); required with ``media``
+        and an ``uplink``, refused otherwise.
     count_time_s : float
         Count interval T_c of the ``doppler`` kind, s.
     doppler_bias_km_s : float
@@ -571,6 +576,7 @@ class MeasurementModel:
     range_rate_bias_km_s: float = 0.0
     media: MediaModel | None = None
     uplink: Station | None = None
+    uplink_media: MediaModel | None = None
     count_time_s: float = DEFAULT_COUNT_TIME_s
     doppler_bias_km_s: float = 0.0
 
@@ -596,17 +602,12 @@ class MeasurementModel:
             if not self.count_time_s > 0.0:
                 raise InputError("MeasurementModel", "count_time_s", "a count time > 0 s",
                                  self.count_time_s)
-        # Not modelled together yet: the up-leg's media belong to the uplink station (its
-        # axes and weather), and Doppler's ionosphere is a phase advance with its own zenith
-        # partials; refused rather than computed with the receiving station's group delay.
-        if self.media is not None and self.uplink is not None:
-            raise InputError("MeasurementModel", "media",
-                             "no media with a three-way uplink (not modelled yet)",
-                             self.uplink.name)
-        if self.media is not None and Observable.DOPPLER in kinds:
-            raise InputError("MeasurementModel", "media",
-                             "no media with count-based doppler (not modelled yet: use "
-                             "range_rate)", self.kinds)
+        # The up-leg crosses the uplink station's atmosphere, not the receiver's.
+        if (self.uplink_media is not None) != (self.media is not None
+                                               and self.uplink is not None):
+            raise InputError("MeasurementModel", "uplink_media",
+                             "the uplink station's MediaModel exactly when there are media "
+                             "and a three-way uplink", self.uplink_media)
 
     def station_eci(self, t_s):
         """Return the station inertial state at t_s (N,), shape (N, 6)."""
@@ -678,6 +679,9 @@ class MeasurementModel:
         if self.media is None:
             return np.zeros(np.shape(t_s) + (len(self.kinds),))
         terms = self._media_terms(self._geometry(t_s, state_eci), self.kinds)
+        if Observable.DOPPLER in self.kinds:
+            terms[Observable.DOPPLER] = self._count_difference(
+                t_s, state_eci, lambda m, t, x: m.media_corrections(t, x)[..., None])[..., 0]
         zero = np.zeros(np.shape(t_s))
         return np.stack([terms.get(k, zero) for k in self.kinds], axis=-1)
 
@@ -685,14 +689,18 @@ class MeasurementModel:
         """Per leg: (weight, its media terms, the partials of (p, ṗ) w.r.t. the spacecraft
         state (N, 6, 6)), p the station-to-spacecraft vector in the station's ENU axes at the
         leg's time and ṗ = M_enu [Δv - ω ĉ × Δr] its rate seen from the rotating Earth
-        (:mod:`tapp.measurements.media`)."""
+        (:mod:`tapp.measurements.media`); a three-way up-leg in the uplink station's axes,
+        with its media."""
         if geo.solution is None:
             links = ("two_way",)
         else:
             links = ("down", "up") if self.light_time.two_way else ("down",)
         out = []
-        for (weight, station, attitude), link in zip(geo.legs, links, strict=True):
-            rot = self.station.enu_from_eci(attitude)
+        for number, ((weight, station, attitude), link) in enumerate(
+                zip(geo.legs, links, strict=True)):
+            site, media = ((self.uplink, self.uplink_media) if number == 1 and self.uplink
+                           else (self.station, self.media))
+            rot = site.enu_from_eci(attitude)
             rel = geo.spacecraft - station
             spin = attitude.omega_rad_s * attitude.spin_axis
             w = rel[..., 3:] - np.cross(spin, rel[..., :3])
@@ -703,7 +711,7 @@ class MeasurementModel:
             jac[..., :3, :3] = rot
             jac[..., 3:, 3:] = rot
             jac[..., 3:, :3] = -rot @ cross_matrix(spin)
-            out.append((weight, self.media.leg(geo.t_s, p, p_dot, link), jac))
+            out.append((weight, media.leg(geo.t_s, p, p_dot, link), jac))
         return out
 
     def _media_rows(self, leg: LegMedia, jac: np.ndarray) -> np.ndarray:
@@ -719,24 +727,48 @@ class MeasurementModel:
         return rows
 
     def media_partials(self, t_s, state_eci):
-        """Return d observables / d zenith parameters (dry km, wet km, TEC TECU), shape
-        (N, m, 3), columns named by :data:`tapp.measurements.media.MEDIA_PARAMETER_NAMES`.
+        """Return d observables / d the station's zenith parameters (dry km, wet km, TEC
+        TECU), shape (N, m, 3), columns named by
+        :data:`tapp.measurements.media.MEDIA_PARAMETER_NAMES`: the legs through its own
+        atmosphere (three-way: the down-leg; :meth:`uplink_media_partials` the up-leg's).
+        Doppler's row differences its phase ranges' (ionosphere negative) over the count.
 
         Raises
         ------
         InputError
             The model has no media.
         """
+        return self._zenith_partials(t_s, state_eci, uplink=False)
+
+    def uplink_media_partials(self, t_s, state_eci):
+        """Return d observables / d the uplink station's zenith parameters (three-way),
+        shape (N, m, 3): the up-leg's part of :meth:`media_partials`' sum.
+
+        Raises
+        ------
+        InputError
+            The model has no uplink station with media.
+        """
+        if self.uplink_media is None:
+            raise InputError("MeasurementModel", "uplink_media",
+                             "a three-way uplink with media for the uplink's media partials")
+        return self._zenith_partials(t_s, state_eci, uplink=True)
+
+    def _zenith_partials(self, t_s, state_eci, uplink: bool):
         if self.media is None:
             raise InputError("MeasurementModel", "media", "a MediaModel for media partials")
         geo = self._geometry(t_s, state_eci)
         out = np.zeros(geo.tau_down_s.shape + (len(self.kinds), 3))
-        for weight, leg, _ in self._media_legs(geo):
+        for number, (weight, leg, _) in enumerate(self._media_legs(geo)):
+            if (self.uplink is not None and number == 1) != uplink:
+                continue
             for row, kind in enumerate(self.kinds):
                 if kind is Observable.RANGE:
                     out[..., row, :] += weight * leg.range_zenith
                 elif kind is Observable.RANGE_RATE:
                     out[..., row, :] += weight * leg.rate_zenith
+        self._put_doppler(out, t_s, state_eci,
+                          lambda m, t, x: m._zenith_partials(t, x, uplink))
         return out
 
     def _clock_rate_km_s(self, t_s, solution: LightTimeSolution):
@@ -757,8 +789,13 @@ class MeasurementModel:
         return 0.5 * C_LIGHT_km_s * (relativity.tdb_rate(t1, transmitter.r_ecef_km) - receive)
 
     def _ranging(self) -> MeasurementModel:
-        """This model measuring the two-/three-way range only (no bias): Doppler's ends."""
-        return replace(self, kinds=(Observable.RANGE,), range_bias_km=0.0)
+        """This model measuring the two-/three-way range of the carrier's phase only (no
+        bias; the ionosphere a phase advance): Doppler's ends."""
+        def phase(media: MediaModel | None) -> MediaModel | None:
+            return None if media is None else replace(media, phase=True)
+
+        return replace(self, kinds=(Observable.RANGE,), range_bias_km=0.0,
+                       media=phase(self.media), uplink_media=phase(self.uplink_media))
 
     def _count_ends(self, t_s, state_eci):
         """Return ((t_s, states), (t_e, states)) at the ends t -/+ T_c / 2 of the count
@@ -770,21 +807,19 @@ class MeasurementModel:
         return tuple((t + sign * half, self.light_time.spacecraft_state(t, x, -sign * half))
                      for sign in (-1.0, 1.0))
 
-    def _doppler_rows(self, t_s, state_eci, which: str, parameters: StationParameters):
-        """Doppler's partials (N, 3 or 6): (dR/dp at t_e - at t_s) / T_c, the state partials
-        mapped to the centre by the local transition (:mod:`tapp.measurements.doppler`)."""
+    def _count_difference(self, t_s, state_eci, of: Callable, state: bool = False):
+        """Doppler's share of ``of(ranging model, t, x)`` (N, 1, k) (values or partials of
+        the phase range, :meth:`_ranging`), (N, k): (at t_e - at t_s) / T_c; ``state``: the
+        state partials, mapped to the centre by the local transition
+        (:mod:`tapp.measurements.doppler`)."""
         ranges = self._ranging()
         x = np.asarray(state_eci, dtype=float)
         out = 0.0
         for sign, (t_end, x_end) in zip((-1.0, 1.0), self._count_ends(t_s, x), strict=True):
-            if which == "state":
-                rows = np.einsum("...i,...ij->...j", ranges.state_partials(t_end, x_end)[
-                    ..., 0, :], local_transition(x, sign * 0.5 * self.count_time_s,
-                                                 self.light_time.mu_km3_s2))
-            elif which == "station":
-                rows = ranges.station_partials(t_end, x_end, parameters)[..., 0, :]
-            else:
-                rows = ranges.uplink_station_partials(t_end, x_end, parameters)[..., 0, :]
+            rows = of(ranges, t_end, x_end)[..., 0, :]
+            if state:
+                rows = np.einsum("...i,...ij->...j", rows, local_transition(
+                    x, sign * 0.5 * self.count_time_s, self.light_time.mu_km3_s2))
             out = out + sign * rows
         return out / self.count_time_s
 
@@ -850,15 +885,15 @@ class MeasurementModel:
         # x(t - tau) ~ x(t) - tau [v, 0]: d/dv = d/dv_B - tau d/dr_B.
         h = h_bounce.copy()
         h[..., 3:] -= geo.tau_down_s[..., None, None] * h_bounce[..., :3]
-        self._put_doppler(h, t_s, state_eci, "state")
+        self._put_doppler(h, t_s, state_eci, MeasurementModel.state_partials, state=True)
         return h
 
-    def _put_doppler(self, out, t_s, state_eci, which: str,
-                     parameters: StationParameters = "cylindrical") -> None:
-        """Fill the doppler rows of ``out`` (N, m, n) in place (:meth:`_doppler_rows`)."""
+    def _put_doppler(self, out, t_s, state_eci, of: Callable, state: bool = False) -> None:
+        """Fill the doppler row of ``out`` (N, m, n) in place with the count difference of
+        the phase range's partials ``of(model, t, x)`` (:meth:`_count_difference`)."""
         if Observable.DOPPLER in self.kinds:
             row = self.kinds.index(Observable.DOPPLER)
-            out[..., row, :] = self._doppler_rows(t_s, state_eci, which, parameters)
+            out[..., row, :] = self._count_difference(t_s, state_eci, of, state)
 
     def station_partials(self, t_s, state_eci, parameters: StationParameters = "cylindrical"):
         """Return d observables / d station location, shape (N, m, 3).
@@ -880,7 +915,8 @@ class MeasurementModel:
         self._put_clock(out, t_s, state_eci, "receiver", parameters)
         if self.uplink is None:
             self._put_clock(out, t_s, state_eci, "transmitter", parameters)
-        self._put_doppler(out, t_s, state_eci, "station", parameters)
+        self._put_doppler(out, t_s, state_eci,
+                          lambda m, t, x: m.station_partials(t, x, parameters))
         return out
 
     def _put_clock(self, out, t_s, state_eci, end: str, parameters: StationParameters) -> None:
@@ -914,7 +950,8 @@ class MeasurementModel:
         attitude, rows = self._leg_partials(self._geometry(t_s, state_eci))[1]
         out = -rows @ station_state_partials(self.uplink.r_ecef_km, attitude, parameters)
         self._put_clock(out, t_s, state_eci, "transmitter", parameters)
-        self._put_doppler(out, t_s, state_eci, "uplink", parameters)
+        self._put_doppler(out, t_s, state_eci,
+                          lambda m, t, x: m.uplink_station_partials(t, x, parameters))
         return out
 
     def uplink_elevation_rad(self, t_s, state_eci):
@@ -981,4 +1018,5 @@ class MeasurementModel:
                 moved = -np.cross(eop_generators(attitude, names), geo.spacecraft[..., None, :3])
                 out = out + np.where(angle[:, None], rows[..., :3] @ np.swapaxes(moved, -1, -2),
                                      0.0)
+        self._put_doppler(out, t_s, state_eci, lambda m, t, x: m.eop_partials(t, x, names))
         return out

@@ -63,9 +63,9 @@ ISO strings or TOML dates)::
                        pressure_hpa, temperature_k, relative_humidity (default: the
                        standard atmosphere at its height) and zenith_tec_tecu
     [media]            optional: troposphere = true, ionosphere = true (both default false)
-                       add their delays to every station's range and range-rate (not to
-                       ΔDOR); shell_height_km (350), zenith_tec_tecu (10)
-                       (tapp.measurements.media)
+                       add their delays to every station's range, range-rate and Doppler
+                       (a three-way up-leg through its uplink station's; not to ΔDOR);
+                       shell_height_km (350), zenith_tec_tecu (10) (tapp.measurements.media)
     [noise.fit]        sigma_range_m, sigma_range_rate_mm_s, sigma_azimuth_deg,
                        sigma_elevation_deg, sigma_doppler_mm_s or sigma_doppler_hz (white
                        noise: W = diag(1/σ²))
@@ -235,6 +235,8 @@ class TrackingStation:
     media_parameters : effects among ("troposphere", "ionosphere") whose zenith parameters
         are in q.
     uplink : the station transmitting its three-way up-leg; None: itself (two-way).
+    uplink_media : the media of the uplink station, which its up-leg crosses (with media and
+        an uplink; None otherwise).
     doppler_bias_km_s : nominal bias added to its count-based Doppler.
     """
 
@@ -252,6 +254,7 @@ class TrackingStation:
     media: MediaModel | None = None
     media_parameters: tuple[str, ...] = ()
     uplink: Station | None = None
+    uplink_media: MediaModel | None = None
     doppler_bias_km_s: float = 0.0
 
     def parameters(self) -> tuple[Parameter, ...]:
@@ -869,25 +872,30 @@ def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
             range_rate_bias_km_s=own.range_rate_bias_mm_s * 1e-6,
             blackouts_s=blackouts + p.windows(own.blackouts, f"{where}.blackouts"),
             band=band,
-            media=_station_media(p, doc.media, own, known[name], band, where, kinds),
+            media=_station_media(p, doc.media, own, known[name], band, where),
             media_parameters=tuple(par.media),
             uplink=None if own.uplink is None else known[own.uplink],
+            uplink_media=None if own.uplink is None else _uplink_media(
+                p, doc.media, trk, own.uplink, known[own.uplink]),
             doppler_bias_km_s=own.doppler_bias_mm_s * 1e-6))
     return tuple(out)
 
 
+def _uplink_media(p: _Parser, media: MediaTable, trk: TrackingTable, name: str,
+                  station: Station) -> MediaModel | None:
+    """The :class:`MediaModel` of a three-way uplink station (:func:`_station_media`), from
+    its own ``[tracking.station.NAME]`` table whether or not it tracks itself."""
+    own = trk.station.get(name, StationTracking())
+    return _station_media(p, media, own, station, trk.band if own.band is None else own.band,
+                          f"tracking.station.{name}")
+
+
 def _station_media(p: _Parser, media: MediaTable, own: StationTracking, station: Station,
-                   band: str, where: str, kinds: tuple[str, ...]) -> MediaModel | None:
+                   band: str, where: str) -> MediaModel | None:
     """A station's :class:`MediaModel` (None with both effects off): its weather, else the
     standard atmosphere at its height; its zenith TEC, else the scenario's."""
     if not (media.troposphere or media.ionosphere):
         return None
-    if own.uplink is not None:
-        p.fail(f"{where}.uplink", "no three-way uplink with [media] (the up-leg's media are "
-               "not modelled yet)", own.uplink)
-    if "doppler" in kinds:
-        p.fail("tracking.observables", "no doppler with [media] (its ionospheric phase "
-               "advance is not modelled yet: use range_rate)", "doppler")
     standard = standard_atmosphere(station.h_km)
     weather = tuple(s if v is None else float(v) for v, s in zip(
         (own.pressure_hpa, own.temperature_k, own.relative_humidity), standard, strict=True))

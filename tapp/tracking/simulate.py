@@ -54,9 +54,12 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
        \\; \\partial h/\\partial(\\text{bias}),\\; \\partial h/\\partial(\\text{zenith}),
        \\; H\\,S_{s,j}(t) \\,\\Big].
 
-   With a ``[media]`` table the stations' range and range-rate carry the troposphere and
-   ionosphere (:mod:`tapp.measurements.media`; ΔDOR does not), and their zenith parameters
-   (``[parameters] media``) their columns ∂h/∂(zenith dry, wet km, TEC TECU).
+   With a ``[media]`` table the stations' range, range-rate and Doppler carry the
+   troposphere and ionosphere (:mod:`tapp.measurements.media`; ΔDOR does not), and their
+   zenith parameters (``[parameters] media``) their columns ∂h/∂(zenith dry, wet km, TEC
+   TECU); a three-way up-leg crosses its uplink station's atmosphere, whose partials go to
+   that station's zenith columns when it tracks too (else its media are nominal only, as
+   its location).
 
 3. **Square-root information.** Per (record k, station s): upper-triangular factors R and R̃
    with RᵀR = ΔJ = AᵀWA and R̃ᵀR̃ = ΔJ̃ = AᵀWMWA over the observations in (t_{k-1}, t_k],
@@ -397,7 +400,8 @@ def _measurement_model(ts: TrackingStation, scenario: Scenario, prop: Propagator
                              relativity)
     return MeasurementModel(ts.station, scenario.orientation, ts.kinds, light_time,
                             ts.range_bias_km, ts.range_rate_bias_km_s, media=ts.media,
-                            uplink=ts.uplink, count_time_s=scenario.schedule.count_time_s,
+                            uplink=ts.uplink, uplink_media=ts.uplink_media,
+                            count_time_s=scenario.schedule.count_time_s,
                             doppler_bias_km_s=ts.doppler_bias_km_s)
 
 
@@ -459,8 +463,9 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
         first = columns[f"{name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
         a[..., first:first + 3] = model.station_partials(t, x, ts.location)
     uplink = next((u for u in scenario.stations if ts.uplink is not None
-                   and u.station.name == ts.uplink.name and u.location != "none"), None)
-    if uplink is not None:  # the up-leg's part goes to the transmitter's location columns
+                   and u.station.name == ts.uplink.name), None)
+    if uplink is not None and uplink.location != "none":  # the up-leg's part goes to the
+        # transmitter's location columns
         first = columns[f"{uplink.station.name}.{STATION_PARAMETER_NAMES[uplink.location][0]}"]
         a[..., first:first + 3] += model.uplink_station_partials(t, x, uplink.location)
     bias = model.bias_partials(t)
@@ -468,10 +473,10 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
         i = BIAS_KINDS.index(kind)
         a[..., columns[f"{name}.{BIAS_NAMES[i]}"]] = bias[..., i]
     if ts.media_parameters:
-        zenith = model.media_partials(t, x)
-        for i, (zname, kind) in enumerate(zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS, strict=True)):
-            if kind in ts.media_parameters:
-                a[..., columns[f"{name}.{zname}"]] = zenith[..., i]
+        _zenith_columns(a, columns, name, ts.media_parameters, model.media_partials(t, x))
+        if uplink is not None and ts.uplink_media is not None:  # and the up-leg's media
+            _zenith_columns(a, columns, uplink.station.name, uplink.media_parameters,
+                            model.uplink_media_partials(t, x))
     _eop_rows(a, scenario, columns, lambda names: model.eop_partials(t, x, names))
     record, segment = _segments(t, label, t13)
     counts = np.full(times.size, len(ts.kinds)) if taken is None else taken.sum(axis=1)
@@ -479,6 +484,15 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
                  for a_, b_ in passes]
     return (_StationData(t, model.compute(t, x), a, record, segment, pass_list,
                          taken=None if taken is None else taken[take]), editing)
+
+
+def _zenith_columns(a: np.ndarray, columns: dict[str, int], station: str,
+                    effects: tuple[str, ...], zenith: np.ndarray) -> None:
+    """Add the partials w.r.t. a station's zenith parameters (N, m, 3) to its columns of A
+    (those of ``effects`` in q)."""
+    for i, (zname, kind) in enumerate(zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS, strict=True)):
+        if kind in effects:
+            a[..., columns[f"{station}.{zname}"]] += zenith[..., i]
 
 
 def _uplink_above(uplink: Station, scenario: Scenario, t: np.ndarray, states: np.ndarray

@@ -146,6 +146,20 @@ def test_light_time_observable_partials_within_v_over_c(two_way):
         _assert_close(analytic[..., j], fd, LIGHT_TIME_REL)
 
 
+def test_count_doppler_eop_partials_within_v_over_c():
+    """Count-based Doppler's row is the count difference of its ranges' partials (it was
+    left zero before: an EOP consider set silently missed the Doppler's share)."""
+    kinds = ("range", "doppler")
+    light_time = LightTime(two_way=True)
+    x = kepler_states(GEOMETRIES["GEO-ish"].to_array(), T_s)
+    analytic = MeasurementModel(GOLDSTONE, _orientation(), kinds, light_time).eop_partials(T_s, x)
+    for j, name in enumerate(NAMES):
+        fd = _central(name, lambda o: MeasurementModel(GOLDSTONE, o, kinds, light_time
+                                                       ).compute(T_s, x))
+        _assert_close(analytic[..., j], fd, LIGHT_TIME_REL)
+        assert np.all(np.abs(fd[:, 1]) > 0.0)
+
+
 def _deep_space(distance_km=1.0e6):
     """A spacecraft at ``distance_km``, moving 20 km/s: a straight line (exact bounce
     states). 1e6 km keeps the rounding of its ranges (2e-10 km) below the checked figures."""

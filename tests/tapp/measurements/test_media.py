@@ -27,6 +27,7 @@ from tapp.measurements.media import (
     zenith_hydrostatic_delay_m,
     zenith_wet_delay_m,
 )
+from tapp.measurements.stations import station_state_eci
 from tests.tapp.measurements.helpers import central_differences
 
 #: DSS-63 (Madrid): geodetic latitude, longitude deg, height km.
@@ -281,3 +282,151 @@ def test_media_partials_need_a_media_model():
     with pytest.raises(InputError, match="media"):
         MeasurementModel(MADRID, GMST0_rad, KINDS).media_partials(np.array([0.0]),
                                                                   _passing(np.array([0.0])))
+
+
+# ---------------------------------------------------------------------------------------------
+# Count-based Doppler and three-way links
+# ---------------------------------------------------------------------------------------------
+
+#: DSS-14 (Goldstone), the three-way uplink of Madrid's passes below.
+GOLDSTONE = Station.from_degrees("DSS14", 35.4259, -116.8895, 1.002, 5.0)
+#: The passing straight line, exact at any time: Doppler's count ends need no expansion.
+EXACT = LightTime(two_way=True, state_at=_passing)
+COUNT_s = 60.0
+
+
+def _doppler(media=None, **kwargs) -> MeasurementModel:
+    return MeasurementModel(MADRID, GMST0_rad, ("range", "range_rate", "doppler"), EXACT,
+                            media=_media() if media is None else media,
+                            count_time_s=COUNT_s, **kwargs)
+
+
+def test_doppler_carries_the_phase_of_the_media_over_its_count():
+    """Doppler's media share is (δφ(t + T_c/2) - δφ(t - T_c/2)) / T_c of the phase range, the
+    troposphere delaying it and the ionosphere advancing it: built here from the ranging
+    model's group delays of each effect alone (the ionosphere's sign flipped by hand), and
+    the mean of the range-rate's share over the count (Gauss-Legendre, 8 nodes: exact far
+    below the O(v/c) ~ 3e-5 by which a two-way leg's rate is taken at dt_leg/dt = 1)."""
+    t = np.array([-200.0, -30.0, 150.0])
+    x = _passing(t)
+    share = _doppler().media_corrections(t, x)
+    ends = []
+    for sign in (-1.0, 1.0):
+        te = t + sign * 0.5 * COUNT_s
+        ranging = [MeasurementModel(MADRID, GMST0_rad, ("range",), EXACT, media=_media(**off))
+                   .media_corrections(te, _passing(te))[:, 0]
+                   for off in ({"ionosphere": False}, {"troposphere": False})]
+        ends.append(ranging[0] - ranging[1])
+    np.testing.assert_allclose(share[:, 2], (ends[1] - ends[0]) / COUNT_s, rtol=1e-9)
+    nodes, weights = np.polynomial.legendre.leggauss(8)
+    mean_rate = sum(0.5 * w * _doppler().media_corrections(t + 0.5 * COUNT_s * u,
+                                                           _passing(t + 0.5 * COUNT_s * u))[:, 1]
+                    for u, w in zip(nodes, weights, strict=True))
+    np.testing.assert_allclose(share[:, 2], mean_rate, rtol=0,
+                               atol=1e-4 * np.abs(mean_rate).max())
+    assert np.all(np.abs(share[:, 2]) > 1e-9)  # km/s: metres of delay change per minute
+
+
+def test_doppler_media_partials_match_central_differences():
+    # Zenith parameters: linear, differences exact to rounding (steps as above). State:
+    # first order in the light time, 1e-4 of each row (the two-way range's tolerance).
+    model = _doppler()
+    t = np.array([-220.0, 30.0])
+    x = _passing(t)
+    base = model.media
+    cols = []
+    for name, h in zip(("zenith_dry_km", "zenith_wet_km", "zenith_tec_tecu"),
+                       (1e-4, 1e-4, 1.0), strict=True):
+        def shifted(d, name=name):
+            return dataclasses.replace(model, media=dataclasses.replace(
+                base, **{name: getattr(base, name) + d})).compute(t, x)
+        cols.append((shifted(h) - shifted(-h)) / (2 * h))
+    numeric = np.stack(cols, axis=-1)
+    analytic = model.media_partials(t, x)
+    np.testing.assert_allclose(analytic, numeric, rtol=1e-7, atol=1e-7 * np.abs(numeric).max())
+    assert np.all(analytic[:, 2, 2] * analytic[:, 1, 2] > 0)  # both from the carrier phase
+    # The count ends moved with the state: the Taylor ends of the light-time model, without
+    # a central body, exact on the straight line, as is the local transition then.
+    taylor = dataclasses.replace(model, light_time=LightTime(two_way=True, mu_km3_s2=0.0))
+    h_media = (taylor.state_partials(t, x)
+               - dataclasses.replace(taylor, media=None).state_partials(t, x))
+    numeric = central_differences(lambda y: taylor.media_corrections(t, y), x,
+                                  [1e-2, 1e-2, 1e-2, 1e-5, 1e-5, 1e-5])
+    scale = np.abs(numeric).max(axis=-1, keepdims=True)
+    assert np.all(np.abs(h_media[:, 2] - numeric[:, 2]) <= 1e-4 * scale[:, 2])
+
+
+def _over_the_atlantic(t_s: np.ndarray) -> np.ndarray:
+    """Spacecraft states (N, 6) on a straight line 26,000 km above 35 N 60 W at t = 0,
+    moving 3 km/s: Madrid sees it at about 25 deg and Goldstone at about 35 deg."""
+    t = np.asarray(t_s, dtype=float)
+    lat, lon = np.radians(35.0), np.radians(-60.0)
+    r_ecef = 32378.0 * np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon),
+                                 np.sin(lat)])
+    r0 = station_state_eci(r_ecef, MeasurementModel(MADRID, GMST0_rad).orientation.attitude(
+        np.array([0.0])))[0, :3]
+    v = np.array([1.0, -2.0, 2.0])
+    return np.concatenate([r0 + t[:, None] * v, np.broadcast_to(v, t.shape + (3,))], axis=-1)
+
+
+def _three_way(receiver: MediaModel, uplink: MediaModel) -> MeasurementModel:
+    return MeasurementModel(MADRID, GMST0_rad, ("range", "range_rate", "doppler"),
+                            LightTime(two_way=True, state_at=_over_the_atlantic),
+                            media=receiver, uplink=GOLDSTONE, uplink_media=uplink,
+                            count_time_s=COUNT_s)
+
+
+def _goldstone_media(**kwargs) -> MediaModel:
+    base = dict(zenith_tec_tecu=40.0, band="X")
+    base.update(kwargs)
+    return MediaModel.from_meteorology(GOLDSTONE.lat_rad, GOLDSTONE.h_km, 70.25, 900.0, 300.0,
+                                       0.2, **base)
+
+
+def test_a_three_way_up_leg_crosses_the_uplink_stations_atmosphere():
+    """With the receiver's media off, the three-way range's media share is half the up-leg's
+    slant troposphere at Goldstone's own elevation and latitude (Niell's functions evaluated
+    here), and none of it is a partial of Madrid's zenith parameters."""
+    t = np.array([-120.0, 60.0])
+    x = _over_the_atlantic(t)
+    up = _goldstone_media(ionosphere=False)
+    model = _three_way(_media(troposphere=False, ionosphere=False), up)
+    s = np.sin(model.uplink_elevation_rad(t, x))
+    # Niell's season at the receive time (the up-leg left 2τ = 0.2 s before: 1e-13 of m)
+    doy = up.day_of_year + t / 86400.0
+    slant = (up.zenith_dry_km * niell_hydrostatic(s, GOLDSTONE.lat_rad, doy, GOLDSTONE.h_km).m
+             + up.zenith_wet_km * niell_wet(s, GOLDSTONE.lat_rad).m)
+    np.testing.assert_allclose(model.media_corrections(t, x)[:, 0], 0.5 * slant, rtol=1e-12)
+    assert np.all(model.media_partials(t, x) == 0.0)
+    assert np.abs(model.uplink_media_partials(t, x)[:, 0, :2]).min() > 0.1
+
+
+@pytest.mark.parametrize("which", ["media", "uplink_media"])
+def test_three_way_zenith_partials_match_central_differences(which):
+    model = _three_way(_media(), _goldstone_media())
+    t = np.array([-200.0, 40.0])
+    x = _over_the_atlantic(t)
+    base = getattr(model, which)
+    cols = []
+    for name, h in zip(("zenith_dry_km", "zenith_wet_km", "zenith_tec_tecu"),
+                       (1e-4, 1e-4, 1.0), strict=True):
+        def shifted(d, name=name):
+            return dataclasses.replace(model, **{which: dataclasses.replace(
+                base, **{name: getattr(base, name) + d})}).compute(t, x)
+        cols.append((shifted(h) - shifted(-h)) / (2 * h))
+    numeric = np.stack(cols, axis=-1)
+    analytic = (model.media_partials(t, x) if which == "media"
+                else model.uplink_media_partials(t, x))
+    np.testing.assert_allclose(analytic, numeric, rtol=1e-7, atol=1e-7 * np.abs(numeric).max())
+    assert np.abs(analytic[:, :2, :]).min() > 0.0
+
+
+def test_three_way_media_need_the_uplink_stations_media():
+    with pytest.raises(InputError, match="uplink_media"):
+        MeasurementModel(MADRID, GMST0_rad, ("range",), EXACT, media=_media(), uplink=GOLDSTONE)
+    with pytest.raises(InputError, match="uplink_media"):
+        MeasurementModel(MADRID, GMST0_rad, ("range",), EXACT, uplink_media=_media())
+    with pytest.raises(InputError, match="uplink_media"):
+        MeasurementModel(MADRID, GMST0_rad, ("range",), EXACT,
+                         media=_media()).uplink_media_partials(np.zeros(1),
+                                                               _passing(np.zeros(1)))

@@ -6,6 +6,7 @@ The geometry is the 3-hour LEO arc of :func:`helpers.leo_document` (three equato
 
 from __future__ import annotations
 
+import dataclasses
 import re
 
 import numpy as np
@@ -16,9 +17,9 @@ from tapp.io.tape.t13_hdf5 import read_t13, write_t13
 from tapp.measurements import MeasurementModel
 from tapp.measurements.media import standard_atmosphere
 from tapp.tracking.scenario import parse_scenario
-from tapp.tracking.simulate import simulate
+from tapp.tracking.simulate import _measurement_model, simulate
 from tests.tapp.processor.helpers import SIGMA, SIGMA_STATION, run
-from tests.tapp.tracking.helpers import SOURCE, leo_document
+from tests.tapp.tracking.helpers import SOURCE, geo_document, leo_document
 
 #: The real world's zenith wet delay error TAPP III considers, km (5 cm).
 WET_SIGMA_km = 5e-5
@@ -146,17 +147,39 @@ def test_media_off_leaves_the_tape_as_before():
     assert not any(p.kind in ("troposphere", "ionosphere") for p in plain.parameters)
 
 
-@pytest.mark.parametrize("station, field, expected", [
-    ({"uplink": "KOUROU"}, "tracking.station.QUITO.uplink", "no three-way uplink with [media]"),
-    ({"observables": ["range", "range_rate", "doppler"]}, "tracking.observables",
-     "no doppler with [media]"),
-])
-def test_media_with_what_they_do_not_model_yet_is_refused(station, field, expected):
-    """The up-leg's media belong to the uplink station, and Doppler's ionosphere is a phase
-    advance with its own partials: refused, not computed with the wrong station or sign."""
-    doc = _document()
-    doc["tracking"]["light_time"] = "two_way"
+def test_three_way_doppler_rows_carry_both_stations_media():
+    """On the GEO track EAST receives UNDER's uplink, ranging and counting Doppler: its
+    rows' zenith columns are the down-leg's media partials, UNDER's zenith columns in them
+    the up-leg's (each station's own weather and TEC), and the values carry both legs'."""
+    doc = geo_document()
+    doc["media"] = dict(MEDIA)
+    doc["parameters"].update(media=["troposphere", "ionosphere"], station_biases=[])
+    doc["tracking"].update(light_time="two_way", observables=["range", "doppler"])
+    doc["tracking"]["station"]["EAST"] = {"uplink": "UNDER", "temperature_k": 300.0,
+                                          "relative_humidity": 0.8, "zenith_tec_tecu": 45.0}
     doc["noise"]["fit"]["sigma_doppler_mm_s"] = 0.1
-    doc["tracking"]["station"]["QUITO"].update(station)
-    with pytest.raises(InputError, match=re.escape(f"{field}: expected {expected}")):
-        parse_scenario(doc, SOURCE)
+    sim = simulate(parse_scenario(doc, SOURCE), raw=True)
+    scenario, raw, names = sim.scenario, sim.tape.raw, sim.tape.parameters.name
+    under, east = scenario.stations
+    assert east.uplink_media == under.media != east.media
+    rows = raw.station == east.number
+    t = np.unique(raw.t_s[rows])
+    assert t.size > 10
+    x = sim.states[np.searchsorted(sim.t_s, t)]
+    model = _measurement_model(east, scenario, scenario.propagator())
+    bare = dataclasses.replace(model, media=None, uplink_media=None)
+
+    def block(station):
+        cols = [names.index(f"{station}.{z}") for z in ZENITH]
+        return raw.A[rows][:, cols].reshape(t.size, 2, 3)
+
+    np.testing.assert_array_equal(block("EAST"), model.media_partials(t, x))
+    np.testing.assert_array_equal(block("UNDER"), model.uplink_media_partials(t, x))
+    assert np.abs(block("UNDER")[:, 0, :2]).min() > 0.4  # half the up-leg's mapping
+    values = raw.value[rows].reshape(t.size, 2)
+    # (with - without) of ranges of 3.8e4 km: rounding 4 eps x 3.8e4 = 3.4e-11 km, and of
+    # Doppler, two such ranges differenced over the 60 s count, 1.1e-12 km/s
+    np.testing.assert_allclose(values - bare.compute(t, x), model.media_corrections(t, x),
+                               rtol=0, atol=3.4e-11)
+    np.testing.assert_allclose((values - bare.compute(t, x))[:, 1],
+                               model.media_corrections(t, x)[:, 1], rtol=0, atol=1.1e-12)
