@@ -45,6 +45,9 @@ ISO strings or TOML dates)::
                        the effect on in [media]),
                        earth_orientation = true | ["ut1_s", "xp_rad", "yp_rad"] (constant
                        EOP offsets eop.*, kind "eop"; gmst: ut1_s only),
+                       earth_orientation_per = "arc" | "day" (one offset over the arc, or
+                       one per UTC day of the tracking window, eop.<name>.<YYYY-MM-DD>:
+                       tapp.tracking.eop_days),
                        [parameters.values] non-nominal values of dynamic parameters
     [stations.NAME]    lat_deg, lon_deg, h_km (-0.5 to 10 km), elev_mask_deg
                        (tapp.io.stations_file)
@@ -170,6 +173,7 @@ from tapp.orbit.bplane import REFERENCE_POLES
 from tapp.targeting.program import BPlaneSearch
 from tapp.targeting.searchfile import TargetingTable, scenario_targeting
 from tapp.tracking.ddor import QUASAR_KIND, DdorTable, TrackingBaseline, tracking_baselines
+from tapp.tracking.eop_days import EopDays, eop_days
 from tapp.tracking.manoeuvres import MAX_MANOEUVRES, ManoeuvreTable, scenario_manoeuvres
 from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
@@ -390,6 +394,8 @@ class Scenario:
         them; None without one.
     eop : the Earth orientation parameters whose constant offsets are in q (parameters
         ``eop.<name>``, kind "eop": :func:`tapp.frames.orientation.eop_parameters_of`).
+    eop_days : with per-day offsets, their UTC days (``eop.<name>.<YYYY-MM-DD>``:
+        :mod:`tapp.tracking.eop_days`); None: one offset over the arc.
     """
 
     source: str
@@ -416,6 +422,7 @@ class Scenario:
     manoeuvres: tuple[Burn, ...] = ()
     reference: Reference | None = None
     eop: tuple[str, ...] = ()
+    eop_days: EopDays | None = None
 
     def propagator(self) -> Propagator:
         """The (state model, variational model, dynamic parameters) propagator."""
@@ -437,7 +444,8 @@ class Scenario:
                                  "dynamic", values[name]))
         for st in self.stations:
             out.extend(st.parameters())
-        out.extend(Parameter(f"eop.{name}", EOP_UNITS[name], EOP_KIND, 0.0) for name in self.eop)
+        out.extend(Parameter(name, EOP_UNITS[name.split(".")[1]], EOP_KIND, 0.0)
+                   for name in self.eop_names())
         out.extend(Parameter(name, "rad", QUASAR_KIND, 0.0, bl.number)
                    for bl in self.baselines for name in bl.quasar_parameters)
         if self.stochastic is not None:
@@ -445,6 +453,12 @@ class Scenario:
         out.extend(Parameter(name, unit, EXECUTION, 0.0) for burn in self.manoeuvres
                    for name, unit, _ in burn.parameters())
         return tuple(out)
+
+    def eop_names(self) -> tuple[str, ...]:
+        """The EOP offsets in q: ``eop.<name>``, or ``eop.<name>.<date>`` day after day."""
+        if self.eop_days is None:
+            return tuple(f"eop.{name}" for name in self.eop)
+        return self.eop_days.names(self.eop)
 
     @property
     def n_p(self) -> int:
@@ -502,6 +516,10 @@ class ParametersTable(Schema):
         False, description="Constant offsets of the Earth orientation parameters from the IERS "
         "values in q (eop.ut1_s, eop.xp_rad, eop.yp_rad): true for all (\"ut1_s\" alone under "
         "gmst), or a list of them.")
+    earth_orientation_per: Literal["arc", "day"] = Field(
+        "arc", description="The offsets' span: one over the whole arc (eop.<name>), or one per "
+        "UTC day of the tracking window (eop.<name>.<YYYY-MM-DD>, each moving only its day's "
+        "observations).")
 
 
 class StationTracking(Schema):
@@ -1153,6 +1171,7 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     orientation.check_covers(np.array([0.0, last_s, schedule.end_s]), source)
     document = json.dumps(data, default=str, sort_keys=True)
     x0.setflags(write=False)
+    eop = eop_parameters_of(orientation.model, doc.parameters.earth_orientation, source)
     # TAPP I's propagator, with every parameter TAPP I differentiates: a method its forces
     # refuse is the file's model.method, not found when the simulation starts
     doc.model.propagator(source, state_model, var_model,
@@ -1165,8 +1184,20 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
                     rtol, atol,
                     dynamic, values, stations, schedule, times, miss, document, targeting,
                     baselines, stochastic, doc.model.method, manoeuvres, reference,
-                    eop=eop_parameters_of(orientation.model, doc.parameters.earth_orientation,
-                                          source))
+                    eop=eop, eop_days=_eop_days(p, doc.parameters, eop, schedule, last_s))
+
+
+def _eop_days(p: _Parser, par: ParametersTable, eop: tuple[str, ...], schedule: Schedule,
+              last_s: float) -> EopDays | None:
+    """The UTC days of per-day EOP offsets: those of the tracking window, from its start to
+    its end or the last T13 time (None: offsets over the arc, or no offsets)."""
+    if par.earth_orientation_per == "arc" or not eop:
+        return None
+    try:
+        return eop_days(p.epoch, schedule.start_s, min(schedule.end_s, last_s))
+    except ValueError as exc:
+        p.fail("parameters.earth_orientation_per", f'"arc" for a tracking window of {exc}',
+               "day")
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

@@ -477,7 +477,7 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
         if uplink is not None and ts.uplink_media is not None:  # and the up-leg's media
             _zenith_columns(a, columns, uplink.station.name, uplink.media_parameters,
                             model.uplink_media_partials(t, x))
-    _eop_rows(a, scenario, columns, lambda names: model.eop_partials(t, x, names))
+    _eop_rows(a, scenario, columns, t, lambda names: model.eop_partials(t, x, names))
     record, segment = _segments(t, label, t13)
     counts = np.full(times.size, len(ts.kinds)) if taken is None else taken.sum(axis=1)
     pass_list = [(float(times[a_]), float(times[b_ - 1]), int(counts[a_:b_].sum()))
@@ -560,7 +560,7 @@ def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, a
         if ts.location != "none":
             first = columns[f"{ts.station.name}.{STATION_PARAMETER_NAMES[ts.location][0]}"]
             a[..., first:first + 3] = model.station_partials(t, x, quasar, ts.location)[which]
-    _eop_rows(a, scenario, columns, lambda names: model.eop_partials(t, x, quasar, names))
+    _eop_rows(a, scenario, columns, t, lambda names: model.eop_partials(t, x, quasar, names))
     if bl.quasar_position:
         first = columns[bl.quasar_parameters[0]]
         a[..., first:first + 2] = model.quasar_partials(t, x, quasar)
@@ -936,10 +936,20 @@ def _editing_table(editing: list[Editing]) -> TapeEditing:
                        np.array([e.added_passes for e in editing]))
 
 
-def _eop_rows(a: np.ndarray, scenario: Scenario, columns: dict[str, int],
+def _eop_rows(a: np.ndarray, scenario: Scenario, columns: dict[str, int], t_s: np.ndarray,
               partials: Callable[[tuple[str, ...]], np.ndarray]) -> None:
-    """Fill the columns ``eop.<name>`` of rows A (n, m, n_o) with ``partials(names)``
-    (n, m, k): a station's or a baseline's d h / d(EOP offsets), when the scenario has them."""
-    if scenario.eop:
-        first = columns[f"eop.{scenario.eop[0]}"]
-        a[..., first:first + len(scenario.eop)] = partials(scenario.eop)
+    """Fill the EOP offsets' columns of rows A (n, m, n_o) at times ``t_s`` (n,) with
+    ``partials(names)`` (n, m, k): a station's or a baseline's d h / d(EOP offsets), when
+    the scenario has them; per-day offsets each in its day's rows."""
+    if not scenario.eop:
+        return
+    names, k = scenario.eop_names(), len(scenario.eop)
+    values = partials(scenario.eop)
+    if scenario.eop_days is None:
+        first = columns[names[0]]
+        a[..., first:first + k] = values
+        return
+    day = scenario.eop_days.index(t_s)
+    for d in np.unique(day):
+        first = columns[names[d * k]]
+        a[day == d, :, first:first + k] = values[day == d]
