@@ -42,7 +42,9 @@ ISO strings or TOML dates)::
                        media = ["troposphere", "ionosphere"] (each station's zenith
                        parameters <STATION>.zenith_dry_km, .zenith_wet_km, kind
                        "troposphere", and .zenith_tec_tecu, kind "ionosphere"; needs
-                       the effect on in [media]),
+                       the effect on in [media]), media_per = "station" | "pass" (one
+                       set per station, or one per pass: <STATION>.zenith_wet_km.p1, ...,
+                       numbered in the station's pass order once the passes are known),
                        earth_orientation = true | ["ut1_s", "xp_rad", "yp_rad"] (constant
                        EOP offsets eop.*, kind "eop"; gmst: ut1_s only),
                        earth_orientation_per = "arc" | "day" (one offset over the arc, or
@@ -114,8 +116,8 @@ from __future__ import annotations
 import datetime as dt
 import json
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Annotated, Literal, NoReturn
 
@@ -238,6 +240,10 @@ class TrackingStation:
     media : the troposphere and ionosphere of its links (None: neither is on).
     media_parameters : effects among ("troposphere", "ionosphere") whose zenith parameters
         are in q.
+    media_per : "station" (one set of zenith parameters) or "pass" (one per pass,
+        ``<name>.p<i>``: :func:`pass_suffix`).
+    media_passes : with ``media_per = "pass"``, its number of passes (set by TAPP I once it
+        has found them: :func:`with_passes`; 0 before).
     uplink : the station transmitting its three-way up-leg; None: itself (two-way).
     uplink_media : the media of the uplink station, which its up-leg crosses (with media and
         an uplink; None otherwise).
@@ -257,6 +263,8 @@ class TrackingStation:
     band: str = DEFAULT_BAND
     media: MediaModel | None = None
     media_parameters: tuple[str, ...] = ()
+    media_per: str = "station"
+    media_passes: int = 0
     uplink: Station | None = None
     uplink_media: MediaModel | None = None
     doppler_bias_km_s: float = 0.0
@@ -277,13 +285,22 @@ class TrackingStation:
             if kind in self.biases:
                 out.append(Parameter(f"{self.station.name}.{bname}", _unit_of(bname), "bias",
                                      nominal[kind], self.number))
+        suffixes = ([""] if self.media_per == "station"
+                    else [pass_suffix(i) for i in range(self.media_passes)])
         if self.media_parameters:
-            for zname, kind, unit, value in zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS,
-                                                MEDIA_UNITS, self.media.zenith, strict=True):
-                if kind in self.media_parameters:
-                    out.append(Parameter(f"{self.station.name}.{zname}", unit, kind,
-                                         float(value), self.number))
+            for suffix in suffixes:
+                for zname, kind, unit, value in zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS,
+                                                    MEDIA_UNITS, self.media.zenith, strict=True):
+                    if kind in self.media_parameters:
+                        out.append(Parameter(f"{self.station.name}.{zname}{suffix}", unit,
+                                             kind, float(value), self.number))
         return tuple(out)
+
+
+def pass_suffix(index: int) -> str:
+    """The suffix of a station's zenith parameters of its pass ``index`` (0-based): ".p1",
+    ".p2", ..."""
+    return f".p{index + 1}"
 
 
 @dataclass(frozen=True, slots=True)
@@ -508,6 +525,10 @@ class ParametersTable(Schema):
         [], description="Media whose per-station zenith parameters are in q: "
         "\"troposphere\" (zenith_dry_km, zenith_wet_km), \"ionosphere\" (zenith_tec_tecu); "
         "each needs its effect on in [media].")
+    media_per: Literal["station", "pass"] = Field(
+        "station", description="The zenith parameters' span: one set per station over the arc "
+        "(STATION.zenith_wet_km), or one per pass, its calibration's (STATION.zenith_wet_km.p1, "
+        ".p2, ... in the station's pass order, named once TAPP I has found the passes).")
     values: dict[str, float] = Field(
         {}, description="Values other than nominal of dynamic parameters, by name (GM in "
         "km³/s²).")
@@ -891,7 +912,7 @@ def _stations(p: _Parser, doc: ScenarioFile, par: ParametersTable
             blackouts_s=blackouts + p.windows(own.blackouts, f"{where}.blackouts"),
             band=band,
             media=_station_media(p, doc.media, own, known[name], band, where),
-            media_parameters=tuple(par.media),
+            media_parameters=tuple(par.media), media_per=par.media_per,
             uplink=None if own.uplink is None else known[own.uplink],
             uplink_media=None if own.uplink is None else _uplink_media(
                 p, doc.media, trk, own.uplink, known[own.uplink]),
@@ -926,7 +947,19 @@ def _station_media(p: _Parser, media: MediaTable, own: StationTracking, station:
 
 
 def _media_parameters(p: _Parser, doc: ScenarioFile) -> None:
-    """Refuse zenith parameters in q of an effect that is off."""
+    """Refuse zenith parameters in q of an effect that is off, and per-pass ones that would
+    not exist (none asked for) or would not be modelled (a three-way up-leg's pass is its
+    uplink station's, not its receiver's)."""
+    if doc.parameters.media_per == "pass":
+        if not doc.parameters.media:
+            p.fail("parameters.media_per", 'zenith parameters to span passes (parameters.media '
+                   'non-empty) or "station"', "pass")
+        three_way = next((name for name, own in doc.tracking.station.items()
+                          if own.uplink is not None), None)
+        if three_way is not None:
+            p.fail(f"tracking.station.{three_way}.uplink", 'no three-way uplink with '
+                   'parameters.media_per = "pass" (the up-leg\'s pass is its uplink '
+                   'station\'s: use "station")', doc.tracking.station[three_way].uplink)
     for i, effect in enumerate(doc.parameters.media):
         if not getattr(doc.media, effect):
             p.fail(f"parameters.media[{i}]", f"media.{effect} = true for the {effect}'s zenith "
@@ -1198,6 +1231,16 @@ def _eop_days(p: _Parser, par: ParametersTable, eop: tuple[str, ...], schedule: 
     except ValueError as exc:
         p.fail("parameters.earth_orientation_per", f'"arc" for a tracking window of {exc}',
                "day")
+
+
+def with_passes(scenario: Scenario, passes: Sequence[int]) -> Scenario:
+    """The scenario with each station's number of passes (in ``scenario.stations`` order),
+    which names its per-pass zenith parameters (``media_per = "pass"``); unchanged without
+    them."""
+    if not any(ts.media_per == "pass" and ts.media_parameters for ts in scenario.stations):
+        return scenario
+    return replace(scenario, stations=tuple(replace(ts, media_passes=int(n)) for ts, n in zip(
+        scenario.stations, passes, strict=True)))
 
 
 def read_scenario(path: Path | str, earth_orientation: str | None = None) -> Scenario:

@@ -153,6 +153,8 @@ from tapp.tracking.scenario import (
     MISS_QUANTITIES,
     Scenario,
     TrackingStation,
+    pass_suffix,
+    with_passes,
 )
 from tapp.tracking.schedule import (
     StationSamples,
@@ -429,14 +431,26 @@ def _segments(t: np.ndarray, label: np.ndarray, t13: np.ndarray
     return record, np.cumsum(change) - 1
 
 
-def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc: _Arc,
-                  grid: np.ndarray, t13: np.ndarray, columns: dict[str, int], n_scheduled: int,
-                  samples: StationSamples | None = None, relativity: Relativity | None = None
-                  ) -> tuple[_StationData | None, Editing]:
-    """Rows of A for one station (module docstring, item 2), or None without samples, and
-    what the rules removed of its ``n_scheduled`` samples on the ``grid``, or of its
-    scheduled ``samples`` (:mod:`tapp.tracking.schedule`). A three-way station also needs
-    its uplink station to see the spacecraft at transmission (:func:`_uplink_above`)."""
+@dataclass(frozen=True, slots=True)
+class _StationPasses:
+    """One station's passes: the candidate times (the grid, or its scheduled samples), their
+    positions in the arc, the passes [start, end) into them, the observables each scheduled
+    sample measures (None: all) and what the rules removed."""
+
+    times: np.ndarray
+    pos: np.ndarray
+    passes: list[tuple[int, int]]
+    taken: np.ndarray | None
+    editing: Editing
+
+
+def _station_passes(ts: TrackingStation, scenario: Scenario, arc: _Arc, grid: np.ndarray,
+                    n_scheduled: int, samples: StationSamples | None = None
+                    ) -> _StationPasses:
+    """One station's passes (module docstring, item 2), and what the rules removed of its
+    ``n_scheduled`` samples on the ``grid``, or of its scheduled ``samples``
+    (:mod:`tapp.tracking.schedule`). A three-way station also needs its uplink station to
+    see the spacecraft at transmission (:func:`_uplink_above`)."""
     sch = scenario.schedule
     times = grid if samples is None else samples.t_s
     pos = np.searchsorted(arc.t_s, times)
@@ -450,8 +464,17 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
                                         sch.data_interval_s, grid, n_scheduled, len(ts.kinds))
     else:
         passes, taken, editing = scheduled_passes(samples, above, ts, sch, scenario.epoch)
+    return _StationPasses(times, pos, passes, taken, editing)
+
+
+def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc: _Arc,
+                  found: _StationPasses, t13: np.ndarray, columns: dict[str, int],
+                  relativity: Relativity | None = None) -> _StationData | None:
+    """Rows of A for one station's passes (module docstring, item 2), or None without
+    any."""
+    times, pos, passes, taken = found.times, found.pos, found.passes, found.taken
     if not passes:
-        return None, editing
+        return None
     take = np.concatenate([np.arange(a, b) for a, b in passes])
     label = np.concatenate([np.full(b - a, i) for i, (a, b) in enumerate(passes)])
     t, p = times[take], pos[take]
@@ -473,7 +496,13 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
         i = BIAS_KINDS.index(kind)
         a[..., columns[f"{name}.{BIAS_NAMES[i]}"]] = bias[..., i]
     if ts.media_parameters:
-        _zenith_columns(a, columns, name, ts.media_parameters, model.media_partials(t, x))
+        zenith = model.media_partials(t, x)
+        if ts.media_per == "station":
+            _zenith_columns(a, columns, name, ts.media_parameters, zenith)
+        else:  # each pass's own
+            for i in range(len(passes)):
+                _zenith_columns(a, columns, name, ts.media_parameters, zenith, label == i,
+                                pass_suffix(i))
         if uplink is not None and ts.uplink_media is not None:  # and the up-leg's media
             _zenith_columns(a, columns, uplink.station.name, uplink.media_parameters,
                             model.uplink_media_partials(t, x))
@@ -482,17 +511,18 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     counts = np.full(times.size, len(ts.kinds)) if taken is None else taken.sum(axis=1)
     pass_list = [(float(times[a_]), float(times[b_ - 1]), int(counts[a_:b_].sum()))
                  for a_, b_ in passes]
-    return (_StationData(t, model.compute(t, x), a, record, segment, pass_list,
-                         taken=None if taken is None else taken[take]), editing)
+    return _StationData(t, model.compute(t, x), a, record, segment, pass_list,
+                        taken=None if taken is None else taken[take])
 
 
 def _zenith_columns(a: np.ndarray, columns: dict[str, int], station: str,
-                    effects: tuple[str, ...], zenith: np.ndarray) -> None:
+                    effects: tuple[str, ...], zenith: np.ndarray,
+                    rows: np.ndarray | slice = slice(None), suffix: str = "") -> None:
     """Add the partials w.r.t. a station's zenith parameters (N, m, 3) to its columns of A
-    (those of ``effects`` in q)."""
+    (those of ``effects`` in q; ``suffix``: a pass's, in that pass's ``rows``)."""
     for i, (zname, kind) in enumerate(zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS, strict=True)):
         if kind in effects:
-            a[..., columns[f"{station}.{zname}"]] += zenith[..., i]
+            a[rows, ..., columns[f"{station}.{zname}{suffix}"]] += zenith[rows, ..., i]
 
 
 def _uplink_above(uplink: Station, scenario: Scenario, t: np.ndarray, states: np.ndarray
@@ -795,9 +825,7 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     times = scenario.times
     t13, is_epoch, is_input = times.t13_s, times.is_epoch, times.is_input
     n_it = t13.size - 1
-    params = scenario.parameters
-    n_o, n_p = len(params), scenario.n_p
-    columns = {par.name: i for i, par in enumerate(params)}
+    n_p = scenario.n_p
     prop = scenario.propagator()
     n_seg = int(np.count_nonzero(is_epoch))
     entries = (*scenario.stations, *scenario.baselines)  # the tape's stations
@@ -819,13 +847,18 @@ def simulate(scenario: Scenario, *, raw: bool = False,
 
     n_scheduled = _n_samples(scenario, scenario.schedule.end_s)
     relativity, relativity_note = relativity_choice(scenario, arc.t_s, arc.states)
+    found = [_station_passes(ts, scenario, arc, grid, n_scheduled, samples.get(ts.number))
+             for ts in scenario.stations]
+    # q is complete once the passes are known (per-pass zenith parameters)
+    scenario = with_passes(scenario, [len(f.passes) for f in found])
+    entries = (*scenario.stations, *scenario.baselines)
+    params = scenario.parameters
+    n_o = len(params)
+    columns = {par.name: i for i, par in enumerate(params)}
     data: list[_StationData | None] = []
-    editing: list[Editing] = []
-    for ts in scenario.stations:
-        d, e = _station_data(ts, scenario, prop, arc, grid, t13, columns, n_scheduled,
-                             samples.get(ts.number), relativity)
-        data.append(d)
-        editing.append(e)
+    editing: list[Editing] = [f.editing for f in found]
+    for ts, passes in zip(scenario.stations, found, strict=True):
+        data.append(_station_data(ts, scenario, prop, arc, passes, t13, columns, relativity))
         tick(f"observations {ts.station.name}")
     for i, bl in enumerate(scenario.baselines):
         d, e = _baseline_data(bl, scenario, prop, arc, grid, t13, columns, n_scheduled)

@@ -183,3 +183,107 @@ def test_three_way_doppler_rows_carry_both_stations_media():
                                rtol=0, atol=3.4e-11)
     np.testing.assert_allclose((values - bare.compute(t, x))[:, 1],
                                model.media_corrections(t, x)[:, 1], rtol=0, atol=1.1e-12)
+
+
+# ---------------------------------------------------------------------------------------------
+# Zenith parameters per pass
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def per_pass():
+    doc = _document()
+    doc["parameters"]["media_per"] = "pass"
+    return simulate(parse_scenario(doc, SOURCE), raw=True)
+
+
+def _pass_names(tape, station: str) -> dict[int, list[str]]:
+    """{pass number: its zenith parameter names} of a station on a per-pass tape."""
+    out: dict[int, list[str]] = {}
+    for name in tape.parameters.name:
+        head, _, suffix = name.rpartition(".")
+        if head.startswith(f"{station}.zenith_") and suffix.startswith("p"):
+            out.setdefault(int(suffix[1:]), []).append(name)
+    return out
+
+
+def test_each_pass_has_its_zenith_parameters(per_pass, simulation):
+    """One (dry, wet, TEC) set per pass of each station, numbered in its pass order, with
+    the station's nominal values; the tape's pass table has as many passes."""
+    tape = per_pass.tape
+    nominal = dict(zip(tape.parameters.name, tape.parameters.nominal, strict=True))
+    station_level = dict(zip(simulation.tape.parameters.name,
+                             simulation.tape.parameters.nominal, strict=True))
+    for number, station in enumerate(("QUITO", "KOUROU", "MALINDI"), start=1):
+        by_pass = _pass_names(tape, station)
+        n_passes = int(np.count_nonzero(tape.passes.station == number))
+        assert sorted(by_pass) == list(range(1, n_passes + 1)) and n_passes >= 1
+        for names in by_pass.values():
+            assert [n.rsplit(".", 1)[0] for n in names] == [f"{station}.{z}" for z in ZENITH]
+            assert [nominal[n] for n in names] == [station_level[f"{station}.{z}"]
+                                                   for z in ZENITH]
+        assert f"{station}.zenith_wet_km" not in nominal
+
+
+def test_a_pass_column_is_the_stations_column_in_that_pass_only(per_pass, simulation):
+    """Summed over a station's passes, the per-pass columns are the per-station column
+    (exactly); each is zero outside its own pass's rows, and not zero in them."""
+    raw_pass, raw_station = per_pass.tape.raw, simulation.tape.raw
+    np.testing.assert_array_equal(raw_pass.t_s, raw_station.t_s)
+    names_pass = list(per_pass.tape.parameters.name)
+    names_station = list(simulation.tape.parameters.name)
+    for station in ("QUITO", "KOUROU", "MALINDI"):
+        by_pass = _pass_names(per_pass.tape, station)
+        for j, z in enumerate(ZENITH):
+            columns = [raw_pass.A[:, names_pass.index(by_pass[k][j])] for k in sorted(by_pass)]
+            np.testing.assert_array_equal(sum(columns),
+                                          raw_station.A[:, names_station.index(
+                                              f"{station}.{z}")])
+            nonzero = [c != 0.0 for c in columns]
+            assert all(m.any() for m in nonzero)
+            assert not np.any(np.sum(nonzero, axis=0) > 1)  # one pass per row
+
+
+def test_fully_correlated_passes_are_the_stations_zenith_error_in_tapp3(per_pass, simulation):
+    """Real world: 5 cm of zenith wet error per pass, the fit holding the zenith parameters
+    at 0: with every two passes of a station correlated by ρ = 1 (one error over the arc) the
+    printed real covariance is the per-station one's to the rounding of the consider terms;
+    with independent passes it is not."""
+    out = {"times": {"print": [3]}, "commands": {"print": ["cov-real p@current"]}}
+    printed = {}
+    for label, sim, correlated in (("station", simulation, False), ("one", per_pass, True),
+                                   ("independent", per_pass, False)):
+        tape = sim.tape
+        fit, real = {}, {}
+        for name in tape.parameters.name:
+            key = name.split(".")[1] if "." in name else name
+            fit[name] = 0.0 if key in ZENITH else SIGMA.get(key, SIGMA_STATION.get(key))
+            real[name] = WET_SIGMA_km if key == "zenith_wet_km" else fit[name]
+        doc = {"fit": {"apriori": {"sigma": fit}}, "real": {"apriori": {"sigma": real}}, **out}
+        if correlated:
+            doc["real"]["apriori"]["correlation"] = [
+                [a, b, 1.0] for station in ("QUITO", "KOUROU", "MALINDI")
+                for names in [[n for n in tape.parameters.name
+                               if n.startswith(f"{station}.zenith_wet_km.p")]]
+                for i, a in enumerate(names) for b in names[i + 1:]]
+        printed[label] = run(tape, doc).blocks[-1].entities[0].matrix
+    scale = np.sqrt(np.outer(np.diag(printed["station"]), np.diag(printed["station"])))
+    assert np.max(np.abs(printed["one"] - printed["station"]) / scale) < 1e-9
+    assert np.max(np.abs(printed["independent"] - printed["station"]) / scale) > 1e-6
+
+
+@pytest.mark.parametrize("change, field", [
+    ({"media": []}, "parameters.media_per"),
+    ({"uplink": "KOUROU"}, "tracking.station.QUITO.uplink"),
+])
+def test_per_pass_zenith_parameters_that_would_not_exist_or_fit_are_refused(change, field):
+    doc = _document()
+    doc["parameters"]["media_per"] = "pass"
+    if "media" in change:
+        doc["parameters"]["media"] = change["media"]
+    else:
+        doc["tracking"]["light_time"] = "two_way"
+        doc["tracking"]["station"]["QUITO"]["uplink"] = change["uplink"]
+    with pytest.raises(InputError) as info:
+        parse_scenario(doc, SOURCE)
+    assert info.value.field == field
