@@ -108,6 +108,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -183,6 +184,10 @@ MAX_TIMES = 10_000
 #: refused make bench's n_o = 100 run (237 entities of up to 100 x 100, 868,000 numbers).
 MAX_ENTITIES = 2_000
 MAX_ENTITY_NUMBERS = 1_000_000
+#: The characters that make a σ-table key or a ``budget.groups`` entry a shell-style pattern
+#: of parameter names (:func:`fnmatch.fnmatchcase`: ``*`` any text, ``?`` one character,
+#: ``[seq]`` one of seq), unless the key is itself a parameter name of the tape.
+PATTERN_CHARS = frozenset("*?[")
 #: The seed's nominal optional miss partitions (Appendix A.1), (tail, head).
 NOMINAL_MISS = {"m1": (0, 6), "m2": (0, 3), "m3": (3, 6), "m4": (6, 12), "m5": (12, 18)}
 
@@ -506,6 +511,8 @@ class _Binder:
         self.generated = _generated(header, self.names)
         #: The station-location block of each world that has one (:meth:`_station_block`).
         self.station_blocks: dict[str, _Generated] = {}
+        #: Each world's σ table with its patterns expanded, once read (:meth:`sigma_table`).
+        self._sigma_tables: dict[str, dict[str, float] | list[float] | None] = {}
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -632,12 +639,13 @@ class _Binder:
                            "common.n_c1")
         order_c = p_c.move(names) if p_c else names
         k_c = self._constraints(com.constraints, order_c, "common.constraints")
-        fit_sigma_fixed = self._sigma_zero(d.fit.apriori.sigma, order_c, n_c1, "fit.apriori")
+        fit_sigma_fixed = self._sigma_zero(self.sigma_table("fit"), order_c, n_c1,
+                                           "fit.apriori")
         p_f, n_f1 = self._world(d.fit.permutation, d.fit.fixed, fit_sigma_fixed, d.fit.n_f1,
                                 order_c, n_c1, "fit", "fixed", "n_f1")
         order_f = p_f.move(order_c) if p_f else order_c
         k_f = self._constraints(d.fit.constraints, order_f, "fit.constraints")
-        real_sigma_certain = self._sigma_zero(d.real.apriori.sigma, order_c, n_c1,
+        real_sigma_certain = self._sigma_zero(self.sigma_table("real"), order_c, n_c1,
                                               "real.apriori")
         p_r, n_r1 = self._world(d.real.permutation, d.real.certain, real_sigma_certain,
                                 d.real.n_r1, order_c, n_c1, "real", "certain", "n_r1")
@@ -677,12 +685,70 @@ class _Binder:
 
     # --- a priori -----------------------------------------------------------------------------
 
+    def _named(self, key: str) -> str:
+        """The name a σ-table key stands for: the parameter at a 1-based position on the tape
+        (the standard order), else the key itself."""
+        return self.names[int(key) - 1] if key.isdigit() and 1 <= int(key) <= self.n_o else key
+
     def _key(self, key: str, field: str) -> str:
         """A σ-table key: a name, or a 1-based position on the tape (the standard order)."""
-        if key.isdigit() and 1 <= int(key) <= self.n_o:
+        name = self._named(key)
+        if name != key:
             self.positional.append(f"{field}.sigma.{key}")
-            return self.names[int(key) - 1]
-        return key
+        return name
+
+    def _is_pattern(self, ref: object) -> bool:
+        """Whether a σ-table key or budget-group entry is a pattern of parameter names (it has
+        :data:`PATTERN_CHARS`; a parameter name of the tape is never one)."""
+        return (isinstance(ref, str) and not PATTERN_CHARS.isdisjoint(ref)
+                and ref not in self.names)
+
+    def _matching(self, pattern: str, field: str) -> list[str]:
+        """The tape's parameter names ``pattern`` matches (:func:`fnmatch.fnmatchcase`), in
+        tape order; a pattern that matches none is refused (a typo, or a deck for another
+        tape, would otherwise pass silently)."""
+        out = [name for name in self.names if fnmatchcase(name, pattern)]
+        if not out:
+            raise self.fail(field, "a pattern that matches at least one parameter of the "
+                            "tape (" + ", ".join(self.names) + ")", pattern)
+        return out
+
+    def sigma_table(self, world: str) -> dict[str, float] | list[float] | None:
+        """The σ's of ``world``'s a priori (``{world}.apriori.sigma``) as every part of the
+        binding reads them: a table with its patterns expanded (computed once; the deck is
+        left as given), a list or None as given.
+
+        A key with pattern characters stands, at its place in the table, for the tape's
+        parameters it matches (in tape order) that the table does not name explicitly, by
+        name or position: explicit keys win. A parameter matched by several patterns takes
+        the first one's place, and they must give it the same σ."""
+        if world not in self._sigma_tables:
+            self._sigma_tables[world] = self._expand_sigma(
+                getattr(self.deck, world).apriori.sigma, f"{world}.apriori.sigma")
+        return self._sigma_tables[world]
+
+    def _expand_sigma(self, sigma, field: str) -> dict[str, float] | list[float] | None:
+        """A σ table with its patterns expanded (:meth:`sigma_table`); a list or None as is."""
+        if not isinstance(sigma, dict):
+            return sigma
+        explicit = {self._named(key) for key in sigma if not self._is_pattern(key)}
+        out: dict[str, float] = {}
+        origin: dict[str, str] = {}
+        for key, value in sigma.items():
+            if not self._is_pattern(key):
+                out[key] = value
+                continue
+            for name in self._matching(key, f"{field}.{key}"):
+                if name in explicit:
+                    continue
+                if name not in origin:
+                    out[name], origin[name] = value, key
+                elif out[name] != value:
+                    raise self.fail(f"{field}.{key}", f"patterns that give {name} one σ, or "
+                                    f"{name} named explicitly (ambiguous: it matches "
+                                    f"{origin[name]!r} with σ = {out[name]:g} and {key!r})",
+                                    value)
+        return out
 
     def _sigma_zero(self, sigma, order: list[str], n_c1: int, field: str) -> list[str]:
         """Names with σ = 0 in a σ table that covers the common parameters (readable form)."""
@@ -922,10 +988,11 @@ class _Binder:
         ap = self.deck.fit.apriori
         if (ap.sigma is None) == (ap.normal is None):
             raise self.fail("fit.apriori", "exactly one of sigma or normal")
-        blocks = self._generated_blocks(order, n_f1, "fit.apriori", "fit", ap.sigma)
+        table = self.sigma_table("fit")
+        blocks = self._generated_blocks(order, n_f1, "fit.apriori", "fit", table)
         if ap.normal is not None:
             return self._matrix(ap.normal, n_f1, "fit.apriori.normal", order, "normal")
-        sigma = self._sigmas(ap.sigma, order, n_f1, "fit.apriori", blocks)
+        sigma = self._sigmas(table, order, n_f1, "fit.apriori", blocks)
         s0 = np.diag(1.0 / sigma**2)
         for at, g in blocks:
             s0[np.ix_(at, at)] = g.information
@@ -935,13 +1002,14 @@ class _Binder:
         ap = self.deck.real.apriori
         if (ap.sigma is None) == (ap.covariance is None):
             raise self.fail("real.apriori", "exactly one of sigma or covariance")
-        blocks = self._generated_blocks(order, n_r1, "real.apriori", "real", ap.sigma)
+        table = self.sigma_table("real")
+        blocks = self._generated_blocks(order, n_r1, "real.apriori", "real", table)
         if ap.covariance is not None:
             if ap.correlation:
                 raise self.fail("real.apriori.correlation", "no correlations with a covariance")
             return self._matrix(ap.covariance, n_r1, "real.apriori.covariance", order,
                                 "covariance")
-        sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori", blocks)
+        sigma = self._sigmas(table, order, n_r1, "real.apriori", blocks)
         if np.any(~np.isfinite(sigma)):
             raise self.fail("real.apriori.sigma", "finite σ's")
         corr = np.eye(n_r1)
