@@ -1106,7 +1106,7 @@ class _Binder:
         out, seen = [], set()
         for name, refs in self.deck.budget.groups.items():
             field = f"budget.groups.{name}"
-            idx = tuple(self.position(r, order, field) for r in refs)
+            idx = self._group(refs, order, field)
             bad = [order[i] for i in idx if not systems.n_p <= i < systems.n_r1]
             if bad or not idx:
                 raise self.fail(field, "uncertain constants of the real world (rq)", bad or refs)
@@ -1122,6 +1122,21 @@ class _Binder:
                              if systems.n_p <= i < systems.n_r1 and i not in seen)
                 if rest:
                     out.append((label, rest))
+        return tuple(out)
+
+    def _group(self, refs: list, order: list[str], field: str) -> tuple[int, ...]:
+        """Positions in ``order`` of a budget group's entries (names or positions): a pattern
+        stands, at its place, for the tape's parameters it matches (in tape order) that the
+        group does not already have, so that each counts once."""
+        given = {k: self.position(r, order, field) for k, r in enumerate(refs)
+                 if not self._is_pattern(r)}
+        out: list[int] = []
+        for k, ref in enumerate(refs):
+            if k in given:
+                out.append(given[k])
+                continue
+            matched = (self.position(n, order, field) for n in self._matching(ref, field))
+            out += [i for i in matched if i not in out and i not in given.values()]
         return tuple(out)
 
     def history(self) -> Side:

@@ -1,4 +1,4 @@
-"""Shell-style patterns of parameter names in the deck's σ tables
+"""Shell-style patterns of parameter names in the deck's σ tables and budget groups
 (:func:`fnmatch.fnmatchcase`; the rule is in the module docstring of
 :mod:`tapp.processor.deck`): a deck with patterns runs exactly as the deck with every name
 spelled out, an explicit key beats a pattern, and patterns that match nothing or disagree are
@@ -42,6 +42,17 @@ REAL_PATTERNS = {"?_km": 1.0, "v?_km_s": 1e-3, "GM_km3_s2": 0.01, "J2": 1e-8,
 STATION_XYZ = ("QUITO.z_km", "KOUROU.x_km", "KOUROU.y_km", "KOUROU.z_km", "MALINDI.z_km")
 RATE_BIASES = ("QUITO.range_rate_bias_km_s", "KOUROU.range_rate_bias_km_s",
                "MALINDI.range_rate_bias_km_s")
+#: Budget groups by pattern, and the same groups spelled out in the order the patterns give
+#: (each pattern's matches in tape order, at its place).
+GROUPS_PATTERNS = {"locations": ["*.spin_radius_km", "*.lon_rad", "*.z_km", "KOUROU.[xy]_km"],
+                   "biases": ["*bias*"]}
+GROUPS_NAMES = {"locations": ["QUITO.spin_radius_km", "MALINDI.spin_radius_km",
+                              "QUITO.lon_rad", "MALINDI.lon_rad", "QUITO.z_km", "KOUROU.z_km",
+                              "MALINDI.z_km", "KOUROU.x_km", "KOUROU.y_km"],
+                "biases": ["QUITO.range_bias_km", "QUITO.range_rate_bias_km_s",
+                           "KOUROU.range_bias_km", "KOUROU.range_rate_bias_km_s",
+                           "MALINDI.range_bias_km", "MALINDI.range_rate_bias_km_s"]}
+
 
 @pytest.fixture(scope="module")
 def tape():
@@ -131,6 +142,32 @@ def test_a_pattern_keeps_the_station_blocks_refusal(tape):
     err = _refused(tape, doc)
     assert err.field == "real.apriori.sigma.QUITO.spin_radius_km"
     assert err.expected.startswith("no σ for a station location given by real.apriori.stations")
+
+
+def test_budget_groups_by_pattern_are_the_groups_by_name(tape):
+    by_name = deck(tape, budget={"groups": GROUPS_NAMES}, **PRINTS)
+    by_pattern = deck(tape, budget={"groups": GROUPS_PATTERNS}, **PRINTS)
+    assert _bind(tape, by_pattern).budget_groups == _bind(tape, by_name).budget_groups
+    budgets = [[e.budget for b in run(tape, doc).blocks for e in b.entities if e.budget]
+               for doc in (by_name, by_pattern)]
+    assert len(budgets[0]) == len(budgets[1]) > 0
+    for a, b in zip(*budgets, strict=True):
+        assert a.sources == b.sources and "biases (a priori)" in a.sources
+        np.testing.assert_array_equal(a.variances, b.variances)
+
+
+def test_a_budget_group_counts_a_parameter_once_whatever_matches_it(tape):
+    groups = {"QUITO": ["QUITO.range_bias_km", "QUITO.*", "*.lon_rad"]}
+    spelled = {"QUITO": ["QUITO.range_bias_km", "QUITO.spin_radius_km", "QUITO.lon_rad",
+                         "QUITO.z_km", "QUITO.range_rate_bias_km_s", "MALINDI.lon_rad"]}
+    assert (_bind(tape, deck(tape, budget={"groups": groups})).budget_groups
+            == _bind(tape, deck(tape, budget={"groups": spelled})).budget_groups)
+
+
+def test_a_budget_pattern_that_matches_no_parameter_is_refused(tape):
+    err = _refused(tape, deck(tape, budget={"groups": {"media": ["*.zenith_wet_km"]}}))
+    assert err.field == "budget.groups.media"
+    assert err.expected.startswith("a pattern that matches at least one parameter of the tape")
 
 
 @pytest.mark.parametrize(("table", "field"), [
