@@ -35,6 +35,7 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     manoeuvres = "ignore"       # the tape's execution errors: "estimate" | "ignore"
     [fit.apriori]
     sigma = { x_km = 1.0, "GM_moon_km3_s2" = 0.0 }  # σ = 0: held fixed; inf: no information
+    # sigma = { "GM_moon_km3_s2" = 0.0, "*.rho_km" = 1e-3, "*" = 1.0 }  # patterns (below)
     # sigma = [1.0, 1.0, ...]   # positional over f1 (seed coding), or
     # normal = [[...], ...]     # the n_f1 x n_f1 normal matrix S₀
     [real]                      # real system: P_r, n_r1, K_r, a priori
@@ -54,7 +55,7 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     partitions = { m1 = [0, 2], m2 = ["b_dot_t_km", "flight_time_s"] }  # [t, h] or names
     [budget]
     enabled = true
-    groups = { "station locations" = ["GOLDSTONE.rho_km", "..."] }
+    groups = { "station locations" = ["GOLDSTONE.rho_km", "MADRID.*"] }
     [plots]
     partition = "p@current"     # σ against time of this set
     [output]
@@ -63,7 +64,19 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
 In the sigma-table form every parameter of the tape needs a σ in the fit world (a parameter
 with σ = 0 is fixed, i.e. constrained) and in the real world (σ = 0: certain); the fit and
 real permutations that put the fitted/uncertain parameters first are then built by keeping the
-tape's order (stable). A priori σ's lie in :data:`SIGMA_RANGE` (the reason is given there);
+tape's order (stable). A key of a σ table may be a shell-style pattern of parameter names
+(:func:`fnmatch.fnmatchcase`, with ``*``, ``?`` or ``[``; :data:`PATTERN_CHARS`):
+``"*.zenith_wet_km"``, ``"eop.ut1_s.*"``, ``"*"``. It stands, at its place in the table,
+for every parameter of the tape it matches, in tape order, that the table does not name
+explicitly (by name or position: explicit keys win, so ``"*"`` after them gives the rest); it
+must match at least one parameter, and two patterns that match a parameter not named
+explicitly must give it the same σ. The table so expanded is what the rest of the binding
+reads: a pattern that matches parameters whose a priori the world takes from elsewhere (the
+tape's stochastic accelerations or execution errors, a station block below) gives them σ's,
+refused as named ones would be. ``[budget.groups]`` takes patterns the same way: each stands
+for the parameters it matches, in tape order, that its group does not already have.
+Correlation triples, permutations, constraints and the fixed, certain and eliminated lists
+take names and positions only. A priori σ's lie in :data:`SIGMA_RANGE` (the reason is given there);
 fit normal matrices and real covariances given as matrices must have their diagonal in the
 matching range, be symmetric and positive semi-definite, each entry on its own scale
 √(a_ii a_jj); constraint coefficients are bounded by :data:`MAX_CONSTRAINT`.
@@ -306,9 +319,10 @@ class FitApriori(Schema):
     """``[fit.apriori]``: the fit world's a priori information: σ's or a normal matrix."""
 
     sigma: dict[str, InfFloat] | list[InfFloat] | None = Field(
-        None, description="σ by parameter name (every parameter), or a list over f1 (the seed's "
-        "coding); 0: held fixed, inf: no information.", json_schema_extra={"unit": "the "
-                                                                            "parameter's"})
+        None, description="σ by parameter name (every parameter) or position, or by a "
+        "shell-style pattern of names (*, ?, [...]) for the parameters it matches that are not "
+        "named explicitly; or a list over f1 (the seed's coding); 0: held fixed, inf: no "
+        "information.", json_schema_extra={"unit": "the parameter's"})
     normal: list[list[float]] | None = Field(None, description="The n_f1 x n_f1 a priori "
                                              "normal matrix S₀ (symmetric).")
     stations: StationsApriori | None = Field(None, description="Station locations as full "
@@ -341,8 +355,10 @@ class RealApriori(Schema):
     matrix."""
 
     sigma: dict[str, float] | list[float] | None = Field(
-        None, description="σ by parameter name (every parameter), or a list over r1; 0: "
-        "certain.", json_schema_extra={"unit": "the parameter's"})
+        None, description="σ by parameter name (every parameter) or position, or by a "
+        "shell-style pattern of names (*, ?, [...]) for the parameters it matches that are not "
+        "named explicitly; or a list over r1; 0: certain.",
+        json_schema_extra={"unit": "the parameter's"})
     correlation: list[list[Ref | float]] = Field(
         [], description="Triples [a, b, ρ]: the correlation of parameters a and b.")
     covariance: list[list[float]] | None = Field(
@@ -382,8 +398,9 @@ class BudgetTable(Schema):
 
     enabled: bool = Field(True, description="Print error budgets.")
     groups: dict[str, list[Ref]] = Field(
-        {}, description="Named groups of parameters whose a priori errors count as one "
-        "source.")
+        {}, description="Named groups of parameters (names, positions, or shell-style "
+        "patterns of names: *, ?, [...], each for the parameters it matches) whose a priori "
+        "errors count as one source.")
 
 
 class Plots(Schema):
