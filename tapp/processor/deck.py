@@ -35,6 +35,7 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     manoeuvres = "ignore"       # the tape's execution errors: "estimate" | "ignore"
     [fit.apriori]
     sigma = { x_km = 1.0, "GM_moon_km3_s2" = 0.0 }  # σ = 0: held fixed; inf: no information
+    # sigma = { "GM_moon_km3_s2" = 0.0, "*.rho_km" = 1e-3, "*" = 1.0 }  # patterns (below)
     # sigma = [1.0, 1.0, ...]   # positional over f1 (seed coding), or
     # normal = [[...], ...]     # the n_f1 x n_f1 normal matrix S₀
     [real]                      # real system: P_r, n_r1, K_r, a priori
@@ -54,7 +55,7 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
     partitions = { m1 = [0, 2], m2 = ["b_dot_t_km", "flight_time_s"] }  # [t, h] or names
     [budget]
     enabled = true
-    groups = { "station locations" = ["GOLDSTONE.rho_km", "..."] }
+    groups = { "station locations" = ["GOLDSTONE.rho_km", "MADRID.*"] }
     [plots]
     partition = "p@current"     # σ against time of this set
     [output]
@@ -63,7 +64,19 @@ seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 tim
 In the sigma-table form every parameter of the tape needs a σ in the fit world (a parameter
 with σ = 0 is fixed, i.e. constrained) and in the real world (σ = 0: certain); the fit and
 real permutations that put the fitted/uncertain parameters first are then built by keeping the
-tape's order (stable). A priori σ's lie in :data:`SIGMA_RANGE` (the reason is given there);
+tape's order (stable). A key of a σ table may be a shell-style pattern of parameter names
+(:func:`fnmatch.fnmatchcase`, with ``*``, ``?`` or ``[``; :data:`PATTERN_CHARS`):
+``"*.zenith_wet_km"``, ``"eop.ut1_s.*"``, ``"*"``. It stands, at its place in the table,
+for every parameter of the tape it matches, in tape order, that the table does not name
+explicitly (by name or position: explicit keys win, so ``"*"`` after them gives the rest); it
+must match at least one parameter, and two patterns that match a parameter not named
+explicitly must give it the same σ. The table so expanded is what the rest of the binding
+reads: a pattern that matches parameters whose a priori the world takes from elsewhere (the
+tape's stochastic accelerations or execution errors, a station block below) gives them σ's,
+refused as named ones would be. ``[budget.groups]`` takes patterns the same way: each stands
+for the parameters it matches, in tape order, that its group does not already have.
+Correlation triples, permutations, constraints and the fixed, certain and eliminated lists
+take names and positions only. A priori σ's lie in :data:`SIGMA_RANGE` (the reason is given there);
 fit normal matrices and real covariances given as matrices must have their diagonal in the
 matching range, be symmetric and positive semi-definite, each entry on its own scale
 √(a_ii a_jj); constraint coefficients are bounded by :data:`MAX_CONSTRAINT`.
@@ -108,6 +121,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -183,6 +197,10 @@ MAX_TIMES = 10_000
 #: refused make bench's n_o = 100 run (237 entities of up to 100 x 100, 868,000 numbers).
 MAX_ENTITIES = 2_000
 MAX_ENTITY_NUMBERS = 1_000_000
+#: The characters that make a σ-table key or a ``budget.groups`` entry a shell-style pattern
+#: of parameter names (:func:`fnmatch.fnmatchcase`: ``*`` any text, ``?`` one character,
+#: ``[seq]`` one of seq), unless the key is itself a parameter name of the tape.
+PATTERN_CHARS = frozenset("*?[")
 #: The seed's nominal optional miss partitions (Appendix A.1), (tail, head).
 NOMINAL_MISS = {"m1": (0, 6), "m2": (0, 3), "m3": (3, 6), "m4": (6, 12), "m5": (12, 18)}
 
@@ -301,9 +319,10 @@ class FitApriori(Schema):
     """``[fit.apriori]``: the fit world's a priori information: σ's or a normal matrix."""
 
     sigma: dict[str, InfFloat] | list[InfFloat] | None = Field(
-        None, description="σ by parameter name (every parameter), or a list over f1 (the seed's "
-        "coding); 0: held fixed, inf: no information.", json_schema_extra={"unit": "the "
-                                                                            "parameter's"})
+        None, description="σ by parameter name (every parameter) or position, or by a "
+        "shell-style pattern of names (*, ?, [...]) for the parameters it matches that are not "
+        "named explicitly; or a list over f1 (the seed's coding); 0: held fixed, inf: no "
+        "information.", json_schema_extra={"unit": "the parameter's"})
     normal: list[list[float]] | None = Field(None, description="The n_f1 x n_f1 a priori "
                                              "normal matrix S₀ (symmetric).")
     stations: StationsApriori | None = Field(None, description="Station locations as full "
@@ -336,8 +355,10 @@ class RealApriori(Schema):
     matrix."""
 
     sigma: dict[str, float] | list[float] | None = Field(
-        None, description="σ by parameter name (every parameter), or a list over r1; 0: "
-        "certain.", json_schema_extra={"unit": "the parameter's"})
+        None, description="σ by parameter name (every parameter) or position, or by a "
+        "shell-style pattern of names (*, ?, [...]) for the parameters it matches that are not "
+        "named explicitly; or a list over r1; 0: certain.",
+        json_schema_extra={"unit": "the parameter's"})
     correlation: list[list[Ref | float]] = Field(
         [], description="Triples [a, b, ρ]: the correlation of parameters a and b.")
     covariance: list[list[float]] | None = Field(
@@ -377,8 +398,9 @@ class BudgetTable(Schema):
 
     enabled: bool = Field(True, description="Print error budgets.")
     groups: dict[str, list[Ref]] = Field(
-        {}, description="Named groups of parameters whose a priori errors count as one "
-        "source.")
+        {}, description="Named groups of parameters (names, positions, or shell-style "
+        "patterns of names: *, ?, [...], each for the parameters it matches) whose a priori "
+        "errors count as one source.")
 
 
 class Plots(Schema):
@@ -506,6 +528,8 @@ class _Binder:
         self.generated = _generated(header, self.names)
         #: The station-location block of each world that has one (:meth:`_station_block`).
         self.station_blocks: dict[str, _Generated] = {}
+        #: Each world's σ table with its patterns expanded, once read (:meth:`sigma_table`).
+        self._sigma_tables: dict[str, dict[str, float] | list[float] | None] = {}
 
     def fail(self, field: str, expected: str, got: object = None) -> InputError:
         return InputError(self.source, field, expected, got)
@@ -632,12 +656,13 @@ class _Binder:
                            "common.n_c1")
         order_c = p_c.move(names) if p_c else names
         k_c = self._constraints(com.constraints, order_c, "common.constraints")
-        fit_sigma_fixed = self._sigma_zero(d.fit.apriori.sigma, order_c, n_c1, "fit.apriori")
+        fit_sigma_fixed = self._sigma_zero(self.sigma_table("fit"), order_c, n_c1,
+                                           "fit.apriori")
         p_f, n_f1 = self._world(d.fit.permutation, d.fit.fixed, fit_sigma_fixed, d.fit.n_f1,
                                 order_c, n_c1, "fit", "fixed", "n_f1")
         order_f = p_f.move(order_c) if p_f else order_c
         k_f = self._constraints(d.fit.constraints, order_f, "fit.constraints")
-        real_sigma_certain = self._sigma_zero(d.real.apriori.sigma, order_c, n_c1,
+        real_sigma_certain = self._sigma_zero(self.sigma_table("real"), order_c, n_c1,
                                               "real.apriori")
         p_r, n_r1 = self._world(d.real.permutation, d.real.certain, real_sigma_certain,
                                 d.real.n_r1, order_c, n_c1, "real", "certain", "n_r1")
@@ -677,12 +702,70 @@ class _Binder:
 
     # --- a priori -----------------------------------------------------------------------------
 
+    def _named(self, key: str) -> str:
+        """The name a σ-table key stands for: the parameter at a 1-based position on the tape
+        (the standard order), else the key itself."""
+        return self.names[int(key) - 1] if key.isdigit() and 1 <= int(key) <= self.n_o else key
+
     def _key(self, key: str, field: str) -> str:
         """A σ-table key: a name, or a 1-based position on the tape (the standard order)."""
-        if key.isdigit() and 1 <= int(key) <= self.n_o:
+        name = self._named(key)
+        if name != key:
             self.positional.append(f"{field}.sigma.{key}")
-            return self.names[int(key) - 1]
-        return key
+        return name
+
+    def _is_pattern(self, ref: object) -> bool:
+        """Whether a σ-table key or budget-group entry is a pattern of parameter names (it has
+        :data:`PATTERN_CHARS`; a parameter name of the tape is never one)."""
+        return (isinstance(ref, str) and not PATTERN_CHARS.isdisjoint(ref)
+                and ref not in self.names)
+
+    def _matching(self, pattern: str, field: str) -> list[str]:
+        """The tape's parameter names ``pattern`` matches (:func:`fnmatch.fnmatchcase`), in
+        tape order; a pattern that matches none is refused (a typo, or a deck for another
+        tape, would otherwise pass silently)."""
+        out = [name for name in self.names if fnmatchcase(name, pattern)]
+        if not out:
+            raise self.fail(field, "a pattern that matches at least one parameter of the "
+                            "tape (" + ", ".join(self.names) + ")", pattern)
+        return out
+
+    def sigma_table(self, world: str) -> dict[str, float] | list[float] | None:
+        """The σ's of ``world``'s a priori (``{world}.apriori.sigma``) as every part of the
+        binding reads them: a table with its patterns expanded (computed once; the deck is
+        left as given), a list or None as given.
+
+        A key with pattern characters stands, at its place in the table, for the tape's
+        parameters it matches (in tape order) that the table does not name explicitly, by
+        name or position: explicit keys win. A parameter matched by several patterns takes
+        the first one's place, and they must give it the same σ."""
+        if world not in self._sigma_tables:
+            self._sigma_tables[world] = self._expand_sigma(
+                getattr(self.deck, world).apriori.sigma, f"{world}.apriori.sigma")
+        return self._sigma_tables[world]
+
+    def _expand_sigma(self, sigma, field: str) -> dict[str, float] | list[float] | None:
+        """A σ table with its patterns expanded (:meth:`sigma_table`); a list or None as is."""
+        if not isinstance(sigma, dict):
+            return sigma
+        explicit = {self._named(key) for key in sigma if not self._is_pattern(key)}
+        out: dict[str, float] = {}
+        origin: dict[str, str] = {}
+        for key, value in sigma.items():
+            if not self._is_pattern(key):
+                out[key] = value
+                continue
+            for name in self._matching(key, f"{field}.{key}"):
+                if name in explicit:
+                    continue
+                if name not in origin:
+                    out[name], origin[name] = value, key
+                elif out[name] != value:
+                    raise self.fail(f"{field}.{key}", f"patterns that give {name} one σ, or "
+                                    f"{name} named explicitly (ambiguous: it matches "
+                                    f"{origin[name]!r} with σ = {out[name]:g} and {key!r})",
+                                    value)
+        return out
 
     def _sigma_zero(self, sigma, order: list[str], n_c1: int, field: str) -> list[str]:
         """Names with σ = 0 in a σ table that covers the common parameters (readable form)."""
@@ -922,10 +1005,11 @@ class _Binder:
         ap = self.deck.fit.apriori
         if (ap.sigma is None) == (ap.normal is None):
             raise self.fail("fit.apriori", "exactly one of sigma or normal")
-        blocks = self._generated_blocks(order, n_f1, "fit.apriori", "fit", ap.sigma)
+        table = self.sigma_table("fit")
+        blocks = self._generated_blocks(order, n_f1, "fit.apriori", "fit", table)
         if ap.normal is not None:
             return self._matrix(ap.normal, n_f1, "fit.apriori.normal", order, "normal")
-        sigma = self._sigmas(ap.sigma, order, n_f1, "fit.apriori", blocks)
+        sigma = self._sigmas(table, order, n_f1, "fit.apriori", blocks)
         s0 = np.diag(1.0 / sigma**2)
         for at, g in blocks:
             s0[np.ix_(at, at)] = g.information
@@ -935,13 +1019,14 @@ class _Binder:
         ap = self.deck.real.apriori
         if (ap.sigma is None) == (ap.covariance is None):
             raise self.fail("real.apriori", "exactly one of sigma or covariance")
-        blocks = self._generated_blocks(order, n_r1, "real.apriori", "real", ap.sigma)
+        table = self.sigma_table("real")
+        blocks = self._generated_blocks(order, n_r1, "real.apriori", "real", table)
         if ap.covariance is not None:
             if ap.correlation:
                 raise self.fail("real.apriori.correlation", "no correlations with a covariance")
             return self._matrix(ap.covariance, n_r1, "real.apriori.covariance", order,
                                 "covariance")
-        sigma = self._sigmas(ap.sigma, order, n_r1, "real.apriori", blocks)
+        sigma = self._sigmas(table, order, n_r1, "real.apriori", blocks)
         if np.any(~np.isfinite(sigma)):
             raise self.fail("real.apriori.sigma", "finite σ's")
         corr = np.eye(n_r1)
@@ -1038,7 +1123,7 @@ class _Binder:
         out, seen = [], set()
         for name, refs in self.deck.budget.groups.items():
             field = f"budget.groups.{name}"
-            idx = tuple(self.position(r, order, field) for r in refs)
+            idx = self._group(refs, order, field)
             bad = [order[i] for i in idx if not systems.n_p <= i < systems.n_r1]
             if bad or not idx:
                 raise self.fail(field, "uncertain constants of the real world (rq)", bad or refs)
@@ -1054,6 +1139,21 @@ class _Binder:
                              if systems.n_p <= i < systems.n_r1 and i not in seen)
                 if rest:
                     out.append((label, rest))
+        return tuple(out)
+
+    def _group(self, refs: list, order: list[str], field: str) -> tuple[int, ...]:
+        """Positions in ``order`` of a budget group's entries (names or positions): a pattern
+        stands, at its place, for the tape's parameters it matches (in tape order) that the
+        group does not already have, so that each counts once."""
+        given = {k: self.position(r, order, field) for k, r in enumerate(refs)
+                 if not self._is_pattern(r)}
+        out: list[int] = []
+        for k, ref in enumerate(refs):
+            if k in given:
+                out.append(given[k])
+                continue
+            matched = (self.position(n, order, field) for n in self._matching(ref, field))
+            out += [i for i in matched if i not in out and i not in given.values()]
         return tuple(out)
 
     def history(self) -> Side:
