@@ -32,6 +32,7 @@ from tapp.guidance.statistics import (
     flight_time_row,
 )
 from tapp.guidance.study import GuidanceResult
+from tapp.report.figures import subplots
 from tapp.report.markdown import table
 
 _DAY_S = 86400.0
@@ -339,25 +340,15 @@ def guidance_markdown(r: GuidanceResult) -> str:
 # ---------------------------------------------------------------------------------------------
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def plot_bplane_scatter(r: GuidanceResult, path: Path, title: str) -> Path:
     """Final (δB·T, δB·R) of the first :data:`SCATTER_SAMPLES` samples, with the 1σ and 3σ
     ellipses of the Monte Carlo (solid) and the linear covariance (dashed) and the
     corridor; needs the B-plane miss components."""
     from tapp.report.processor import ellipse_points
 
-    plt = _pyplot()
     bp = bplane_rows(r.miss_name)
     miss = r.samples.miss[:SCATTER_SAMPLES]
-    fig, ax = plt.subplots(figsize=(6.4, 6.0))
+    fig, ax = subplots(figsize=(6.4, 6.0))
     ax.plot(miss[:, bp[0]], miss[:, bp[1]], ".", ms=1.5, alpha=0.3, color="0.6",
             label=f"samples ({len(miss):,})", zorder=1)
     for o, color, style in ((r.monte_carlo, "tab:red", "-"), (r.linear, "tab:blue", "--")):
@@ -380,16 +371,14 @@ def plot_bplane_scatter(r: GuidanceResult, path: Path, title: str) -> Path:
     ax.set_title(textwrap.fill(title, 70), fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
     return path
 
 
 def plot_dv_histograms(r: GuidanceResult, path: Path, title: str) -> Path:
     """Histogram of |Δv| (m/s) of each manoeuvre, with the 99 % of both methods (the linear
     one labelled when the Monte Carlo contradicts it)."""
-    plt = _pyplot()
     mans = r.monte_carlo.manoeuvres
-    fig, axes = plt.subplots(1, len(mans), figsize=(4.2 * len(mans), 3.4), squeeze=False)
+    fig, axes = subplots(1, len(mans), figsize=(4.2 * len(mans), 3.4), squeeze=False)
     mags = r.samples.dv_magnitude_km_s * _M_PER_KM
     for i, (ax, mc, lin) in enumerate(zip(axes[0], mans, r.linear.manoeuvres, strict=True)):
         ax.hist(mags[:, i], bins=80, color="0.6", density=True)
@@ -406,7 +395,6 @@ def plot_dv_histograms(r: GuidanceResult, path: Path, title: str) -> Path:
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
     return path
 
 

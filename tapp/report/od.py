@@ -6,18 +6,15 @@ import json
 import math
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from tapp.constants import GM_EARTH_km3_s2  # noqa: E402
-from tapp.od.batch import rms_tail_probability  # noqa: E402
-from tapp.od.setup import describe_orientation  # noqa: E402
-from tapp.od.study import DCRun, StudyResults  # noqa: E402
-from tapp.orbit.elements import cartesian_to_elements  # noqa: E402
-from tapp.report.markdown import table  # noqa: E402
+from tapp.constants import GM_EARTH_km3_s2
+from tapp.od.batch import rms_tail_probability
+from tapp.od.setup import describe_orientation
+from tapp.od.study import DCRun, StudyResults
+from tapp.orbit.elements import cartesian_to_elements
+from tapp.report.figures import subplots
+from tapp.report.markdown import table
 
 
 def _rms_at(run: DCRun, k: int) -> str:
@@ -323,7 +320,7 @@ def rsig_section(results: StudyResults, png: str) -> str:
 
 
 def plot_rsig(results: StudyResults, path: Path) -> None:
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig, ax = subplots(figsize=(8, 5))
     for r in results.rsig:
         ax.plot(r.signature.t_s / 3600.0, r.signature.r, label=f"({r.truth},{r.stm})")
     ax.set_xlabel("time (h)")
@@ -334,7 +331,6 @@ def plot_rsig(results: StudyResults, path: Path) -> None:
     ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def _observed_points(results: StudyResults, curve, x_of) -> tuple[list, list]:
@@ -384,7 +380,7 @@ def _same_orbit_shape(a: np.ndarray, b: np.ndarray) -> bool:
 
 def plot_rate_vs_arc(results: StudyResults, path: Path) -> None:
     """ρ against arc length for each (truth, STM) pair, with the study's observed factors."""
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig, ax = subplots(figsize=(8, 5))
     orbit = results.rate_vs_arc[0].orbit
     _plot_curves(ax, results.rate_vs_arc, results,
                  lambda r: r.arc_h if r.orbit == orbit else None)
@@ -393,14 +389,13 @@ def plot_rate_vs_arc(results: StudyResults, path: Path) -> None:
                  "diverges)", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def plot_rate_vs_inclination(results: StudyResults, path: Path,
                              x_orbit: np.ndarray | None = None) -> None:
     """ρ against inclination for each (truth, STM) pair, with the study's observed factors
     of the runs of the same a and e over the same arc."""
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig, ax = subplots(figsize=(8, 5))
     arc = results.inclination_arc_h
     c0 = results.rate_vs_inclination[0]
     ref = next((r.x_true for r in results.dc if r.orbit == c0.orbit and
@@ -419,7 +414,6 @@ def plot_rate_vs_inclination(results: StudyResults, path: Path,
                  f"{arc:g} h, {results.inclination_network} network)", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def rate_curves_section(results: StudyResults) -> str:
@@ -446,7 +440,7 @@ def rate_curves_section(results: StudyResults) -> str:
 
 def plot_dc_rms(results: StudyResults, path: Path) -> None:
     blocks = results.dc_blocks
-    fig, axes = plt.subplots(len(blocks), 1, figsize=(8, 3.2 * len(blocks)), squeeze=False)
+    fig, axes = subplots(len(blocks), 1, figsize=(8, 3.2 * len(blocks)), squeeze=False)
     for ax, title in zip(axes[:, 0], blocks, strict=True):
         for r in (r for r in results.dc if r.block == title):
             ax.plot(np.arange(1, len(r.result.rms) + 1), r.result.rms, marker="o", ms=3,
@@ -459,7 +453,6 @@ def plot_dc_rms(results: StudyResults, path: Path) -> None:
         ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def write_report(results: StudyResults, out_dir: Path, elapsed_s: float) -> Path:

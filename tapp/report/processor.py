@@ -11,14 +11,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from tapp.estimation.ellipse import error_ellipse  # noqa: E402
-from tapp.frames.ric import RIC_NAMES  # noqa: E402
+from tapp.estimation.ellipse import error_ellipse
+from tapp.frames.ric import RIC_NAMES
+from tapp.report.figures import subplots
 
 _DAY_S = 86400.0
 RIC_AXES = ("R", "I", "C")
@@ -42,7 +39,7 @@ def plot_ric_history(history, path: Path, title: str) -> Path:
     t = np.array([h.t_s for h in rows]) / _DAY_S
     real = np.array([h.ric_real for h in rows])
     fits = [(tt, h.ric_fit) for tt, h in zip(t, rows, strict=True) if h.ric_fit is not None]
-    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    fig, axes = subplots(1, 2, figsize=(10.0, 4.0))
     colors = ("tab:red", "tab:green", "tab:blue")
     for ax, first, scale, unit in ((axes[0], 0, 1e3, "m"), (axes[1], 3, 1e6, "mm/s")):
         for i, (axis, color) in enumerate(zip(RIC_AXES, colors, strict=True)):
@@ -60,7 +57,6 @@ def plot_ric_history(history, path: Path, title: str) -> Path:
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
     return path
 
 
@@ -84,7 +80,7 @@ def plot_sigma_history(history, labels: tuple[str, ...], path: Path, title: str)
     n = len(labels)
     cols = 3 if n > 4 else n
     nrows = int(np.ceil(n / max(cols, 1)))
-    fig, axes = plt.subplots(nrows, cols, figsize=(4.2 * cols, 3.0 * nrows), squeeze=False)
+    fig, axes = subplots(nrows, cols, figsize=(4.2 * cols, 3.0 * nrows), squeeze=False)
     t = np.array([h.t_s for h in rows]) / _DAY_S
     for i, label in enumerate(labels):
         ax = axes[i // cols][i % cols]
@@ -104,7 +100,6 @@ def plot_sigma_history(history, labels: tuple[str, ...], path: Path, title: str)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
     return path
 
 
@@ -122,7 +117,7 @@ def plot_bplane_ellipses(history, miss_names: tuple[str, ...], path: Path, title
     """1σ/3σ (B·T, B·R) ellipses, fit vs real, at the times of :func:`bplane_rows`."""
     rows = bplane_rows(history, miss_names)
     ix = [miss_names.index("b_dot_t_km"), miss_names.index("b_dot_r_km")]
-    fig, axes = plt.subplots(1, len(rows), figsize=(4.2 * len(rows), 4.2), squeeze=False)
+    fig, axes = subplots(1, len(rows), figsize=(4.2 * len(rows), 4.2), squeeze=False)
     for ax, h in zip(axes[0], rows, strict=True):
         for cov, color, name in ((h.miss_real, "tab:red", "real"),
                                  (h.miss_fit, "tab:blue", "fit")):
@@ -145,5 +140,4 @@ def plot_bplane_ellipses(history, miss_names: tuple[str, ...], path: Path, title
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
     return path

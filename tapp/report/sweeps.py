@@ -4,17 +4,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from tapp.report.figures import subplots
 
 
 def plot_departure_sweep(day: np.ndarray, dv_km_s: np.ndarray, flight_time_s: np.ndarray,
                          ok: np.ndarray, path: Path) -> None:
     """ΔV (m/s) and flight time (days) against departure day; failed cases marked."""
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    fig, (ax1, ax2) = subplots(2, 1, figsize=(8, 6), sharex=True)
     ax1.plot(day[ok], dv_km_s[ok] * 1e3, "o-", ms=4, label="targeted (SEARCH converged)")
     for d in day[~ok]:
         ax1.axvline(d, color="tab:red", ls=":", lw=1)
@@ -29,4 +27,3 @@ def plot_departure_sweep(day: np.ndarray, dv_km_s: np.ndarray, flight_time_s: np
     fig.suptitle("Trans-lunar injection targeted to the lunar B-plane, per departure day")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
