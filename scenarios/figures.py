@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from iter import CaseStatus, read_hdf5
+from tapp.constants import SECONDS_PER_DAY
 from tapp.io.tape.files import describe
 from tapp.od.batch import DCOutcome
 
@@ -36,7 +37,6 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "scenarios" / "readme_figures.json"
 
 Scalar = float | int | str | bool
-_DAY_S = 86400.0
 _M_PER_KM = 1e3
 #: Below this magnitude a real figure is printed with an exponent (1.3e-10).
 _EXPONENT_BELOW = 1e-3
@@ -319,7 +319,7 @@ def _rate_findings(ex: _Extraction, f: dict) -> None:
 
 def _recycle_at(run: dict, day: float) -> dict:
     """The recycle of a TAPP III run (``run_dict``) at ``day`` days."""
-    found = [r for r in run["recycles"] if r["t_s"] == day * _DAY_S]
+    found = [r for r in run["recycles"] if r["t_s"] == day * SECONDS_PER_DAY]
     if not found:
         raise ValueError(f"{day:g} d: no recycle at that time (the README quotes it)")
     return found[0]
@@ -366,12 +366,12 @@ def _tapp3(ex: _Extraction) -> None:
     held = [(b["t_s"], e["digits"]) for b in prints for e in b["entities"] if "digits" in e]
     fewest = min(d for _, d in held)
     ex.real("tapp3.fewest_digits", fewest, 2)
-    ex.exact("tapp3.fewest_digits_from_day",
-             min(t for t, _ in held if all(d == fewest for s, d in held if s >= t)) / _DAY_S)
+    since_s = min(t for t, _ in held if all(d == fewest for s, d in held if s >= t))
+    ex.exact("tapp3.fewest_digits_from_day", since_s / SECONDS_PER_DAY)
     closures = sorted(((e["budget"]["closure"], b["t_s"], e["alias"]) for b in run["blocks"]
                        for e in b["entities"] if "budget" in e), reverse=True)
     ex.real("tapp3.budget_closure_worst", closures[0][0], 2)
-    ex.exact("tapp3.budget_closure_worst_day", closures[0][1] / _DAY_S)
+    ex.exact("tapp3.budget_closure_worst_day", closures[0][1] / SECONDS_PER_DAY)
     ex.real("tapp3.budget_closure_elsewhere", closures[1][0], 1)
 
 
@@ -397,7 +397,7 @@ def _mission(ex: _Extraction) -> None:
     listed = [s for s in MISSION_SOURCES if s in sigma]
     ex.claim("mission: the README's budget table names every a priori source of the run",
              set(listed) == {s for s in sigma if not s.startswith(_NOISE)})
-    ex.exact("mission.budget.day", last["t_s"] / _DAY_S)
+    ex.exact("mission.budget.day", last["t_s"] / SECONDS_PER_DAY)
     ex.exact("mission.budget.sources", [s.removesuffix(" (a priori)") for s in listed])
     for name, i in zip(("b_dot_r_m", "b_dot_t_m"), rows, strict=True):
         ex.real(f"mission.budget.{name}", [_M_PER_KM * sigma[s][i] for s in listed], 2)

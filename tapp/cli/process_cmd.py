@@ -24,12 +24,12 @@ from tapp.cli.common import (
     progress_bar,
     run_guarded,
 )
+from tapp.constants import SECONDS_PER_DAY
 
 if TYPE_CHECKING:
     from tapp.processor.printout import SigmaRatio
     from tapp.processor.sequencing import Run
 
-_DAY_S = 86400.0
 
 
 def _run(tape: Path, deck_path: Path, quiet: bool) -> tuple[Run, object, object, float]:
@@ -63,7 +63,7 @@ def summary_line(written: list[str], worst: SigmaRatio | None) -> str:
     """
     ratio = ("no fit-world σ to compare" if worst is None else
              f"largest real/fit σ ratio {worst.ratio:.4g} ({worst.name}, {worst.kind} at t = "
-             f"{worst.t_s / _DAY_S:.3f} d)")
+             f"{worst.t_s / SECONDS_PER_DAY:.3f} d)")
     return f"TAPP III: wrote {', '.join(written)}; {ratio}"
 
 

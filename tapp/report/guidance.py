@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tapp.constants import SECONDS_PER_DAY
 from tapp.guidance.agreement import EXACT, MIN_MOMENT_SAMPLES, Check, Key, clopper_pearson
 from tapp.guidance.statistics import (
     BPLANE,
@@ -35,7 +36,6 @@ from tapp.guidance.study import GuidanceResult
 from tapp.report.figures import subplots
 from tapp.report.markdown import table
 
-_DAY_S = 86400.0
 _M_PER_KM = 1000.0
 _NAVIGATION = {"tape": "the tape's estimator (its a priori ignores the execution errors)",
                "inflate": "a priori inflated by the execution-error covariance, regression "
@@ -181,7 +181,7 @@ def _dv_table(r: GuidanceResult) -> str:
     rows = []
     for i, (mc, lin) in enumerate(zip(r.monte_carlo.manoeuvres, r.linear.manoeuvres,
                                       strict=True)):
-        when = [str(mc.number), f"{mc.t_s / _DAY_S:.3f}"]
+        when = [str(mc.number), f"{mc.t_s / SECONDS_PER_DAY:.3f}"]
         rows += [[*when, r.monte_carlo.method, *_magnitude_row(r, mc.magnitude, None)],
                  [*when, r.linear.method,
                   *_magnitude_row(r, lin.magnitude, ("manoeuvres", i, "magnitude"))]]
@@ -389,7 +389,7 @@ def plot_dv_histograms(r: GuidanceResult, path: Path, title: str) -> Path:
             p99 = dict(m.magnitude.percentiles_km_s)[99.0] * _M_PER_KM
             ax.axvline(p99, color=color, ls=style, label=f"{method}: 99 % {p99:.3g} m/s")
         ax.set_xlabel("|Δv| (m/s)")
-        ax.set_title(f"recycle {mc.number}, t = {mc.t_s / _DAY_S:.2f} d", fontsize=9)
+        ax.set_title(f"recycle {mc.number}, t = {mc.t_s / SECONDS_PER_DAY:.2f} d", fontsize=9)
         ax.legend(fontsize=7)
         ax.grid(True, alpha=0.3)
     fig.suptitle(title)

@@ -11,19 +11,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from tapp.constants import SECONDS_PER_DAY
 from tapp.report import BPLANE_PNG, HISTOGRAM_PNG, RIC_PNG, SCATTER_PNG, SIGMA_PNG
 from tapp.report.markdown import table
 
 #: Lines of the O3 printout quoted in the report (the whole printout is o3.txt).
 O3_EXCERPT_LINES = 40
-_DAY_S = 86400.0
 
 
 def recycle_sigma_table(content: dict) -> str:
     """Markdown table of the miss σ, fit / real, at each recycle of a ``run_dict``, with the
     significant digits those covariances hold."""
     miss = content["history"]["miss"]
-    rows = [[r["number"], r["k"], f"{r['t_s'] / _DAY_S:.3f}",
+    rows = [[r["number"], r["k"], f"{r['t_s'] / SECONDS_PER_DAY:.3f}",
              *(f"{f:.4g} / {g:.4g}" for f, g in zip(r["miss_sigma_fit"], r["miss_sigma_real"],
                                                      strict=True)), f"~{r['digits']:.1f}"]
             for r in content["recycles"]]
@@ -41,8 +41,9 @@ def bplane_ellipse_table(content: dict) -> str:
                                               else fit[key], fmt)
         return f"{left} / {format(real['sigma1'][key] if key != 'angle_deg' else real[key], fmt)}"
 
-    rows = [[h["kind"], h["k"], f"{h['t_s'] / _DAY_S:.3f}", pair(h, "semi_major_km", ".4g"),
-             pair(h, "semi_minor_km", ".4g"), pair(h, "angle_deg", "+.2f")]
+    rows = [[h["kind"], h["k"], f"{h['t_s'] / SECONDS_PER_DAY:.3f}",
+             pair(h, "semi_major_km", ".4g"), pair(h, "semi_minor_km", ".4g"),
+             pair(h, "angle_deg", "+.2f")]
             for h in content["history"]["rows"] if h.get("bplane_ellipse_real")]
     if not rows:
         return ""
@@ -54,7 +55,7 @@ def bplane_ellipse_table(content: dict) -> str:
 def ric_sigma_table(content: dict) -> str:
     """Markdown table of the orbit's position σ along R, I, C (m), fit / real, at each print
     and recycle time of a ``run_dict`` (empty unless the deck asked for RIC axes)."""
-    rows = [[h["kind"], h["k"], f"{h['t_s'] / _DAY_S:.3f}",
+    rows = [[h["kind"], h["k"], f"{h['t_s'] / SECONDS_PER_DAY:.3f}",
              *(("-" if h["ric_sigma_fit"] is None else f"{1e3 * h['ric_sigma_fit'][i]:.4g}")
                + f" / {1e3 * h['ric_sigma_real'][i]:.4g}" for i in range(3))]
             for h in content["history"]["rows"] if h.get("ric_sigma_real")]

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
+from tapp.constants import SECONDS_PER_DAY
 from tapp.estimation.ellipse import error_ellipse
 from tapp.frames.ric import RIC_NAMES
 from tapp.report.figures import subplots
 
-_DAY_S = 86400.0
 RIC_AXES = ("R", "I", "C")
 
 
@@ -36,7 +36,7 @@ def plot_ric_history(history, path: Path, title: str) -> Path:
     """σ of the orbit along R, I, C against time, fit (dashed) and real (solid): position in
     m, velocity in mm/s, time in days from the tape epoch."""
     rows = ric_rows(history)
-    t = np.array([h.t_s for h in rows]) / _DAY_S
+    t = np.array([h.t_s for h in rows]) / SECONDS_PER_DAY
     real = np.array([h.ric_real for h in rows])
     fits = [(tt, h.ric_fit) for tt, h in zip(t, rows, strict=True) if h.ric_fit is not None]
     fig, axes = subplots(1, 2, figsize=(10.0, 4.0))
@@ -69,7 +69,8 @@ def ric_csv(history) -> str:
     lines = [",".join(head)]
     for h in ric_rows(history):
         fit = [""] * len(RIC_NAMES) if h.ric_fit is None else [f"{v:.10e}" for v in h.ric_fit]
-        lines.append(",".join([h.kind, str(h.k), f"{h.t_s:.6f}", f"{h.t_s / _DAY_S:.9f}", *fit,
+        days = h.t_s / SECONDS_PER_DAY
+        lines.append(",".join([h.kind, str(h.k), f"{h.t_s:.6f}", f"{days:.9f}", *fit,
                                *(f"{v:.10e}" for v in h.ric_real)]))
     return "\n".join(lines) + "\n"
 
@@ -81,7 +82,7 @@ def plot_sigma_history(history, labels: tuple[str, ...], path: Path, title: str)
     cols = 3 if n > 4 else n
     nrows = int(np.ceil(n / max(cols, 1)))
     fig, axes = subplots(nrows, cols, figsize=(4.2 * cols, 3.0 * nrows), squeeze=False)
-    t = np.array([h.t_s for h in rows]) / _DAY_S
+    t = np.array([h.t_s for h in rows]) / SECONDS_PER_DAY
     for i, label in enumerate(labels):
         ax = axes[i // cols][i % cols]
         real = np.array([h.sigma_real[i] for h in rows])
@@ -133,7 +134,7 @@ def plot_bplane_ellipses(history, miss_names: tuple[str, ...], path: Path, title
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel("δB·T (km)")
         ax.set_ylabel("δB·R (km)")
-        ax.set_title(f"{h.kind} k = {h.k}, t = {h.t_s / _DAY_S:.2f} d (angle: major axis "
+        ax.set_title(f"{h.kind} k = {h.k}, t = {h.t_s / SECONDS_PER_DAY:.2f} d (angle: major axis "
                      "from T towards R)", fontsize=8)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
