@@ -24,7 +24,6 @@ from tapp.cli.common import (
     progress_bar,
     run_guarded,
 )
-from tapp.constants import SECONDS_PER_DAY
 
 if TYPE_CHECKING:
     from tapp.processor.printout import SigmaRatio
@@ -61,6 +60,8 @@ def summary_line(written: list[str], worst: SigmaRatio | None) -> str:
     'TAPP III: wrote O3 printout o3.txt, T32 tape run.t32.h5; largest real/fit σ ratio 380.1 \
 (vx_km_s@current, print at t = 30.000 d)'
     """
+    from tapp.constants import SECONDS_PER_DAY  # here: the module loads numpy
+
     ratio = ("no fit-world σ to compare" if worst is None else
              f"largest real/fit σ ratio {worst.ratio:.4g} ({worst.name}, {worst.kind} at t = "
              f"{worst.t_s / SECONDS_PER_DAY:.3f} d)")
