@@ -3,35 +3,41 @@ PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+# The test tools (pytest, the peers, mpmath, ...) on top: make scenario does without them.
+TEST_STAMP := $(VENV)/.installed-test
 
 .PHONY: install test test-all scenario bench lint clean
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[test]'
+	$(BIN)/pip install --quiet -e .
 	touch $(STAMP)
 
-install: $(STAMP)
+$(TEST_STAMP): $(STAMP)
+	$(BIN)/pip install --quiet -e '.[test]'
+	touch $(TEST_STAMP)
+
+install: $(TEST_STAMP)
 
 # On every CPU (at most 4), the modules that share a fixture kept together (tests/conftest.py).
 PYTEST := $(BIN)/python -m pytest -q -n auto --doctest-modules tapp search iter tests --ignore=tests/bench
 
-test: $(STAMP) lint
+test: $(TEST_STAMP) lint
 	$(PYTEST) -m "not slow"
 
 # Everything, the slow reproductions too: before a release.
-test-all: $(STAMP) lint
+test-all: $(TEST_STAMP) lint
 	$(PYTEST)
 
 scenario: $(STAMP)
 	$(BIN)/python -m scenarios.run_all
 
-bench: $(STAMP)
+bench: $(TEST_STAMP)
 	$(BIN)/pip install --quiet -e ".[test,bench]"
 	$(BIN)/python tests/bench/run.py
 
-lint: $(STAMP)
+lint: $(TEST_STAMP)
 	$(BIN)/ruff check tapp search iter tests scenarios
 	$(BIN)/lint-imports
 
