@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 # The test tools (pytest, the peers, mpmath, ...) on top: make scenario does without them.
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: install test test-all scenario bench lint clean
+.PHONY: install test test-all scenario readme bench lint clean
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -32,6 +32,10 @@ test-all: $(TEST_STAMP) lint
 
 scenario: $(STAMP)
 	$(BIN)/python -m scenarios.run_all
+
+# The last make scenario's figures into the tracked README and scenarios/readme_figures.json.
+readme: $(STAMP)
+	$(BIN)/python -m scenarios.readme
 
 bench: $(TEST_STAMP)
 	$(BIN)/pip install --quiet -e ".[test,bench]"

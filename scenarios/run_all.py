@@ -23,9 +23,10 @@ The input files are the examples shipped in the package (:mod:`tapp.examples`, t
 8. Your own mission: the examples' mission folder (its OEM with a deterministic burn, its
    booked DSN passes) through TAPP I, III and II -> results/mission/ (the tape, the OEM
    flown, the O3 printout, the T32 tape, the guidance report and every JSON).
-9. The README's figures: read from results/ into scenarios/readme_figures.json and rendered
-   into the README's generated blocks, then checked against results/ read again, with the
-   claims of the prose around them (scenarios/readme.py); ``git diff`` shows what changed.
+9. The README's figures: read from results/ into results/readme_figures.json and a README
+   rendered from them (results/README.md), compared with the committed ones, and the claims
+   of the prose around them checked (scenarios/readme.py); the tracked files are left alone:
+   ``make readme`` takes the run's figures into them.
 
 Steps 1, 3-6, 8 and the first four sweeps of 7 are independent of one another (5 reads 4's
 tapes) and run side by side (:func:`side_by_side`), as do the commands inside 4 and 5: each
@@ -384,9 +385,9 @@ def sweeps() -> None:
 
 
 def readme_figures() -> None:
-    if readme.main([]) != 0:
-        raise SystemExit("the README's figures disagree with results/ (listed above)")
-    print(f"README figures -> {readme.README} ({readme.DATA})")
+    if readme.main(["--compare"]) != 0:
+        raise SystemExit("a claim of the README's prose no longer holds (listed above)")
+    print(f"README figures -> {readme.RUN_README} ({readme.RUN_DATA})")
 
 
 def main() -> None:

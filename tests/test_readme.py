@@ -129,3 +129,17 @@ def test_the_rounding_rule() -> None:
     assert (format_value(22.0, WALL_TIME), format_value(32.7, WALL_TIME)) == ("20", "30")
     again = Figure(significant(0.75190, 2), "results/x.json", 2)
     assert again == Figure(significant(0.75194, 2), "results/x.json", 2)
+
+
+def test_make_scenario_tells_a_changed_figure_from_a_slower_machine() -> None:
+    """``make scenario`` leaves the tracked README alone and lists the figures of its run that
+    differ from the committed ones (scenarios/readme.py ``compare``): a number that changed
+    is listed; a wall time only beyond a factor of 2, since it depends on the machine."""
+    wall = Figure(30.0, "results/x.json", WALL_TIME)
+    assert readme._agree(wall, dataclasses.replace(wall, value=50.0))
+    assert readme._agree(wall, dataclasses.replace(wall, value=20.0))
+    assert not readme._agree(wall, dataclasses.replace(wall, value=100.0))
+    real = Figure(1.234, "results/x.json", 3)
+    assert readme._agree(real, dataclasses.replace(real, value=1.2341))  # same text
+    assert not readme._agree(real, dataclasses.replace(real, value=1.236))
+    assert not readme._agree(Figure(30.0, "r", WALL_TIME), Figure(50.0, "r", 2))  # not both
