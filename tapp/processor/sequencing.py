@@ -77,6 +77,7 @@ from tapp.estimation.factors import (
 from tapp.estimation.regression import FitSystem, SingularFitError, regression
 from tapp.frames.ric import RIC_NAMES, ric_state_rotation, rotate_covariance, rotate_rows
 from tapp.io.tape.packing import tr_nonzero_rows, upper_from_tr
+from tapp.io.tape.t13 import PARTS
 from tapp.io.tape.t32 import T32Entity, T32Recycle
 from tapp.processor.commands import UPC, Command
 from tapp.processor.executive import Budget, Entity, evaluate, transform
@@ -93,7 +94,6 @@ from tapp.processor.representations import (
 
 #: Pairs read from the tape at a time (bounds the memory of a block of packed factors).
 PAIRS_PER_BLOCK = 2048
-NOISE_PARTS = ("white", "bias", "correlated")
 #: Condition number of a transition's orbit block up to which factors are mapped to a new
 #: epoch by a plain product (losing at most cond ε ≈ 2e-12 of their columns); beyond it the
 #: product is formed in twice the working precision (the deep-space periapsis: 4.5e13).
@@ -263,7 +263,7 @@ class Processor:
         self.station_ids = np.asarray(h.stations.id, dtype=np.int64)
         self.has_parts = True
         self.sources = [f"noise: {name} {part}" for name in h.stations.name
-                        for part in NOISE_PARTS]
+                        for part in PARTS]
         self.Rt_src = [self._empty() for _ in self.sources]
         self.apriori: list[np.ndarray] = []
         self.apriori_names: list[str] = []
@@ -331,11 +331,11 @@ class Processor:
             mine = station == sid
             if not np.any(mine):
                 continue
-            for p in range(len(NOISE_PARTS)):
+            for p in range(len(PARTS)):
                 if parts is None and p > 0:
                     continue
                 packed = blk.Rt[keep][mine] if parts is None else parts[mine, p]
-                i = pos * len(NOISE_PARTS) + p
+                i = pos * len(PARTS) + p
                 self.Rt_src[i] = triangularize(self.Rt_src[i], self._rows(packed, to, mapper))
 
     def _read(self, k: int) -> None:

@@ -52,9 +52,6 @@ from tapp.estimation.gauss_markov import gauss_markov_covariance
 from tapp.measurements import OBSERVABLE_UNITS, Observable
 from tapp.measurements.ddor import DDOR_KIND, DDOR_UNIT
 
-#: The parts of the real-world AᵀWMWA (:func:`pass_rows`), in their order.
-PARTS = ("white", "bias", "correlated")
-
 #: Edge unit of each observable kind's noise in scenario files, and the factor to the internal
 #: unit: σ_internal = σ_edge * factor (m -> km, mm/s -> km/s, deg -> rad).
 EDGE_UNITS: dict[str, tuple[str, float]] = {

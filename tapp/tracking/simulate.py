@@ -101,6 +101,7 @@ from tapp.dynamics.forces import default_parameters
 from tapp.errors import InputError
 from tapp.estimation.factors import triangularize
 from tapp.io.tape.t13 import (
+    PARTS,
     T13,
     TapeEditing,
     TapeMiss,
@@ -144,7 +145,7 @@ from tapp.tracking.editing import (
     removed_text,
 )
 from tapp.tracking.encounter import prepare_encounter
-from tapp.tracking.noise import PARTS, pass_rows
+from tapp.tracking.noise import pass_rows
 from tapp.tracking.pieces import Forcing, SegmentPartials, fly, propagate_pieces
 from tapp.tracking.reference import ReferenceFit, fitted
 from tapp.tracking.scenario import (

@@ -76,7 +76,9 @@ VERSION = 4
 SUPPORTED_VERSIONS = (1, 2, 3, 4)
 #: Versions that carry normal matrices, not factors (read with a warning).
 NORMAL_MATRIX_VERSIONS = (1, 2)
-#: Names of the parts of ``pairs/Rt_parts``, in order (as tapp.tracking.noise.PARTS).
+#: Names of the parts of the real-world information R̃ᵀR̃ = AᵀWMWA (``pairs/Rt_parts``), in
+#: order: white noise, per-pass biases, correlated noise (tapp.tracking.noise makes them,
+#: TAPP III's budget names its noise sources by them).
 PARTS = ("white", "bias", "correlated")
 #: Largest relative difference between the diagonal of R̃ᵀR̃ and the sum of its parts'
 #: (column norms squared) accepted: the rounding of a QR of a few thousand rows.
