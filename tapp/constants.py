@@ -4,6 +4,22 @@ Gravity field: EGM96 (Lemoine et al. 1998, NASA/TP-1998-206861), fully normalise
 to degree and order 8, shipped in ``tapp/data/egm96_deg8.txt``. GM and radius of the Earth are
 those of EGM96 so the field is used with the constants it was fitted with.
 GM of the other bodies: JPL DE430 (Folkner et al. 2014, IPN Progress Report 42-196, Table 8).
+
+Zonal J2 of the other centres that have one here (:data:`J2_CENTRE`, :data:`J2_RADIUS_km`),
+unnormalised, J2 = -sqrt(5) \\bar C_{20}, each with the reference radius of its field:
+
+- Mars: J2 = 1.95545e-3, R = 3396.0 km, MRO120D (Konopliv et al. 2016, Icarus 274, 253);
+  GMM-3 (Genova et al. 2016, Icarus 272, 228) has \\bar C_{20} = -8.7450e-4, i.e.
+  J2 = 1.95544e-3, the same to 5e-6. The fields' GM of Mars alone (42828.374 km^3/s^2) differs
+  from DE430's Mars-system GM (42828.375214, with Phobos and Deimos) by ~2e-8 relative, far
+  below J2's effect (1e-3): the DE430 value is used.
+- Moon: \\bar C_{20} = -9.0880e-5, R = 1738.0 km, GRAIL GL0660B (Konopliv et al. 2013, JGR
+  Planets 118, 1415), so J2 = sqrt(5) * 9.0880e-5 = 2.03214e-4 (not 2.0330e-4: that value does
+  not follow from this C20). The field's GM (4902.80007) is DE430's to 1e-9.
+- Venus: J2 = 4.458e-6, R = 6051.8 km, MGNP180U (Konopliv, Banerdt & Sjogren 1999, Icarus
+  139, 3). DE430's GM is used.
+
+Each J2 acts about the body's IAU rotation pole (:mod:`tapp.dynamics.poles`).
 """
 
 from __future__ import annotations
@@ -56,6 +72,15 @@ RADIUS_km = {
     "uranus": 25559.0,
     "neptune": 24764.0,
 }
+
+# Zonal J2 (unnormalised, dimensionless) and the reference radius of its field (km) of the
+# centres other than the Earth that have one (module docstring for the sources).
+J2_CENTRE = {
+    "mars": 1.95545e-3,                      # MRO120D
+    "moon": float(np.sqrt(5.0)) * 9.0880e-5,  # GL0660B, -sqrt(5) C20
+    "venus": 4.458e-6,                       # MGNP180U
+}
+J2_RADIUS_km = {"mars": 3396.0, "moon": 1738.0, "venus": 6051.8}
 
 #: Highest degree of the shipped gravity field.
 MAX_DEGREE = 8

@@ -29,8 +29,9 @@ that SRP and the Harris-Priester atmosphere read, :attr:`ForceModel.ephemeris_bo
 followed, when the field is oriented by the iau2006 model (:attr:`Equations.oriented`), by
 the series that orient it: the ITRS pole ("pole", 3 entries: enough when every oriented field
 is zonal) or the nine slow terms ("full",
-:meth:`tapp.frames.orientation.EarthOrientation.slow_terms`). The driver evaluates all of rb
-from one Chebyshev table.
+:meth:`tapp.frames.orientation.EarthOrientation.slow_terms`), or, for the J2 of another
+centre (:attr:`ForceModel.pole_field`), by that body's IAU pole ("body_pole", 3 entries,
+:mod:`tapp.dynamics.poles`). The driver evaluates all of rb from one Chebyshev table.
 """
 
 from __future__ import annotations
@@ -91,11 +92,14 @@ def build_equations(state_model: ForceModel, var_model: ForceModel,
     models = [m for m in (state_model, var_model) if m.oriented_field]
     oriented = "" if not models else (
         "pole" if all(m.gravity.order == 0 for m in models) else "full")
+    if state_model.pole_field or var_model.pole_field:  # the same centre, not the Earth
+        oriented = "body_pole"
     nq = len(params)
     t = ca.SX.sym("t")
     c = ca.SX.sym("c", 1)
     q = ca.SX.sym("q", nq)
-    rb = ca.SX.sym("rb", 3 * len(bodies) + {"": 0, "pole": 3, "full": 9}[oriented])
+    rb = ca.SX.sym("rb", 3 * len(bodies) + {"": 0, "pole": 3, "body_pole": 3,
+                                                  "full": 9}[oriented])
     r_bodies = {b: rb[3 * i:3 * i + 3] for i, b in enumerate(bodies)}
     slow = rb[3 * len(bodies):] if oriented else None
     q_map = {name: q[i] for i, name in enumerate(params)}

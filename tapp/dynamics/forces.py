@@ -28,6 +28,20 @@ zonal field (symmetric about the inertial z axis). U(M r) with M orthogonal give
 ∇_r U = Mᵀ ∇_f U: the gradient w.r.t. the inertial position is already the inertial
 acceleration.
 
+The Moon, Mars and Venus have their zonal J2 only (:data:`tapp.constants.J2_CENTRE`, the same
+potential with \\bar C_{20} = -J2/\\sqrt 5 and the field's radius), about the body's IAU
+pole k(t) in inertial axes (:mod:`tapp.dynamics.poles`), which the driver evaluates beside the
+ephemeris: r_fixed = (0, 0, k·r) and r² = |r|², that is
+
+.. math::
+    U = \\frac{GM}{r}\\left(1 - J_2 \\left(\\frac{R}{r}\\right)^2
+        \\frac{3 (\\hat r\\cdot k)^2 - 1}{2}\\right),\\quad
+    \\mathbf a = \\nabla U = -\\frac{GM}{r^2}\\hat r - \\frac{3}{2} J_2 \\frac{GM R^2}{r^4}
+        \\left[(1 - 5 (\\hat r\\cdot k)^2)\\,\\hat r + 2 (\\hat r\\cdot k)\\, k\\right]
+
+(the direct form is written out in the tests). Not yet validated against an independent
+propagator for these bodies; the tests check the gradient, the secular J2 rates and the STM.
+
 Third bodies (point masses, relative to a possibly accelerated centre; Montenbruck & Gill
 eq. 3.37):
 
@@ -58,7 +72,14 @@ from collections.abc import Callable, Mapping
 
 import casadi as ca
 
-from tapp.constants import GM_km3_s2, OMEGA_EARTH_rad_s, R_EARTH_km, egm96_coefficients
+from tapp.constants import (
+    J2_CENTRE,
+    GM_km3_s2,
+    J2_RADIUS_km,
+    OMEGA_EARTH_rad_s,
+    R_EARTH_km,
+    egm96_coefficients,
+)
 from tapp.dynamics.atmosphere import density_kg_m3, drag_acceleration
 from tapp.dynamics.empirical import NAMES as EMPIRICAL_NAMES
 from tapp.dynamics.manoeuvres import THRUST_NAMES
@@ -95,9 +116,10 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
             values[name] = model.surface.c_d
         elif (m := _ZONAL_J.match(name)) and _in_field(model, int(m.group(1)), 0):
             n = int(m.group(1))
-            values[name] = -math.sqrt(2 * n + 1) * c_bar[n, 0]
-        elif (m := _HARMONIC.match(name)) and _in_field(model, int(m.group(2)),
-                                                        int(m.group(3))):
+            values[name] = (-math.sqrt(2 * n + 1) * c_bar[n, 0] if model.center == "earth"
+                            else J2_CENTRE[model.center])
+        elif (m := _HARMONIC.match(name)) and model.center == "earth" and _in_field(
+                model, int(m.group(2)), int(m.group(3))):
             n, mm = int(m.group(2)), int(m.group(3))
             if m.group(1) == "S" and mm == 0:
                 raise InputError("model", "parameters", "no S_n0 (identically zero)", name)
@@ -135,8 +157,10 @@ def check_parameter_value(name: str, value: float, source: str = "model",
 
 
 def _in_field(model: ForceModel, n: int, m: int) -> bool:
-    return model.center == "earth" and 2 <= n <= model.gravity.degree and m <= min(
-        n, model.gravity.order)
+    """True when the harmonic (n, m) is in the model's field (only J2 about another centre)."""
+    if model.center != "earth":
+        return model.pole_field and (n, m) == (2, 0)
+    return 2 <= n <= model.gravity.degree and m <= min(n, model.gravity.order)
 
 
 def _recursion_factors(n: int, m: int) -> tuple[float, float]:
@@ -165,7 +189,7 @@ def central_potential(model: ForceModel, r_fixed, gm, coefficients: Mapping[tupl
         r2 = x * x + y * y + z * z
     if deg < 2:
         return gm / sqrt(r2)
-    radius = R_EARTH_km
+    radius = R_EARTH_km if model.center == "earth" else J2_RADIUS_km[model.center]
     rr = radius / r2
     v = {(0, 0): radius / sqrt(r2)}
     w = {(0, 0): 0.0}
@@ -196,13 +220,14 @@ def field_coefficients(model: ForceModel, q: Mapping[str, ca.SX]
     """Return the normalised coefficients of the truncation, symbols where ``q`` names them."""
     c_bar, s_bar = egm96_coefficients()
     coeffs: dict[tuple[str, int, int], ca.SX | float] = {}
-    if model.center != "earth":
-        return coeffs
-    for n in range(2, model.gravity.degree + 1):
-        for m in range(0, min(n, model.gravity.order) + 1):
-            coeffs["C", n, m] = float(c_bar[n, m])
-            if m > 0:
-                coeffs["S", n, m] = float(s_bar[n, m])
+    if model.pole_field:
+        coeffs["C", 2, 0] = -J2_CENTRE[model.center] / math.sqrt(5)
+    elif model.center == "earth":
+        for n in range(2, model.gravity.degree + 1):
+            for m in range(0, min(n, model.gravity.order) + 1):
+                coeffs["C", n, m] = float(c_bar[n, m])
+                if m > 0:
+                    coeffs["S", n, m] = float(s_bar[n, m])
     for name, sym in q.items():
         if m := _ZONAL_J.match(name):
             n = int(m.group(1))
@@ -220,12 +245,13 @@ def body_fixed_position(model: ForceModel, r: ca.SX, t: ca.SX, theta0: ca.SX,
     """Rotate inertial r (km) into the body-fixed frame (module docstring): (r_fixed, r2).
 
     ``slow`` holds the iau2006 slow terms (X, Y, s, x_p, y_p, s', Δ, 0, 0) at t, or, with 3
-    entries, the ITRS pole k in the GCRS (all a zonal field needs: r_fixed = (0, 0, k·r) and
+    entries, the ITRS pole k in the GCRS or the IAU pole of another centre
+    (:attr:`ForceModel.pole_field`) (all a zonal field needs: r_fixed = (0, 0, k·r) and
     r2 = |r|²; r2 is None when r_fixed is the whole position); ``theta0`` is ERA (iau2006) or
     GMST (gmst) at t = 0, rad. A gmst zonal field is symmetric about the inertial z axis, so no
     rotation is applied (and the model stays autonomous).
     """
-    if model.oriented_field and slow.numel() == 3:
+    if model.pole_field or (model.oriented_field and slow.numel() == 3):
         return ca.vertcat(0.0, 0.0, ca.dot(slow, r)), ca.dot(r, r)
     if model.oriented_field:
         era = theta0 + OMEGA_ERA_rad_s * (t + slow[6])
@@ -254,7 +280,7 @@ def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mappin
     r_bodies : mapping of body name to its position relative to the centre (km): the third
         bodies and :attr:`ForceModel.ephemeris_bodies`.
     slow : SX (9,) or (3,), the iau2006 slow terms or the pole at t
-        (:func:`body_fixed_position`), if oriented.
+        (:func:`body_fixed_position`), if oriented or a :attr:`ForceModel.pole_field`.
     v : SX (3,) inertial velocity, km/s; needed by drag only.
     """
     gm = q.get("GM", model.gm_center_km3_s2)

@@ -42,6 +42,7 @@ from tapp.dynamics.equations import (
 )
 from tapp.dynamics.events import Events
 from tapp.dynamics.forces import check_parameter_value, default_parameters
+from tapp.dynamics.poles import pole_table, tdb_from_epoch
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError, TappError
 from tapp.frames.chebyshev import ChebyshevTable
@@ -224,8 +225,8 @@ class Propagator:
                                                  f"param_values.{name}")
         q = np.array([values[name] for name in self.params])
         if orientation is not None:
-            if self.state_model.gravity.degree >= 2 and \
-                    orientation.model != self.state_model.earth_orientation:
+            if self.state_model.gravity.degree >= 2 and self.state_model.center == "earth" \
+                    and orientation.model != self.state_model.earth_orientation:
                 raise InputError("propagate", "orientation", f"the force model's Earth "
                                  f"orientation {self.state_model.earth_orientation!r}",
                                  orientation.model)
@@ -257,12 +258,24 @@ class Propagator:
     def _series(self, eqs: Equations, epoch_jd_utc: float | None,
                 orientation: EarthOrientation | None, t0_s: float, t_s: np.ndarray
                 ) -> ChebyshevTable:
-        """The driver's table: third-body positions, then the iau2006 slow terms if oriented."""
+        """The driver's table: third-body positions, then the iau2006 slow terms if oriented,
+        or the IAU pole of a centre with a J2 (at TDB of ``orientation``'s scales, else
+        TDB ≈ TT of ``epoch_jd_utc``, as the ephemeris)."""
         lo, hi = min(t0_s, t_s.min()), max(t0_s, t_s.max())
         table = ChebyshevTable.empty()
         scales = orientation.scales if orientation is not None else None
         origin = None if scales is None else orientation.segment_origin_s  # one grid for both
-        if eqs.oriented:
+        if eqs.oriented == "body_pole":
+            from tapp.dynamics.ephemeris import utc_to_tdb_jd
+
+            if scales is None and epoch_jd_utc is None:
+                raise InputError("propagate", "epoch", "an epoch (UTC) for the J2 of centre "
+                                 f"{self.state_model.center} (its pole moves)", None)
+            tdb = scales.tdb if scales is not None else tdb_from_epoch(
+                utc_to_tdb_jd(epoch_jd_utc))
+            table = pole_table(self.state_model.center, tdb, lo, hi, origin)
+            lo, hi = table.t0_s, table.t_end_s  # the same segments for the ephemeris
+        elif eqs.oriented:
             if scales is None:
                 raise InputError("propagate", "orientation", "the scenario's iau2006 Earth "
                                  "orientation for a model with earth_orientation = 'iau2006'",

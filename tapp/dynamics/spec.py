@@ -13,7 +13,7 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from tapp.constants import MAX_DEGREE, GM_km3_s2
+from tapp.constants import J2_CENTRE, MAX_DEGREE, GM_km3_s2
 from tapp.errors import InputError
 from tapp.frames.orientation import check_model
 
@@ -181,8 +181,9 @@ class ForceModel:
     Attributes
     ----------
     gravity : GravitySpec
-        Truncation of the central body's field; only the Earth has harmonics here, other
-        centres must be point masses (``J0``).
+        Truncation of the central body's field: any within EGM96 for the Earth; ``J0`` or
+        ``J2`` for the Moon, Mars and Venus (:data:`tapp.constants.J2_CENTRE`, about their IAU
+        pole, :mod:`tapp.dynamics.poles`); ``J0`` for the other centres.
     center : str
         Central body of the integration frame (EME2000 axes), one of ``BODIES``.
     third_bodies : tuple of str
@@ -208,10 +209,8 @@ class ForceModel:
         check_model(self.earth_orientation, "model")
         if self.center not in BODIES:
             raise InputError("model", "center", f"one of {', '.join(BODIES)}", self.center)
-        if self.center != "earth" and self.gravity.degree > 1:
-            raise InputError("model", "gravity",
-                             "J0 for a centre other than the Earth (no field shipped)",
-                             self.gravity.name)
+        if self.center != "earth":
+            check_center_field(self.center, self.gravity)
         for body in self.third_bodies:
             if body not in BODIES or body == self.center:
                 raise InputError("model", "third_bodies",
@@ -259,10 +258,29 @@ class ForceModel:
         return "+".join((self.gravity.name, *self.third_bodies, *surface))
 
     @property
+    def pole_field(self) -> bool:
+        """True when the field is the J2 of a centre other than the Earth, about that body's
+        moving IAU pole (:mod:`tapp.dynamics.poles`)."""
+        return self.center != "earth" and self.gravity.degree >= 2
+
+    @property
     def oriented_field(self) -> bool:
         """True when the field needs the full Earth orientation (iau2006 and degree >= 2)."""
         return self.earth_orientation == "iau2006" and self.center == "earth" and \
             self.gravity.degree >= 2
+
+
+def check_center_field(center: str, gravity: GravitySpec) -> None:
+    """Raise InputError naming ``gravity`` unless a centre other than the Earth has a field
+    it ships: ``J0`` or ``J2`` for the bodies of :data:`tapp.constants.J2_CENTRE`, ``J0`` for
+    the others."""
+    has_j2 = center in J2_CENTRE
+    if gravity.order > 0 or gravity.degree > (2 if has_j2 else 1):
+        zonal = ", ".join(sorted(J2_CENTRE))
+        expected = (f"J0 or J2 for centre {center} (only its zonal J2 is shipped)" if has_j2
+                    else f"J0 for centre {center} (no field shipped; J2 exists for {zonal}, "
+                    "any EGM96 truncation for the earth)")
+        raise InputError("model", "gravity", expected, gravity.name)
 
 
 def earth_model(spec: str, third_bodies: tuple[str, ...] = (), *, source: str = "model",

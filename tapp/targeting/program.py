@@ -93,6 +93,7 @@ from search import SearchResult, solve
 from tapp.constants import SECONDS_PER_DAY, GM_km3_s2
 from tapp.dynamics import PropagationError, Propagator
 from tapp.dynamics.ephemeris import position_km, utc_to_tdb_jd
+from tapp.dynamics.poles import pole_unit
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.orientation import EarthOrientation
 from tapp.frames.time import Epoch
@@ -308,7 +309,9 @@ class BPlaneProgram:
         eqs, _ = self.propagator.compiled()
         t = np.array([t_s], dtype=np.float64)
         rb = [self.body_position_km(body, t)[0] for body in eqs.bodies]
-        if eqs.oriented:
+        if eqs.oriented == "body_pole":
+            rb.append(pole_unit(self.propagator.state_model.center, *self._tdb(t)).ravel())
+        elif eqs.oriented:
             rb.append((self.orientation.slow_terms(t) if eqs.oriented == "full"
                        else self.orientation.pole(t)).ravel())
         xdot = eqs.f_state(t_s, state, np.zeros(0), [self.orientation.theta0_rad],
@@ -317,11 +320,14 @@ class BPlaneProgram:
 
     def body_position_km(self, body: str, t_s: np.ndarray) -> np.ndarray:
         """Position (N, 3) km of ``body`` relative to the centre, at TDB (TT with gmst)."""
-        center = self.propagator.state_model.center
+        return position_km(body, self.propagator.state_model.center, *self._tdb(t_s))
+
+    def _tdb(self, t_s: np.ndarray) -> tuple:
+        """TDB Julian date (whole, fraction) of t_s s from the epoch (TT with gmst)."""
         scales = self.orientation.scales
         if scales is None:
-            return position_km(body, center, self._jd_tdb, t_s / SECONDS_PER_DAY)
-        return position_km(body, center, *scales.tdb(t_s))
+            return self._jd_tdb, t_s / SECONDS_PER_DAY
+        return scales.tdb(t_s)
 
     def soi_radius_km(self, distance_km: ArrayLike) -> np.ndarray:
         r"""Return Laplace's sphere-of-influence radius :math:`D(\mu_b/\mu_c)^{2/5}`, km."""
