@@ -81,7 +81,6 @@ J2_CENTRE = {
     "venus": 4.458e-6,                       # MGNP180U
 }
 J2_RADIUS_km = {"mars": 3396.0, "moon": 1738.0, "venus": 6051.8}
-
 #: Highest degree of the shipped gravity field.
 MAX_DEGREE = 8
 

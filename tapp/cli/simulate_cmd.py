@@ -288,7 +288,8 @@ def simulate(
                                   interpolation_degree=INTERPOLATION_DEGREE,
                                   comments=comments, meta_comments=traj.comments,
                                   segment=traj.segment,
-                                  segment_comments=segment_comments(traj, sim.scenario))
+                                  segment_comments=segment_comments(traj, sim.scenario),
+                                  center_name=sim.scenario.state_model.center.upper())
         if spk is not None:
             body = _spk_body(spk_id, fit)
             spk_info = {"path": str(spk), "body": body}

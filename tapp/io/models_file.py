@@ -47,7 +47,6 @@ from tapp.dynamics.spec import (
     ForceModel,
     SurfaceForces,
     check_surface_value,
-    earth_model,
     parse_gravity,
 )
 from tapp.errors import InputError
@@ -66,8 +65,9 @@ def _gravity(spec: str) -> str:
 GravityName = Annotated[str, AfterValidator(_gravity), Field(json_schema_extra={
     "allowed": f"J0 (point mass), Jn (zonals to degree n) or NxM (degree N >= order M), "
                f"degree <= {MAX_DEGREE}"})]
-#: A third body: a DE421 body other than the Earth.
-ThirdBody = Literal[tuple(b for b in BODIES if b != "earth")]  # type: ignore[valid-type]
+#: A DE421 body: the centre of the integration, or a third body (not the centre).
+Body = Literal[BODIES]  # type: ignore[valid-type]
+ThirdBody = Body
 #: Third bodies, each once.
 ThirdBodies = Annotated[list[ThirdBody], Unique]
 #: An atmosphere model of the drag force ("none": no drag).
@@ -153,6 +153,10 @@ class ModelTable(Schema):
     rtol: Tolerance = Field(1e-13, description="Relative tolerance of the integrator.")
     atol: Tolerance = Field(1e-13, description="Absolute tolerance of the integrator, on km "
                             "and km/s.")
+    center: Body = Field(
+        "earth", description="Centre of the integration (ICRF axes, origin at its centre; "
+        "the [injection] state is relative to it): the Earth, or any DE421 body, as a point "
+        "mass or with its J2 (the Moon, Mars, Venus); the other bodies as third bodies.")
     method: Method = Field(
         "dop853", description="Integration method: 'dop853' (Dormand-Prince 8(5,3), any "
         "force model) or 'rkn12' (Runge-Kutta-Nystrom 12(10) on r'' = a(t, r): about 4x "
@@ -160,29 +164,41 @@ class ModelTable(Schema):
 
     def force_models(self, source: str, earth_orientation: str
                      ) -> tuple[ForceModel, ForceModel]:
-        """The (state, variational) Earth-centred force models under ``earth_orientation``.
+        """The (state, variational) force models about :attr:`center` under
+        ``earth_orientation``.
 
         Raises
         ------
         InputError
-            Naming ``source`` and ``model.gravity`` or ``model.var_gravity``, or
-            ``model.area_to_mass_m2_kg`` when SRP or drag is asked without it.
+            Naming ``source`` and ``model.gravity``, ``model.var_gravity``,
+            ``model.third_bodies``, ``model.var_third_bodies`` (the centre among them; a field
+            the centre has not) or ``model.atmosphere``, or ``model.area_to_mass_m2_kg`` when
+            SRP or drag is asked without it.
         """
-        state = earth_model(self.gravity, tuple(self.third_bodies), source=source,
-                            field="model.gravity", earth_orientation=earth_orientation,
-                            surface=self._surface(source, self.srp, self.atmosphere,
-                                                  self.shadows))
-        var = earth_model(self.gravity if self.var_gravity is None else self.var_gravity,
-                          tuple(self.third_bodies if self.var_third_bodies is None
-                                else self.var_third_bodies),
-                          source=source, field="model.var_gravity",
-                          earth_orientation=earth_orientation,
-                          surface=self._surface(
+        state = self._model(source, "", self.gravity, self.third_bodies,
+                            earth_orientation, self._surface(source, self.srp, self.atmosphere,
+                                                             self.shadows))
+        var = self._model(source, "var_",
+                          self.gravity if self.var_gravity is None else self.var_gravity,
+                          self.third_bodies if self.var_third_bodies is None
+                          else self.var_third_bodies, earth_orientation,
+                          self._surface(
                               source, self.srp if self.var_srp is None else self.var_srp,
                               self.atmosphere if self.var_atmosphere is None
                               else self.var_atmosphere,
                               self.shadows if self.var_shadows is None else self.var_shadows))
         return state, var
+
+    def _model(self, source: str, prefix: str, gravity: str, third_bodies: list[str],
+               earth_orientation: str, surface: SurfaceForces | None) -> ForceModel:
+        """One force model about :attr:`center`, its errors named ``model.<prefix><key>``."""
+        spec = parse_gravity(gravity, source=source, field=f"model.{prefix}gravity")
+        try:
+            return ForceModel(spec, self.center, tuple(third_bodies), earth_orientation,
+                              surface)
+        except InputError as exc:  # named after the kernel, not the file
+            key = exc.field if exc.field == "atmosphere" else f"{prefix}{exc.field}"
+            raise InputError(source, f"model.{key}", exc.expected, exc.got) from None
 
     def propagator(self, source: str, state_model: ForceModel, var_model: ForceModel,
                    params: tuple[str, ...] = ()) -> Propagator:

@@ -11,13 +11,16 @@ Grammar of an orbit spec (the ``--orbit`` option):
   ``v_km_s = [vx, vy, vz]``, or ``a_km, e, i_deg, raan_deg, argp_deg`` and ``M_deg`` (or
   ``nu_deg``), and optionally ``allow_subsurface = true``.
 
-All states are EME2000 inertial, centred on the Earth, with the EGM96 GM.
+All states are EME2000 inertial, centred on the Earth, with the EGM96 GM; a scenario whose
+``[model] center`` is another body gives its ``[injection]`` relative to that body, its
+elements with that body's GM (``center`` of :meth:`OrbitTable.state`).
 
 An orbit that would pass below the Earth's surface is refused (:func:`check_perigee`): its
 perigee radius is below the equatorial radius ``R_EARTH_km`` and it reaches that perigee (an
 ellipse always does; a hyperbola or parabola only while inbound), or it starts below the
-surface. ``allow_subsurface = true`` in the orbit's table, or ``--allow-subsurface`` on the
-command line, says the user means it.
+surface (about another centre, below its equatorial radius, ``RADIUS_km``).
+``allow_subsurface = true`` in the orbit's table, or ``--allow-subsurface`` on the command
+line, says the user means it.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field, model_validator
 
-from tapp.constants import GM_EARTH_km3_s2, R_EARTH_km
+from tapp.constants import GM_EARTH_km3_s2, GM_km3_s2, RADIUS_km
 from tapp.errors import InputError
 from tapp.examples import STUDY_FILE
 from tapp.io.schema import Invalid, Schema, validate
@@ -84,8 +87,10 @@ def check_state_bounds(x: np.ndarray, source: str, field: str) -> np.ndarray:
 
 
 def check_perigee(x: np.ndarray, source: str, field: str, *, allow_subsurface: bool = False,
-                  how_to_allow: str = "--allow-subsurface") -> np.ndarray:
-    """Return ``x`` (6,) unless its orbit passes below the Earth's surface (module docstring).
+                  how_to_allow: str = "--allow-subsurface", center: str = "earth"
+                  ) -> np.ndarray:
+    """Return ``x`` (6,) unless its orbit passes below the surface of ``center`` (the Earth's
+    equatorial radius, another body's mean radius; module docstring).
 
     The state is first held to :func:`check_state_bounds` (even with ``allow_subsurface``).
 
@@ -98,17 +103,20 @@ def check_perigee(x: np.ndarray, source: str, field: str, *, allow_subsurface: b
     check_state_bounds(x, source, field)
     if allow_subsurface:
         return x
+    mu, radius = GM_km3_s2[center], RADIUS_km[center]
+    what = f"the {center.capitalize()}'s equatorial radius"
+    apsis = "perigee" if center == "earth" else "periapsis"
     r_km = float(np.linalg.norm(x[:3]))
-    rp_km = perigee_radius_km(x)
-    energy = 0.5 * float(x[3:] @ x[3:]) - GM_EARTH_km3_s2 / r_km
+    rp_km = perigee_radius_km(x, mu)
+    energy = 0.5 * float(x[3:] @ x[3:]) - mu / r_km
     inbound = float(x[:3] @ x[3:]) < 0
-    if r_km < R_EARTH_km:
-        raise InputError(source, field, f"a start radius |r| >= {R_EARTH_km} km, the Earth's "
-                         f"equatorial radius ({how_to_allow} if you mean it)", round(r_km, 3))
-    if rp_km < R_EARTH_km and (energy < 0 or inbound):
-        raise InputError(source, field, f"a perigee radius r_p >= {R_EARTH_km} km, the Earth's "
-                         f"equatorial radius (this orbit's perigee is {R_EARTH_km - rp_km:.1f} km "
-                         f"below it; {how_to_allow} if you mean it)", round(rp_km, 3))
+    if r_km < radius:
+        raise InputError(source, field, f"a start radius |r| >= {radius} km, {what} "
+                         f"({how_to_allow} if you mean it)", round(r_km, 3))
+    if rp_km < radius and (energy < 0 or inbound):
+        raise InputError(source, field, f"a {apsis} radius r_p >= {radius} km, {what} (this "
+                         f"orbit's {apsis} is {radius - rp_km:.1f} km below it; {how_to_allow} "
+                         "if you mean it)", round(rp_km, 3))
     return x
 
 
@@ -132,8 +140,10 @@ def _parse_pairs(text: str, source: str, field: str) -> dict[str, float]:
 
 def state_from_elements(a_km: float, e: float, i_deg: float, raan_deg: float, argp_deg: float,
                         anomaly_deg: float, *, true_anomaly: bool = False,
-                        source: str = "orbit", field: str = "orbit") -> np.ndarray:
-    """Return the Cartesian state (6,) km, km/s of classical elements given in degrees."""
+                        source: str = "orbit", field: str = "orbit",
+                        mu_km3_s2: float = GM_EARTH_km3_s2) -> np.ndarray:
+    """Return the Cartesian state (6,) km, km/s of classical elements given in degrees, about
+    a body of GM ``mu_km3_s2`` (the Earth's EGM96 GM by default)."""
     if not e >= 0 or (e < 1 and a_km <= 0) or (e > 1 and a_km >= 0):
         raise InputError(source, field, "e >= 0 with a > 0 (ellipse) or a < 0 (hyperbola)",
                          f"a={a_km}, e={e}")
@@ -154,7 +164,7 @@ def state_from_elements(a_km: float, e: float, i_deg: float, raan_deg: float, ar
                              " deg", anomaly_deg)
         anomaly = float(true_to_mean_anomaly(anomaly, e))
     elems = np.array([a_km, e, *np.radians([i_deg, raan_deg, argp_deg]), anomaly])
-    return np.asarray(elements_to_cartesian(elems, GM_EARTH_km3_s2), dtype=float)
+    return np.asarray(elements_to_cartesian(elems, mu_km3_s2), dtype=float)
 
 
 def _from_mapping(values: Mapping[str, float], source: str, field: str) -> np.ndarray:
@@ -215,10 +225,11 @@ class OrbitTable(Schema):
                       "nu_deg)", ",".join(sorted(given)))
 
     def state(self, source: str, field: str, *, allow_subsurface: bool = False,
-              how_to_allow: str = "") -> np.ndarray:
-        """Return the Cartesian state (6,) km, km/s, perigee-checked (module docstring).
+              how_to_allow: str = "", center: str = "earth") -> np.ndarray:
+        """Return the Cartesian state (6,) km, km/s relative to ``center`` (elements with its
+        GM), periapsis-checked against its surface (module docstring).
 
-        ``how_to_allow`` names what lifts the perigee check in the message (default: this
+        ``how_to_allow`` names what lifts the periapsis check in the message (default: this
         table's ``allow_subsurface`` and ``--allow-subsurface``).
         """
         if self.r_km is not None:
@@ -226,8 +237,9 @@ class OrbitTable(Schema):
         else:
             anomaly = "M_deg" if self.M_deg is not None else "nu_deg"
             x = state_from_elements(*(getattr(self, k) for k in (*_ELEMENT_TABLE_KEYS, anomaly)),
-                                    true_anomaly=anomaly == "nu_deg", source=source, field=field)
-        return check_perigee(x, source, field,
+                                    true_anomaly=anomaly == "nu_deg", source=source, field=field,
+                                    mu_km3_s2=GM_km3_s2[center])
+        return check_perigee(x, source, field, center=center,
                              allow_subsurface=allow_subsurface or self.allow_subsurface,
                              how_to_allow=how_to_allow or f"{field}.allow_subsurface = true or "
                              "--allow-subsurface")

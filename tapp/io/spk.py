@@ -40,8 +40,13 @@ from tapp.dynamics.ephemeris import de421_path
 from tapp.errors import InputError
 from tapp.frames.time import JD_J2000, Epoch
 
-#: NAIF id of the Earth, the centre of every state read or written.
+#: NAIF id of the Earth, the centre of every state read, and of those written unless the
+#: scenario integrates about another body (:data:`NAIF_IDS`).
 EARTH_ID = 399
+#: NAIF ids of the DE421 bodies an integration may be centred on (the outer planets by their
+#: system barycentres, as DE421 holds them).
+NAIF_IDS = {"sun": 10, "mercury": 199, "venus": 299, "earth": EARTH_ID, "moon": 301,
+            "mars": 499, "jupiter": 5, "saturn": 6, "uranus": 7, "neptune": 8}
 #: The inertial frame of the states (SPICE's name for the ICRF axes).
 FRAME = "J2000"
 #: Longest file name SPICE accepts (FILEN in the toolkit).
@@ -124,10 +129,10 @@ def _coverage(path: str, body: int) -> np.ndarray:
 
 
 def spk_states(path: Path | str, body: int, et_s, source: str, field: str = "file",
-               body_field: str = "object", spans: Sequence[tuple[float, float, str]] = ()
-               ) -> np.ndarray:
-    """Return the states (N, 6) of ``body`` relative to the Earth in J2000 (km, km/s) at ET
-    values ``et_s`` (N,) from the SPK at ``path`` (module docstring).
+               body_field: str = "object", spans: Sequence[tuple[float, float, str]] = (),
+               center: int = EARTH_ID) -> np.ndarray:
+    """Return the states (N, 6) of ``body`` relative to ``center`` (the Earth) in J2000 (km,
+    km/s) at ET values ``et_s`` (N,) from the SPK at ``path`` (module docstring).
 
     ``spans`` lists (ET start, ET end, what it is) that the file's coverage of the body must
     hold whole, each named in the error when it does not (the scenario's arcs); the times
@@ -161,10 +166,10 @@ def spk_states(path: Path | str, body: int, et_s, source: str, field: str = "fil
                                  f"{what}, {_et_text(start)} to {_et_text(end)} (it covers "
                                  f"{have})", str(path))
         try:
-            states, _ = spiceypy.spkezr(str(body), et, FRAME, "NONE", str(EARTH_ID))
+            states, _ = spiceypy.spkezr(str(body), et, FRAME, "NONE", str(center))
         except SpiceyError as exc:
             raise InputError(source, field, f"an SPK from which SPICE computes body {body}'s "
-                             "state relative to the Earth", _spice_error(exc)) from None
+                             f"state relative to body {center}", _spice_error(exc)) from None
     return np.asarray(states, dtype=float).reshape(et.size, 6)
 
 
@@ -196,9 +201,10 @@ def _et_text(et: float) -> str:
 
 
 def write_spk(path: Path | str, body: int, segments: Sequence[tuple[np.ndarray, np.ndarray]],
-              *, segment_id: str = "tapp", degree: int = SPK_DEGREE, option: str = "--spk"
-              ) -> None:
-    """Write an SPK file holding type 13 segments of ``body`` relative to the Earth in J2000,
+              *, segment_id: str = "tapp", degree: int = SPK_DEGREE, option: str = "--spk",
+              center: int = EARTH_ID) -> None:
+    """Write an SPK file holding type 13 segments of ``body`` relative to ``center`` (the
+    Earth) in J2000,
     one per (ET (N,), states (N, 6) km, km/s) of ``segments``, in time order: ET strictly
     increasing within each, Hermite of odd ``degree`` through (degree + 1) / 2 states.
 
@@ -218,7 +224,7 @@ def write_spk(path: Path | str, body: int, segments: Sequence[tuple[np.ndarray, 
                 for et_s, states in segments:
                     et = np.ascontiguousarray(et_s, dtype=float)
                     x = np.ascontiguousarray(states, dtype=float)
-                    spiceypy.spkw13(handle, body, EARTH_ID, FRAME, float(et[0]),
+                    spiceypy.spkw13(handle, body, center, FRAME, float(et[0]),
                                     float(et[-1]), segment_id[:40], degree, et.size, x, et)
             finally:
                 spiceypy.spkcls(handle)

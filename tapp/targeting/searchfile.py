@@ -239,14 +239,14 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     except InputError as exc:
         raise InputError(source, "epoch", exc.expected, epoch_text) from None
 
-    x0 = doc.injection.state(source, "injection",
+    mod = doc.model
+    x0 = doc.injection.state(source, "injection", center=mod.center,
                              how_to_allow="injection.allow_subsurface = true")
     r0, v0 = x0[:3], x0[3:]
-    if np.linalg.norm(r0) <= RADIUS_km["earth"]:
-        raise InputError(source, "injection", "a position above the Earth's surface",
-                         r0.tolist())
+    if np.linalg.norm(r0) <= RADIUS_km[mod.center]:
+        raise InputError(source, "injection", f"a position above the {mod.center.capitalize()}'s "
+                         "surface", r0.tolist())
 
-    mod = doc.model
     bodies = tuple(mod.third_bodies)
     orientation = orientation_for(doc.earth_orientation, epoch, doc.eop,
                                   Path(source).parent, source)

@@ -42,7 +42,7 @@ from tapp.io.ccsds.oem import (
     event_comments,
     lagrange_interpolate,
 )
-from tapp.io.spk import SPK_DEGREE, add_comments, spk_states, write_spk
+from tapp.io.spk import NAIF_IDS, SPK_DEGREE, add_comments, spk_states, write_spk
 from tapp.tracking.manoeuvres import describe, vector_text
 from tapp.tracking.pieces import fly
 from tapp.tracking.scenario import Scenario
@@ -227,9 +227,9 @@ def write_trajectory_spk(path: Path, scenario: Scenario, traj: OemTrajectory, bo
                          comments: Sequence[str] = (), option: str = "--spk"
                          ) -> tuple[float, float]:
     """Write the OEM's states ``traj`` as an SPK (one type 13 segment of NAIF id ``body``
-    about the Earth per OEM segment, J2000 = the GCRS axes, a gmst scenario's states rotated
-    there by the frame bias) at ``path``, check it, and return the largest interpolation
-    errors SPICE makes at the mid-points between states (km, km/s).
+    about the integration centre per OEM segment, J2000 = the GCRS axes, a gmst scenario's
+    states rotated there by the frame bias) at ``path``, check it, and return the largest
+    interpolation errors SPICE makes at the mid-points between states (km, km/s).
 
     The states go in at ET of their scenario times, each moved by the sub-ulp remainder its
     rounded ET leaves out, velocities per TDB second (:func:`tapp.frames.timesystems.to_et`);
@@ -246,14 +246,15 @@ def write_trajectory_spk(path: Path, scenario: Scenario, traj: OemTrajectory, bo
     """
     epoch, orientation = scenario.epoch, scenario.orientation
     gcrs = gcrs_from_scenario(traj.states, orientation)
+    center = NAIF_IDS[scenario.state_model.center]
     write_spk(path, body, [to_et(traj.t_s[s], gcrs[s], epoch) for s in traj.spans],
-              option=option)
+              option=option, center=center)
     arcs = flight_arcs(scenario, float(traj.t_s[-1]))
     mids = [0.5 * (traj.t_s[s][1:] + traj.t_s[s][:-1]) for s in traj.spans]
     truth = np.concatenate([fly_arc(scenario, arc, m).states
                             for arc, m in zip(arcs, mids, strict=True)])
-    spice = [from_et(m, spk_states(path, body, et_from_scenario(m, epoch), option, str(path)),
-                     epoch) for m in mids]
+    spice = [from_et(m, spk_states(path, body, et_from_scenario(m, epoch), option, str(path),
+                                   center=center), epoch) for m in mids]
     got = to_scenario_frame("GCRF", np.concatenate(mids), np.concatenate(spice), orientation)
     err = np.abs(got - truth)
     error_km, error_km_s = float(err[:, :3].max()), float(err[:, 3:].max())

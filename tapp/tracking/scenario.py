@@ -1152,8 +1152,11 @@ def _injection(p: _Parser, doc: ScenarioFile, orientation: EarthOrientation, las
     if (doc.injection is None) == (doc.reference is None):
         p.fail("injection", "either an [injection] table or a [reference] trajectory file")
     if doc.injection is not None:
-        return doc.injection.state(p.source, "injection",
+        return doc.injection.state(p.source, "injection", center=doc.model.center,
                                    how_to_allow="injection.allow_subsurface = true"), None
+    if doc.model.center != "earth":
+        p.fail("model.center", '"earth" with a [reference] trajectory (read Earth-centred)',
+               doc.model.center)
     if doc.targeting is not None:
         p.fail("targeting", "no [targeting] with [reference] (the reference's trajectory is "
                "the mission's)")

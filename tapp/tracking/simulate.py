@@ -89,7 +89,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -136,6 +136,7 @@ from tapp.measurements.relativity import (
 from tapp.orbit.bplane import b_plane
 from tapp.orbit.elements import cartesian_to_elements
 from tapp.targeting.program import BPlaneProgram
+from tapp.tracking.centre import geocentric
 from tapp.tracking.ddor import TrackingBaseline
 from tapp.tracking.editing import (
     EDITING_RULES,
@@ -218,6 +219,14 @@ class _Arc:
     phi: np.ndarray
     sens: np.ndarray
     batches: SegmentPartials | None = None
+    #: The geocentric states the stations observe (:mod:`tapp.tracking.centre`; None: the
+    #: states themselves, about the Earth).
+    geo: np.ndarray | None = None
+
+    @property
+    def observed(self) -> np.ndarray:
+        """The geocentric states (N, 6) at :attr:`t_s`."""
+        return self.states if self.geo is None else self.geo
 
 
 @dataclass(frozen=True, slots=True)
@@ -363,9 +372,11 @@ def _light_time(scenario: Scenario, prop: Propagator, two_way: bool,
         return None
     values = dict(scenario.dynamic_values)
 
-    def state_at(t_s: np.ndarray) -> np.ndarray:
-        return fly(prop, scenario.manoeuvres, scenario.x0, t_s, param_values=values,
-                   orientation=scenario.orientation, epoch_jd_utc=scenario.epoch.jd).states
+    def state_at(t_s: np.ndarray) -> np.ndarray:  # geocentric (tapp.tracking.centre)
+        states = fly(prop, scenario.manoeuvres, scenario.x0, t_s, param_values=values,
+                     orientation=scenario.orientation, epoch_jd_utc=scenario.epoch.jd).states
+        return geocentric(scenario.state_model.center, scenario.epoch, scenario.orientation,
+                          t_s, states)
 
     return LightTime(two_way=two_way, state_at=state_at, relativity=relativity)
 
@@ -455,10 +466,10 @@ def _station_passes(ts: TrackingStation, scenario: Scenario, arc: _Arc, grid: np
     sch = scenario.schedule
     times = grid if samples is None else samples.t_s
     pos = np.searchsorted(arc.t_s, times)
-    above = (_above(ts.station, scenario, times, arc.states[pos]) if times.size
+    above = (_above(ts.station, scenario, times, arc.observed[pos]) if times.size
              else np.zeros(0, dtype=bool))  # a station without a scheduled sample
     if ts.uplink is not None and times.size:
-        above &= _uplink_above(ts.uplink, scenario, times, arc.states[pos])
+        above &= _uplink_above(ts.uplink, scenario, times, arc.observed[pos])
     taken = None
     if samples is None:
         passes, editing = edited_passes(above, ts.blackouts_s, sch.min_pass_s, sch.max_pass_s,
@@ -479,7 +490,7 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     take = np.concatenate([np.arange(a, b) for a, b in passes])
     label = np.concatenate([np.full(b - a, i) for i, (a, b) in enumerate(passes)])
     t, p = times[take], pos[take]
-    x = arc.states[p]
+    x = arc.observed[p]
     model = _measurement_model(ts, scenario, prop, relativity)
     a = _state_rows(model.state_partials(t, x), arc, p, scenario, columns)
     name = ts.station.name
@@ -564,7 +575,7 @@ def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, a
     sch = scenario.schedule
     pair = [scenario.stations[n - 1] for n in (bl.station_a, bl.station_b)]
     pos = np.searchsorted(arc.t_s, grid)
-    above = np.logical_and(*(_above(ts.station, scenario, grid, arc.states[pos])
+    above = np.logical_and(*(_above(ts.station, scenario, grid, arc.observed[pos])
                              for ts in pair))
     blackouts = pair[0].blackouts_s + pair[1].blackouts_s
     windows, win_editing = edited_passes(above, blackouts, bl.min_window_s, math.inf,
@@ -582,7 +593,7 @@ def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, a
         return None, editing
     take = np.concatenate(picks)
     t, p = grid[take], pos[take]
-    x = arc.states[p]
+    x = arc.observed[p]
     model = DdorModel(pair[0].station, pair[1].station, scenario.orientation,
                       _light_time(scenario, prop, two_way=False))
     quasar = quasar_direction(x[:, :3], bl.separation_rad, bl.position_angle_rad)
@@ -847,7 +858,10 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         [grid if on_grid else grid[:0], *(s.t_s for s in samples.values())])), tick)
 
     n_scheduled = _n_samples(scenario, scenario.schedule.end_s)
-    relativity, relativity_note = relativity_choice(scenario, arc.t_s, arc.states)
+    if scenario.state_model.center != "earth":  # the stations observe geocentric states
+        arc = replace(arc, geo=geocentric(scenario.state_model.center, scenario.epoch,
+                                          scenario.orientation, arc.t_s, arc.states))
+    relativity, relativity_note = relativity_choice(scenario, arc.t_s, arc.observed)
     found = [_station_passes(ts, scenario, arc, grid, n_scheduled, samples.get(ts.number))
              for ts in scenario.stations]
     # q is complete once the passes are known (per-pass zenith parameters)

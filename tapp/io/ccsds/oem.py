@@ -182,8 +182,10 @@ def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
                ref_frame: str, interpolation: str, interpolation_degree: int,
                originator: str = "TAPP", comments: tuple[str, ...] = (),
                meta_comments: tuple[str, ...] = (), segment=None,
-               segment_comments: tuple[tuple[str, ...], ...] = ()) -> str:
-    """Return the text of an OEM 2.0 (KVN) of an Earth-centred inertial trajectory.
+               segment_comments: tuple[tuple[str, ...], ...] = (),
+               center_name: str = "EARTH") -> str:
+    """Return the text of an OEM 2.0 (KVN) of an inertial trajectory about ``center_name``
+    (the Earth unless the scenario integrates about another body).
 
     Parameters
     ----------
@@ -256,7 +258,7 @@ def format_oem(epoch: Epoch, t_s, states, *, object_name: str, object_id: str,
         lines += ["META_START", *(f"COMMENT {c}" for c in (*meta_comments, *own)),
                   f"OBJECT_NAME = {object_name}",
                   f"OBJECT_ID = {object_id}",
-                  "CENTER_NAME = EARTH",
+                  f"CENTER_NAME = {center_name}",
                   f"REF_FRAME = {ref_frame}",
                   "TIME_SYSTEM = UTC",
                   f"START_TIME = {epoch.iso_after(float(t[span][0]), EPOCH_DECIMALS)}",
