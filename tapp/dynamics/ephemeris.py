@@ -17,7 +17,7 @@ from __future__ import annotations
 import importlib.util
 import math
 from collections.abc import Callable
-from functools import cache, lru_cache
+from functools import cache, lru_cache, partial
 from pathlib import Path
 
 import numpy as np
@@ -61,6 +61,20 @@ def tai_minus_utc_s(jd_utc: float, source: str = "epoch") -> float:
 def utc_to_tdb_jd(jd_utc: float, source: str = "epoch") -> float:
     """Return the TDB Julian date of a UTC Julian date (TDB ≈ TT, see module docstring)."""
     return jd_utc + (tai_minus_utc_s(jd_utc, source) + TT_MINUS_TAI_s) / SECONDS_PER_DAY
+
+
+def tdb_reader(epoch_jd_utc: float | None, scales: TimeScales | None = None
+               ) -> Callable[[np.ndarray], tuple]:
+    """Return ``tdb(t_s) -> (whole, fraction)``, the TDB Julian date of scenario times t_s
+    (s from the epoch), as every reader of the ephemeris takes it: ``scales``' TDB proper
+    (iau2006), else TT of the UTC epoch (gmst: module docstring)."""
+    if scales is not None:
+        return scales.tdb
+    return partial(_tt_dates, utc_to_tdb_jd(epoch_jd_utc))  # picklable (Dask workers)
+
+
+def _tt_dates(jd_tdb: float, t_s: np.ndarray) -> tuple[float, np.ndarray]:
+    return jd_tdb, np.asarray(t_s, dtype=float) / SECONDS_PER_DAY
 
 
 def de421_path() -> Path:
@@ -173,14 +187,8 @@ def chebyshev_table(bodies: tuple[str, ...], center: str, epoch_jd_utc: float, t
         coeffs = np.concatenate([_tdb_segment(bodies, center, scales.epoch, float(start),
                                               segment_s, n_coef) for start in starts], axis=1)
         return ChebyshevTable(np.ascontiguousarray(coeffs), float(starts[0]), segment_s)
-    if scales is None:
-        jd_tdb = utc_to_tdb_jd(epoch_jd_utc)
-
-        def tdb(t: np.ndarray) -> tuple[float, np.ndarray]:
-            return jd_tdb, t / SECONDS_PER_DAY
-    else:
-        tdb = scales.tdb
-    return fit_chebyshev(_positions(bodies, center, tdb), t_start_s, t_end_s, segment_s,
+    return fit_chebyshev(_positions(bodies, center, tdb_reader(epoch_jd_utc, scales)),
+                         t_start_s, t_end_s, segment_s,
                          n_coef, origin_s)
 
 

@@ -33,7 +33,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from tapp.constants import SECONDS_PER_DAY
 from tapp.frames.chebyshev import ChebyshevTable, fit_chebyshev
 
 _J2000_JD = 2451545.0
@@ -106,10 +105,3 @@ def pole_table(body: str, tdb: Callable[[np.ndarray], tuple], t_start_s: float,
 
     return fit_chebyshev(fn, t_start_s, t_end_s, SEGMENT_s, N_COEF, origin_s)
 
-
-def tdb_from_epoch(jd_tdb_epoch: float) -> Callable[[np.ndarray], tuple]:
-    """``tdb(t)`` of a TDB Julian date at t = 0: (jd_tdb_epoch, t / 86400)."""
-    def tdb(t: np.ndarray) -> tuple[float, np.ndarray]:
-        return jd_tdb_epoch, np.asarray(t, dtype=float) / SECONDS_PER_DAY
-
-    return tdb

@@ -42,7 +42,7 @@ from tapp.dynamics.equations import (
 )
 from tapp.dynamics.events import Events
 from tapp.dynamics.forces import check_parameter_value, default_parameters
-from tapp.dynamics.poles import pole_table, tdb_from_epoch
+from tapp.dynamics.poles import pole_table
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError, TappError
 from tapp.frames.chebyshev import ChebyshevTable
@@ -266,14 +266,13 @@ class Propagator:
         scales = orientation.scales if orientation is not None else None
         origin = None if scales is None else orientation.segment_origin_s  # one grid for both
         if eqs.oriented == "body_pole":
-            from tapp.dynamics.ephemeris import utc_to_tdb_jd
+            from tapp.dynamics.ephemeris import tdb_reader  # jplephem, on first use
 
             if scales is None and epoch_jd_utc is None:
                 raise InputError("propagate", "epoch", "an epoch (UTC) for the J2 of centre "
                                  f"{self.state_model.center} (its pole moves)", None)
-            tdb = scales.tdb if scales is not None else tdb_from_epoch(
-                utc_to_tdb_jd(epoch_jd_utc))
-            table = pole_table(self.state_model.center, tdb, lo, hi, origin)
+            table = pole_table(self.state_model.center, tdb_reader(epoch_jd_utc, scales), lo,
+                               hi, origin)
             lo, hi = table.t0_s, table.t_end_s  # the same segments for the ephemeris
         elif eqs.oriented:
             if scales is None:

@@ -84,6 +84,7 @@ R. H. Battin, *An Introduction to the Mathematics and Methods of Astrodynamics*,
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -92,7 +93,7 @@ from numpy.typing import ArrayLike
 from search import SearchResult, solve
 from tapp.constants import SECONDS_PER_DAY, GM_km3_s2
 from tapp.dynamics import PropagationError, Propagator
-from tapp.dynamics.ephemeris import position_km, utc_to_tdb_jd
+from tapp.dynamics.ephemeris import position_km, tdb_reader
 from tapp.dynamics.poles import pole_unit
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.orientation import EarthOrientation
@@ -246,7 +247,8 @@ class BPlaneProgram:
     scan_step_s: float = 600.0
     periapsis_time_tol_s: float = 1e-3
     orientation: EarthOrientation | None = None
-    _jd_tdb: float = field(init=False, repr=False, compare=False)
+    #: TDB of scenario times (:func:`tapp.dynamics.ephemeris.tdb_reader`).
+    _tdb: Callable[[np.ndarray], tuple] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         r0 = np.asarray(self.r0_km, dtype=np.float64)
@@ -275,9 +277,9 @@ class BPlaneProgram:
         if self.max_flight_time_s / self.scan_step_s > MAX_SCAN_STEPS:
             raise InputError("targeting", "max_flight_time_s", f"at most {MAX_SCAN_STEPS:,} "
                              f"scan steps of {self.scan_step_s:g} s", self.max_flight_time_s)
-        object.__setattr__(self, "_jd_tdb", utc_to_tdb_jd(self.epoch.jd))
         if self.orientation is None:
             object.__setattr__(self, "orientation", EarthOrientation.gmst(self.epoch))
+        object.__setattr__(self, "_tdb", tdb_reader(self.epoch.jd, self.orientation.scales))
 
     @property
     def gm_target_km3_s2(self) -> float:
@@ -321,13 +323,6 @@ class BPlaneProgram:
     def body_position_km(self, body: str, t_s: np.ndarray) -> np.ndarray:
         """Position (N, 3) km of ``body`` relative to the centre, at TDB (TT with gmst)."""
         return position_km(body, self.propagator.state_model.center, *self._tdb(t_s))
-
-    def _tdb(self, t_s: np.ndarray) -> tuple:
-        """TDB Julian date (whole, fraction) of t_s s from the epoch (TT with gmst)."""
-        scales = self.orientation.scales
-        if scales is None:
-            return self._jd_tdb, t_s / SECONDS_PER_DAY
-        return scales.tdb(t_s)
 
     def soi_radius_km(self, distance_km: ArrayLike) -> np.ndarray:
         r"""Return Laplace's sphere-of-influence radius :math:`D(\mu_b/\mu_c)^{2/5}`, km."""

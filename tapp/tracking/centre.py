@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tapp.constants import SECONDS_PER_DAY
-from tapp.dynamics.ephemeris import barycentric_state, utc_to_tdb_jd
+from tapp.dynamics.ephemeris import barycentric_state, tdb_reader
 from tapp.frames.orientation import EarthOrientation
 from tapp.frames.time import Epoch
 
@@ -27,9 +26,7 @@ def centre_from_earth(center: str, epoch: Epoch, orientation: EarthOrientation,
     t = np.asarray(t_s, dtype=float)
     if center == "earth":
         return np.zeros(t.shape + (6,))
-    scales = orientation.scales
-    jd, jd2 = (scales.tdb(t) if scales is not None
-               else (utc_to_tdb_jd(epoch.jd), t / SECONDS_PER_DAY))
+    jd, jd2 = tdb_reader(epoch.jd, orientation.scales)(t)
     return barycentric_state(center, jd, jd2) - barycentric_state("earth", jd, jd2)
 
 
