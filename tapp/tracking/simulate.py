@@ -219,14 +219,9 @@ class _Arc:
     phi: np.ndarray
     sens: np.ndarray
     batches: SegmentPartials | None = None
-    #: The geocentric states the stations observe (:mod:`tapp.tracking.centre`; None: the
-    #: states themselves, about the Earth).
+    #: The geocentric states the stations observe (:mod:`tapp.tracking.centre`; the states
+    #: themselves about the Earth), set once the trajectory is flown.
     geo: np.ndarray | None = None
-
-    @property
-    def observed(self) -> np.ndarray:
-        """The geocentric states (N, 6) at :attr:`t_s`."""
-        return self.states if self.geo is None else self.geo
 
 
 @dataclass(frozen=True, slots=True)
@@ -466,10 +461,10 @@ def _station_passes(ts: TrackingStation, scenario: Scenario, arc: _Arc, grid: np
     sch = scenario.schedule
     times = grid if samples is None else samples.t_s
     pos = np.searchsorted(arc.t_s, times)
-    above = (_above(ts.station, scenario, times, arc.observed[pos]) if times.size
+    above = (_above(ts.station, scenario, times, arc.geo[pos]) if times.size
              else np.zeros(0, dtype=bool))  # a station without a scheduled sample
     if ts.uplink is not None and times.size:
-        above &= _uplink_above(ts.uplink, scenario, times, arc.observed[pos])
+        above &= _uplink_above(ts.uplink, scenario, times, arc.geo[pos])
     taken = None
     if samples is None:
         passes, editing = edited_passes(above, ts.blackouts_s, sch.min_pass_s, sch.max_pass_s,
@@ -490,7 +485,7 @@ def _station_data(ts: TrackingStation, scenario: Scenario, prop: Propagator, arc
     take = np.concatenate([np.arange(a, b) for a, b in passes])
     label = np.concatenate([np.full(b - a, i) for i, (a, b) in enumerate(passes)])
     t, p = times[take], pos[take]
-    x = arc.observed[p]
+    x = arc.geo[p]
     model = _measurement_model(ts, scenario, prop, relativity)
     a = _state_rows(model.state_partials(t, x), arc, p, scenario, columns)
     name = ts.station.name
@@ -575,7 +570,7 @@ def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, a
     sch = scenario.schedule
     pair = [scenario.stations[n - 1] for n in (bl.station_a, bl.station_b)]
     pos = np.searchsorted(arc.t_s, grid)
-    above = np.logical_and(*(_above(ts.station, scenario, grid, arc.observed[pos])
+    above = np.logical_and(*(_above(ts.station, scenario, grid, arc.geo[pos])
                              for ts in pair))
     blackouts = pair[0].blackouts_s + pair[1].blackouts_s
     windows, win_editing = edited_passes(above, blackouts, bl.min_window_s, math.inf,
@@ -593,7 +588,7 @@ def _baseline_data(bl: TrackingBaseline, scenario: Scenario, prop: Propagator, a
         return None, editing
     take = np.concatenate(picks)
     t, p = grid[take], pos[take]
-    x = arc.observed[p]
+    x = arc.geo[p]
     model = DdorModel(pair[0].station, pair[1].station, scenario.orientation,
                       _light_time(scenario, prop, two_way=False))
     quasar = quasar_direction(x[:, :3], bl.separation_rad, bl.position_angle_rad)
@@ -840,9 +835,8 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     n_p = scenario.n_p
     prop = scenario.propagator()
     n_seg = int(np.count_nonzero(is_epoch))
-    entries = (*scenario.stations, *scenario.baselines)  # the tape's stations
     names = [ts.station.name for ts in scenario.stations] + [b.name for b in scenario.baselines]
-    total = n_seg + 2 * len(entries) + 1
+    total = n_seg + 2 * len(names) + 1
     step = iter(range(1, total + 1))
 
     def tick(stage: str) -> None:
@@ -858,15 +852,14 @@ def simulate(scenario: Scenario, *, raw: bool = False,
         [grid if on_grid else grid[:0], *(s.t_s for s in samples.values())])), tick)
 
     n_scheduled = _n_samples(scenario, scenario.schedule.end_s)
-    if scenario.state_model.center != "earth":  # the stations observe geocentric states
-        arc = replace(arc, geo=geocentric(scenario.state_model.center, scenario.epoch,
-                                          scenario.orientation, arc.t_s, arc.states))
-    relativity, relativity_note = relativity_choice(scenario, arc.t_s, arc.observed)
+    arc = replace(arc, geo=geocentric(scenario.state_model.center, scenario.epoch,
+                                      scenario.orientation, arc.t_s, arc.states))
+    relativity, relativity_note = relativity_choice(scenario, arc.t_s, arc.geo)
     found = [_station_passes(ts, scenario, arc, grid, n_scheduled, samples.get(ts.number))
              for ts in scenario.stations]
     # q is complete once the passes are known (per-pass zenith parameters)
     scenario = with_passes(scenario, [len(f.passes) for f in found])
-    entries = (*scenario.stations, *scenario.baselines)
+    entries = (*scenario.stations, *scenario.baselines)  # the tape's stations
     params = scenario.parameters
     n_o = len(params)
     columns = {par.name: i for i, par in enumerate(params)}
