@@ -53,7 +53,8 @@ ONE_METRE_km = 1e-3
 ONE_CM_km = 1e-5
 TEN_UM_PER_S_km_s = 1e-8
 
-# NAIF (centre, target) segments from the solar-system barycentre in DE421.
+# NAIF (centre, target) segments from the solar-system barycentre in DE421: written here, not
+# taken from tapp.dynamics.ephemeris, so that the reference reads DE421 on its own.
 _SEGMENTS = {
     "sun": ((0, 10),),
     "mercury": ((0, 1), (1, 199)),
