@@ -17,6 +17,8 @@ epoch's 0h, so 1 ns survives.
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass
 
 import erfa
@@ -28,10 +30,16 @@ from tapp.frames.time import Epoch
 
 #: TT − TAI, s (IAU 1991 Resolution A4).
 TT_MINUS_TAI_s = 32.184
-#: Largest spacing of the nodes between which TDB − TT is interpolated linearly, s: the
-#: series' fast terms leave an error of 3e-12 s (1e-10 s at 3600 s), measured over 60-day
-#: spans from 1968 to 2050 (tests/tapp/frames/test_timescales.py).
-DTDB_NODE_s = 600.0
+#: Node spacing (s) of the day tables of ERFA's geocentric TDB − TT that every reader
+#: interpolates (cubic Lagrange, :func:`geocentric_tdb_minus_tt_s`): the series' fastest
+#: terms leave at most 9e-17 s at 1800 s (3e-16 s at 3600 s, 5e-15 s at 7200 s), measured
+#: at every 0.37 of a node over 2028-2036 (tests/tapp/frames/test_timescales.py).
+DTDB_STEP_s = 1800.0
+_DTDB_PER_DAY = round(SECONDS_PER_DAY / DTDB_STEP_s)
+_DEG = math.pi / 180.0
+#: Days per Julian millennium, and the J2000 Julian date (the series' time argument).
+_DAYS_PER_MILLENNIUM = 365250.0
+_J2000_JD = 2451545.0
 
 
 def seconds_after(epoch: Epoch, when: Epoch, source: str = "epoch") -> float:
@@ -53,9 +61,68 @@ def seconds_after(epoch: Epoch, when: Epoch, source: str = "epoch") -> float:
     return days * SECONDS_PER_DAY + float(step)
 
 
-def _tdb_minus_tt_s(whole: np.ndarray, fraction: np.ndarray) -> np.ndarray:
-    """TDB − TT at the geocentre, s: ERFA's Fairhead & Bretagnon series."""
-    return erfa.dtdb(whole, fraction, 0.0, 0.0, 0.0, 0.0)
+@functools.lru_cache(maxsize=8192)
+def _dtdb_day(tt0_whole: float, tt0_fraction: float, day: int) -> np.ndarray:
+    """ERFA's geocentric TDB − TT (s) at the nodes of one day: (day D + i / 48) days of TT
+    after the Julian date tt0, i = 0 ... 47 (:data:`DTDB_STEP_s` apart)."""
+    t_s = (day * _DTDB_PER_DAY + np.arange(_DTDB_PER_DAY)) * DTDB_STEP_s
+    return erfa.dtdb(tt0_whole, tt0_fraction + t_s / SECONDS_PER_DAY, 0.0, 0.0, 0.0, 0.0)
+
+
+def geocentric_tdb_minus_tt_s(tt0_jd: tuple[float, float], t_s) -> np.ndarray:
+    """Return TDB − TT at the geocentre, s, at t_s seconds of TT after the TT Julian date
+    ``tt0_jd`` = (whole, fraction), same shape: ERFA's Fairhead & Bretagnon (1990) series
+    (``erfa.dtdb`` without a site), by cubic Lagrange interpolation in day tables of nodes
+    :data:`DTDB_STEP_s` apart, computed once per day (the series costs ~3.5 μs a time and a
+    light-time solution asks for it ~100 times per sample; error < 5e-16 s, tested)."""
+    x = np.asarray(t_s, dtype=float) / DTDB_STEP_s
+    if x.size == 0:
+        return np.zeros(x.shape)
+    n = np.floor(x).astype(np.int64)
+    first, last = (int(n.min()) - 1) // _DTDB_PER_DAY, (int(n.max()) + 2) // _DTDB_PER_DAY
+    nodes = np.concatenate([_dtdb_day(*tt0_jd, d) for d in range(first, last + 1)])
+    i = n - first * _DTDB_PER_DAY
+    s = x - n
+    return (-s * (s - 1.0) * (s - 2.0) / 6.0 * nodes[i - 1]
+            + (s + 1.0) * (s - 1.0) * (s - 2.0) / 2.0 * nodes[i]
+            - (s + 1.0) * s * (s - 2.0) / 2.0 * nodes[i + 1]
+            + (s + 1.0) * s * (s - 1.0) / 6.0 * nodes[i + 2])
+
+
+def topocentric_tdb_minus_tt_s(tt_jd: tuple, ut_fraction, site: tuple[float, float, float]
+                               ) -> np.ndarray:
+    """Return the topocentric terms of TDB − TT at a site, s (add them to the geocentric
+    :func:`geocentric_tdb_minus_tt_s`): Moyer (1981) and Murray (1983), as ERFA's ``dtdb``
+    evaluates them, with its fundamental arguments (Simon et al. 1994).
+
+    Parameters
+    ----------
+    tt_jd : (whole, fraction) TT Julian dates, arrays broadcasting together, days.
+    ut_fraction : UT (UT1, or UTC within its 0.9 s) as a fraction of a day: the local solar
+        time's argument.
+    site : (east longitude rad, distance from the spin axis u km, from the equator v km).
+
+    The terms are linear in u and v; erfa.dtdb with the site minus erfa.dtdb without it
+    equals them to 1e-19 s (tested).
+    """
+    elong, u, v = site
+    w = ((np.asarray(tt_jd[0], float) - _J2000_JD) + tt_jd[1]) / _DAYS_PER_MILLENNIUM / 3600.0
+    tsol = np.mod(ut_fraction, 1.0) * 2.0 * math.pi + elong
+    elsun = np.mod(280.46645683 + 1296027711.03429 * w, 360.0) * _DEG  # Sun mean longitude
+    emsun = np.mod(357.52910918 + 1295965810.481 * w, 360.0) * _DEG  # Sun mean anomaly
+    d = np.mod(297.85019547 + 16029616012.090 * w, 360.0) * _DEG  # Moon's elongation
+    elj = np.mod(34.35151874 + 109306899.89453 * w, 360.0) * _DEG  # Jupiter mean longitude
+    els = np.mod(50.07744430 + 44046398.47038 * w, 360.0) * _DEG  # Saturn mean longitude
+    return (0.00029e-10 * u * np.sin(tsol + elsun - els)
+            + 0.00100e-10 * u * np.sin(tsol - 2.0 * emsun)
+            + 0.00133e-10 * u * np.sin(tsol - d)
+            + 0.00133e-10 * u * np.sin(tsol + elsun - elj)
+            - 0.00229e-10 * u * np.sin(tsol + 2.0 * elsun + emsun)
+            - 0.02200e-10 * v * np.cos(elsun + emsun)
+            + 0.05312e-10 * u * np.sin(tsol - emsun)
+            - 0.13677e-10 * u * np.sin(tsol + 2.0 * elsun)
+            - 1.31840e-10 * v * np.cos(elsun)
+            + 3.17679e-10 * u * np.sin(tsol))
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,21 +164,10 @@ class TimeScales:
         return whole, fraction + self.tdb_minus_tt_s(t_s) / SECONDS_PER_DAY
 
     def tdb_minus_tt_s(self, t_s) -> np.ndarray:
-        """TDB − TT at the geocentre, s, at scenario times t_s.
-
-        Many times at once (more than there are nodes :data:`DTDB_NODE_s` apart over their
-        span) take it interpolated linearly between such nodes: the series costs about 7 μs
-        a time, and SEARCH's scans evaluated it at every grid point (80 % of a trajectory's
-        time).
-        """
-        t = np.asarray(t_s, dtype=float)
-        if t.size > 2 and np.isfinite(span_s := float(np.ptp(t))):
-            count = max(int(np.ceil(span_s / DTDB_NODE_s)) + 1, 2)
-            if count < t.size:
-                nodes = float(t.min()) + span_s * np.linspace(0.0, 1.0, count)
-                return np.interp(t.ravel(), nodes, _tdb_minus_tt_s(*self.tt(nodes))).reshape(
-                    t.shape)
-        return _tdb_minus_tt_s(*self.tt(t))
+        """TDB − TT at the geocentre, s, at scenario times t_s
+        (:func:`geocentric_tdb_minus_tt_s`)."""
+        whole, fraction = self.tt(0.0)
+        return geocentric_tdb_minus_tt_s((float(whole), float(fraction)), t_s)
 
     def utc_mjd(self, t_s) -> np.ndarray:
         """UTC as a modified Julian date at scenario times t_s (for table look-ups), days.

@@ -66,14 +66,17 @@ import functools
 import math
 from dataclasses import dataclass
 
-import erfa
 import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY, C_LIGHT_km_s, GM_km3_s2
 from tapp.dynamics.ephemeris import barycentric_state, tai_minus_utc_s
 from tapp.frames.orientation import EarthOrientation
 from tapp.frames.time import Epoch
-from tapp.frames.timescales import TT_MINUS_TAI_s
+from tapp.frames.timescales import (
+    TT_MINUS_TAI_s,
+    geocentric_tdb_minus_tt_s,
+    topocentric_tdb_minus_tt_s,
+)
 from tapp.measurements.observables import (
     LIGHT_TIME_REL_TOL,
     LightTime,
@@ -90,29 +93,6 @@ SHAPIRO_BODIES = ("sun", "earth", "moon")
 #: Geocentric distance (km) beyond which relativity = "auto" turns the model on: the Moon's
 #: mean distance.
 AUTO_DISTANCE_km = 384400.0
-
-
-#: Node spacing (s) of the TDB - TT tables ERFA's series is interpolated from (a table per
-#: day and site, cached). Four-point Lagrange interpolation of the site's diurnal term
-#: (A = 1.7 us at 5,200 km from the axis, ω = 7.3e-5 rad/s) errs by at most 9 (ω h)⁴ A / 384:
-#: 6e-16 s at 150 s (measured 9e-15 s at 300 s); the geocentric series varies far slower.
-TDB_STEP_s = 150.0
-#: The node spacing of the tables behind the clock's site gradient (a term 5e-5 of a station
-#: partial): 9 (ω h)⁴ / 384 = 1.4e-6 of it at 1200 s, 7e-11 of the partial.
-GRADIENT_STEP_s = 1200.0
-
-
-@functools.lru_cache(maxsize=4096)
-def _tdb_block(tt0_whole: float, tt0_fraction: float, ut_minus_tt_s: float,
-               site: tuple[float, float, float], block: int, step_s: float) -> np.ndarray:
-    """ERFA's TDB - TT (s) at the nodes of one block (a day): scenario times (block B + i) h,
-    h = ``step_s``, the site (east longitude rad, distance from the spin axis km, from the
-    equator km)."""
-    nodes = round(SECONDS_PER_DAY / step_s)
-    t = (block * nodes + np.arange(nodes)) * step_s
-    fraction = tt0_fraction + t / SECONDS_PER_DAY
-    ut = np.mod(tt0_whole - 0.5 + fraction + ut_minus_tt_s / SECONDS_PER_DAY, 1.0)
-    return erfa.dtdb(tt0_whole, fraction, ut, *site)
 
 
 #: Node spacing (s) of the barycentric body tables DE421 is interpolated from (cubic Hermite
@@ -192,29 +172,25 @@ class Relativity:
         x, y, z = (float(c) for c in r_ecef_km)
         return self.dtdb(t_s, (math.atan2(y, x), math.hypot(x, y), z))
 
-    def dtdb(self, t_s, site: tuple[float, float, float], step_s: float = TDB_STEP_s):
+    def dtdb(self, t_s, site: tuple[float, float, float]):
         """Return ERFA's TDB - TT (``erfa.dtdb``: Fairhead & Bretagnon 1990 with Moyer's
         topocentric terms) at scenario times t_s, s, same shape, at ``site`` (east longitude
-        rad, distance from the spin axis km, from the equator km): cubic Lagrange
-        interpolation in tables of :data:`TDB_STEP_s` nodes computed once per day and site
-        (the series costs 3.5 us a point, and the light-time solution asks for it ~100 times
-        per sample; interpolation error < 1e-15 s, tested)."""
-        x = np.asarray(t_s, dtype=float) / step_s
-        if x.size == 0:
-            return np.zeros(x.shape)
+        rad, distance from the spin axis km, from the equator km): the geocentric series
+        interpolated from cached day tables
+        (:func:`tapp.frames.timescales.geocentric_tdb_minus_tt_s`) plus the site's terms in
+        closed form (:meth:`topocentric`)."""
+        geocentre = geocentric_tdb_minus_tt_s(self.tt0_jd, t_s)
         if site[1] == 0.0 and site[2] == 0.0:  # the topocentric terms all scale with u or v
-            site = (0.0, 0.0, 0.0)
-        n = np.floor(x).astype(np.int64)
-        per_block = round(SECONDS_PER_DAY / step_s)
-        first, last = (int(n.min()) - 1) // per_block, (int(n.max()) + 2) // per_block
-        nodes = np.concatenate([_tdb_block(*self.tt0_jd, self.ut_minus_tt_s, site, b, step_s)
-                                for b in range(first, last + 1)])
-        i = n - first * per_block
-        s = x - n
-        return (-s * (s - 1.0) * (s - 2.0) / 6.0 * nodes[i - 1]
-                + (s + 1.0) * (s - 1.0) * (s - 2.0) / 2.0 * nodes[i]
-                - (s + 1.0) * s * (s - 2.0) / 2.0 * nodes[i + 1]
-                + (s + 1.0) * s * (s - 1.0) / 6.0 * nodes[i + 2])
+            return geocentre
+        return geocentre + self.topocentric(t_s, site)
+
+    def topocentric(self, t_s, site: tuple[float, float, float]):
+        """Return the topocentric terms of TDB - TT at ``site`` (as :meth:`dtdb`), s, at
+        scenario times t_s (:func:`tapp.frames.timescales.topocentric_tdb_minus_tt_s`; the
+        solar time from UTC, :attr:`ut_minus_tt_s`)."""
+        fraction = self.tt0_jd[1] + np.asarray(t_s, dtype=float) / SECONDS_PER_DAY
+        ut = self.tt0_jd[0] - 0.5 + fraction + self.ut_minus_tt_s / SECONDS_PER_DAY
+        return topocentric_tdb_minus_tt_s((self.tt0_jd[0], fraction), ut, site)
 
     def tdb_rate(self, t_s, r_ecef_km=None):
         """Return d(TDB - TT)/dt at t_s (N,), dimensionless: central difference, 1 s steps
@@ -237,8 +213,7 @@ class Relativity:
         u, lon = math.hypot(x, y), math.atan2(y, x)
 
         def topo(lon_rad, u_km, v_km):
-            return (self.dtdb(t_s, (lon_rad, u_km, v_km), GRADIENT_STEP_s)
-                    - self.dtdb(t_s, (lon_rad, 0.0, 0.0), GRADIENT_STEP_s))
+            return self.topocentric(t_s, (lon_rad, u_km, v_km))
 
         step = 1e-3
         d_u, d_v = topo(lon, 1.0, 0.0), topo(lon, 0.0, 1.0)

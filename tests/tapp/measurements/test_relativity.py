@@ -278,10 +278,11 @@ def test_uplink_needs_two_way_light_time():
 
 
 def test_tdb_tables_interpolate_erfa_to_its_own_rounding():
-    """TDB - TT from the cached tables against ERFA's series called at each time, at the
-    geocentre and at Goldstone, over a month of random times (and the rate used by Doppler):
-    the tables' bound is 6e-16 s; the reference itself rounds UT (a Julian date of 2.46e6 days
-    plus a fraction: 4.7e-5 s of UT, 5.7e-15 s of the 1.7 us diurnal term), hence 1e-14 s."""
+    """TDB - TT from the cached tables and the closed-form site terms against ERFA's series
+    called at each time, at the geocentre and at Goldstone, over a month of random times (and
+    the rate used by Doppler): the tables' bound is 5e-16 s; the reference itself rounds UT (a
+    Julian date of 2.46e6 days plus a fraction: 4.7e-5 s of UT, 5.7e-15 s of the 1.7 us
+    diurnal term), hence 1e-14 s."""
     rel = Relativity.at(parse_epoch(EPOCH))
     t = np.sort(np.random.default_rng(1).uniform(-3600.0, 31 * 86400.0, 20_000))
     site = np.array([-2353.6, -4641.3, 3677.0])
