@@ -42,7 +42,7 @@ import numpy as np
 
 from tapp.constants import RADIUS_km
 from tapp.dynamics.atmosphere import HP_HEIGHT_km, height_km
-from tapp.dynamics.radiation import SHADOW_BODIES, SHADOW_BOUNDARIES, disc_geometry
+from tapp.dynamics.radiation import SHADOW_BOUNDARIES, disc_geometry
 from tapp.dynamics.spec import ForceModel
 
 
@@ -62,11 +62,12 @@ def boundaries(model: ForceModel, r: ca.SX, r_bodies: Mapping[str, ca.SX]
     out: dict[str, ca.SX] = {}
     if surface is None:
         return out
+    def position(body: str) -> ca.SX:
+        return ca.SX.zeros(3) if body == model.center else r_bodies[body]
+
     if surface.srp and surface.shadows:
-        sun = r_bodies["sun"]
-        for body in SHADOW_BODIES:
-            position = ca.SX.zeros(3) if body == model.center else r_bodies[body]
-            a, b, c = disc_geometry(r, sun, position, RADIUS_km[body])
+        for body in model.occulters:
+            a, b, c = disc_geometry(r, position("sun"), position(body), RADIUS_km[body])
             for kind, g in SHADOW_BOUNDARIES.items():
                 out[f"{body} {kind}"] = g(a, b, c)
     if surface.drag and surface.atmosphere == "harris_priester":

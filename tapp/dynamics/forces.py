@@ -83,7 +83,7 @@ from tapp.constants import (
 from tapp.dynamics.atmosphere import density_kg_m3, drag_acceleration
 from tapp.dynamics.empirical import NAMES as EMPIRICAL_NAMES
 from tapp.dynamics.manoeuvres import THRUST_NAMES
-from tapp.dynamics.radiation import SHADOW_BODIES, srp_acceleration
+from tapp.dynamics.radiation import srp_acceleration
 from tapp.dynamics.spec import ForceModel, check_surface_value
 from tapp.errors import InputError
 from tapp.frames.orientation import OMEGA_ERA_rad_s, itrs_from_gcrs_elements
@@ -310,7 +310,7 @@ def surface_acceleration(model: ForceModel, acc: ca.SX, r: ca.SX, v: ca.SX | Non
         return ca.SX.zeros(3) if body == model.center else r_bodies[body]
 
     if surface.srp:
-        occulters = {b: position(b) for b in SHADOW_BODIES} if surface.shadows else {}
+        occulters = {b: position(b) for b in model.occulters}
         acc = acc + srp_acceleration(r, position("sun"), occulters, q.get("Cr", surface.c_r),
                                      surface.area_to_mass_m2_kg)
     if surface.drag:

@@ -1,4 +1,5 @@
-"""Solar radiation pressure on a cannonball spacecraft, with conical Earth and Moon shadows.
+"""Solar radiation pressure on a cannonball spacecraft, with conical shadows (the Earth's, the
+Moon's and the centre's: :attr:`tapp.dynamics.spec.ForceModel.occulters`).
 
 The acceleration (Montenbruck & Gill, *Satellite Orbits*, 2000, §3.4.1, for a
 sphere) pushes away from the Sun:
@@ -26,8 +27,8 @@ would lose half the digits, 1e-10 of ν.
 
 The discs overlap as plane circles (M&G's model): the boundaries c = a + b and c = b − a are
 exact cones, the partial area is approximate where the Earth's disc is large (LEO). The
-Earth's and the Moon's factors are multiplied: a simultaneous occultation by both (rare) is
-then not exact. The Earth's radius is its equatorial one (no oblateness in the shadow).
+bodies' factors are multiplied: a simultaneous occultation by two (rare) is then not exact.
+Each body's radius is its equatorial one (no oblateness in the shadow).
 Positions are relative to the integration centre, in km, from DE421.
 """
 
@@ -38,9 +39,6 @@ import math
 import casadi as ca
 
 from tapp.constants import AU_km, RADIUS_km, SOLAR_PRESSURE_1AU_N_m2
-
-#: Bodies whose shadows are modelled.
-SHADOW_BODIES = ("earth", "moon")
 
 
 def _clip(x, lo: float, hi: float):
@@ -101,8 +99,9 @@ def srp_acceleration(r, r_sun, occulters, c_r, area_to_mass_m2_kg: float):
     Parameters
     ----------
     r, r_sun : SX (3,) spacecraft and Sun positions relative to the centre, km.
-    occulters : mapping of body name (:data:`SHADOW_BODIES`) to its position relative to the
-        centre (km, SX (3,)); empty for no shadows (ν = 1: a conservative force).
+    occulters : mapping of body name (:attr:`tapp.dynamics.spec.ForceModel.occulters`) to
+        its position relative to the centre (km, SX (3,)); empty for no shadows (ν = 1: a
+        conservative force).
     c_r : radiation pressure coefficient (a number or a symbol).
     area_to_mass_m2_kg : A/m, m^2/kg.
     """

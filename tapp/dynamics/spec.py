@@ -17,6 +17,9 @@ from tapp.constants import J2_CENTRE, MAX_DEGREE, GM_km3_s2
 from tapp.errors import InputError
 from tapp.frames.orientation import check_model
 
+#: Bodies whose shadows SRP models about any centre (:attr:`ForceModel.occulters`).
+SHADOW_BODIES = ("earth", "moon")
+
 _ZONAL = re.compile(r"^[Jj](\d+)$")
 _FIELD = re.compile(r"^(\d+)\s*[xX]\s*(\d+)$")
 
@@ -137,10 +140,10 @@ class SurfaceForces:
     atmosphere : one of :data:`ATMOSPHERES`: the density model of the drag force
         (:mod:`tapp.dynamics.atmosphere`), ``"none"`` for no drag.
     c_d : drag coefficient, in :data:`SURFACE_RANGES`; its nominal value as the parameter ``Cd``.
-    shadows : True to dim SRP in the Earth's and the Moon's shadows (their boundaries are
-        integration events: :mod:`tapp.dynamics.events`). Without them SRP is the gradient of
-        a potential (−k/|r − r☉|) and the STM symplectic; with them, and with drag, it is
-        not.
+    shadows : True to dim SRP in the occulting bodies' shadows (:attr:`ForceModel.occulters`;
+        their boundaries are integration events: :mod:`tapp.dynamics.events`). Without them
+        SRP is the gradient of a potential (−k/|r − r☉|) and the STM symplectic; with them,
+        and with drag, it is not.
     exponential : the layer of the ``"exponential"`` atmosphere.
     """
 
@@ -236,12 +239,22 @@ class ForceModel:
         return self.surface is not None and self.surface.drag
 
     @property
+    def occulters(self) -> tuple[str, ...]:
+        """Bodies whose shadows SRP has (none without shadows): the Earth and the Moon
+        (:data:`SHADOW_BODIES`), and the centre itself when it is another body (Mars' shadow
+        on an approach through its periapsis); never the Sun."""
+        if not (self.srp and self.surface.shadows):
+            return ()
+        return tuple(b for b in dict.fromkeys((*SHADOW_BODIES, self.center)) if b != "sun")
+
+    @property
     def ephemeris_bodies(self) -> tuple[str, ...]:
-        """Bodies whose positions the model reads: third bodies, the Sun and the Moon for
-        SRP (source and shadow), the Sun for the Harris-Priester bulge; not the centre."""
+        """Bodies whose positions the model reads: third bodies, the Sun and the occulting
+        bodies for SRP (source and shadows), the Sun for the Harris-Priester bulge; not the
+        centre."""
         need = set(self.third_bodies)
         if self.srp:
-            need |= {"sun", "moon"} if self.surface.shadows else {"sun"}
+            need |= {"sun", *self.occulters}
         if self.drag and self.surface.atmosphere == "harris_priester":
             need.add("sun")
         return tuple(sorted(need - {self.center}))
