@@ -150,6 +150,19 @@ def barycentric_state(body: str, jd_tdb: float | np.ndarray,
     return total.T
 
 
+def relative_state(body: str, origin: str, jd_tdb: float | np.ndarray,
+                   jd_tdb2: float | np.ndarray = 0.0) -> np.ndarray:
+    """Return the state (N, 6) [km, km/s] of ``body`` relative to ``origin`` (ICRF axes):
+    the difference of their barycentric states (:func:`barycentric_state`), zeros when they
+    are the same body. The translation between two integration centres, or from the body an
+    injection is given about to the centre."""
+    if body == origin:
+        jd = np.broadcast_arrays(np.atleast_1d(np.asarray(jd_tdb, dtype=float)),
+                                 np.atleast_1d(np.asarray(jd_tdb2, dtype=float)))[0]
+        return np.zeros((jd.size, 6))
+    return barycentric_state(body, jd_tdb, jd_tdb2) - barycentric_state(origin, jd_tdb, jd_tdb2)
+
+
 def position_km(body: str, center: str, jd_tdb: float | np.ndarray,
                 jd_tdb2: float | np.ndarray = 0.0) -> np.ndarray:
     """Return the position (N, 3), km, of ``body`` relative to ``center``.

@@ -13,7 +13,9 @@ Grammar of an orbit spec (the ``--orbit`` option):
 
 All states are EME2000 inertial, centred on the Earth, with the EGM96 GM; a scenario whose
 ``[model] center`` is another body gives its ``[injection]`` relative to that body, its
-elements with that body's GM (``center`` of :meth:`OrbitTable.state`).
+elements with that body's GM (``center`` of :meth:`OrbitTable.state`). An ``[injection]`` may
+name its own ``center`` (an Earth departure of a Sun-centred cruise given about the Earth):
+its state is about that body and is translated to the integration's centre by DE421 at t = 0.
 
 An orbit that would pass below the Earth's surface is refused (:func:`check_perigee`): its
 perigee radius is below the equatorial radius ``R_EARTH_km`` and it reaches that perigee (an
@@ -26,14 +28,15 @@ line, says the user means it.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
 from tapp.constants import GM_EARTH_km3_s2, GM_km3_s2, RADIUS_km
+from tapp.dynamics.ephemeris import BODIES, relative_state
 from tapp.errors import InputError
 from tapp.examples import STUDY_FILE
 from tapp.io.schema import Invalid, Schema, validate
@@ -211,11 +214,15 @@ class OrbitTable(Schema):
     nu_deg: float | None = Field(None, description="True anomaly at the epoch (or M_deg).")
     allow_subsurface: bool = Field(False, description="Accept an orbit whose perigee is below "
                                    "the Earth's surface (refused otherwise).")
+    center: Literal[BODIES] | None = Field(  # type: ignore[valid-type]
+        None, description="The body the state is given about (elements with its GM, the "
+        "periapsis checked against its surface), translated to the integration's centre "
+        "(model.center) by DE421 at t = 0; default: model.center.")
 
     @model_validator(mode="after")
     def _one_form(self) -> OrbitTable:
         given = {k for k in type(self).model_fields
-                 if k != "allow_subsurface" and getattr(self, k) is not None}
+                 if k not in ("allow_subsurface", "center") and getattr(self, k) is not None}
         if given == {"r_km", "v_km_s"}:
             return self
         anomaly = given & {"M_deg", "nu_deg"}
@@ -225,13 +232,29 @@ class OrbitTable(Schema):
                       "nu_deg)", ",".join(sorted(given)))
 
     def state(self, source: str, field: str, *, allow_subsurface: bool = False,
-              how_to_allow: str = "", center: str = "earth") -> np.ndarray:
+              how_to_allow: str = "", center: str = "earth",
+              tdb: Callable[[np.ndarray], tuple] | None = None) -> np.ndarray:
         """Return the Cartesian state (6,) km, km/s relative to ``center`` (elements with its
         GM), periapsis-checked against its surface (module docstring).
 
+        A table with its own :attr:`center` is read about that body (its GM, its surface)
+        and translated to ``center`` by the bodies' DE421 states at t = 0, read at the TDB
+        date ``tdb(0)`` (the scenario's reader, :func:`tapp.dynamics.ephemeris.tdb_reader`;
+        a caller without one, an Earth-centred study, refuses another body).
         ``how_to_allow`` names what lifts the periapsis check in the message (default: this
         table's ``allow_subsurface`` and ``--allow-subsurface``).
         """
+        own = center if self.center is None else self.center
+        if own != center and tdb is None:
+            raise InputError(source, f"{field}.center", f'"{center}" (a state about another '
+                             "body needs a scenario's epoch)", own)
+        x = self._state(source, field, own, allow_subsurface, how_to_allow)
+        if own == center:
+            return x
+        return x + relative_state(own, center, *tdb(np.zeros(1)))[0]
+
+    def _state(self, source: str, field: str, center: str, allow_subsurface: bool,
+               how_to_allow: str) -> np.ndarray:
         if self.r_km is not None:
             x = np.array([*self.r_km, *self.v_km_s], dtype=float)
         else:

@@ -15,6 +15,7 @@ from pydantic import AfterValidator, Field
 
 from tapp.constants import SECONDS_PER_DAY, RADIUS_km
 from tapp.dynamics import Propagator
+from tapp.dynamics.ephemeris import tdb_reader
 from tapp.errors import InputError
 from tapp.frames.orientation import EarthOrientation, orientation_for
 from tapp.frames.time import Epoch, parse_epoch
@@ -240,16 +241,17 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
         raise InputError(source, "epoch", exc.expected, epoch_text) from None
 
     mod = doc.model
+    orientation = orientation_for(doc.earth_orientation, epoch, doc.eop,
+                                  Path(source).parent, source)
     x0 = doc.injection.state(source, "injection", center=mod.center,
-                             how_to_allow="injection.allow_subsurface = true")
+                             how_to_allow="injection.allow_subsurface = true",
+                             tdb=tdb_reader(epoch.jd, orientation.scales))
     r0, v0 = x0[:3], x0[3:]
     if np.linalg.norm(r0) <= RADIUS_km[mod.center]:
         raise InputError(source, "injection", f"a position above the {mod.center.capitalize()}'s "
                          "surface", r0.tolist())
 
     bodies = tuple(mod.third_bodies)
-    orientation = orientation_for(doc.earth_orientation, epoch, doc.eop,
-                                  Path(source).parent, source)
     state_model, var_model = mod.force_models(source, orientation.model)
     propagator = mod.propagator(source, state_model, var_model)
 

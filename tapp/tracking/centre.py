@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tapp.dynamics.ephemeris import barycentric_state, tdb_reader
+from tapp.dynamics.ephemeris import relative_state, tdb_reader
 from tapp.frames.orientation import EarthOrientation
 from tapp.frames.time import Epoch
 
@@ -26,8 +26,7 @@ def centre_from_earth(center: str, epoch: Epoch, orientation: EarthOrientation,
     t = np.asarray(t_s, dtype=float)
     if center == "earth":
         return np.zeros(t.shape + (6,))
-    jd, jd2 = tdb_reader(epoch.jd, orientation.scales)(t)
-    return barycentric_state(center, jd, jd2) - barycentric_state("earth", jd, jd2)
+    return relative_state(center, "earth", *tdb_reader(epoch.jd, orientation.scales)(t))
 
 
 def geocentric(center: str, epoch: Epoch, orientation: EarthOrientation, t_s: np.ndarray,

@@ -126,6 +126,7 @@ from pydantic import Field
 
 from tapp.dynamics import ForceModel, Propagator
 from tapp.dynamics.empirical import COMPONENTS
+from tapp.dynamics.ephemeris import tdb_reader
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.manoeuvres import KIND as EXECUTION
 from tapp.dynamics.manoeuvres import THRUST_NAMES, Burn
@@ -1153,7 +1154,8 @@ def _injection(p: _Parser, doc: ScenarioFile, orientation: EarthOrientation, las
         p.fail("injection", "either an [injection] table or a [reference] trajectory file")
     if doc.injection is not None:
         return doc.injection.state(p.source, "injection", center=doc.model.center,
-                                   how_to_allow="injection.allow_subsurface = true"), None
+                                   how_to_allow="injection.allow_subsurface = true",
+                                   tdb=tdb_reader(p.epoch.jd, orientation.scales)), None
     if doc.model.center != "earth":
         p.fail("model.center", '"earth" with a [reference] trajectory (read Earth-centred)',
                doc.model.center)

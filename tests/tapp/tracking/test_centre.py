@@ -101,3 +101,40 @@ def test_an_injection_inside_the_centre_is_refused():
     with pytest.raises(InputError, match="the Sun's equatorial radius") as info:
         parse_scenario(_document("sun", np.array([1e5, 0, 0, 0, 1.0, 0])), SOURCE)
     assert info.value.field == "injection"
+
+
+def _about_earth(doc: dict, x0: np.ndarray) -> dict:
+    doc["injection"] = {"center": "earth", "r_km": list(x0[:3]), "v_km_s": list(x0[3:])}
+    return doc
+
+
+def test_an_injection_about_the_earth_is_translated_to_the_centre():
+    """[injection] center = "earth" in a Sun-centred scenario: the state the test translates
+    itself (the Earth's DE421 state at the scenario's TDB, from TimeScales, not the reader the
+    scenario uses) to the rounding of heliocentric positions (1.5e8 km: 3e-8 km)."""
+    sun = parse_scenario(_about_earth(_document("sun", GEOCENTRIC), GEOCENTRIC), SOURCE)
+    expected = GEOCENTRIC + _earth_from_sun()
+    np.testing.assert_allclose(sun.x0[:3], expected[:3], rtol=0, atol=1e-7)
+    np.testing.assert_allclose(sun.x0[3:], expected[3:], rtol=0, atol=1e-12)
+    # about its own centre, the state is kept as given
+    earth = parse_scenario(_about_earth(_document("earth", GEOCENTRIC), GEOCENTRIC), SOURCE)
+    np.testing.assert_array_equal(earth.x0, GEOCENTRIC)
+
+
+def test_an_injection_below_its_own_bodys_surface_is_refused():
+    """The periapsis check is about the body the state is given about (a departure 100 km
+    from the Earth's centre is inside the Earth, whatever the integration's centre)."""
+    inside = np.array([100.0, 0.0, 0.0, 0.0, 1.0, 0.0])
+    with pytest.raises(InputError, match="Earth's equatorial radius") as info:
+        parse_scenario(_about_earth(_document("sun", GEOCENTRIC), inside), SOURCE)
+    assert info.value.field == "injection"
+
+
+def test_an_orbit_about_another_body_needs_a_scenario_epoch():
+    """A study's named orbits have no epoch to read the ephemeris at: another body refused."""
+    from tapp.io.orbits import OrbitTable
+
+    table = OrbitTable(center="mars", r_km=[4000.0, 0.0, 0.0], v_km_s=[0.0, 3.5, 0.0])
+    with pytest.raises(InputError) as info:
+        table.state("study.toml", "orbits.MARS")
+    assert info.value.field == "orbits.MARS.center"
