@@ -26,12 +26,13 @@ import numpy as np
 
 from iter.body import input_check
 from iter.execute import Execution
+from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
 from tapp.guidance.guidefile import GuideFile
 from tapp.guidance.study import GuidanceResult, check_samples, check_seed, guidance_study
 from tapp.io.outputs import check_new_directory, new_directory
 from tapp.io.schema import validate
-from tapp.io.tape.t13_hdf5 import t13_file_writer
+from tapp.io.tape.t13_hdf5 import read_t13, t13_file_writer
 from tapp.io.tape.t32_hdf5 import read_t32, t32_file_writer
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
 from tapp.pipeline.steps import process_tape
@@ -141,14 +142,20 @@ def bind_parts(pipeline: Pipeline) -> tuple[Scenario, Deck, GuideFile]:
 
 
 def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: bool,
-         progress: Progress) -> PipelineResult:
+         progress: Progress, t13: Path | None = None) -> PipelineResult:
+    """The three steps into ``work``; with ``t13``, TAPP III and II on that tape of the
+    pipeline's scenario (simulated once for many decks: :func:`tape_case`), not TAPP I."""
     wall: dict[str, float] = {}
     start = time.perf_counter()
     scenario, deck, guide = bind_parts(pipeline)
-    sim = simulate(scenario, progress=lambda stage, done, total: progress(
-        f"TAPP I: {stage}", done, total))
-    t13_path = work / OUTPUTS["t13"]
-    t13_file_writer(sim.tape, source=t13_path.name)(t13_path)
+    if t13 is None:
+        sim = simulate(scenario, progress=lambda stage, done, total: progress(
+            f"TAPP I: {stage}", done, total))
+        t13_path = work / OUTPUTS["t13"]
+        t13_file_writer(sim.tape, source=t13_path.name)(t13_path)
+        pairs, warnings = sim.tape.pairs, sim.warnings
+    else:
+        t13_path, pairs, warnings = t13, read_t13(t13, raw=False).pairs, ()
     wall["simulate"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -176,12 +183,11 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
 
     (work / OUTPUTS["guide_json"]).write_text(json.dumps(guidance_dict(guidance)), "utf-8")
     (work / OUTPUTS["guide_md"]).write_text(guidance_markdown(guidance), "utf-8")
-    pairs = sim.tape.pairs
     observations = int(pairs.n_obs.sum())
     write_report(work, pipeline, run, header, content, guidance, observations, wall, plots)
     return PipelineResult(work, observations,
                           observations_used(plan, pairs.k, pairs.station, pairs.n_obs),
-                          content, guidance, wall, sim.warnings)
+                          content, guidance, wall, warnings)
 
 
 def check_tracking_case(pipeline: str, data_interval_s: float, network: float,
@@ -222,6 +228,85 @@ def check_tracking_case(pipeline: str, data_interval_s: float, network: float,
                    seed=check_seed(_whole(seed), "seed"))
     bind_parts(pipe)
     return pipe
+
+
+def booked_slots(days: int, stations: tuple[str, ...], passes_per_week: int
+                 ) -> set[tuple[int, str]]:
+    """Return the (day, station) slots a schedule of ``passes_per_week`` books over ``days``
+    days: in each week the i-th of its N passes falls on day ⌊7 i / N⌋ at station i mod S (the
+    stations in turn), so N = 7 S is every station every day and N = 7 a pass a day in turn.
+    A deep-space spacecraft is seen once a day by each complex: a slot is a pass."""
+    per_week = {(7 * i // passes_per_week, stations[i % len(stations)])
+                for i in range(passes_per_week)}
+    return {(7 * w + d, name) for w in range(-(-days // 7)) for d, name in per_week
+            if 7 * w + d < days}
+
+
+def check_tape_case(pipeline: str, tape: str, ddor: float, passes_per_week: float,
+                    samples: int = 5000, seed: int = 1) -> tuple[Pipeline, Path]:
+    """Return the pipeline of one :func:`tape_case` (its deck's time-station flags set) and
+    the tape, checked: the body's input check (ITER runs it before any case).
+
+    Raises
+    ------
+    InputError
+        Naming the argument or the file: a tape that is not a file, ``ddor`` not 0 or 1,
+        ``passes_per_week`` not a whole number from 1 to 7 x the scenario's stations, a
+        scenario whose T13 times are not whole days, or any part's own errors.
+    """
+    path = Path(tape)
+    if not path.is_file():
+        raise InputError("tape", "file", "the T13 tape of the pipeline's scenario (tapp "
+                         "simulate SCENARIO -o TAPE)", tape)
+    if _whole(ddor) not in (0, 1):
+        raise InputError("ddor", "value", "0 (no ΔDOR) or 1 (the scenario's ΔDOR)", ddor)
+    base = read_pipeline(pipeline)
+    scenario = parse_scenario(base.scenario.document, base.scenario.source,
+                              base.earth_orientation)
+    stations = tuple(s.station.name for s in scenario.stations)
+    n = _whole(passes_per_week)
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 7 * len(stations):
+        raise InputError("passes_per_week", "value", f"a whole number 1..{7 * len(stations)} "
+                         f"(7 days x {len(stations)} stations)", passes_per_week)
+    times = scenario.times.t13_s
+    days = np.round(times / SECONDS_PER_DAY)
+    if np.any(np.abs(times - days * SECONDS_PER_DAY) > 1e-6) or np.any(np.diff(days) != 1):
+        raise InputError(base.scenario.source, "times", "T13 times a day apart on whole days "
+                         "(a pass per day and station is switched on or off)", times[:3])
+    booked = booked_slots(int(days[-1]), stations, n)
+    # Record k holds the data of (t_k-1, t_k]: day d is the record ending at d + 1 days
+    # (the first record, ending at t_0, holds what came before it).
+    off = [{"station": name, "start": float(d * SECONDS_PER_DAY),
+            "end": float((d + 1) * SECONDS_PER_DAY)}
+           for d in range(int(days[0]), int(days[-1])) for name in stations
+           if (d, name) not in booked]
+    if not _whole(ddor):
+        off += [{"station": b.name} for b in scenario.baselines]
+    pipe = with_overrides(base, {
+        "deck.stations_off": [*base.deck.document.get("stations_off", []), *off]})
+    pipe = replace(pipe, samples=check_samples(_whole(samples), "samples"),
+                   seed=check_seed(_whole(seed), "seed"))
+    bind_parts(pipe)
+    return pipe, path
+
+
+@input_check(check_tape_case)
+def tape_case(pipeline: str, tape: str, ddor: float, passes_per_week: float,
+              samples: int = 5000, seed: int = 1) -> dict[str, float]:
+    """ITER body: TAPP III and TAPP II of a pipeline on its scenario's T13 tape, simulated
+    once (``tape``), with the tracking thinned by the deck's time-station flags; return the
+    trade-study outputs (:func:`trade_outputs`).
+
+    ``passes_per_week`` passes are kept in each week (:func:`booked_slots`; the scenario's
+    T13 times must be a day apart, so that a day's record of a station is its pass), the
+    other (day, station) records switched off; ``ddor`` = 0 switches the scenario's ΔDOR
+    baselines off for the whole run, 1 keeps them. The tape is not copied or changed; TAPP
+    III checks that it is the deck's (its iden). Serial, in a temporary directory.
+    """
+    pipe, path = check_tape_case(pipeline, tape, ddor, passes_per_week, samples, seed)
+    with new_directory(Path(tempfile.mkdtemp()) / "run", "run", _NEVER_OVERWRITES) as work:
+        result = _run(pipe, work, Execution(serial=True), False, _nothing, t13=path)
+    return trade_outputs(result)
 
 
 def _whole(value: object) -> object:

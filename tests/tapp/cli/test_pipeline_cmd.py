@@ -22,7 +22,7 @@ from typer.testing import CliRunner
 import tapp.cli  # noqa: F401  (registers every command)
 from tapp.cli.common import app
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.pipeline.run import OUTPUTS, tracking_case
+from tapp.pipeline.run import OUTPUTS, booked_slots, tape_case, tracking_case
 from tests.faults import fill, mounted_tmpfs
 
 runner = CliRunner()
@@ -217,6 +217,44 @@ def test_the_tracking_sweep_body_switches_stations_off(parts) -> None:
     assert np.isfinite(all3["dv_total_99_m_s"]) and all3["dv_total_99_m_s"] > 0
     with pytest.raises(Exception, match="network: value: expected a whole number 0..1"):
         tracking_case(network=2.0, **common)
+
+
+def test_a_week_books_its_passes_in_turn() -> None:
+    """N passes a week: N slots in each full week, each station's share within one of N/S;
+    7 S is every station every day, 7 a pass every day."""
+    stations = ("GOLDSTONE", "CANBERRA", "MADRID")
+    for n in (1, 3, 7, 10, 21):
+        slots = booked_slots(28, stations, n)
+        assert len(slots) == 4 * n
+        counts = [sum(1 for _, s in slots if s == name) for name in stations]
+        assert max(counts) - min(counts) <= 4
+    assert booked_slots(14, stations, 21) == {(d, s) for d in range(14) for s in stations}
+    assert {d for d, _ in booked_slots(14, stations, 7)} == set(range(14))
+    assert len(booked_slots(10, stations, 7)) == 10  # the last week cut at day 10
+
+
+def test_the_tape_sweep_body_books_passes_on_one_tape(parts, piped) -> None:
+    """The trade body on the pipeline's own tape: every pass booked uses every observation
+    and gives the pipeline's numbers (same deck, samples and seed); fewer passes a week use
+    fewer and widen the B-plane dispersion; what is not a day-record tape or a booking is
+    refused before anything runs."""
+    common = {"pipeline": str(parts["pipeline"]), "tape": str(piped / OUTPUTS["t13"]),
+              "samples": SAMPLES, "seed": SEED}
+    every = tape_case(ddor=1.0, passes_per_week=21.0, **common)
+    fewer = tape_case(ddor=1.0, passes_per_week=2.0, **common)
+    assert every["observations_used"] == every["observations_simulated"]
+    assert 0 < fewer["observations_used"] < every["observations_used"]
+    assert fewer["bplane_semi_major_km"] > every["bplane_semi_major_km"]
+    mc = json.loads((piped / OUTPUTS["guide_json"]).read_text())["monte_carlo"]
+    assert every["bplane_semi_major_km"] == mc["bplane_ellipse"]["semi_major_km"]
+    assert every["sigma_b_dot_r_km"] == np.sqrt(mc["miss_cov"][0][0])
+    with pytest.raises(Exception, match="passes_per_week: value: expected a whole number"):
+        tape_case(ddor=1.0, passes_per_week=22.0, **common)
+    with pytest.raises(Exception, match="ddor: value: expected 0"):
+        tape_case(ddor=0.5, passes_per_week=7.0, **common)
+    with pytest.raises(Exception, match="tape: file: expected the T13 tape"):
+        tape_case(**{**common, "tape": str(piped / "missing.h5")}, ddor=1.0,
+                  passes_per_week=7.0)
 
 
 def _tracking_sweep(folder: Path, pipeline: Path) -> Path:
