@@ -22,18 +22,20 @@ The input files are the examples shipped in the package (:mod:`tapp.examples`, t
    the cases, failures and wall time of each sweep).
 8. Your own mission: the examples' mission folder (its OEM with a deterministic burn, its
    booked DSN passes) through TAPP I, III and II -> results/mission/ (the tape, the OEM
-   flown, the O3 printout, the T32 tape, the guidance report and every JSON).
+   flown, the O3 printout, the T32 tape, the guidance report and every JSON); and the Mars
+   2028 transfer (tapp/examples/mars/): its pipeline and its trade study (ΔDOR x passes per
+   week) -> results/mars/ (report.md).
 9. The README's figures: read from results/ into results/readme_figures.json and a README
    rendered from them (results/README.md), compared with the committed ones, and the claims
    of the prose around them checked (scenarios/readme.py); the tracked files are left alone:
    ``make readme`` takes the run's figures into them.
 
-Steps 1, 3-6, 8 and the first four sweeps of 7 are independent of one another (5 reads 4's
-tapes) and run side by side (:func:`side_by_side`), as do the commands inside 4 and 5: each
-runs tapp's commands, or its sweep's Dask cluster, as processes of their own. Step 2 and the
-tracking sweep then run alone, one after the other, as before: the README quotes their wall
-times (the study's, the tracking sweep's on 2 workers), which would grow with the machine
-shared. The numbers are those of the runs one at a time.
+Steps 1, 3-6, 8 (its two runs) and the first four sweeps of 7 are independent of one another
+(5 reads 4's tapes) and run side by side (:func:`side_by_side`), as do the commands inside
+4 and 5: each runs tapp's commands, or its sweep's Dask cluster, as processes of their own.
+Step 2 and the tracking sweep then run alone, one after the other, as before: the README
+quotes their wall times (the study's, the tracking sweep's on 2 workers), which would grow
+with the machine shared. The numbers are those of the runs one at a time.
 """
 
 from __future__ import annotations
@@ -297,6 +299,64 @@ def mission_run() -> None:
     print(f"your own mission -> {out}")
 
 
+#: The Mars example's files (tapp/examples/mars/), copied beside its tape for the trade study.
+MARS_FILES = ("mars.toml", "mars_deck.toml", "mars_guidance.toml", "mars_pipeline.toml",
+              "mars_trade.toml")
+
+
+def mars_run() -> None:
+    """The Mars 2028 transfer: the whole pipeline into results/mars/pipeline/ (B-plane
+    ellipses, TCM ΔV), then its trade study (ΔDOR x passes per week) on that run's tape, with
+    the example's files copied beside it into results/mars/trade/ (the sweep reads its tape
+    from its own folder), and results/mars/report.md."""
+    out = RESULTS / "mars"
+    shutil.rmtree(out, ignore_errors=True)  # a pipeline never overwrites: this is a re-run
+    proc = _tapp("pipeline", str(EXAMPLES / "mars" / "mars_pipeline.toml"), "-o",
+                 str(out / "pipeline"), "--workers", "2")
+    if proc.returncode != 0:
+        raise SystemExit(f"tapp pipeline (Mars) exited {proc.returncode}: {proc.stderr}")
+    trade = out / "trade"
+    trade.mkdir()
+    for name in MARS_FILES:
+        shutil.copy(EXAMPLES / "mars" / name, trade / name)
+    shutil.copy(out / "pipeline" / "run.t13.h5", trade / "mars.t13.h5")
+    start = time.perf_counter()
+    res = run_sweep(load_sweep(trade / "mars_trade.toml"), output_h5=trade / "mars_trade.h5",
+                    output_csv=trade / "mars_trade.csv", execution=Execution(workers=2))
+    wall_s = time.perf_counter() - start
+    res.raise_if_all_failed()
+    (trade / "mars.t13.h5").unlink()  # the pipeline's own copy stays
+    (out / "report.md").write_text("\n".join(_mars_report(res.table, wall_s)) + "\n")
+    print(f"Mars 2028 -> {out / 'report.md'}")
+
+
+def _mars_report(tab, wall_s: float) -> list[str]:
+    """results/mars/report.md: the pipeline's report by reference, the trade study's table."""
+    ok = tab.column("status") == int(CaseStatus.OK)
+    rows = []
+    for i in range(len(ok)):
+        case = ["on" if tab.column("ddor")[i] else "off",
+                f"{float(tab.column('passes_per_week')[i]):g}"]
+        if not ok[i]:
+            rows.append([*case, "failed", "", "", ""])
+            continue
+        v = {n: float(tab.column(n)[i]) for n in ("bplane_semi_major_km",
+                                                  "bplane_semi_minor_km",
+                                                  "sigma_flight_time_s", "dv_total_99_m_s")}
+        rows.append([*case, f"{v['bplane_semi_major_km']:.2f}",
+                     f"{v['bplane_semi_minor_km']:.2f}", f"{v['sigma_flight_time_s']:.2f}",
+                     f"{v['dv_total_99_m_s']:.2f}"])
+    return ["# Mars 2028 transfer", "",
+            "The whole pipeline: [pipeline/report.md](pipeline/report.md) (TAPP I, III, II; "
+            "the B-plane ellipses at each TCM, the TCM ΔV statistics).", "",
+            "## Trade study: ΔDOR x DSN passes per week (TAPP III and II on one tape)", "",
+            f"Final miss after TCM-4 (Monte Carlo, 5,000 samples per case), {len(ok)} cases "
+            f"in {wall_s:.0f} s on 2 workers ([trade/mars_trade.csv](trade/mars_trade.csv)).",
+            "",
+            table(["ΔDOR", "passes per week", "1σ B-plane semi-major (km)",
+                   "1σ semi-minor (km)", "σ arrival time (s)", "99 % total ΔV (m/s)"], rows)]
+
+
 def _tracking_section(tab) -> list[str]:
     """The tracking trade study: final-miss σ and 99 % ΔV against data interval x network."""
     networks = ("GOLDSTONE, CANBERRA, MADRID", "GOLDSTONE, CANBERRA", "GOLDSTONE")
@@ -394,7 +454,8 @@ def main() -> None:
     # Side by side: the steps whose wall times the README does not quote (module docstring).
     *_, first_sweeps = side_by_side(propagation_demo, search_targeting,
                                     lambda: (tracking_simulations(), matrix_processor()),
-                                    pipeline_run, mission_run, partial(run_sweeps, SWEEPS[:-1]))
+                                    pipeline_run, mission_run, mars_run,
+                                    partial(run_sweeps, SWEEPS[:-1]))
     # Alone: the README quotes their wall times.
     approx_stm_study()
     sweeps_report({**first_sweeps, **run_sweeps(SWEEPS[-1:])})

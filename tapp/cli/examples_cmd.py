@@ -38,7 +38,7 @@ def copying_examples(out_dir: Path, option: str = "DIR") -> Iterator[tuple[Path,
     with new_directory(out_dir, option, "examples are copied into a folder of their own, "
                        "never over files") as work:
         for name in FILES:
-            (work / name).parent.mkdir(exist_ok=True)  # the mission/ folder
+            (work / name).parent.mkdir(exist_ok=True)  # the mission/ and mars/ folders
             shutil.copyfile(FOLDER / name, work / name)
         yield tuple(Path(out_dir) / name for name in FILES)
 
@@ -49,7 +49,8 @@ def examples_cmd(
     json_out: JsonOpt = None,
 ) -> None:
     """Copy every example input file (scenarios, decks, guidance, pipeline, sweeps, SEARCH,
-    the study, and a mission folder with its own OEM and pass schedule) into DIRECTORY, and
+    the study, a mission folder with its own OEM and pass schedule, and a Mars transfer) into
+    DIRECTORY, and
     list them with their kind (tapp schema KIND)."""
     from tapp.examples import FILES
     from tapp.io.outputs import check_paths

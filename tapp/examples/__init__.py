@@ -16,6 +16,10 @@ a scenario reads from it: a ``trajectory`` (``[reference] file``) or a ``schedul
 deterministic burn and whose tracking is a CSV of booked DSN passes, with its deck and
 guidance file (the tutorial's "Your own mission"). Its OEM and CSV are made by tapp
 (``scenarios/mission_example.py``; regenerating them is tested).
+
+``mars/`` is an interplanetary cruise: a Mars 2028 transfer integrated about the Sun from the
+Earth departure, DSN range, Doppler and ΔDOR for 229 days, four TCMs to the Mars B-plane,
+and a trade study (ΔDOR x DSN passes per week) on its simulated tape.
 """
 
 from __future__ import annotations
@@ -49,6 +53,11 @@ FILES: dict[str, str] = {
     "mission/dsn_passes.csv": "schedule",
     "mission/mission_deck.toml": "deck",
     "mission/mission_guidance.toml": "guidance",
+    "mars/mars.toml": "scenario",
+    "mars/mars_deck.toml": "deck",
+    "mars/mars_guidance.toml": "guidance",
+    "mars/mars_pipeline.toml": "pipeline",
+    "mars/mars_trade.toml": "sweep",
 }
 
 #: The folder of the shipped files. A package installed from a wheel is a folder of files
