@@ -150,6 +150,16 @@ def barycentric_state(body: str, jd_tdb: float | np.ndarray,
     return total.T
 
 
+def relative_state(body: str, center: str, jd_tdb: float | np.ndarray,
+                   jd_tdb2: float | np.ndarray = 0.0) -> np.ndarray:
+    """Return the state (N, 6) [km, km/s] of ``body`` relative to ``center`` at TDB
+    ``jd_tdb + jd_tdb2`` (days, split as in :func:`position_km`): the difference of their
+    :func:`barycentric_state` (the translation of a change of integration centre,
+    :mod:`tapp.dynamics.centres`)."""
+    return barycentric_state(body, jd_tdb, jd_tdb2) - barycentric_state(center, jd_tdb,
+                                                                         jd_tdb2)
+
+
 def position_km(body: str, center: str, jd_tdb: float | np.ndarray,
                 jd_tdb2: float | np.ndarray = 0.0) -> np.ndarray:
     """Return the position (N, 3), km, of ``body`` relative to ``center``.
