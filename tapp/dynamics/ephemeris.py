@@ -154,8 +154,8 @@ def relative_state(body: str, origin: str, jd_tdb: float | np.ndarray,
                    jd_tdb2: float | np.ndarray = 0.0) -> np.ndarray:
     """Return the state (N, 6) [km, km/s] of ``body`` relative to ``origin`` (ICRF axes):
     the difference of their barycentric states (:func:`barycentric_state`), zeros when they
-    are the same body. The translation between two integration centres, or from the body an
-    injection is given about to the centre."""
+    are the same body. The translation of a change of integration centre
+    (:mod:`tapp.dynamics.centres`), or from the body an injection is given about to the centre."""
     if body == origin:
         jd = np.broadcast_arrays(np.atleast_1d(np.asarray(jd_tdb, dtype=float)),
                                  np.atleast_1d(np.asarray(jd_tdb2, dtype=float)))[0]

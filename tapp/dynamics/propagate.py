@@ -19,16 +19,28 @@ Either way the grid does not constrain the step size, and no step straddles a bo
 the force model is not smooth (a shadow's edge, a Harris-Priester table height): both drivers
 locate these integration events and restart there (:mod:`tapp.dynamics.events`); the
 trajectory lists the events it met.
+
+With centre changes (:mod:`tapp.dynamics.centres`) the propagator integrates each interval
+between them about that interval's body, and translates the state at each change and every
+output back to the model's centre: the caller sees one trajectory about the model's centre.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache
 
 import numpy as np
 
+from tapp.dynamics.centres import (
+    CentreChange,
+    centre_at,
+    check_centre_changes,
+    model_about,
+    names_about,
+)
 from tapp.dynamics.compiled import METHODS, STATUS, CompiledPropagator, compiled_propagator
 from tapp.dynamics.equations import (
     Equations,
@@ -45,6 +57,7 @@ from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.poles import pole_table
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError, TappError
+from tapp.estimation.factors import accurate_stacked
 from tapp.frames.chebyshev import ChebyshevTable
 from tapp.frames.orientation import EarthOrientation
 
@@ -144,6 +157,9 @@ class Propagator:
     max_steps : cap on integration steps per call.
     method : ``"dop853"`` (default) or ``"rkn12"`` (see the module docstring); ``"rkn12"``
         refuses a model whose acceleration depends on velocity.
+    centre_changes : changes of the integration centre, ascending in time
+        (:func:`tapp.dynamics.centres.check_centre_changes`); every input and output stays
+        about the models' centre.
     """
 
     state_model: ForceModel
@@ -154,6 +170,7 @@ class Propagator:
     error_control: str = "state"
     max_steps: int = 10_000_000
     method: str = "dop853"
+    centre_changes: tuple[CentreChange, ...] = ()
     _nominal: dict[str, float] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -173,6 +190,8 @@ class Propagator:
                              "dependent forces ('rkn12' integrates r'' = a(t, r) only)",
                              self.method)
         object.__setattr__(self, "_nominal", default_parameters(self.state_model, self.params))
+        object.__setattr__(self, "centre_changes", check_centre_changes(
+            self.centre_changes, self.state_model, self.var_model, self.params))
 
     def compiled(self) -> tuple[Equations, CompiledPropagator]:
         """Build (or fetch from the cache) the equations and the compiled library."""
@@ -194,8 +213,8 @@ class Propagator:
             when no ``orientation`` is given.
         epoch_jd_utc : UTC Julian date of t = 0; required when third bodies are present.
         orientation : the scenario's Earth orientation; required by an iau2006 model with a
-            field (its angle replaces ``theta0_rad``; with third bodies the ephemeris is read
-            at its TDB).
+            field (its angle replaces ``theta0_rad``; with third bodies and centre changes the
+            ephemeris is read at its TDB).
 
         Raises
         ------
@@ -216,13 +235,17 @@ class Propagator:
         np.subtract(t_s[1:], t_s[:-1], out=steps[1:])
         if not (steps.min() >= 0 or steps.max() <= 0):
             raise InputError("propagate", "times", "times monotonic away from t0", None)
-        eqs, lib = self.compiled()
         values = dict(self._nominal)
         for name, value in (param_values or {}).items():
             if name not in values:
                 raise InputError("propagate", "param_values", f"one of {self.params}", name)
             values[name] = check_parameter_value(name, value, "propagate",
                                                  f"param_values.{name}")
+        pieces = self._centre_pieces(t0_s, float(t_s[-1]))
+        if len(pieces) > 1 or pieces[0][2] != self.state_model.center:
+            return self._across_centres(pieces, x0, t_s, stm, values, theta0_rad,
+                                        epoch_jd_utc, orientation)
+        eqs, lib = self.compiled()
         q = np.array([values[name] for name in self.params])
         if orientation is not None:
             if self.state_model.gravity.degree >= 2 and self.state_model.center == "earth" \
@@ -254,6 +277,69 @@ class Propagator:
         events = Events(log.t_s, tuple(eqs.events[i] for i in log.index), log.falling)
         return Trajectory(t_s, states, phi, sens, self.params, int(stats[0]), int(stats[2]),
                           events)
+
+    def _centre_pieces(self, t0_s: float, t_end_s: float) -> list[tuple[float, float, str]]:
+        """(start, end, centre) of each interval from ``t0_s`` to ``t_end_s`` between the
+        centre changes strictly inside, in the direction of integration."""
+        inside = [c.t_s for c in self.centre_changes
+                  if min(t0_s, t_end_s) < c.t_s < max(t0_s, t_end_s)]
+        cuts = [t0_s, *(inside if t_end_s >= t0_s else inside[::-1]), t_end_s]
+        return [(a, b, centre_at(self.centre_changes, self.state_model.center, 0.5 * (a + b)))
+                for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
+
+    def _across_centres(self, pieces: list[tuple[float, float, str]], x0: np.ndarray,
+                        t_s: np.ndarray, stm: bool, values: dict[str, float],
+                        theta0_rad: float, epoch_jd_utc: float | None,
+                        orientation: EarthOrientation | None) -> Trajectory:
+        """Propagate interval by interval about each one's centre (module docstring of
+        :mod:`tapp.dynamics.centres`): translate the state in at each start, the outputs back
+        to the model's centre, and compose Φ and S across the changes."""
+        from tapp.dynamics.ephemeris import relative_state, tdb_reader  # jplephem, on first use
+
+        if epoch_jd_utc is None and orientation is None:
+            raise InputError("propagate", "epoch", "an epoch (UTC) for the ephemeris of the "
+                             "centre changes", None)
+        tdb = tdb_reader(epoch_jd_utc, None if orientation is None else orientation.scales)
+        center = self.state_model.center
+
+        def offset(centre: str, times: np.ndarray) -> np.ndarray:
+            """States (n, 6) of ``centre`` relative to the model's centre at ``times``."""
+            if centre == center:
+                return np.zeros((times.size, 6))
+            return relative_state(centre, center, *tdb(times))
+
+        x_model, n_q = x0, len(self.params)
+        phi0, s0 = np.eye(6), np.zeros((6, n_q))
+        parts: dict[str, list] = {"states": [], "stm": [], "sensitivity": []}
+        events, steps, rhs = [], 0, 0
+        sign = 1.0 if t_s[-1] >= pieces[0][0] else -1.0
+        for i, (a, b, centre) in enumerate(pieces):
+            prop = _about(self, centre)
+            names = names_about(self.params, self.state_model, centre)
+            u = sign * t_s
+            take = ((u >= sign * a) if i == 0 else (u > sign * a)) & (u <= sign * b)
+            grid = np.append(t_s[take], b)
+            traj = prop.propagate(
+                x_model - offset(centre, np.array([a]))[0], grid, t0_s=a, stm=stm,
+                param_values={n: values[p] for p, n in zip(self.params, names, strict=True)
+                              if n is not None}, theta0_rad=theta0_rad,
+                epoch_jd_utc=epoch_jd_utc, orientation=orientation)
+            moved = traj.states + offset(centre, grid)
+            parts["states"].append(moved[:-1])
+            x_model = moved[-1]
+            events.append(traj.events)
+            steps, rhs = steps + traj.steps, rhs + traj.rhs_evaluations
+            if stm:
+                own = np.zeros((grid.size, 6, n_q))
+                columns = [j for j, n in enumerate(names) if n is not None]
+                own[:, :, columns] = traj.sensitivity
+                parts["stm"].append(accurate_stacked(traj.stm[:-1], phi0))
+                parts["sensitivity"].append(accurate_stacked(traj.stm[:-1], s0, own[:-1]))
+                phi0 = accurate_stacked(traj.stm[-1:], phi0)[0]
+                s0 = accurate_stacked(traj.stm[-1:], s0, own[-1:])[0]
+        out = {key: np.concatenate(value) if value else None for key, value in parts.items()}
+        return Trajectory(t_s, out["states"], out["stm"], out["sensitivity"], self.params,
+                          steps, rhs, Events.join(events))
 
     def _series(self, eqs: Equations, epoch_jd_utc: float | None,
                 orientation: EarthOrientation | None, t0_s: float, t_s: np.ndarray
@@ -290,3 +376,15 @@ class Propagator:
             table = chebyshev_table(eqs.bodies, self.state_model.center, epoch_jd_utc, lo, hi,
                                     scales=scales, origin_s=origin).stacked(table)
         return table
+
+
+@cache
+def _about(prop: Propagator, centre: str) -> Propagator:
+    """The propagator of an interval about ``centre``: ``prop``'s models about it
+    (:func:`tapp.dynamics.centres.model_about`), the parameters that have a force there, and no
+    centre changes (cached: one compiled model per centre)."""
+    names = names_about(prop.params, prop.state_model, centre)
+    return dataclasses.replace(prop, state_model=model_about(prop.state_model, centre),
+                               var_model=model_about(prop.var_model, centre),
+                               params=tuple(n for n in names if n is not None),
+                               centre_changes=())

@@ -29,7 +29,8 @@ from scipy import linalg
 
 from tapp.errors import SingularMatrixError
 
-__all__ = ["accurate_inverse", "accurate_map", "accurate_matmul", "ar1_whitened",
+__all__ = ["accurate_inverse", "accurate_map", "accurate_matmul", "accurate_stacked",
+           "ar1_whitened",
            "digits_held", "gram", "map_growth", "product_unit", "psd_factor",
            "scaled_min_eigenvalue", "triangularize", "upper_from_packed"]
 
@@ -282,6 +283,18 @@ def accurate_matmul(a: np.ndarray, b: np.ndarray, c: np.ndarray | None = None, *
     if split:
         return hi, (p - hi) + s
     return hi
+
+
+def accurate_stacked(phi: np.ndarray, m: np.ndarray, c: np.ndarray | None = None
+                     ) -> np.ndarray:
+    """Return C_i + Φ_i M for stacked Φ (N, n, n), one M (n, p) and C (N, n, p) or None, each
+    entry by :func:`accurate_matmul` (as if in twice the working precision, BLAS-free): the
+    composition of transitions along a trajectory, Φ(t_i, t_0) = Φ(t_i, b) Φ(b, t_0) and
+    S(t_i) = Φ(t_i, b) S(b) + S_b(t_i), whose terms cancel after a close approach."""
+    n, k, p = phi.shape[0], phi.shape[1], m.shape[1]
+    flat = accurate_matmul(phi.reshape(n * k, phi.shape[2]), m,
+                           None if c is None else c.reshape(n * k, p))
+    return flat.reshape(n, k, p)
 
 
 def accurate_map(k: np.ndarray, x: np.ndarray, x_lo: np.ndarray | None = None) -> np.ndarray:

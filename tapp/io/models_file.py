@@ -24,6 +24,10 @@ the trajectory, and the variational model's Jacobian drives Φ and the sensitivi
     rtol = 1e-13               # integrator tolerances
     atol = 1e-13
     method = "dop853"          # or "rkn12" (tapp.dynamics.propagate)
+    centre_changes = [         # integrate about another body from a time on (tracking
+        { time = 259200.0, center = "sun" },           # scenarios: s or UTC date) ...
+        { time = "2031-07-22T00:00:00", center = "mars" },
+    ]                          # ... inputs and outputs stay about `center`
 
 and the study file's runs name their models ``gravity`` and ``var_gravity`` too. The
 spellings ``stm_gravity`` and ``stm_third_bodies`` of earlier SEARCH files are refused, naming
@@ -32,11 +36,13 @@ the new key.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Annotated, Literal
 
 from pydantic import AfterValidator, Field
 
 from tapp.constants import MAX_DEGREE
+from tapp.dynamics.centres import CentreChange
 from tapp.dynamics.compiled import METHODS
 from tapp.dynamics.propagate import Propagator
 from tapp.dynamics.spec import (
@@ -50,7 +56,7 @@ from tapp.dynamics.spec import (
     parse_gravity,
 )
 from tapp.errors import InputError
-from tapp.io.schema import Invalid, Schema, Tolerance, Unique
+from tapp.io.schema import Invalid, Schema, Time, Tolerance, Unique
 
 
 def _gravity(spec: str) -> str:
@@ -98,6 +104,15 @@ ScaleHeight = _surface_value("scale_height_km")
 _LAYER = ExponentialLayer()
 #: An integration method of :class:`tapp.dynamics.Propagator`.
 Method = Literal[tuple(METHODS)]  # type: ignore[valid-type]
+
+
+class CentreChangeRow(Schema):
+    """One ``[model] centre_changes`` entry: from ``time`` on, integrate about ``center``."""
+
+    time: Time = Field(description="When the centre changes: s from the epoch (> 0) or a UTC "
+                       "date, after the change before.")
+    center: Body = Field(description="The body to integrate about from then on: the model's "
+                         "centre or one of its third bodies (of both models).")
 
 
 class ModelTable(Schema):
@@ -161,6 +176,12 @@ class ModelTable(Schema):
         "dop853", description="Integration method: 'dop853' (Dormand-Prince 8(5,3), any "
         "force model) or 'rkn12' (Runge-Kutta-Nystrom 12(10) on r'' = a(t, r): about 4x "
         "fewer evaluations than dop853 at 1e-12; refuses velocity-dependent forces).")
+    centre_changes: list[CentreChangeRow] = Field(
+        [], description="Changes of the integration centre, ascending in time (tracking "
+        "scenarios): each interval is integrated about its body, with the same bodies acting "
+        "as point masses (the centre's field and drag only about it), and the state, STM and "
+        "sensitivities translated back, so every input and output stays about center "
+        "(tapp.dynamics.centres).")
 
     def force_models(self, source: str, earth_orientation: str
                      ) -> tuple[ForceModel, ForceModel]:
@@ -201,20 +222,31 @@ class ModelTable(Schema):
             raise InputError(source, f"model.{key}", exc.expected, exc.got) from None
 
     def propagator(self, source: str, state_model: ForceModel, var_model: ForceModel,
-                   params: tuple[str, ...] = ()) -> Propagator:
-        """The propagator of the table's models (:meth:`force_models`), tolerances and
-        method, with the sensitivities to ``params``.
+                   params: tuple[str, ...] = (),
+                   time_s: Callable[[object, str], float] | None = None) -> Propagator:
+        """The propagator of the table's models (:meth:`force_models`), tolerances, method
+        and centre changes, with the sensitivities to ``params``.
+
+        ``time_s(value, field)`` converts a file time (s or UTC date) to s from the epoch;
+        a file whose reader gives none cannot have centre changes.
 
         Raises
         ------
         InputError
             Naming ``source`` and ``model.method``: "rkn12" for forces that depend on the
             velocity (drag, or ``params`` whose partials do: stochastic accelerations in RIC
-            axes).
+            axes); or ``model.centre_changes[i].time`` / ``.center``
+            (:func:`tapp.dynamics.centres.check_centre_changes`), or ``model.centre_changes``
+            in a file without times.
         """
+        if self.centre_changes and time_s is None:
+            raise InputError(source, "model.centre_changes", "no centre changes in this file "
+                             "(tracking scenarios only)", len(self.centre_changes))
+        changes = tuple(CentreChange(time_s(row.time, f"model.centre_changes[{i}].time"),
+                                     row.center) for i, row in enumerate(self.centre_changes))
         try:
             return Propagator(state_model, var_model, params, rtol=self.rtol, atol=self.atol,
-                              method=self.method)
+                              method=self.method, centre_changes=changes)
         except InputError as exc:  # named after the Propagator, not the file
             raise InputError(source, f"model.{exc.field}", exc.expected, exc.got) from None
 

@@ -125,6 +125,7 @@ import numpy as np
 from pydantic import Field
 
 from tapp.dynamics import ForceModel, Propagator
+from tapp.dynamics.centres import CentreChange
 from tapp.dynamics.empirical import COMPONENTS
 from tapp.dynamics.ephemeris import tdb_reader
 from tapp.dynamics.forces import check_parameter_value, default_parameters
@@ -414,6 +415,8 @@ class Scenario:
         ``eop.<name>``, kind "eop": :func:`tapp.frames.orientation.eop_parameters_of`).
     eop_days : with per-day offsets, their UTC days (``eop.<name>.<YYYY-MM-DD>``:
         :mod:`tapp.tracking.eop_days`); None: one offset over the arc.
+    centre_changes : the changes of integration centre of every propagation
+        (:mod:`tapp.dynamics.centres`); states stay about the model's centre.
     """
 
     source: str
@@ -441,11 +444,14 @@ class Scenario:
     reference: Reference | None = None
     eop: tuple[str, ...] = ()
     eop_days: EopDays | None = None
+    centre_changes: tuple[CentreChange, ...] = ()
 
     def propagator(self) -> Propagator:
-        """The (state model, variational model, dynamic parameters) propagator."""
+        """The (state model, variational model, dynamic parameters) propagator, with the
+        centre changes."""
         return Propagator(self.state_model, self.var_model, self.dynamic, rtol=self.rtol,
-                          atol=self.atol, method=self.method)
+                          atol=self.atol, method=self.method,
+                          centre_changes=self.centre_changes)
 
     @property
     def parameters(self) -> tuple[Parameter, ...]:
@@ -1212,17 +1218,21 @@ def parse_scenario(data: Mapping, source: str, earth_orientation: str | None = N
     eop = eop_parameters_of(orientation.model, doc.parameters.earth_orientation, source)
     # TAPP I's propagator, with every parameter TAPP I differentiates: a method its forces
     # refuse is the file's model.method, not found when the simulation starts
-    doc.model.propagator(source, state_model, var_model,
-                         dynamic + (() if stochastic is None else stochastic.model_parameters))
+    changes = doc.model.propagator(
+        source, state_model, var_model,
+        dynamic + (() if stochastic is None else stochastic.model_parameters),
+        p.time_s).centre_changes
     targeting = _targeting(p, doc, miss, values, x0,
-                           doc.model.propagator(source, state_model, var_model), orientation)
+                           doc.model.propagator(source, state_model, var_model, (), p.time_s),
+                           orientation)
     baselines = tracking_baselines(source, doc.ddor, tuple(ts.station for ts in stations),
                                    schedule.data_interval_s)
     return Scenario(source, doc.title, iden, epoch, orientation, x0, state_model, var_model,
                     rtol, atol,
                     dynamic, values, stations, schedule, times, miss, document, targeting,
                     baselines, stochastic, doc.model.method, manoeuvres, reference,
-                    eop=eop, eop_days=_eop_days(p, doc.parameters, eop, schedule, last_s))
+                    eop=eop, eop_days=_eop_days(p, doc.parameters, eop, schedule, last_s),
+                    centre_changes=changes)
 
 
 def _eop_days(p: _Parser, par: ParametersTable, eop: tuple[str, ...], schedule: Schedule,

@@ -138,3 +138,28 @@ def test_an_orbit_about_another_body_needs_a_scenario_epoch():
     with pytest.raises(InputError) as info:
         table.state("study.toml", "orbits.MARS")
     assert info.value.field == "orbits.MARS.center"
+
+
+def test_centre_changes_reach_the_propagator_with_their_times():
+    # [model] centre_changes: a time in s and one as a UTC date (one day after the epoch)
+    from tapp.dynamics.centres import CentreChange
+
+    doc = _document("earth", GEOCENTRIC)
+    doc["model"]["centre_changes"] = [{"time": 3600.0, "center": "sun"},
+                                      {"time": "2026-03-11T00:00:00", "center": "earth"}]
+    scenario = parse_scenario(doc, SOURCE)
+    assert scenario.propagator().centre_changes == (CentreChange(3600.0, "sun"),
+                                                    CentreChange(86400.0, "earth"))
+
+
+@pytest.mark.parametrize("rows, field", [
+    ([{"time": 3600.0, "center": "uranus"}], "model.centre_changes[0].center"),  # not a body
+    ([{"time": 7200.0, "center": "sun"}, {"time": 3600.0, "center": "earth"}],
+     "model.centre_changes[1].time"),
+])
+def test_a_bad_centre_change_is_named(rows, field):
+    doc = _document("earth", GEOCENTRIC)
+    doc["model"]["centre_changes"] = rows
+    with pytest.raises(InputError) as info:
+        parse_scenario(doc, SOURCE)
+    assert info.value.field == field
