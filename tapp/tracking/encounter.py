@@ -128,7 +128,8 @@ def _program(scenario: Scenario, horizon_s: float) -> BPlaneProgram:
     return BPlaneProgram(
         scenario.epoch, scenario.x0[:3],
         Propagator(scenario.state_model, scenario.var_model, rtol=scenario.rtol,
-                   atol=scenario.atol, method=scenario.method),
+                   atol=scenario.atol, method=scenario.method,
+                   centre_changes=scenario.centre_changes),
         target=miss.body, reference=miss.reference, scan_step_s=scan.scan_step_s,
         max_flight_time_s=max(scan.max_flight_time_s, last_s, horizon_s),
         orientation=scenario.orientation)
