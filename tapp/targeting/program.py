@@ -129,7 +129,7 @@ _EPHEMERIS_STEP_s = 60.0
 _B_PLANE_POSITION_STEP = 1e-6
 # Time step of the central difference of the B-plane in its moving reference pole: the
 # fastest pole term (the Moon's E6, 13.6 days) leaves a truncation (omega h)^2 / 6 ~ 2e-6 of
-# a term that is itself below 1e-4 of the partials; round-off ~1e-16 |B| / (pole rate h).
+# a term that is itself ~1e-4 of the partials; round-off 1e-16 / (3e-9 rad/s x h) ~ 6e-11 of it.
 _POLE_TIME_STEP_s = 600.0
 
 #: What a file's B-plane ``reference`` may be (the schemas' field descriptions).

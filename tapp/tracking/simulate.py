@@ -85,9 +85,10 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    formulas use (the target's GM for a B-plane, the Earth's for elements). A B-plane's
    reference pole is that of the fixed miss time t_m (``"body_equator"``: the body's IAU
    pole at the TDB of t_m, :meth:`tapp.targeting.program.BPlaneProgram.reference_pole`), the
-   same for every differenced state: G is a partial w.r.t. the state at fixed time, and the
-   pole is a function of time only (the Moon's, the fastest, turns by < 1e-8 rad/s, so it
-   would move by < 1e-9 rad over any differencing step of the time below 0.1 s). The entry
+   same for every differenced state: G is a partial w.r.t. the state at the fixed time t_m
+   and the pole depends on time only, so holding it is exact (for scale: the Moon's pole,
+   the fastest, turns by < 1e-8 rad/s; a miss time that moves with x(t_0), as a
+   "periapsis" one physically would, is not what B describes). The entry
    flight-path angle (``entry_fpa_rad``) is that of the osculating target-relative hyperbola
    at ``miss.entry_radius_km`` (:func:`tapp.orbit.bplane.entry_flight_path_angle`).
 """
