@@ -94,6 +94,22 @@ def pole_unit(body: str, jd_tdb, jd_tdb2=0.0) -> np.ndarray:
                      np.sin(delta)], axis=-1)
 
 
+#: Bodies whose equator has a pole here (:func:`equator_pole`): the Earth and the IAU models.
+EQUATOR_POLE_BODIES = ("earth", *POLE_MODELS)
+
+
+def equator_pole(body: str, jd_tdb, jd_tdb2=0.0) -> np.ndarray:
+    """Return the pole (N, 3) of ``body``'s equator in ICRF (EME2000) axes at TDB ``jd_tdb +
+    jd_tdb2`` (Julian dates): :func:`pole_unit` for the bodies of :data:`POLE_MODELS`, and for
+    the Earth the pole of its mean equator of J2000, the EME2000 z axis (0, 0, 1) at every
+    time (the B-plane's "earth_equator"; precession and nutation are not applied here).
+    ``body`` must be one of :data:`EQUATOR_POLE_BODIES` (callers check it with its field)."""
+    if body == "earth":
+        t = np.atleast_1d(np.asarray(jd_tdb, dtype=float)) + np.asarray(jd_tdb2, dtype=float)
+        return np.broadcast_to(np.array([0.0, 0.0, 1.0]), t.shape + (3,))
+    return pole_unit(body, jd_tdb, jd_tdb2)
+
+
 def pole_table(body: str, tdb: Callable[[np.ndarray], tuple], t_start_s: float,
                t_end_s: float, origin_s: float | None = None) -> ChebyshevTable:
     """Fit the pole k(t) of ``body`` over [t_start, t_end] s from the epoch: one 3-vector

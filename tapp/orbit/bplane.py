@@ -11,9 +11,11 @@ and :math:`\hat R` completes the right-handed triad:
 
 with :math:`\hat N` the pole (unit normal) of the reference plane: the Earth's mean equator of
 J2000 (the EME2000 z axis, as nyx does with the frame's z axis), the ecliptic of J2000, or the
-target body's equator given by its pole. The B vector points from the body's centre to where the
-incoming asymptote pierces the B-plane; its length is the impact parameter
-:math:`b = |a|\sqrt{e^2 - 1} = h / v_\infty`.
+target body's equator given by its pole (by name ``"body_equator"`` in the files and programs,
+:data:`REFERENCE_PLANES`, which resolve it to a pole vector at the evaluation time:
+:meth:`tapp.targeting.program.BPlaneProgram.reference_pole`). The B vector points from the
+body's centre to where the incoming asymptote pierces the B-plane; its length is the impact
+parameter :math:`b = |a|\sqrt{e^2 - 1} = h / v_\infty`.
 
 Everything is computed from the two-body state relative to the target body, in km, km/s and s
 (STYLE section 3). Arrays broadcast over leading axes: positions and velocities are (..., 3),
@@ -24,7 +26,8 @@ References
 W. Kizner, "A method of describing miss distances for lunar and interplanetary trajectories",
 Planetary and Space Science 7 (1961) 125-131 (the B-plane and its T, R axes).
 D. A. Vallado, *Fundamentals of Astrodynamics and Applications*, 4th ed. (2013), ch. 2 (the
-eccentricity vector, the hyperbolic Kepler equation).
+eccentricity vector, the hyperbolic Kepler equation, the flight-path angle
+:math:`\cos\phi_{fpa} = h / (r v)` from the local horizontal, and the vis-viva energy).
 J. H. Lieske et al., "Expressions for the precession quantities based upon the IAU (1976)
 system of astronomical constants", A&A 58 (1977) 1-16 (obliquity of the ecliptic at J2000).
 """
@@ -56,6 +59,11 @@ ECLIPTIC_POLE_EME2000.setflags(write=False)
 
 #: Reference planes selectable by name in :func:`b_plane`.
 REFERENCE_POLES = {"earth_equator": EARTH_EQUATOR_POLE_EME2000, "ecliptic": ECLIPTIC_POLE_EME2000}
+#: The target body's own equator: its pole moves with time, so the programs that know the body
+#: and the time pass it to :func:`b_plane` as a vector.
+BODY_EQUATOR = "body_equator"
+#: Reference planes a file or a program may name: the fixed ones and the body's equator.
+REFERENCE_PLANES = (*REFERENCE_POLES, BODY_EQUATOR)
 
 # The Jacobian is taken by complex step: df/dv_k = Im f(v + i h e_k) / h, exact to rounding
 # for any h small enough that h^2 terms vanish (Squire & Trapp 1998, SIAM Review 40, 110).
@@ -234,7 +242,9 @@ def b_plane(
         ``"earth_equator"``: EME2000 xy-plane (pole (0, 0, 1)), the default, as nyx (z axis
         of the state's frame); ``"ecliptic"``: ecliptic of J2000 with the IAU 1976 obliquity
         (state in EME2000); a vector: the pole of any plane, e.g. a body's equator from
-        :func:`pole_from_ra_dec` (normalised here).
+        :func:`pole_from_ra_dec` or :func:`tapp.dynamics.poles.equator_pole` at the time of
+        the state (normalised here). ``"body_equator"`` needs the body and the time, so the
+        programs resolve it to that vector (the name is refused here).
 
     Returns
     -------
@@ -291,7 +301,8 @@ def b_plane(
             raise InputError(
                 "b_plane",
                 "reference",
-                f"one of {sorted(REFERENCE_POLES)} or a pole vector",
+                f"one of {sorted(REFERENCE_POLES)} or a pole vector (for the body's equator: "
+                "its pole at the state's time, tapp.dynamics.poles.equator_pole)",
                 reference,
             )
         pole = REFERENCE_POLES[reference]
@@ -359,3 +370,73 @@ def b_plane(
         periapsis_radius_km=mu * (q["ecc"] - 1.0) / q["v_inf"] ** 2,
         jacobian_v=jacobian,
     )
+
+
+def entry_flight_path_angle(
+    r_km: ArrayLike, v_km_s: ArrayLike, gm_km3_s2: ArrayLike, entry_radius_km: ArrayLike
+) -> np.ndarray:
+    r"""Return the flight-path angle (rad, shape (...)) where the incoming two-body conic of a
+    state crosses the sphere of radius ``entry_radius_km`` about the body's centre.
+
+    The flight-path angle :math:`\gamma` is the angle from the local horizontal (the plane
+    perpendicular to :math:`\mathbf r`) to the velocity, negative while the distance decreases
+    (Vallado 2013, ch. 2: :math:`\cos\phi_{fpa} = h / (r v)`). The angular momentum h and the
+    energy are constants of the conic, so at the interface radius :math:`r_e`
+
+    .. math::
+
+        h = |\mathbf r\times\mathbf v|, \qquad
+        v_\infty^2 = v^2 - \frac{2\mu}{r}, \qquad
+        v_e = \sqrt{v_\infty^2 + \frac{2\mu}{r_e}}, \qquad
+        \gamma_e = -\arccos\frac{h}{r_e v_e}
+
+    (vis-viva for :math:`v_e`; the minus sign takes the incoming branch, whatever the sign of
+    :math:`\mathbf r\cdot\mathbf v` of the state). The conic reaches :math:`r_e` if and only
+    if its periapsis radius :math:`r_p \le r_e`: :math:`(r v)^2 = v_\infty^2 r^2 + 2\mu r`
+    grows with r and equals :math:`h^2` at periapsis. At :math:`r_p = r_e` the angle is 0.
+
+    Parameters
+    ----------
+    r_km, v_km_s : array_like, shape (..., 3)
+        Position (km) and velocity (km/s) relative to the body's centre.
+    gm_km3_s2 : array_like, shape (...)
+        The body's GM, km^3/s^2, > 0.
+    entry_radius_km : array_like, shape (...)
+        Radius of the atmosphere interface, km: > 0 and below the state's distance.
+
+    Raises
+    ------
+    InputError
+        Shapes or non-finite values as :func:`b_plane`; an entry radius <= 0 or not below the
+        state's distance; a conic whose periapsis is above the entry radius (it does not
+        enter; the message gives the periapsis radius, km, of the first such state).
+    """
+    r = _state_array("r_km", r_km)
+    v = _state_array("v_km_s", v_km_s)
+    mu = np.asarray(gm_km3_s2, dtype=np.float64)
+    r_e = np.asarray(entry_radius_km, dtype=np.float64)
+    if not np.all(np.isfinite(mu) & (mu > 0.0)):
+        raise InputError("entry_flight_path_angle", "gm_km3_s2", "a finite GM > 0 in km^3/s^2",
+                         mu.tolist())
+    shape = np.broadcast_shapes(r.shape, v.shape, mu.shape + (3,), r_e.shape + (3,))
+    r, v = np.broadcast_to(r, shape), np.broadcast_to(v, shape)
+    mu, r_e = np.broadcast_to(mu, shape[:-1]), np.broadcast_to(r_e, shape[:-1])
+    r_mag = np.sqrt(_dot(r, r))
+    if not np.all(np.isfinite(r_e) & (r_e > 0.0) & (r_e < r_mag)):
+        raise InputError("entry_flight_path_angle", "entry_radius_km",
+                         "a finite radius > 0 km below the state's distance from the centre",
+                         f"{r_e.tolist()} km at distances {r_mag.tolist()} km")
+    h_vec = np.cross(r, v)
+    h2 = _dot(h_vec, h_vec)
+    v_e = np.sqrt(_dot(v, v) + 2.0 * mu * (1.0 / r_e - 1.0 / r_mag))
+    cos_gamma = np.sqrt(h2) / (r_e * v_e)
+    misses = cos_gamma > 1.0
+    if np.any(misses):
+        first = tuple(int(i) for i in np.argwhere(misses)[0])
+        e_vec = _energy_and_e_vec(r, v, mu)[1][first]
+        r_p = h2[first] / (mu[first] * (1.0 + np.sqrt(e_vec @ e_vec)))  # p / (1 + e), p = h^2/mu
+        raise InputError("entry_flight_path_angle", "entry_radius_km",
+                         "a radius at or above the conic's periapsis radius (else it does not "
+                         "enter)", f"{r_e[first]:.3f} km, periapsis radius {r_p:.3f} km at "
+                         f"state {first}")
+    return -np.arccos(cos_gamma)

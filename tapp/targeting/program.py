@@ -47,7 +47,9 @@ Analytic partials (consistent with that choice of :math:`t_e`). With
         \Phi_v + \dot{\mathbf z}\,\frac{\partial t_e}{\partial \mathbf v_0},
 
     \frac{\partial (B\cdot R, B\cdot T)}{\partial \mathbf v_0} =
-        G\,\frac{\partial \mathbf z(t_e)}{\partial \mathbf v_0}, \qquad
+        G\,\frac{\partial \mathbf z(t_e)}{\partial \mathbf v_0}
+        + \frac{\partial (B\cdot R, B\cdot T)}{\partial t}\Big|_{\mathbf z}
+          \frac{\partial t_e}{\partial \mathbf v_0}, \qquad
     \frac{\partial t_f}{\partial \mathbf v_0} = \frac{\partial t_e}{\partial \mathbf v_0}
 
 (implicit differentiation of :math:`h(\mathbf z(t_e)) = 0`; the :math:`t_p` term of
@@ -55,8 +57,13 @@ Analytic partials (consistent with that choice of :math:`t_e`). With
 :math:`G = \partial(B\cdot R, B\cdot T)/\partial\mathbf z` (2x6) is the B-plane Jacobian: its
 velocity block is :attr:`tapp.orbit.bplane.BPlane.jacobian_v` (complex step), its position block is
 taken here by central differences of :func:`tapp.orbit.bplane.b_plane` (cheap: two-body formulas
-only). :math:`\mathbf a(\mathbf x)` is the state model's acceleration (its CasADi function);
-the target's velocity and acceleration are central differences of the DE421 position. The
+only). The time derivative at fixed z is that of the reference pole, non-zero only for
+``reference = "body_equator"`` (the body's pole at the moving t_e; a central difference over
+600 s): the Moon's pole turns by up to ~3e-9 rad/s, which moves a 7,000 km B by ~2e-5 km/s;
+times :math:`\partial t_e/\partial \mathbf v_0` (~2e6 s per km/s on a lunar transfer) that is
+5 s, 1e-4 of the B·R row of the shipped lunar search (measured; tested).
+:math:`\mathbf a(\mathbf x)` is the state model's acceleration (its CasADi function); the
+target's velocity and acceleration are central differences of the DE421 position. The
 expensive part, the trajectory's sensitivity, comes from the STM alone. With a variational
 model other than the state model (:class:`tapp.dynamics.Propagator` ``var_model``) the
 partials are those of the approximate STM, as the (J_N, J_M) study intends.
@@ -94,12 +101,12 @@ from search import SearchResult, solve
 from tapp.constants import SECONDS_PER_DAY, GM_km3_s2
 from tapp.dynamics import PropagationError, Propagator
 from tapp.dynamics.ephemeris import position_km, tdb_reader
-from tapp.dynamics.poles import pole_unit
+from tapp.dynamics.poles import EQUATOR_POLE_BODIES, equator_pole, pole_unit
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.frames.orientation import EarthOrientation
 from tapp.frames.time import Epoch
 from tapp.orbit import lambert
-from tapp.orbit.bplane import REFERENCE_POLES, BPlane, b_plane
+from tapp.orbit.bplane import BODY_EQUATOR, REFERENCE_PLANES, REFERENCE_POLES, BPlane, b_plane
 
 #: Names of the independent variables x (injection velocity, EME2000) and dependent ones y.
 X_NAMES = ("vx_km_s", "vy_km_s", "vz_km_s")
@@ -120,6 +127,29 @@ _EPHEMERIS_STEP_s = 60.0
 # Relative step of the central differences of the B-plane in position: truncation
 # ~(1e-6)^2, round-off ~1e-16 |B| / (1e-6 |r|), both far below 1e-8 of the partials.
 _B_PLANE_POSITION_STEP = 1e-6
+# Time step of the central difference of the B-plane in its moving reference pole: the
+# fastest pole term (the Moon's E6, 13.6 days) leaves a truncation (omega h)^2 / 6 ~ 2e-6 of
+# a term that is itself ~1e-4 of the partials; round-off 1e-16 / (3e-9 rad/s x h) ~ 6e-11 of it.
+_POLE_TIME_STEP_s = 600.0
+
+#: What a file's B-plane ``reference`` may be (the schemas' field descriptions).
+REFERENCE_HELP = (
+    "\"earth_equator\" (the EME2000 xy-plane), \"ecliptic\" (of J2000) or \"body_equator\" "
+    "(the body's own equator, its pole from the IAU WGCCRE model at the time of the B-plane; "
+    f"the Earth's is the EME2000 xy-plane; bodies with a pole: {', '.join(EQUATOR_POLE_BODIES)})")
+
+
+def check_reference(reference: str, body: str, source: str, field: str) -> None:
+    """Raise :class:`~tapp.errors.InputError` naming ``source`` and ``field`` unless
+    ``reference`` is one of :data:`tapp.orbit.bplane.REFERENCE_PLANES` and, for
+    ``"body_equator"``, ``body`` has an equator pole
+    (:data:`tapp.dynamics.poles.EQUATOR_POLE_BODIES`)."""
+    if reference not in REFERENCE_PLANES:
+        raise InputError(source, field, f"one of {list(REFERENCE_PLANES)}", reference)
+    if reference == BODY_EQUATOR and body not in EQUATOR_POLE_BODIES:
+        raise InputError(source, field, f"a body with a pole model for \"{BODY_EQUATOR}\" "
+                         f"({', '.join(EQUATOR_POLE_BODIES)}), or \"earth_equator\" or "
+                         f"\"ecliptic\"", f"{reference} of the {body}")
 
 
 class TargetMissedError(NotHyperbolicError):
@@ -225,7 +255,10 @@ class BPlaneProgram:
     target : str, optional
         Target body, one of :data:`tapp.dynamics.BODIES` (default ``"moon"``).
     reference : str, optional
-        B-plane reference plane, ``"earth_equator"`` (default) or ``"ecliptic"``.
+        B-plane reference plane (:meth:`reference_pole`): ``"earth_equator"`` (default),
+        ``"ecliptic"`` or ``"body_equator"`` (the target's own equator; its pole from the IAU
+        model at the evaluation time, for a target of
+        :data:`tapp.dynamics.poles.EQUATOR_POLE_BODIES`).
     max_flight_time_s : float, optional
         Horizon of the scan, s (default 8 days).
     scan_step_s : float, optional
@@ -264,9 +297,7 @@ class BPlaneProgram:
         if self.propagator.params:
             raise InputError("targeting", "propagator.params", "no model parameters",
                              self.propagator.params)
-        if self.reference not in REFERENCE_POLES:
-            raise InputError("targeting", "reference", f"one of {sorted(REFERENCE_POLES)}",
-                             self.reference)
+        check_reference(self.reference, self.target, "targeting", "reference")
         for name in ("max_flight_time_s", "scan_step_s", "periapsis_time_tol_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
@@ -337,8 +368,22 @@ class BPlaneProgram:
         except PropagationError as exc:
             raise PropagationError(f"{exc} (injection velocity {v0.tolist()} km/s)") from exc
 
-    def _b_plane(self, z: np.ndarray) -> BPlane:
-        return b_plane(z[..., :3], z[..., 3:], self.gm_target_km3_s2, reference=self.reference)
+    def reference_pole(self, t_s: ArrayLike) -> np.ndarray:
+        """Return the pole (N, 3) of the B-plane's reference plane, EME2000 axes, at ``t_s``
+        (N,) s from the epoch: the fixed pole of :data:`tapp.orbit.bplane.REFERENCE_POLES`,
+        or for ``"body_equator"`` the target's equator pole
+        (:func:`tapp.dynamics.poles.equator_pole`: the IAU WGCCRE model at the TDB of t_s,
+        :func:`tapp.dynamics.ephemeris.tdb_reader`; for the Earth the EME2000 z axis, the
+        same plane as ``"earth_equator"``)."""
+        t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))
+        if self.reference == BODY_EQUATOR:
+            return equator_pole(self.target, *self._tdb(t))
+        return np.broadcast_to(REFERENCE_POLES[self.reference], t.shape + (3,))
+
+    def _b_plane(self, z: np.ndarray, t_s: float) -> BPlane:
+        """The B-plane of target-relative states z (..., 6) at one time t_s (its pole)."""
+        return b_plane(z[..., :3], z[..., 3:], self.gm_target_km3_s2,
+                       reference=self.reference_pole(t_s)[0])
 
     # --- the program ----------------------------------------------------------------------
 
@@ -394,7 +439,7 @@ class BPlaneProgram:
         k = int(hits[0])
         k = k if dist[k] <= dist[k + 1] else k + 1
         try:
-            t_p = float(self._b_plane(z[k]).time_to_periapsis_s)
+            t_p = float(self._b_plane(z[k], t[k]).time_to_periapsis_s)
         except NotHyperbolicError as exc:
             raise TargetMissedError(
                 f"the {self.target}-relative orbit at closest approach (t = {t[k]:.0f} s, "
@@ -439,7 +484,7 @@ class BPlaneProgram:
             body, body_acc = self.target_state(t_e)
             z = traj.states[0] - body[0]
             try:
-                bp = self._b_plane(z)
+                bp = self._b_plane(z, t_e)
             except NotHyperbolicError as exc:
                 raise TargetMissedError(
                     f"the {self.target}-relative orbit at t = {t_e:.3f} s is not hyperbolic: "
@@ -474,18 +519,23 @@ class BPlaneProgram:
         # velocity block from its complex-step Jacobian (rows B.R, B.T, LTOF).
         step_km = _B_PLANE_POSITION_STEP * float(np.linalg.norm(r))
         dr = step_km * np.eye(3)
-        plus = self._b_plane(np.concatenate([r + dr, np.broadcast_to(v, (3, 3))], axis=1))
-        minus = self._b_plane(np.concatenate([r - dr, np.broadcast_to(v, (3, 3))], axis=1))
+        plus = self._b_plane(np.concatenate([r + dr, np.broadcast_to(v, (3, 3))], axis=1), t_e)
+        minus = self._b_plane(np.concatenate([r - dr, np.broadcast_to(v, (3, 3))], axis=1), t_e)
         g_r = np.stack([plus.b_dot_r_km - minus.b_dot_r_km,
                         plus.b_dot_t_km - minus.b_dot_t_km]) / (2.0 * step_km)
         g = np.concatenate([g_r, bp.jacobian_v[:2]], axis=1)
+        # d(B.R, B.T)/dt at fixed z through the reference pole (zero for a fixed plane).
+        later = self._b_plane(z, t_e + _POLE_TIME_STEP_s)
+        earlier = self._b_plane(z, t_e - _POLE_TIME_STEP_s)
+        g_t = np.array([later.b_dot_r_km - earlier.b_dot_r_km,
+                        later.b_dot_t_km - earlier.b_dot_t_km]) / (2.0 * _POLE_TIME_STEP_s)
         # zdot = (v_rel, a - a_b); grad h of h = r.v is (v, r).
         zdot = np.concatenate([v, self.acceleration_km_s2(t_e, state) - body_acc])
         grad_h = np.concatenate([v, r])
         phi_v = phi[:, 3:6]
         dte_dv0 = -(grad_h @ phi_v) / (grad_h @ zdot)
         dz_dv0 = phi_v + np.outer(zdot, dte_dv0)
-        return np.vstack([g @ dz_dv0, dte_dv0])
+        return np.vstack([g @ dz_dv0 + np.outer(g_t, dte_dv0), dte_dv0])
 
     def partials(self, v0_km_s: ArrayLike) -> np.ndarray:
         """Return the analytic dy/dv0 (3, 3) (s, s, s^2/km) from the variational equations."""
@@ -594,7 +644,7 @@ def patched_conic_guess(program: BPlaneProgram, b_dot_r_km: float, b_dot_t_km: f
     try:
         arrival = lambert(r0, body[:3], arrival_s, gm, pole=pole)[1]
         s_hat = (arrival - body[3:]) / np.linalg.norm(arrival - body[3:])
-        t_hat = np.cross(s_hat, REFERENCE_POLES[program.reference])
+        t_hat = np.cross(s_hat, program.reference_pole(arrival_s)[0])
         t_hat /= np.linalg.norm(t_hat)
         aim = body[:3] + b_dot_t_km * t_hat + b_dot_r_km * np.cross(s_hat, t_hat)
         return lambert(r0, aim, arrival_s, gm, pole=pole)[0]

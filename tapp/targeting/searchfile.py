@@ -30,14 +30,16 @@ from tapp.io.schema import (
     UtcDate,
     validate,
 )
-from tapp.orbit.bplane import REFERENCE_POLES
+from tapp.orbit.bplane import REFERENCE_PLANES
 from tapp.targeting.program import (
     FIRST_GUESSES,
     MAX_SCAN_STEPS,
+    REFERENCE_HELP,
     X_NAMES,
     Y_NAMES,
     BPlaneProgram,
     BPlaneSearch,
+    check_reference,
     frozen_array,
 )
 
@@ -67,8 +69,9 @@ class SearchTarget(ScanTable):
     """``[target]``: the target body, B-plane reference and the closest-approach scan."""
 
     body: str = Field("moon", description="The target body, a third body of the state model.")
-    reference: Literal[tuple(REFERENCE_POLES)] = Field(  # type: ignore[valid-type]
-        "earth_equator", description="The B-plane's reference plane (it sets the T axis).")
+    reference: Literal[REFERENCE_PLANES] = Field(  # type: ignore[valid-type]
+        "earth_equator", description=f"The B-plane's reference plane (it sets the T axis): "
+        f"{REFERENCE_HELP}.")
 
 
 _BR, _BT, _TF = "B·R of the target-relative hyperbola", "B·T of the target-relative " \
@@ -218,7 +221,8 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
       ``gravity`` (J0, Jn, NxM), ``third_bodies`` (list), optional
       ``var_gravity``/``var_third_bodies`` (variational model, default the state model),
       ``rtol``/``atol`` (default 1e-13, within ``tapp.dynamics.propagate.TOLERANCE_RANGE``).
-    - ``[target]``: ``body`` (default moon), ``reference`` (earth_equator | ecliptic),
+    - ``[target]``: ``body`` (default moon), ``reference`` (earth_equator | ecliptic |
+      body_equator: :meth:`tapp.targeting.program.BPlaneProgram.reference_pole`),
       ``max_flight_time_s``, ``scan_step_s``, ``periapsis_time_tol_s`` (optional).
     - ``[search]``: ``targets``, ``tolerances`` (tables keyed b_dot_r_km, b_dot_t_km,
       flight_time_s), ``target_increments`` (same keys, optional, theta), ``increments``
@@ -259,6 +263,7 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
     if tgt.body not in bodies:
         raise InputError(source, "target.body", f"one of model.third_bodies {list(bodies)}",
                          tgt.body)
+    check_reference(tgt.reference, tgt.body, source, "target.reference")
     program = _program(tgt, source, "target", epoch=epoch, r0_km=r0, propagator=propagator,
                        target=tgt.body, reference=tgt.reference, orientation=orientation)
     srch = doc.search

@@ -58,6 +58,7 @@ from tapp.dynamics import PropagationError, Propagator
 from tapp.dynamics.forces import default_parameters
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.io.orbits import check_perigee
+from tapp.orbit.bplane import b_plane
 from tapp.targeting.program import (
     BPlaneProgram,
     ClosestApproach,
@@ -182,11 +183,34 @@ def check_encounter(scenario: Scenario, *, retargeted: bool = False) -> None:
     energy = 0.5 * float(z[3:] @ z[3:]) - gm / r_km
     radius_km = attraction_radius_km(program, miss.t_s)
     if r_km <= radius_km and energy > 0.0:
+        check_entry(scenario, z, gm)
         return
     raise _no_encounter(scenario, f"at the miss time {scenario.epoch.iso_after(miss.t_s, 3)} UTC "
                         f"(t = {miss.t_s:.3f} s) {r_km:,.1f} km from the centre, sphere of "
                         f"attraction {radius_km:,.0f} km, {miss.body}-relative energy "
                         f"{energy:.4g} km^2/s^2", retargeted)
+
+
+def check_entry(scenario: Scenario, z: np.ndarray, gm_km3_s2: float) -> None:
+    """Raise :class:`~tapp.errors.InputError` naming ``miss.entry_radius_km`` unless the
+    osculating hyperbola of the body-relative state ``z`` (6,) (km, km/s) at the miss time
+    enters the interface sphere ahead: a radius below the spacecraft's distance and at or
+    above the hyperbola's periapsis radius (:func:`tapp.orbit.bplane.entry_flight_path_angle`;
+    ``gm_km3_s2`` the body's GM). Nothing to check without ``entry_fpa_rad`` in the miss."""
+    miss = scenario.miss
+    if "entry_fpa_rad" not in miss.quantities:
+        return
+    r_km = float(np.linalg.norm(z[:3]))
+    if miss.entry_radius_km >= r_km:
+        raise InputError(scenario.source, "miss.entry_radius_km", "a radius below the "
+                         f"spacecraft's distance from the {miss.body}'s centre at the miss time, "
+                         f"{r_km:,.3f} km", miss.entry_radius_km)
+    r_p_km = float(b_plane(z[:3], z[3:], gm_km3_s2).periapsis_radius_km)
+    if r_p_km > miss.entry_radius_km:
+        raise InputError(scenario.source, "miss.entry_radius_km", "a radius at or above the "
+                         f"periapsis radius of the {miss.body}-relative hyperbola at the miss "
+                         f"time, {r_p_km:,.3f} km (below it the spacecraft does not enter: no "
+                         "entry flight-path angle)", miss.entry_radius_km)
 
 
 def _retarget(scenario: Scenario) -> tuple[TargetingRun, float]:

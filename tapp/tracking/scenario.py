@@ -85,12 +85,19 @@ ISO strings or TOML dates)::
     [times]            input = [times] or input_step_s with end; epochs = [times] (epoch times
                        after t_0 = 0; re-epoching as in seed TAPP III §4.1)
     [miss]             kind = "bplane" (body, reference; b_dot_r_km, b_dot_t_km, ltof_s,
-                       flight_time_s) | "equinoctial" (a_km, ex, ey, hx, hy, lambda_m_rad) |
-                       "classical" (a_km, e, i_rad, raan_rad, argp_rad, M_rad); time (a
-                       B-plane's may be "periapsis": the trajectory's first periapsis at the
-                       body, found as SEARCH finds it); quantities (default: all of the kind
-                       but flight_time_s). A B-plane miss must be an encounter
-                       (tapp.tracking.encounter), checked before anything is written.
+                       flight_time_s, entry_fpa_rad) | "equinoctial" (a_km, ex, ey, hx, hy,
+                       lambda_m_rad) | "classical" (a_km, e, i_rad, raan_rad, argp_rad,
+                       M_rad); time (a B-plane's may be "periapsis": the trajectory's first
+                       periapsis at the body, found as SEARCH finds it); quantities (default:
+                       all of the kind but flight_time_s and entry_fpa_rad). reference =
+                       "earth_equator" (default, EME2000 xy) | "ecliptic" | "body_equator"
+                       (the body's own equator, its IAU pole at the miss time; the Earth's
+                       is EME2000 xy; bodies: tapp.dynamics.poles.EQUATOR_POLE_BODIES).
+                       entry_fpa_rad: the flight-path angle (< 0) where the osculating
+                       hyperbola at the miss time crosses entry_radius_km (required with
+                       it, refused without; tapp.orbit.bplane.entry_flight_path_angle). A
+                       B-plane miss must be an encounter (tapp.tracking.encounter), checked
+                       before anything is written.
     [stochastic]       optional: piecewise-constant stochastic accelerations
                        (tapp.estimation.gauss_markov): frame = "ric" | "inertial",
                        components (default all three), interval_s with start, end (default
@@ -173,8 +180,8 @@ from tapp.measurements.media import (
     standard_atmosphere,
 )
 from tapp.measurements.stations import Station
-from tapp.orbit.bplane import REFERENCE_POLES
-from tapp.targeting.program import BPlaneSearch
+from tapp.orbit.bplane import REFERENCE_PLANES
+from tapp.targeting.program import REFERENCE_HELP, BPlaneSearch, check_reference
 from tapp.targeting.searchfile import TargetingTable, scenario_targeting
 from tapp.tracking.ddor import QUASAR_KIND, DdorTable, TrackingBaseline, tracking_baselines
 from tapp.tracking.eop_days import EopDays, eop_days
@@ -200,12 +207,14 @@ ORBIT_PARAMETERS = (("x_km", "km"), ("y_km", "km"), ("z_km", "km"), ("vx_km_s", 
 #: Miss quantities of each kind, with units.
 MISS_QUANTITIES = {
     "bplane": (("b_dot_r_km", "km"), ("b_dot_t_km", "km"), ("ltof_s", "s"),
-               ("flight_time_s", "s")),
+               ("flight_time_s", "s"), ("entry_fpa_rad", "rad")),
     "equinoctial": (("a_km", "km"), ("ex", "1"), ("ey", "1"), ("hx", "1"), ("hy", "1"),
                     ("lambda_m_rad", "rad")),
     "classical": (("a_km", "km"), ("e", "1"), ("i_rad", "rad"), ("raan_rad", "rad"),
                   ("argp_rad", "rad"), ("M_rad", "rad")),
 }
+#: Miss quantities asked for by name only (the default is every other one of the kind).
+OPT_IN_MISS = ("flight_time_s", "entry_fpa_rad")
 
 
 @dataclass(frozen=True, slots=True)
@@ -364,9 +373,11 @@ class MissSpec:
     """Miss parameters: ``quantities`` of ``kind`` at time ``t_s`` (s from the epoch).
 
     For "bplane", ``body`` is the target (a third body of the state model) and ``reference``
-    the B-plane reference plane (``tapp.orbit.bplane.REFERENCE_POLES``). ``at_periapsis``: the
-    time is the trajectory's periapsis at the body, NaN here until the simulator finds it
-    (:func:`tapp.tracking.encounter.prepare_encounter`).
+    the B-plane reference plane (``tapp.orbit.bplane.REFERENCE_PLANES``; "body_equator" only
+    for a body of ``tapp.dynamics.poles.EQUATOR_POLE_BODIES``). ``at_periapsis``: the time is
+    the trajectory's periapsis at the body, NaN here until the simulator finds it
+    (:func:`tapp.tracking.encounter.prepare_encounter`). ``entry_radius_km``: the atmosphere
+    interface radius of ``entry_fpa_rad``, km (NaN without that quantity).
     """
 
     kind: str
@@ -375,6 +386,7 @@ class MissSpec:
     body: str = ""
     reference: str = "earth_equator"
     at_periapsis: bool = False
+    entry_radius_km: float = math.nan
 
     @property
     def units(self) -> tuple[str, ...]:
@@ -670,19 +682,25 @@ class MissTable(Schema):
     an encounter: the spacecraft inside the body's sphere of attraction, on a hyperbola."""
 
     kind: Literal[tuple(MISS_QUANTITIES)] = Field(  # type: ignore[valid-type]
-        description="\"bplane\" (b_dot_r_km, b_dot_t_km, ltof_s, flight_time_s), "
+        description="\"bplane\" (b_dot_r_km, b_dot_t_km, ltof_s, flight_time_s, entry_fpa_rad), "
         "\"equinoctial\" (a_km, ex, ey, hx, hy, lambda_m_rad) or \"classical\" (a_km, e, "
         "i_rad, raan_rad, argp_rad, M_rad).")
     time: Time | None = Field(
         None, description="When the miss is evaluated; a B-plane's may be \"periapsis\" (the "
         "trajectory's first periapsis at the body); default: the last T13 time.")
     quantities: Annotated[list[str], Field(min_length=1), Unique] | None = Field(
-        None, description="Which quantities of the kind; default: all but flight_time_s.")
+        None, description="Which quantities of the kind; default: all but flight_time_s and "
+        "entry_fpa_rad.")
     body: str | None = Field(None, description="The B-plane's body, a third body of the state "
                              "model.")
-    reference: Literal[tuple(REFERENCE_POLES)] | None = Field(  # type: ignore[valid-type]
-        None, description="The B-plane's reference plane (T axis); default: "
-        "\"earth_equator\".")
+    reference: Literal[REFERENCE_PLANES] | None = Field(  # type: ignore[valid-type]
+        None, description=f"The B-plane's reference plane (T axis): {REFERENCE_HELP}; "
+        "default: \"earth_equator\".")
+    entry_radius_km: Positive | None = Field(
+        None, description="Atmosphere interface radius from the body's centre, km, where "
+        "entry_fpa_rad is the flight-path angle of the incoming osculating hyperbola; "
+        "required with entry_fpa_rad in quantities, refused without; below the distance at "
+        "the miss time and at or above the hyperbola's periapsis radius.")
 
 
 #: Most stochastic-acceleration parameters (intervals x components): each adds a column to
@@ -1043,7 +1061,7 @@ def _schedule(p: _Parser, trk: TrackingTable, last_s: float,
 def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -> MissSpec:
     kind = miss.kind
     names = tuple(n for n, _ in MISS_QUANTITIES[kind])
-    quantities = tuple(n for n in names if n != "flight_time_s")
+    quantities = tuple(n for n in names if n not in OPT_IN_MISS)
     if miss.quantities is not None:
         for i, q in enumerate(miss.quantities):
             if q not in names:
@@ -1057,16 +1075,25 @@ def _miss(p: _Parser, miss: MissTable, state_model: ForceModel, last_s: float) -
     if t_s <= 0:
         p.fail("miss.time", "a time after the injection (> 0 s)", t_s)
     if kind != "bplane":
-        for key in ("body", "reference"):
+        for key in ("body", "reference", "entry_radius_km"):
             if getattr(miss, key) is not None:
-                p.fail(f"miss.{key}", "no body or reference for orbit elements",
+                p.fail(f"miss.{key}", "no body, reference or entry radius for orbit elements",
                        getattr(miss, key))
         return MissSpec(kind, t_s, quantities)
     if miss.body not in state_model.third_bodies:
         p.fail("miss.body", f"one of model.third_bodies {list(state_model.third_bodies)}",
                miss.body)
     reference = "earth_equator" if miss.reference is None else miss.reference
-    return MissSpec(kind, t_s, quantities, miss.body, reference, at_periapsis)
+    check_reference(reference, miss.body, p.source, "miss.reference")
+    entry = "entry_fpa_rad" in quantities
+    if entry and miss.entry_radius_km is None:
+        p.fail("miss.entry_radius_km", "the atmosphere interface radius (km from the body's "
+               "centre) of the quantity entry_fpa_rad")
+    if not entry and miss.entry_radius_km is not None:
+        p.fail("miss.entry_radius_km", "no entry radius without entry_fpa_rad in "
+               "miss.quantities", miss.entry_radius_km)
+    return MissSpec(kind, t_s, quantities, miss.body, reference, at_periapsis,
+                    math.nan if miss.entry_radius_km is None else float(miss.entry_radius_km))
 
 
 def _stochastic(p: _Parser, table: StochasticTable | None, last_s: float

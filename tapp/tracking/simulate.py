@@ -82,7 +82,15 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
    with G = ∂m/∂x(t_m) by central differences of the closed-form m (steps 1e-6 of |r|,
    |v| of the state the formulas take, target-relative for a B-plane, and of GM: truncation
    ~1e-12, rounding ~1e-10 relative) and the direct term for the GM the
-   formulas use (the target's GM for a B-plane, the Earth's for elements).
+   formulas use (the target's GM for a B-plane, the Earth's for elements). A B-plane's
+   reference pole is that of the fixed miss time t_m (``"body_equator"``: the body's IAU
+   pole at the TDB of t_m, :meth:`tapp.targeting.program.BPlaneProgram.reference_pole`), the
+   same for every differenced state: G is a partial w.r.t. the state at the fixed time t_m
+   and the pole depends on time only, so holding it is exact (for scale: the Moon's pole,
+   the fastest, turns by < 1e-8 rad/s; a miss time that moves with x(t_0), as a
+   "periapsis" one physically would, is not what B describes). The entry
+   flight-path angle (``entry_fpa_rad``) is that of the osculating target-relative hyperbola
+   at ``miss.entry_radius_km`` (:func:`tapp.orbit.bplane.entry_flight_path_angle`).
 """
 
 from __future__ import annotations
@@ -133,7 +141,7 @@ from tapp.measurements.relativity import (
     AUTO_DISTANCE_km,
     Relativity,
 )
-from tapp.orbit.bplane import b_plane
+from tapp.orbit.bplane import b_plane, entry_flight_path_angle
 from tapp.orbit.elements import cartesian_to_elements
 from tapp.targeting.program import BPlaneProgram
 from tapp.tracking.centre import geocentric
@@ -145,7 +153,7 @@ from tapp.tracking.editing import (
     outside_blackouts,
     removed_text,
 )
-from tapp.tracking.encounter import prepare_encounter
+from tapp.tracking.encounter import check_entry, prepare_encounter
 from tapp.tracking.noise import pass_rows
 from tapp.tracking.pieces import Forcing, SegmentPartials, fly, propagate_pieces
 from tapp.tracking.reference import ReferenceFit, fitted
@@ -697,12 +705,16 @@ def _miss_function(scenario: Scenario, gm_values: dict[str, float]
                                 Propagator(scenario.state_model), target=miss.body,
                                 reference=miss.reference, orientation=scenario.orientation)
         body = program.target_state(np.array([miss.t_s]))[0][0]
+        pole = program.reference_pole(np.array([miss.t_s]))[0]  # fixed at t_m (module doc)
+        entry = "entry_fpa_rad" in miss.quantities
 
         def bplane(x: np.ndarray, gm: float) -> np.ndarray:
             z = x - body
-            bp = b_plane(z[:3], z[3:], gm, reference=miss.reference)
+            bp = b_plane(z[:3], z[3:], gm, reference=pole)
+            fpa = (entry_flight_path_angle(z[:3], z[3:], gm, miss.entry_radius_km) if entry
+                   else math.nan)
             all_values = (bp.b_dot_r_km, bp.b_dot_t_km, bp.ltof_s,
-                          miss.t_s + bp.time_to_periapsis_s)
+                          miss.t_s + bp.time_to_periapsis_s, fpa)
             return np.array([float(all_values[i]) for i in index])
 
         name = f"GM_{miss.body}"
@@ -740,6 +752,9 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     ------
     InputError
         Classical elements asked of a near-circular or near-equatorial orbit.
+        An entry flight-path angle whose ``miss.entry_radius_km`` is not below the distance at
+        the miss time, or below the hyperbola's periapsis radius
+        (:func:`tapp.tracking.encounter.check_entry`).
     NotHyperbolicError
         A B-plane asked of a state that is not hyperbolic relative to the target.
     """
@@ -760,6 +775,10 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     gm_values = default_parameters(scenario.state_model, (body_gm,))
     gm_values.update(values)
     f, gm_name, gm, offset = _miss_function(scenario, gm_values)
+    # Steps scale with the state the formulas see (target-relative for a B-plane: |z| of a
+    # flyby is 1e-2 of the Earth-centred |x|, and G's position block needs the finer step).
+    rel = x + offset
+    check_entry(scenario, rel, gm)
     nominal = f(x, gm)
     if miss.kind == "classical":
         elements = np.asarray(cartesian_to_elements(x, gm), dtype=float)
@@ -770,9 +789,6 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
                              "orbit (classical angles are singular there)",
                              f"e = {e:.3g}, i = {i:.3g} rad at the miss time")
     angles = np.array([u == "rad" for u in miss.units])
-    # Steps scale with the state the formulas see (target-relative for a B-plane: |z| of a
-    # flyby is 1e-2 of the Earth-centred |x|, and G's position block needs the finer step).
-    rel = x + offset
     steps = MISS_STEP * np.repeat([np.linalg.norm(rel[:3]), np.linalg.norm(rel[3:])], 3)
     g = _difference(lambda s: f(s, gm), x, steps, angles)
     big_b = np.zeros((len(nominal), scenario.n_o))
