@@ -155,6 +155,29 @@ def _mission_budget(f: _Reader) -> str:
                              "σ B·R (m)", "σ B·T (m)"], rows) + "\n")
 
 
+def _mars_tcms(f: _Reader) -> str:
+    """The Mars TCMs' ΔV: mean and 99 %, Monte Carlo and linear covariance."""
+    names = ("TCM-1 (L+15 d)", "TCM-2 (L+60 d)", "TCM-3 (E-60 d)", "TCM-4 (E-10 d)")
+    columns = [f[f"mars.{k}"].texts for k in ("tcm_dv_mean_monte_carlo_m_s",
+                                             "tcm_dv_mean_linear_m_s",
+                                             "tcm_dv99_monte_carlo_m_s",
+                                             "tcm_dv99_linear_m_s")]
+    rows = [[name, *values] for name, *values in zip(names, *columns, strict=True)]
+    return ("\n\n" + table(["TCM", "mean ΔV Monte Carlo (m/s)", "mean ΔV linear (m/s)",
+                             "99 % ΔV Monte Carlo (m/s)", "99 % ΔV linear (m/s)"], rows)
+            + "\n")
+
+
+def _mars_trade(f: _Reader) -> str:
+    """The Mars trade study: the final B-plane dispersion and 99 % ΔV per case."""
+    rows = [["on" if d else "off", n, a, b, dv] for d, n, a, b, dv in zip(
+        f["mars.trade.ddor"].value, f["mars.trade.passes_per_week"].value,
+        f["mars.trade.semi_major_km"].texts, f["mars.trade.semi_minor_km"].texts,
+        f["mars.trade.dv99_m_s"].texts, strict=True)]
+    return ("\n\n" + table(["ΔDOR", "passes a week", "1σ B-plane semi-major (km)",
+                             "1σ semi-minor (km)", "99 % total ΔV (m/s)"], rows) + "\n")
+
+
 def _outcome_table(f: _Reader) -> str:
     return "\n\n" + table(["runs", "outcome", "ρ"], [_row(f, row) for row in OUTCOME_ROWS]) + "\n"
 
@@ -260,6 +283,12 @@ BLOCKS: dict[str, Renderer] = {
         _template("{iter.tracking.three_sigma_b_dot_r_sparse_dense_km[1]} km"),
     "tracking-dv99": _template("{iter.tracking.dv_total_99_m_s} m/s"),
     "mission-budget": _mission_budget,
+    "mars-tcms": _mars_tcms,
+    "mars-ellipse": _template("1σ {mars.ellipse_monte_carlo_km[0]} x "
+                              "{mars.ellipse_monte_carlo_km[1]} km Monte Carlo, "
+                              "{mars.ellipse_linear_km[0]} x {mars.ellipse_linear_km[1]} km "
+                              "linear"),
+    "mars-trade": _mars_trade,
     "search-trajectories": _template("{search.differenced.trajectories} and "
                                      "{search.analytic.trajectories}"),
     "search-dv": _search_dv,

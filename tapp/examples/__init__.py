@@ -18,8 +18,8 @@ guidance file (the tutorial's "Your own mission"). Its OEM and CSV are made by t
 (``scenarios/mission_example.py``; regenerating them is tested).
 
 ``mars/`` is an interplanetary cruise: a Mars 2028 transfer from the Earth departure, integrated
-about the Earth, the Sun and Mars in turn, DSN range, Doppler and ΔDOR for 229 days, four TCMs to the Mars B-plane,
-and a trade study (ΔDOR x DSN passes per week) on its simulated tape.
+about the Earth, the Sun and Mars in turn, DSN range, Doppler and ΔDOR for 229 days, four TCMs
+to the Mars B-plane, and a trade study (ΔDOR x DSN passes per week) on its simulated tape.
 """
 
 from __future__ import annotations
