@@ -514,6 +514,16 @@ def _mars(ex: _Extraction) -> None:
                 [_M_PER_KM * m["magnitude"]["mean_km_s"] for m in stats["manoeuvres"]], 3)
         ex.real(f"mars.ellipse_{method}_km", [stats["bplane_ellipse"]["semi_major_km"],
                                               stats["bplane_ellipse"]["semi_minor_km"]], 3)
+    # Check 5.5: the Monte Carlo's final miss against the linear covariance. A sample mean's
+    # z = mean / (σ/√N); a sample σ's z = (s/σ − 1) √(2N) (its standard error σ/√(2N) for
+    # a Gaussian miss): |z| < 5 for all six, a false alarm of ~6e-7 each.
+    n = guide["samples"]
+    sigma = np.sqrt(np.diag(lin["miss_cov"]))
+    z_mean = np.asarray(mc["miss_mean"]) / (sigma / np.sqrt(n))
+    z_sigma = (np.sqrt(np.diag(mc["miss_cov"])) / sigma - 1.0) * np.sqrt(2.0 * n)
+    ex.real("mars.miss_z_max", np.abs(np.concatenate([z_mean, z_sigma])).max(), 2)
+    ex.claim("Mars: TAPP II's Monte Carlo final miss (means, σ's) agrees with the linear "
+             "covariance, |z| < 5", np.all(np.abs(z_mean) < 5) and np.all(np.abs(z_sigma) < 5))
     tab = read_hdf5(ex.path("results/mars/trade/mars_trade.h5")).table
     ex.claim("Mars: every case of the trade study succeeds",
              np.all(tab.column("status") == int(CaseStatus.OK)))

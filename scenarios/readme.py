@@ -289,6 +289,8 @@ BLOCKS: dict[str, Renderer] = {
                               "{mars.ellipse_linear_km[0]} x {mars.ellipse_linear_km[1]} km "
                               "linear"),
     "mars-trade": _mars_trade,
+    "mars-miss-z": _template("{mars.miss_z_max}"),
+    "mars-miss-z-row": _template("{mars.miss_z_max}"),
     "search-trajectories": _template("{search.differenced.trajectories} and "
                                      "{search.analytic.trajectories}"),
     "search-dv": _search_dv,
