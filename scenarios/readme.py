@@ -231,6 +231,7 @@ def _search_miss(f: _Reader) -> str:
 BLOCKS: dict[str, Renderer] = {
     "numerics-digits": _template("about {tapp3.fewest_digits} digits on the deep-space run at "
                                  "and after day {tapp3.fewest_digits_from_day}"),
+    "mars-miss-z-row": _template("{mars.miss_z_max}"),
     "approx-stm-time": _template("about {approx_stm.elapsed_s} s"),
     "approx-stm-eccentric-rms": _template("{approx_stm.eccentric_first_rms}"),
     "approx-stm-noise-test": _noise_test,
@@ -288,9 +289,8 @@ BLOCKS: dict[str, Renderer] = {
                               "{mars.ellipse_monte_carlo_km[1]} km Monte Carlo, "
                               "{mars.ellipse_linear_km[0]} x {mars.ellipse_linear_km[1]} km "
                               "linear"),
-    "mars-trade": _mars_trade,
     "mars-miss-z": _template("{mars.miss_z_max}"),
-    "mars-miss-z-row": _template("{mars.miss_z_max}"),
+    "mars-trade": _mars_trade,
     "search-trajectories": _template("{search.differenced.trajectories} and "
                                      "{search.analytic.trajectories}"),
     "search-dv": _search_dv,
