@@ -82,6 +82,7 @@ from tapp.constants import (
 )
 from tapp.dynamics.atmosphere import density_kg_m3, drag_acceleration
 from tapp.dynamics.empirical import NAMES as EMPIRICAL_NAMES
+from tapp.dynamics.ephemeris_offsets import offset_bodies, offset_of
 from tapp.dynamics.manoeuvres import THRUST_NAMES
 from tapp.dynamics.radiation import srp_acceleration
 from tapp.dynamics.spec import ForceModel, check_surface_value
@@ -110,6 +111,9 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
             values[name] = 0.0
         elif name.startswith("GM_") and name[3:] in model.third_bodies:
             values[name] = GM_km3_s2[name[3:]]
+        elif (found := offset_of(name)) and (found[0] in model.third_bodies
+                                             or found[0] == model.center):
+            values[name] = 0.0  # an ephemeris offset, km (tapp.dynamics.ephemeris_offsets)
         elif name == "Cr" and model.srp:
             values[name] = model.surface.c_r
         elif name == "Cd" and model.drag:
@@ -127,8 +131,8 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
         else:
             raise InputError("model", "parameters",
                              f"GM, Jn, Cnm, Snm within {model.gravity.name}, GM_<third body>, "
-                             "Cr (with srp), Cd (with an atmosphere) or acc_R, acc_I, acc_C, "
-                             "acc_x, acc_y, acc_z", name)
+                             "dr_<third body>_x|y|z, Cr (with srp), Cd (with an atmosphere) or "
+                             "acc_R, acc_I, acc_C, acc_x, acc_y, acc_z", name)
     return values
 
 
@@ -287,12 +291,16 @@ def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mappin
     r_fixed, r2 = body_fixed_position(model, r, t, theta0, slow)
     u = central_potential(model, r_fixed, gm, field_coefficients(model, q), r2=r2)
     acc = ca.gradient(u, r)
+    # The spacecraft sees the bodies where their ephemeris offsets put them; the centre's own
+    # acceleration (the indirect term) is its ephemeris path's, which a constant offset does
+    # not change (tapp.dynamics.ephemeris_offsets).
+    seen = offset_bodies(r_bodies, q, model.center)
     for body in model.third_bodies:
         s = r_bodies[body]
-        d = r - s
+        d = r - seen[body]
         gm_b = q.get(f"GM_{body}", GM_km3_s2[body])
         acc = acc - gm_b * (d / ca.norm_2(d) ** 3 + s / ca.norm_2(s) ** 3)
-    return surface_acceleration(model, acc, r, v, q, r_bodies)
+    return surface_acceleration(model, acc, r, v, q, seen)
 
 
 def surface_acceleration(model: ForceModel, acc: ca.SX, r: ca.SX, v: ca.SX | None,

@@ -42,6 +42,7 @@ from tapp.dynamics.centres import (
     names_about,
 )
 from tapp.dynamics.compiled import METHODS, STATUS, CompiledPropagator, compiled_propagator
+from tapp.dynamics.ephemeris_offsets import offset_values, selector
 from tapp.dynamics.equations import (
     Equations,
     build_equations,
@@ -303,10 +304,13 @@ class Propagator:
         center = self.state_model.center
 
         def offset(centre: str, times: np.ndarray) -> np.ndarray:
-            """States (n, 6) of ``centre`` relative to the model's centre at ``times``."""
+            """States (n, 6) of ``centre`` relative to the model's centre at ``times``, its
+            ephemeris offset added (:mod:`tapp.dynamics.ephemeris_offsets`)."""
             if centre == center:
                 return np.zeros((times.size, 6))
-            return relative_state(centre, center, *tdb(times))
+            moved = relative_state(centre, center, *tdb(times))
+            moved[:, :3] += offset_values(values, centre)
+            return moved
 
         x_model, n_q = x0, len(self.params)
         phi0, s0 = np.eye(6), np.zeros((6, n_q))
@@ -333,10 +337,14 @@ class Propagator:
                 own = np.zeros((grid.size, 6, n_q))
                 columns = [j for j, n in enumerate(names) if n is not None]
                 own[:, :, columns] = traj.sensitivity
+                # the translations by the centre's offset: -E into the interval, +E out
+                e = selector(self.params, centre) if centre != center else np.zeros((6, n_q))
+                own += e
+                s_in = s0 - e
                 parts["stm"].append(accurate_stacked(traj.stm[:-1], phi0))
-                parts["sensitivity"].append(accurate_stacked(traj.stm[:-1], s0, own[:-1]))
+                parts["sensitivity"].append(accurate_stacked(traj.stm[:-1], s_in, own[:-1]))
                 phi0 = accurate_stacked(traj.stm[-1:], phi0)[0]
-                s0 = accurate_stacked(traj.stm[-1:], s0, own[-1:])[0]
+                s0 = accurate_stacked(traj.stm[-1:], s_in, own[-1:])[0]
         out = {key: np.concatenate(value) if value else None for key, value in parts.items()}
         return Trajectory(t_s, out["states"], out["stm"], out["sensitivity"], self.params,
                           steps, rhs, Events.join(events))

@@ -135,6 +135,7 @@ from tapp.dynamics import ForceModel, Propagator
 from tapp.dynamics.centres import CentreChange
 from tapp.dynamics.empirical import COMPONENTS
 from tapp.dynamics.ephemeris import tdb_reader
+from tapp.dynamics.ephemeris_offsets import offset_of
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.manoeuvres import KIND as EXECUTION
 from tapp.dynamics.manoeuvres import THRUST_NAMES, Burn
@@ -476,8 +477,9 @@ class Scenario:
         values.update(dict(self.dynamic_values))
         for name in self.dynamic:
             gm = name == "GM" or name.startswith("GM_")
-            out.append(Parameter(f"{name}_km3_s2" if gm else name, "km^3/s^2" if gm else "1",
-                                 "dynamic", values[name]))
+            unit = "km^3/s^2" if gm else "km" if offset_of(name) else "1"
+            suffix = {"km^3/s^2": "_km3_s2", "km": "_km", "1": ""}[unit]
+            out.append(Parameter(f"{name}{suffix}", unit, "dynamic", values[name]))
         for st in self.stations:
             out.extend(st.parameters())
         out.extend(Parameter(name, EOP_UNITS[name.split(".")[1]], EOP_KIND, 0.0)
@@ -834,6 +836,10 @@ def _dynamic(p: _Parser, par: ParametersTable, state_model: ForceModel
             default_parameters(state_model, (name,))
         except InputError as exc:
             raise InputError(p.source, f"parameters.dynamic[{i}]", exc.expected, name) from None
+        if (found := offset_of(name)) and found[0] in ("earth", state_model.center):
+            p.fail(f"parameters.dynamic[{i}]", "the ephemeris offset of a third body other than "
+                   "the Earth (the stations' frame) and the model's centre (the frame of every "
+                   "state)", name)
     chosen = []
     for name, value in par.values.items():
         if name not in par.dynamic:

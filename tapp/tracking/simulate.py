@@ -81,8 +81,10 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
 
    with G = ∂m/∂x(t_m) by central differences of the closed-form m (steps 1e-6 of |r|,
    |v| of the state the formulas take, target-relative for a B-plane, and of GM: truncation
-   ~1e-12, rounding ~1e-10 relative) and the direct term for the GM the
-   formulas use (the target's GM for a B-plane, the Earth's for elements). A B-plane's
+   ~1e-12, rounding ~1e-10 relative) and the direct terms: for the GM the formulas use (the
+   target's GM for a B-plane, the Earth's for elements), and for a B-plane target's ephemeris
+   offset dr_<body>_x|y|z (the state relative to the target is x − (s_B + δ_B): −G's position
+   columns; :mod:`tapp.dynamics.ephemeris_offsets`). A B-plane's
    reference pole is that of the fixed miss time t_m (``"body_equator"``: the body's IAU
    pole at the TDB of t_m, :meth:`tapp.targeting.program.BPlaneProgram.reference_pole`), the
    same for every differenced state: G is a partial w.r.t. the state at the fixed time t_m
@@ -104,6 +106,7 @@ from threadpoolctl import threadpool_limits
 
 from tapp.constants import C_LIGHT_km_s
 from tapp.dynamics import Propagator, Trajectory
+from tapp.dynamics.ephemeris_offsets import offset_of, offset_values
 from tapp.dynamics.events import Events
 from tapp.dynamics.forces import default_parameters
 from tapp.errors import InputError
@@ -705,6 +708,7 @@ def _miss_function(scenario: Scenario, gm_values: dict[str, float]
                                 Propagator(scenario.state_model), target=miss.body,
                                 reference=miss.reference, orientation=scenario.orientation)
         body = program.target_state(np.array([miss.t_s]))[0][0]
+        body[:3] += offset_values(gm_values, miss.body)  # its ephemeris offset, nominal 0
         pole = program.reference_pole(np.array([miss.t_s]))[0]  # fixed at t_m (module doc)
         entry = "entry_fpa_rad" in miss.quantities
 
@@ -798,6 +802,10 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
         column = 6 + scenario.dynamic.index(gm_name)
         big_b[:, column] += _difference(lambda q: f(x, float(q[0])), np.array([gm]),
                                         np.array([MISS_STEP * gm]), angles)[:, 0]
+    if miss.kind == "bplane":  # z = x - (s_B + δ_B): the body's ephemeris offset, -G E
+        for j, name in enumerate(scenario.dynamic):
+            if (found := offset_of(name)) and found[0] == miss.body:
+                big_b[:, 6 + j] -= g[:, found[1]]
     if forcing.names:
         first = scenario.n_o - len(forcing.names)  # the segment parameters come last
         big_b[:, first:] = arc.partials.rows(np.array([0]), g[None])[0]
