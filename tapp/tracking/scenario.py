@@ -35,8 +35,10 @@ ISO strings or TOML dates)::
                        area_to_mass_m2_kg, c_r, c_d, srp / var_srp, shadows /
                        var_shadows, atmosphere / var_atmosphere ("none", "exponential",
                        "harris_priester")
-    [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", "Cr", "Cd", ...]
-                       (tapp.dynamics.forces names), station_location = "cylindrical" |
+    [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", "Cr", "Cd", "dr_mars_x", ...]
+                       (tapp.dynamics.forces names; dr_<body>_x|y|z: a third body's
+                       ephemeris offset, km, not the Earth's: tapp.dynamics.ephemeris_offsets),
+                       station_location = "cylindrical" |
                        "ecef" | "none", station_biases = ["range", "range_rate",
                        "doppler"],
                        media = ["troposphere", "ionosphere"] (each station's zenith
@@ -538,8 +540,9 @@ class ParametersTable(Schema):
 
     dynamic: Annotated[list[str], Unique] = Field(
         [], description="Model parameters in q: \"GM\", \"GM_moon\" (a third body's), "
-        "\"J2\", \"C22\", \"S22\", ... of the state model, \"Cr\" (with model.srp) and "
-        "\"Cd\" (with a model.atmosphere).")
+        "\"J2\", \"C22\", \"S22\", ... of the state model, \"Cr\" (with model.srp), "
+        "\"Cd\" (with a model.atmosphere) and \"dr_mars_x\", \"dr_mars_y\", \"dr_mars_z\" "
+        "(a third body's ephemeris offset, km, ICRF; not the Earth's).")
     station_location: LocationMode = Field("none", description=_LOCATION)
     station_biases: Annotated[list[BiasKind], Unique] = Field([], description=_BIASES)
     media: Annotated[list[Literal[MEDIA_EFFECTS]], Unique] = Field(  # type: ignore[valid-type]
