@@ -46,11 +46,12 @@ interval's own propagation (zero at b_k),
     S(t) = \\Phi_k(t, b_k)\\,S(b_k) + S_k(t),
 
 exactly, the columns of S_k matched by :func:`names_about` (the model's ``GM`` is the interval
-about K's ``GM_<C>``, the model's ``GM_<K>`` its ``GM``). The ephemeris enters only through the
-translations and the bodies' positions relative to K; tapp has no ephemeris parameters, so no
-partials with respect to the ephemeris are formed (an offset δ of K's ephemeris would give −I
-at b_k and +I at each output, plus its effect, through ∂a/∂s_j, on the positions of the
-other bodies relative to K: no simple ±I).
+about K's ``GM_<C>``, the model's ``GM_<K>`` its ``GM``). The ephemeris enters through the
+translations and the bodies' positions relative to K. With an ephemeris offset δ_K of K
+among the parameters (:mod:`tapp.dynamics.ephemeris_offsets`) the translations move by it:
+S enters K's interval as S(b_k) − E_K and leaves each output as ... + E_K (E_K the identity
+in the position rows of δ_K's columns), and on the interval the other bodies sit at
+s_j/K + δ_j − δ_K as the spacecraft sees them (S_k carries that through ∂a/∂s_j).
 
 Parameters whose force follows the orbit about the centre (empirical accelerations in RIC
 axes, a finite burn's thrust in RIC or VNB axes: :mod:`tapp.dynamics.empirical`,
