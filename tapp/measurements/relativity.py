@@ -64,7 +64,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -135,6 +135,14 @@ def shapiro_delay_s(r_i_km, r_j_km, body_i_km, body_j_km, mu_km3_s2: float,
 
 
 @dataclass(frozen=True, slots=True)
+class _Nodes:
+    """Joined day tables of one body: the first day's index and the (n, 6) nodes."""
+
+    first: int
+    table: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
 class Relativity:
     """The relativistic light-time model of one scenario (module docstring).
 
@@ -155,6 +163,8 @@ class Relativity:
     ut_minus_tt_s: float
     bodies: tuple[str, ...] = SHAPIRO_BODIES
     gamma: float = GAMMA_PPN
+    #: Per body, the last span of day tables joined (:meth:`_body_nodes`): a cache.
+    _spans: dict = field(default_factory=dict, compare=False, repr=False)
 
     @classmethod
     def at(cls, epoch: Epoch, bodies: tuple[str, ...] = SHAPIRO_BODIES) -> Relativity:
@@ -223,38 +233,56 @@ class Relativity:
         return np.stack([d_u * c - d_lon * s_ / u, d_u * s_ + d_lon * c / u,
                          d_v * np.ones_like(d_u)], axis=-1)
 
-    def body_state(self, body: str, t_s, tdb_minus_tt_s):
-        """Return the barycentric state (N, 6) of ``body`` at TDB = TT(t_s) + tdb_minus_tt_s:
-        DE421 (jplephem) interpolated by cubic Hermite polynomials on its positions and
-        velocities every :data:`BODY_STEP_s`, tables computed once per day and body (the
-        light-time solution asks for five bodies' states ~10 times per sample)."""
+    def body_state(self, body: str, t_s, tdb_minus_tt_s, *, velocity: bool = True):
+        """Return the barycentric state (N, 6) of ``body`` at TDB = TT(t_s) + tdb_minus_tt_s
+        (its position (N, 3) alone with ``velocity=False``): DE421 (jplephem) interpolated
+        by cubic Hermite polynomials on its positions and velocities every
+        :data:`BODY_STEP_s`, tables computed once per day and body (the light-time solution
+        asks for the bodies' positions ~10 times per sample)."""
         x = (np.asarray(t_s, dtype=float) + tdb_minus_tt_s) / BODY_STEP_s
         x = np.atleast_1d(x)
         n = np.floor(x).astype(np.int64)
-        first, last = int(n.min()) // BODY_BLOCK, (int(n.max()) + 1) // BODY_BLOCK
-        nodes = np.concatenate([_body_block(body, *self.tt0_jd, b)
-                                for b in range(first, last + 1)])
-        i = n - first * BODY_BLOCK
+        nodes = self._body_nodes(body, int(n.min()) // BODY_BLOCK,
+                                 (int(n.max()) + 1) // BODY_BLOCK)
+        i = n - nodes.first * BODY_BLOCK
         s = (x - n)[:, None]
         h = BODY_STEP_s
-        p0, p1 = nodes[i, :3], nodes[i + 1, :3]
-        m0, m1 = h * nodes[i, 3:], h * nodes[i + 1, 3:]
-        s2, s3 = s * s, s * s * s
-        step = p1 - p0  # exact for neighbouring nodes: one rounding of p0's size in all
+        a, b = nodes.table[i], nodes.table[i + 1]
+        p0, m0, m1 = a[:, :3], h * a[:, 3:], h * b[:, 3:]
+        s2 = s * s
+        s3 = s2 * s
+        step = b[:, :3] - p0  # exact for neighbouring nodes: one rounding of p0's size in all
         position = p0 + ((3 * s2 - 2 * s3) * step + (s3 - 2 * s2 + s) * m0 + (s3 - s2) * m1)
-        velocity = ((6 * s - 6 * s2) * step + (3 * s2 - 4 * s + 1) * m0
-                    + (3 * s2 - 2 * s) * m1) / h
-        return np.concatenate([position, velocity], axis=-1)
+        if not velocity:
+            return position
+        rate = ((6 * s - 6 * s2) * step + (3 * s2 - 4 * s + 1) * m0 + (3 * s2 - 2 * s) * m1) / h
+        return np.concatenate([position, rate], axis=-1)
 
-    def delay_s(self, r_i_km, t_i_s, dtdb_i_s, r_j_km, t_j_s, dtdb_j_s):
-        """Return RLT_ij summed over ``bodies``, s, (N,): ends at scenario times t_i, t_j with
-        their TDB - TT."""
+    def _body_nodes(self, body: str, first: int, last: int) -> _Nodes:
+        """The nodes of ``body``'s day tables ``first`` ... ``last``, joined once per span
+        (the last span asked is kept: the light-time iterations ask for the same one)."""
+        key = (body, first, last)
+        cached = self._spans.get(body)
+        if cached is None or cached[0] != key:
+            table = np.concatenate([_body_block(body, *self.tt0_jd, b)
+                                    for b in range(first, last + 1)])
+            cached = (key, _Nodes(first, table))
+            self._spans[body] = cached
+        return cached[1]
+
+    def bodies_at(self, t_s, tdb_minus_tt_s) -> tuple[np.ndarray, ...]:
+        """The barycentric positions (N, 3) of :attr:`bodies` at scenario times t_s (the
+        ends of a leg, for :meth:`delay_s`)."""
+        return tuple(self.body_state(body, t_s, tdb_minus_tt_s, velocity=False)
+                     for body in self.bodies)
+
+    def delay_s(self, r_i_km, bodies_i, r_j_km, bodies_j):
+        """Return RLT_ij summed over :attr:`bodies`, s, (N,): ends r_i, r_j with the bodies'
+        positions at each end's time (:meth:`bodies_at`)."""
         total = 0.0
-        for body in self.bodies:
-            total = total + shapiro_delay_s(
-                r_i_km, r_j_km, self.body_state(body, t_i_s, dtdb_i_s)[..., :3],
-                self.body_state(body, t_j_s, dtdb_j_s)[..., :3], GM_km3_s2[body], self.gamma,
-                sun=body == "sun")
+        for body, b_i, b_j in zip(self.bodies, bodies_i, bodies_j, strict=True):
+            total = total + shapiro_delay_s(r_i_km, r_j_km, b_i, b_j, GM_km3_s2[body],
+                                            self.gamma, sun=body == "sun")
         return total
 
     def solve(self, t_s, state_eci, light_time: LightTime, r_receive_ecef_km,
@@ -288,18 +316,19 @@ class Relativity:
         station3 = station_state_eci(r_receive_ecef_km, orientation.attitude(t3))
         earth3 = self.body_state("earth", t3, dt3)
         r3 = earth3[..., :3] + station3[..., :3]
+        bodies3 = self.bodies_at(t3, dt3)  # the receive end: fixed while tau_down is sought
 
-        def bounce(tau):
+        def bounce(tau, velocity=True):
             t2 = t3 - tau
             dt2 = self.tdb_minus_tt_s(t2)
-            earth2 = self.body_state("earth", t2, dt2)
+            earth2 = self.body_state("earth", t2, dt2, velocity=velocity)
             return t2, dt2, earth2, light_time.spacecraft_state(t3, x, tau)
 
         def down(tau):
-            t2, dt2, earth2, sc = bounce(tau)
-            r2 = earth2[..., :3] + sc[..., :3]
+            t2, dt2, earth2, sc = bounce(tau, velocity=False)
+            r2 = earth2 + sc[..., :3]
             return (np.linalg.norm(r2 - r3, axis=-1) + C_LIGHT_km_s * (
-                self.delay_s(r2, t2, dt2, r3, t3, dt3) + dt2 - dt3))
+                self.delay_s(r2, self.bodies_at(t2, dt2), r3, bodies3) + dt2 - dt3))
 
         # The barycentric positions' rounding, below which the iterates only wander.
         floor_s = LIGHT_TIME_REL_TOL * np.linalg.norm(r3, axis=-1) / C_LIGHT_km_s
@@ -316,17 +345,19 @@ class Relativity:
         if not light_time.two_way:
             return LightTimeSolution(tau_d, np.zeros_like(tau_d), spacecraft, receive, receive)
 
-        def transmit(tau_u):
+        bodies2 = self.bodies_at(t2, dt2)  # the bounce: fixed while tau_up is sought
+
+        def transmit(tau_u, velocity=True):
             t1 = t2 - tau_u
             dt1 = self.tdb_minus_tt_s(t1, r_transmit_ecef_km)
             station1 = station_state_eci(r_transmit_ecef_km, orientation.attitude(t1))
-            return t1, dt1, station1, self.body_state("earth", t1, dt1)
+            return t1, dt1, station1, self.body_state("earth", t1, dt1, velocity=velocity)
 
         def up(tau_u):
-            t1, dt1, station1, earth1 = transmit(tau_u)
-            r1 = earth1[..., :3] + station1[..., :3]
+            t1, dt1, station1, earth1 = transmit(tau_u, velocity=False)
+            r1 = earth1 + station1[..., :3]
             return (np.linalg.norm(r2 - r1, axis=-1) + C_LIGHT_km_s * (
-                self.delay_s(r1, t1, dt1, r2, t2, dt2) + dt1 - dt2))
+                self.delay_s(r1, self.bodies_at(t1, dt1), r2, bodies2) + dt1 - dt2))
 
         tau_u = iterate_light_time(up, tau_d, "up", floor_s)
         _, _, station1, earth1 = transmit(tau_u)
