@@ -32,7 +32,7 @@ from tapp.guidance.guidefile import GuideFile
 from tapp.guidance.study import GuidanceResult, check_samples, check_seed, guidance_study
 from tapp.io.outputs import check_new_directory, new_directory
 from tapp.io.schema import validate
-from tapp.io.tape.t13_hdf5 import read_t13, t13_file_writer
+from tapp.io.tape.t13_hdf5 import t13_file_writer
 from tapp.io.tape.t32_hdf5 import read_t32, t32_file_writer
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
 from tapp.pipeline.steps import process_tape
@@ -153,9 +153,9 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
             f"TAPP I: {stage}", done, total))
         t13_path = work / OUTPUTS["t13"]
         t13_file_writer(sim.tape, source=t13_path.name)(t13_path)
-        pairs, warnings = sim.tape.pairs, sim.warnings
+        warnings = sim.warnings
     else:
-        t13_path, pairs, warnings = t13, read_t13(t13, raw=False).pairs, ()
+        t13_path, warnings = t13, ()
     wall["simulate"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -183,6 +183,7 @@ def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: boo
 
     (work / OUTPUTS["guide_json"]).write_text(json.dumps(guidance_dict(guidance)), "utf-8")
     (work / OUTPUTS["guide_md"]).write_text(guidance_markdown(guidance), "utf-8")
+    pairs = header.pairs  # the tape's, as TAPP III read it
     observations = int(pairs.n_obs.sum())
     write_report(work, pipeline, run, header, content, guidance, observations, wall, plots)
     return PipelineResult(work, observations,
