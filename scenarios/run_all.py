@@ -81,8 +81,8 @@ def propagation_demo() -> None:
     out = RESULTS / "propagate"
     out.mkdir(parents=True, exist_ok=True)
     for stm in ("J2", "J0"):
-        cmd = [sys.executable, "-m", "tapp.cli", "propagate", "--orbit", "SATORB2", "--hours",
-               "24", "--step", "60", "--truth", "J2", "--stm", stm, "--json", "-"]
+        cmd = [sys.executable, "-m", "tapp.cli", "propagate", "--orbit", "SATORB2", "--arc",
+               "24h", "--step", "60s", "--truth", "J2", "--stm", stm, "--json", "-"]
         proc = subprocess.run(cmd, capture_output=True, text=True, check=True)
         (out / f"satorb2_J2_{stm}.json").write_text(proc.stdout)
     print(f"propagation demo -> {out}")

@@ -467,9 +467,9 @@ OPTION_VALUES = ("nan", "inf", "-inf", "0", "-0.0", "-1", "1e-308", "1e308", "-1
 
 #: (command, fast base arguments, numeric options, documented numerical codes)
 OPTION_CASES = [
-    (["propagate", "--orbit", "SATORB1", "--hours", "1", "--step", "600"],
-     ("--hours", "--step", "--tol"), frozenset()),
-    (["rsig", "--orbit", "SATORB1", "--hours", "2", "--step", "600"], ("--hours", "--step"),
+    (["propagate", "--orbit", "SATORB1", "--arc", "1h", "--step", "600s"],
+     ("--arc", "--step", "--hours", "--tol"), frozenset()),
+    (["rsig", "--orbit", "SATORB1", "--span", "2h", "--step", "600s"], ("--span", "--step"),
      frozenset()),
     (["dc", "--orbit", "SATORB1", "--arc", "2h"], ("--max-iter", "--seed"),
      frozenset({3, 4, 5, 6})),

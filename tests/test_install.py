@@ -135,10 +135,10 @@ def test_the_console_script_reads_the_shipped_study(console) -> None:
 COMMANDS = {
     "info": (["info"], "DE421 ephemeris", None),
     "schema": (["schema", "scenario"], '"var_gravity"', None),
-    "propagate": (["propagate", "--orbit", "SATORB1", "--hours", "1", "--step", "600",
+    "propagate": (["propagate", "--orbit", "SATORB1", "--arc", "1h", "--step", "600s",
                    "--json", "-"], '"stm"', None),
     "ekf": (["ekf", "--orbit", "SATORB1", "--arc", "2h"], "max|O-C| range", None),
-    "rsig": (["rsig", "--orbit", "SATORB1", "--hours", "2", "--step", "600", "--stm", "J0"],
+    "rsig": (["rsig", "--orbit", "SATORB1", "--span", "2h", "--step", "600s", "--stm", "J0"],
              "R(t) SATORB1", None),
     "simulate": (["simulate", "ex/tapp1_table_d1.toml", "-o", "d1.t13.h5"], "n_o = 29",
                  "d1.t13.h5"),

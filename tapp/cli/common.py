@@ -58,16 +58,16 @@ observation) are one line each on stderr, ``warning: SOURCE: FIELD: what`` like 
 last, once its outputs are written, so that a failed run's one line is its error.
 
 Limits checked before allocating: output grids of at most :data:`MAX_GRID_SAMPLES` samples
-(``--hours``/``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES`` cases (the product of
-the loops' ``sets``), TAPP II Monte Carlos of ``tapp.guidance.study.MIN_SAMPLES`` to
-``MAX_SAMPLES`` samples, SEARCH scans of at most ``tapp.targeting.program.MAX_SCAN_STEPS``
-steps, local Dask clusters of at most ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core
-(no limit with ``--scheduler``), TOML files of at most ``iter.inputfile.MAX_TOML_BYTES``
-(4 MiB), TDM and CSV observation files of ``tapp.io.obsfile.MAX_TEXT_BYTES`` (64 MiB), EOP
-tables of ``tapp.frames.eop.MAX_EOP_BYTES`` (16 MiB), TAPP III decks of at most
-``tapp.processor.deck.MAX_COMMANDS`` commands a list and runs of at most ``MAX_ENTITIES``
-output entities and ``MAX_ENTITY_NUMBERS`` numbers in them; each message gives the size that
-would be needed and the option or field to change.
+(``--arc`` or ``--span`` with ``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES``
+cases (the product of the loops' ``sets``), TAPP II Monte Carlos of
+``tapp.guidance.study.MIN_SAMPLES`` to ``MAX_SAMPLES`` samples, SEARCH scans of at most
+``tapp.targeting.program.MAX_SCAN_STEPS`` steps, local Dask clusters of at most
+``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (no limit with ``--scheduler``), TOML
+files of at most ``iter.inputfile.MAX_TOML_BYTES`` (4 MiB), TDM and CSV observation files of
+``tapp.io.obsfile.MAX_TEXT_BYTES`` (64 MiB), EOP tables of ``tapp.frames.eop.MAX_EOP_BYTES``
+(16 MiB), TAPP III decks of at most ``tapp.processor.deck.MAX_COMMANDS`` commands a list and
+runs of at most ``MAX_ENTITIES`` output entities and ``MAX_ENTITY_NUMBERS`` numbers in them;
+each message gives the size that would be needed and the option or field to change.
 
 Conventions of every command: ``--json PATH`` writes the command's results as one JSON
 object to PATH, with the other outputs (all or none), and ``--json -`` prints it on

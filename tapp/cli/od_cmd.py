@@ -49,7 +49,6 @@ CSV, or a CCSDS TDM in KVN (``.tdm``; :mod:`tapp.io.obsfile`, :mod:`tapp.io.ccsd
 from __future__ import annotations
 
 import math
-import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -65,9 +64,15 @@ from tapp.cli.common import (
     grid_samples,
     json_file,
     nonnegative_option,
-    positive_option,
     run_guarded,
     seed_option,
+)
+from tapp.cli.durations import (
+    DURATION_FORMS,
+    parse_duration_s,
+    span_option,
+    step_option,
+    warn_deprecated,
 )
 from tapp.errors import InputError, TooFewMeasurementsError
 
@@ -81,11 +86,6 @@ if TYPE_CHECKING:
     from tapp.od.rate import PredictedRate
     from tapp.od.setup import Study
 
-#: A duration: a positive number and its unit (s, m, h or d), as ``--arc`` takes it.
-_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([smhd])\s*$")
-_UNIT_S = {"s": 1.0, "m": 60.0, "h": 3600.0, "d": 86400.0}
-#: The forms a duration is written in, as the error message shows them.
-DURATION_FORMS = "24h, 90m, 3600s, 2d"
 _APRIORI_KEYS = ("sx", "sy", "sz", "svx", "svy", "svz")
 #: Exit codes of ``tapp dc`` per outcome (module docstring); its output is still printed.
 EXIT_DIVERGED = 3
@@ -102,28 +102,6 @@ ScenarioOpt = Annotated[Path | None, typer.Option(
     help="Study scenario file [default: the shipped approx_stm.toml].")]
 SubsurfaceOpt = Annotated[bool, typer.Option(
     "--allow-subsurface", help="Accept an orbit whose perigee is below the Earth's surface.")]
-
-
-def parse_duration_s(text: str, option: str = "--arc") -> float:
-    """Return a duration in seconds from a number and its unit: '24h', '90m', '3600s', '2d'.
-
-    A number without a unit is refused: hours, minutes and seconds are all in use, and
-    the unit a reader assumes is not always the one meant.
-
-    >>> parse_duration_s("1.5d")
-    129600.0
-    >>> parse_duration_s("24")
-    Traceback (most recent call last):
-    ...
-    tapp.errors.InputError: --arc: value: expected a duration with a unit: 24h, 90m, 3600s, \
-2d (got '24')
-    """
-    m = _DURATION.match(text)
-    if m is None:
-        raise InputError(option, "value", f"a duration with a unit: {DURATION_FORMS}", text)
-    if not float(m.group(1)) > 0:
-        raise InputError(option, "value", f"a duration > 0 with a unit: {DURATION_FORMS}", text)
-    return float(m.group(1)) * _UNIT_S[m.group(2)]
 
 
 def _short_arc(exc: TooFewMeasurementsError, data: Observations, arc: str
@@ -561,8 +539,12 @@ def rsig(
     orbit: OrbitOpt,
     truth: TruthOpt = "J2",
     stm: StmOpt = "J2",
-    hours: Annotated[float, typer.Option(help="Span, hours (> 0).")] = 48.0,
-    step: Annotated[float, typer.Option(help="Output step, s (> 0).")] = 300.0,
+    span: Annotated[str | None, typer.Option(
+        help=f"Span with its unit: {DURATION_FORMS} [default: 48h].")] = None,
+    step: Annotated[str, typer.Option(help=f"Output step with its unit: {DURATION_FORMS}.")]
+    = "300s",
+    hours: Annotated[float | None, typer.Option(
+        help="Span, hours (deprecated: --span 48h).", hidden=True)] = None,
     scenario: ScenarioOpt = None,
     allow_subsurface: SubsurfaceOpt = False,
     earth_orientation: EarthOrientationOpt = None,
@@ -581,14 +563,14 @@ def rsig(
 
         path = _scenario(scenario)
         check_paths({"--scenario": path}, {"--json": json_file(json_out)})
-        span_s = positive_option("--hours", hours) * 3600.0
-        dt = positive_option("--step", step)
-        check_grid_size("--hours/--step", grid_samples(span_s, dt))
+        span_s = span_option("--span", span, hours, "48h")
+        dt = step_option(step)
+        check_grid_size("--span/--step", grid_samples(span_s, dt))
         study, orient = _read(path, earth_orientation)
         x_true = setup.true_orbit(orbit, study, allow_subsurface=allow_subsurface)
         prop = _model_pair(truth, stm, orient)
         t = np.arange(0.0, span_s + 0.5 * dt, dt)
-        orient.check_covers(t[[0, -1]], "--hours")
+        orient.check_covers(t[[0, -1]], "--span")
         sig = r_signature(prop, x_true, t, orient)
         used = setup.orientation_record(orient, t)
         with delivering(json_out, {"t_s": sig.t_s, "R": sig.r, "earth_orientation": used}
@@ -602,5 +584,6 @@ def rsig(
                 console = Console(width=80)
                 console.print(table)
                 console.print(f"Earth orientation: {setup.describe_orientation(used)}")
+        warn_deprecated("--span", hours, step)
 
     run_guarded(body)

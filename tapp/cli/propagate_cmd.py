@@ -17,9 +17,9 @@ from tapp.cli.common import (
     earth_orientation_option,
     grid_samples,
     json_file,
-    positive_option,
     run_guarded,
 )
+from tapp.cli.durations import DURATION_FORMS, span_option, step_option, warn_deprecated
 from tapp.errors import InputError
 
 
@@ -50,8 +50,10 @@ def _method(name: str) -> str:
 def propagate(
     orbit: Annotated[str, typer.Option(help="a=..,e=..,i=..,raan=..,argp=..,M=.. (km, deg), "
                                        "x=..,..,vz=.. (km, km/s) or an orbit name")],
-    hours: Annotated[float, typer.Option(help="Arc length, hours (> 0).")] = 24.0,
-    step: Annotated[float, typer.Option(help="Output step, seconds (> 0).")] = 60.0,
+    arc: Annotated[str | None, typer.Option(
+        help=f"Arc length with its unit: {DURATION_FORMS} [default: 24h].")] = None,
+    step: Annotated[str, typer.Option(help=f"Output step with its unit: {DURATION_FORMS}.")]
+    = "60s",
     truth: Annotated[str, typer.Option(help="State model: J0, Jn or NxM.")] = "J2",
     stm: Annotated[str, typer.Option(help="Variational model: J0, Jn or NxM.")] = "J2",
     third_body: Annotated[list[str] | None, typer.Option(
@@ -71,6 +73,8 @@ def propagate(
         "--allow-subsurface", help="Accept an orbit whose perigee is below the Earth's "
         "surface.")] = False,
     earth_orientation: EarthOrientationOpt = None,
+    hours: Annotated[float | None, typer.Option(
+        help="Arc length, hours (deprecated: --arc 24h).", hidden=True)] = None,
 ) -> None:
     """Propagate an Earth orbit with its state transition matrix (GCRS, km, km/s)."""
 
@@ -90,9 +94,9 @@ def propagate(
 
         check_paths({"--scenario": scenario}, {"--json": json_file(json_out)})
         x0 = parse_orbit(orbit, scenario=scenario, allow_subsurface=allow_subsurface)
-        arc_s = positive_option("--hours", hours) * 3600.0
-        dt = positive_option("--step", step)
-        check_grid_size("--hours/--step", grid_samples(arc_s, dt))
+        arc_s = span_option("--arc", arc, hours, "24h")
+        dt = step_option(step)
+        check_grid_size("--arc/--step", grid_samples(arc_s, dt))
         bodies = _third_bodies(third_body or [])
         ep = parse_epoch(epoch, source="--epoch")
         model = earth_orientation_option(earth_orientation) or "iau2006"
@@ -106,17 +110,17 @@ def propagate(
         if bodies:
             check_coverage(utc_to_tdb_jd(ep.jd, source="--epoch"),
                            np.array([0.0, arc_s]) / SECONDS_PER_DAY,
-                           source="--epoch/--hours", field="arc")
+                           source="--epoch/--arc", field="arc")
         t = np.append(np.arange(0.0, arc_s, dt), arc_s)
         start = time.perf_counter()
-        orientation.check_covers(np.array([0.0, arc_s]), "--epoch/--hours")
+        orientation.check_covers(np.array([0.0, arc_s]), "--epoch/--arc")
         traj = prop.propagate(x0, t, epoch_jd_utc=ep.jd, orientation=orientation)
         elapsed = time.perf_counter() - start
         with delivering(json_out, {"t_s": traj.t_s, "state": traj.states, "stm": traj.stm}
                         ) as report:
             if report:
-                table = Table(title=f"{orbit}: truth {truth}, STM {stm}, {hours:g} h, Earth "
-                              f"orientation {model}")
+                table = Table(title=f"{orbit}: truth {truth}, STM {stm}, "
+                              f"{arc_s / 3600.0:g} h, Earth orientation {model}")
                 for col in ("t (s)", "x (km)", "y (km)", "z (km)", "vx (km/s)", "vy (km/s)",
                             "vz (km/s)", "|Φ|max"):
                     table.add_column(col, justify="right")
@@ -127,5 +131,6 @@ def propagate(
                 console.print(table)
                 console.print(f"{method}: {traj.steps} steps, {traj.rhs_evaluations} RHS "
                               f"evaluations, {elapsed * 1e3:.1f} ms")
+        warn_deprecated("--arc", hours, step)
 
     run_guarded(body)

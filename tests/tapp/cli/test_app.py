@@ -161,7 +161,7 @@ def test_the_old_json_flag_is_refused_naming_the_new_form(args: list[str], got: 
 
 
 def test_json_to_a_file_keeps_the_report_and_equals_json_on_standard_output(tmp_path: Path):
-    args = ["propagate", "--orbit", "SATORB1", "--hours", "0.1", "--step", "120"]
+    args = ["propagate", "--orbit", "SATORB1", "--arc", "0.1h", "--step", "120s"]
     to_file = runner.invoke(app, [*args, "--json", str(tmp_path / "p.json")])
     to_stdout = runner.invoke(app, [*args, "--json", "-"])
     assert to_file.exit_code == 0 and to_stdout.exit_code == 0, to_file.output

@@ -191,9 +191,9 @@ def test_a_run_removes_no_folder_that_is_not_provably_a_killed_run_s(tmp_path: P
 
 
 @pytest.mark.parametrize(("args", "says"), [
-    (["propagate", "--orbit", "SATORB1", "--hours", "1e308"], "--hours/--step"),
-    (["propagate", "--orbit", "SATORB1", "--step", "1e-9"], "it would need 8.64e+13"),
-    (["rsig", "--orbit", "SATORB1", "--hours", "1e308"], "at most 1,000,000 output samples"),
+    (["propagate", "--orbit", "SATORB1", "--arc", "1e300h"], "--arc/--step"),
+    (["propagate", "--orbit", "SATORB1", "--step", "1e-9s"], "it would need 8.64e+13"),
+    (["rsig", "--orbit", "SATORB1", "--span", "1e300h"], "at most 1,000,000 output samples"),
     (["propagate", "--orbit", "SATORB1", "--third-body", "moon", "--epoch", "2060-01-01",
       "--earth-orientation", "gmst"],
      "DE421's coverage 1899-07-29T00:00:00 TDB .. 2053-10-09T00:00:00 TDB"),
@@ -207,7 +207,7 @@ def test_a_run_removes_no_folder_that_is_not_provably_a_killed_run_s(tmp_path: P
     (["ekf", "--orbit", "SATORB1", "--process-noise", "-1"], "error: --process-noise:"),
     (["ekf", "--orbit", "SATORB1", "--process-noise", "nan"], "error: --process-noise:"),
     (["iter", str(SWEEP), "--workers", "1000000"], "--workers: expected at most"),
-    (["propagate", "--orbit", "SATORB1", "--hours", "abc"], "'--hours'"),
+    (["propagate", "--orbit", "SATORB1", "--arc", "abc"], "--arc: value: expected a duration"),
     (["dc", "--orbit", "SATORB1", "--max-iter", "0"], "error: --max-iter:"),
     # the option at fault is named, not the file or the library's field
     (["dc", "--orbit", "SATORB1", "--stations", "NOWHERE"], "error: --stations: name:"),

@@ -17,7 +17,7 @@ from scipy.stats import chi2
 from typer.testing import CliRunner
 
 from tapp.cli import app
-from tapp.cli.od_cmd import parse_duration_s
+from tapp.cli.durations import parse_duration_s
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.io.obsfile import read_observations, write_observations
 from tapp.io.stations_file import load_stations
@@ -137,7 +137,7 @@ def test_ekf_and_rsig_json_shapes() -> None:
     assert len(out["passes"]) == len(out["max_abs_residual_per_pass"]) > 0
     assert set(out["max_abs_residual_per_pass"][0]) == {"range_m", "range_rate_mm_s"}
     res = runner.invoke(app, ["rsig", "--orbit", "SATORB1", "--truth", "J0", "--stm", "J0",
-                              "--hours", "2", "--step", "600", "--json", "-"])
+                              "--span", "2h", "--step", "600s", "--json", "-"])
     out = json.loads(res.stdout)
     assert len(out["t_s"]) == len(out["R"]) == 13
     assert out["R"][0] == pytest.approx(np.sqrt(3.0))  # Φ(t0) = I: three unit entries
@@ -152,7 +152,7 @@ def test_ekf_and_rsig_json_shapes() -> None:
     (["ekf", "--orbit", "SATORB1", "--apriori", "7"], "--apriori"),
     (["ekf", "--orbit", "SATORB1", "--apriori", "sx=1,sy=1,sz=1,svx=0,svy=1,svz=1"],
      "--apriori"),
-    (["rsig", "--orbit", "SATORB1", "--hours", "0"], "--hours"),
+    (["rsig", "--orbit", "SATORB1", "--span", "0h"], "--span"),
 ])
 def test_bad_input_one_line_nonzero_exit(args: list[str], option: str) -> None:
     res = runner.invoke(app, args)
@@ -318,7 +318,7 @@ def test_the_study_file_runs_gmst_and_the_outputs_say_so() -> None:
 
 
 @pytest.mark.parametrize("command", [
-    ["dc", "--arc", "12h"], ["ekf", "--arc", "3h"], ["rsig", "--hours", "2", "--step", "600"]])
+    ["dc", "--arc", "12h"], ["ekf", "--arc", "3h"], ["rsig", "--span", "2h", "--step", "600s"]])
 def test_earth_orientation_option_overrides_the_file(command: list[str]) -> None:
     """--earth-orientation iau2006 on every OD command: the data (dc, ekf) are simulated and
     fitted under iau2006 and the JSON records the model and the EOP source; the DC still
@@ -371,7 +371,7 @@ def test_an_epoch_outside_the_eop_table_is_refused(tmp_path: Path) -> None:
     naming the file, the epoch and the way out (eop = "none")."""
     path = _study(tmp_path, 'epoch = "2026-01-01T00:00:00"', 'epoch = "2060-01-01T00:00:00"')
     gmst = runner.invoke(app, ["rsig", "--orbit", "SATORB1", "--scenario", str(path),
-                               "--hours", "1"])
+                               "--span", "1h"])
     assert gmst.exit_code == 0, gmst.output
     save = ["--save-obs", str(tmp_path / "obs.h5")]
     line = _refused(["dc", "--orbit", "SATORB1", "--scenario", str(path),
@@ -391,7 +391,7 @@ def test_an_epoch_outside_the_eop_table_is_refused(tmp_path: Path) -> None:
     no_eop = tmp_path / "in_file" / "no_eop.toml"
     no_eop.write_text(in_file.read_text().replace('eop = "iers"', 'eop = "none"'))
     res = runner.invoke(app, ["rsig", "--orbit", "SATORB1", "--scenario", str(no_eop),
-                              "--hours", "1", "--json", "-"])
+                              "--span", "1h", "--json", "-"])
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["earth_orientation"]["eop"].startswith("none")
 

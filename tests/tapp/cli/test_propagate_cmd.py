@@ -16,7 +16,7 @@ runner = CliRunner()
 
 def test_json_output_has_grid_states_and_stm() -> None:
     result = runner.invoke(app, ["propagate", "--orbit", "a=6550.524,e=0,i=30,raan=0,argp=0,M=0",
-                                 "--hours", "1", "--step", "600", "--truth", "J2", "--stm", "J0",
+                                 "--arc", "1h", "--step", "600s", "--truth", "J2", "--stm", "J0",
                                  "--json", "-"])
     assert result.exit_code == 0, result.output
     out = json.loads(result.stdout)
@@ -32,7 +32,7 @@ def test_json_output_has_grid_states_and_stm() -> None:
 
 
 def test_method_option_selects_the_integrator_and_both_agree() -> None:
-    base = ["propagate", "--orbit", "SATORB7", "--hours", "2", "--step", "600", "--json", "-"]
+    base = ["propagate", "--orbit", "SATORB7", "--arc", "2h", "--step", "600s", "--json", "-"]
     dop = runner.invoke(app, base)
     rkn = runner.invoke(app, [*base, "--method", "rkn12"])
     assert dop.exit_code == 0 and rkn.exit_code == 0, rkn.output
@@ -44,10 +44,10 @@ def test_method_option_selects_the_integrator_and_both_agree() -> None:
 
 
 def test_named_orbit_equals_its_elements() -> None:
-    by_name = runner.invoke(app, ["propagate", "--orbit", "SATORB7", "--hours", "0.5",
+    by_name = runner.invoke(app, ["propagate", "--orbit", "SATORB7", "--arc", "0.5h",
                                   "--json", "-"])
     by_elems = runner.invoke(app, ["propagate", "--orbit",
-                                   "a=7278.360,e=0.1,i=0,raan=0,argp=0,M=0", "--hours", "0.5",
+                                   "a=7278.360,e=0.1,i=0,raan=0,argp=0,M=0", "--arc", "0.5h",
                                    "--json", "-"])
     assert by_name.exit_code == 0 and by_elems.exit_code == 0
     assert json.loads(by_name.stdout)["state"] == json.loads(by_elems.stdout)["state"]
@@ -57,15 +57,15 @@ def test_named_orbit_equals_its_elements() -> None:
     (["--truth", "J12"], "--truth"),
     (["--stm", "2x3"], "--stm"),
     (["--truth", "Z2"], "--truth"),
-    (["--hours", "-1"], "--hours"),
+    (["--arc", "-1h"], "--arc"),
     (["--tol", "0"], "--tol"),
-    (["--step", "nan"], "--step"),
+    (["--step", "nans"], "--step"),
     (["--orbit", "x=1,y=2,z=inf,vx=0,vy=1,vz=0"], "--orbit"),
     (["--orbit", "a=7000,e=0"], "--orbit"),
     (["--orbit", "SATORB99"], "--orbit"),
 ])
 def test_bad_input_gives_one_clear_line_and_nonzero_exit(args: list[str], option: str) -> None:
-    base = ["propagate", "--orbit", "SATORB1", "--hours", "0.1"]
+    base = ["propagate", "--orbit", "SATORB1", "--arc", "0.1h"]
     # later options override earlier ones in click, so appending replaces the default
     result = runner.invoke(app, base + args)
     assert result.exit_code == 2
@@ -76,3 +76,22 @@ def test_bad_input_gives_one_clear_line_and_nonzero_exit(args: list[str], option
 def test_version() -> None:
     result = runner.invoke(app, ["--version"])
     assert result.exit_code == 0 and result.stdout.startswith("tapp ")
+
+
+def test_the_earlier_spellings_still_run_with_the_new_one_named() -> None:
+    """--hours 0.5 and a bare --step 600 (seconds) give the numbers of --arc 0.5h --step
+    600s, and a warning on stderr for each naming the spelling to use; both spans at once are
+    refused in one line."""
+    new = runner.invoke(app, ["propagate", "--orbit", "SATORB1", "--arc", "0.5h", "--step",
+                              "600s", "--json", "-"])
+    old = runner.invoke(app, ["propagate", "--orbit", "SATORB1", "--hours", "0.5", "--step",
+                              "600", "--json", "-"])
+    assert new.exit_code == old.exit_code == 0, old.output
+    assert json.loads(new.stdout) == json.loads(old.stdout)
+    assert new.stderr == ""
+    assert "--hours 0.5 is deprecated: write --arc 0.5h" in old.stderr
+    assert "--step 600 (seconds) is deprecated: write --step 600s" in old.stderr
+    both = runner.invoke(app, ["propagate", "--orbit", "SATORB1", "--arc", "1h", "--hours",
+                               "1"])
+    assert both.exit_code == 2 and len(both.stderr.strip().splitlines()) == 1
+    assert both.stderr.startswith("error: --arc: value: expected --arc or the deprecated --hours")

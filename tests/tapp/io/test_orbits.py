@@ -91,7 +91,7 @@ def test_the_commands_refuse_a_subsurface_orbit_in_one_line(command: str) -> Non
 
 def test_propagate_accepts_a_subsurface_orbit_when_told() -> None:
     result = runner.invoke(app, ["propagate", "--orbit", BELOW, "--allow-subsurface",
-                                 "--hours", "0.1", "--json", "-"])
+                                 "--arc", "0.1h", "--json", "-"])
     assert result.exit_code == 0, result.output
 
 
@@ -103,7 +103,7 @@ def test_propagate_accepts_a_subsurface_orbit_when_told() -> None:
 ])
 def test_propagate_refuses_impossible_integration_settings(options: list, message: str) -> None:
     result = runner.invoke(app, ["propagate", "--orbit", "a=7000,e=0,i=0,raan=0,argp=0,M=0",
-                                 "--hours", "1", *options])
+                                 "--arc", "1h", *options])
     assert result.exit_code == 2
     assert message in result.output and len(result.output.strip().splitlines()) == 1
 
