@@ -3,19 +3,68 @@
 Trajectories with separately truncated variational equations, ground-station tracking
 simulation (TAPP I), the matrix processor (TAPP III), Monte Carlo guidance (TAPP II) and the
 batch/sequential estimators of the approximate-STM study.
+
+The Python front door (:mod:`tapp.api`), one verb per program, each taking paths or objects
+in memory and returning a result that renders itself (``to_json()``, a text rendering,
+``plot(ax=None)``) as the command does::
+
+    from tapp import read_scenario, simulate, process, guide, search, sweep
+
+- ``read_scenario(path)`` -> :class:`Scenario`
+- ``simulate(scenario_or_path, *, raw=False, progress=None)`` -> :class:`SimulateResult`
+  (``.tape``, ``.write(path)``, ``.to_json()``)
+- ``process(t13_or_path, deck_or_path)`` -> :class:`ProcessResult` (``.run``, ``.o3()``,
+  ``.to_json()``, ``.t32()``, ``.write_t32(path)``, ``.plot(ax)``)
+- ``guide(t32_or_path, guidance_or_path, *, samples, seed, execution=None)`` ->
+  :class:`GuideResult` (``.result``, ``.markdown()``, ``.to_json()``, ``.plot(ax)``)
+- ``search(path_or_problem)`` -> :class:`TargetingResult` (``.status``, ``.converged``,
+  ``.report()``, ``.to_json()``)
+- ``sweep(path, *, output_h5=None, execution=None)`` -> :class:`iter.SweepResult`
+
+The names are imported on first use, so that ``import tapp`` (and ``tapp --help``) stays
+light.
 """
 
+#: The front door: name -> "module:attribute", imported on first access (PEP 562).
+_LAZY = {
+    "Scenario": "tapp.tracking.scenario:Scenario",
+    "read_scenario": "tapp.tracking.scenario:read_scenario",
+    "simulate": "tapp.api.tracking:simulate",
+    "SimulateResult": "tapp.api.tracking:SimulateResult",
+    "process": "tapp.api.processing:process",
+    "ProcessResult": "tapp.api.processing:ProcessResult",
+    "guide": "tapp.api.guidance:guide",
+    "GuideResult": "tapp.api.guidance:GuideResult",
+    "search": "tapp.api.targeting:search",
+    "TargetingResult": "tapp.api.targeting:TargetingResult",
+    "sweep": "tapp.api.sweeps:sweep",
+}
 
-def __getattr__(name: str) -> str:
-    """``__version__``, read from the installed metadata on first use (reading it costs
-    more than the rest of ``import tapp``, which ``tapp --help`` waits for)."""
-    if name != "__version__":
+__all__ = ["__version__", *_LAZY]
+
+
+def __getattr__(name: str) -> object:
+    """A front-door name of :data:`_LAZY`, or ``__version__`` (read from the installed
+    metadata: reading it costs more than the rest of ``import tapp``, which ``tapp --help``
+    waits for), imported on first use and kept."""
+    if name in _LAZY:
+        from importlib import import_module
+
+        module, attribute = _LAZY[name].split(":")
+        value = getattr(import_module(module), attribute)
+    elif name == "__version__":
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            value = version("tapp")
+        except PackageNotFoundError:  # running from a source tree that is not installed
+            value = "0.0.0+unknown"
+    else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        value = version("tapp")
-    except PackageNotFoundError:  # running from a source tree that is not installed
-        value = "0.0.0+unknown"
-    globals()["__version__"] = value
+    globals()[name] = value
     return value
+
+
+def __dir__() -> list[str]:
+    """The module's names and the front door's, not yet imported."""
+    return sorted({*globals(), *__all__})

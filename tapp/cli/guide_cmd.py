@@ -38,20 +38,16 @@ from tapp.cli.common import (
 
 if TYPE_CHECKING:
     from iter.execute import Execution
-    from tapp.guidance.study import GuidanceResult
+    from tapp.api.guidance import GuideResult
 
 
 def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Execution,
-           shard_size: int | None, quiet: bool) -> GuidanceResult:
+           shard_size: int | None, quiet: bool) -> GuideResult:
     from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
 
     from iter import SchedulerError
-    from tapp.guidance.guidefile import read_guide
-    from tapp.guidance.study import guidance_study
-    from tapp.io.tape.t32_hdf5 import read_t32
+    from tapp.api.guidance import guide as run_guide
 
-    guide_file = read_guide(guide)
-    t32 = read_t32(tape)
     columns = (TextColumn("{task.description:<8}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("samples"), TimeElapsedColumn())
     with progress_bar(*columns, quiet=quiet) as bar:
@@ -61,10 +57,8 @@ def _study(tape: Path, guide: Path, samples: int, seed: int, execution: Executio
             bar.update(task, completed=done, total=total)
 
         try:
-            return guidance_study(t32, guide_file, samples=samples, seed=seed,
-                                  execution=execution, shard_samples=shard_size,
-                                  progress=progress, guide_source=str(guide),
-                                  tape_source=str(tape))
+            return run_guide(tape, guide, samples=samples, seed=seed, execution=execution,
+                             shard_samples=shard_size, progress=progress)
         except SchedulerError as exc:
             raise scheduler_error(exc) from None
 
@@ -100,12 +94,7 @@ def guide_cmd(
         from tapp.guidance.study import check_samples, check_seed, check_shard_samples
         from tapp.io.outputs import OutputSet, check_paths
         from tapp.report import HISTOGRAM_PNG, SCATTER_PNG
-        from tapp.report.guidance import (
-            guidance_dict,
-            guidance_markdown,
-            plot_bplane_scatter,
-            plot_dv_histograms,
-        )
+        from tapp.report.guidance import plot_bplane_scatter, plot_dv_histograms
 
         pngs = {} if plots is None else {f"--plots ({name})": plots / name
                                          for name in (SCATTER_PNG, HISTOGRAM_PNG)}
@@ -114,9 +103,9 @@ def guide_cmd(
         check_seed(seed, "--seed")
         check_shard_samples(shard_size, "--shard-size")
         execution = execution_options(scheduler, workers, connect_timeout_s, serial)
-        result = _study(tape, guide, samples, seed, execution, shard_size,
+        guided = _study(tape, guide, samples, seed, execution, shard_size,
                         quiet=json_out == STDOUT)
-        content = guidance_dict(result)
+        result = guided.result
         outputs = OutputSet()
         if plots is not None:
             title = f"{result.tape_iden}: {result.title}" if result.title else result.tape_iden
@@ -125,8 +114,8 @@ def guide_cmd(
                     result, tmp, f"{title}: final B-plane miss"))
             outputs.add("--plots", plots / HISTOGRAM_PNG, lambda tmp: plot_dv_histograms(
                 result, tmp, f"{title}: ΔV per manoeuvre"))
-        with delivering(json_out, content, outputs) as report:
+        with delivering(json_out, guided.to_json(), outputs) as report:
             if report:
-                typer.echo(guidance_markdown(result), nl=False)
+                typer.echo(guided.markdown(), nl=False)
 
     run_guarded(body)

@@ -9,7 +9,6 @@ on standard output, or on stderr when standard output carries the O3 printout or
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -26,19 +25,16 @@ from tapp.cli.common import (
 )
 
 if TYPE_CHECKING:
+    from tapp.api.processing import ProcessResult
     from tapp.processor.printout import SigmaRatio
-    from tapp.processor.sequencing import Run
 
 
 
-def _run(tape: Path, deck_path: Path, quiet: bool) -> tuple[Run, object, object, float]:
+def _run(tape: Path, deck: Path, quiet: bool) -> ProcessResult:
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
-    from tapp.pipeline.steps import process_tape
-    from tapp.processor.deck import read_deck
+    from tapp.api.processing import process
 
-    deck = read_deck(deck_path)
-    start = time.perf_counter()
     columns = (TextColumn("{task.description:<12}"), BarColumn(),
                TextColumn("record {task.completed}/{task.total}"), TimeElapsedColumn())
     with progress_bar(*columns, quiet=quiet) as bar:
@@ -47,8 +43,7 @@ def _run(tape: Path, deck_path: Path, quiet: bool) -> tuple[Run, object, object,
         def progress(k: int, n_it: int) -> None:
             bar.update(task, completed=k, total=n_it)
 
-        run, plan, header = process_tape(tape, deck, str(deck_path), progress)
-    return run, plan, (header, deck), time.perf_counter() - start
+        return process(tape, deck, progress=progress)
 
 
 def summary_line(written: list[str], worst: SigmaRatio | None) -> str:
@@ -87,19 +82,17 @@ def process_cmd(
     def body() -> None:
         from tapp.io.outputs import OutputSet, check_paths
         from tapp.io.tape.t32_hdf5 import t32_file_writer
-        from tapp.processor.printout import largest_sigma_ratio, o3_text, run_dict
-        from tapp.processor.tape32 import build_t32, t32_provenance
+        from tapp.processor.printout import largest_sigma_ratio
         from tapp.report import BPLANE_PNG, RIC_CSV, RIC_PNG, SIGMA_PNG
 
         pngs = {} if plots is None else {f"--plots ({name})": plots / name
                                          for name in (SIGMA_PNG, BPLANE_PNG, RIC_PNG, RIC_CSV)}
         check_paths({"TAPE": tape, "DECK": deck}, {"--print": print_path, "--tape": tape_out,
                                                    "--json": json_file(json_out), **pngs})
-        run, plan, (header, deck_obj), wall_s = _run(
-            tape, deck, quiet=print_path is None or json_out == STDOUT)
-        text = o3_text(run, header, str(deck), str(tape))
-        content = run_dict(run, header, str(deck), str(tape))
-        content["wall_s"] = wall_s
+        result = _run(tape, deck, quiet=print_path is None or json_out == STDOUT)
+        run, header, deck_obj = result.run, result.header, result.deck
+        text = result.o3()
+        content = result.to_json()
         outputs = OutputSet()
         written: list[str] = []
         if print_path is not None:
@@ -110,9 +103,8 @@ def process_cmd(
         if json_out is not None:
             written.append(f"JSON {'on standard output' if json_out == STDOUT else json_out}")
         if tape_out is not None:
-            t32 = build_t32(run, plan, header,
-                            t32_provenance(header, deck_obj, str(deck), str(tape)))
-            outputs.add("--tape", tape_out, t32_file_writer(t32, source=str(tape_out)))
+            outputs.add("--tape", tape_out, t32_file_writer(result.t32(),
+                                                            source=str(tape_out)))
             written.append(f"T32 tape {tape_out}")
         if plots is not None:
             # matplotlib only when plots are asked for (it costs ~0.5 s to import)

@@ -37,44 +37,10 @@ from tapp.cli.common import (
     run_guarded,
 )
 from tapp.errors import InputError
+from tapp.targeting.exits import exit_code
 
 if TYPE_CHECKING:
     from tapp.targeting.program import BPlaneSearch, TargetingRun
-
-# Column names in the report (the seed's IV1N.., DV1N..), at most 17 characters.
-_X_LABELS = ("VX (KM/S)", "VY (KM/S)", "VZ (KM/S)")
-_Y_LABELS = ("B.R (KM)", "B.T (KM)", "TF (S)")
-
-
-def exit_code(status: str) -> int | None:
-    """The exit code of a SEARCH exit: 0 converged, the seed's FLAG + 1 otherwise (3
-    diverged, 4 singular); None for a status that is not one of SEARCH's exits."""
-    from search import EXIT_FLAG
-
-    flag = EXIT_FLAG.get(status)
-    return None if flag is None else 0 if status == "converged" else flag + 1
-
-
-def is_tracking_scenario(data: dict) -> bool:
-    """Whether a parsed file is a tracking scenario (else a SEARCH file)."""
-    return "tracking" in data or "targeting" in data
-
-
-def problem_of(data: dict, path: Path, earth_orientation: str | None) -> BPlaneSearch:
-    """The search problem of a parsed scenario file (a SEARCH file, or a tracking scenario
-    with a ``[targeting]`` table); ``earth_orientation`` overrides the file's model."""
-    from tapp.targeting.searchfile import scenario_search
-    from tapp.tracking.scenario import parse_scenario
-
-    if is_tracking_scenario(data):
-        problem = parse_scenario(data, str(path), earth_orientation).targeting
-        if problem is None:
-            raise InputError(str(path), "targeting", "a [targeting] table (the aim point) in "
-                             "a tracking scenario given to tapp search")
-        return problem
-    if earth_orientation is not None:
-        data["earth_orientation"] = earth_orientation
-    return scenario_search(data, str(path))
 
 
 def _written_scenario(path: Path, data: dict, problem: BPlaneSearch, run: TargetingRun
@@ -83,6 +49,7 @@ def _written_scenario(path: Path, data: dict, problem: BPlaneSearch, run: Target
     ``[targeting]``)."""
     import datetime as dt
 
+    from tapp.api.targeting import is_tracking_scenario
     from tapp.io.tomlfile import replace_tables
     from tapp.targeting.program import Y_NAMES
 
@@ -108,83 +75,6 @@ def _written_scenario(path: Path, data: dict, problem: BPlaneSearch, run: Target
     return replace_tables(text, str(path), tables, comment=comment)
 
 
-def _encounter_dict(problem: BPlaneSearch, run: TargetingRun) -> dict:
-    from tapp.constants import RADIUS_km
-
-    enc = run.encounter
-    body = problem.program.target
-    r_p = float(enc.b_plane.periapsis_radius_km)
-    return {"body": body,
-            "t_periapsis_s": enc.t_periapsis_s,
-            "periapsis_utc": problem.program.epoch.iso_after(enc.t_periapsis_s, 3),
-            "periapsis_radius_km": r_p,
-            "periapsis_altitude_km": r_p - RADIUS_km[body],
-            "v_inf_km_s": float(enc.b_plane.v_inf_km_s),
-            "eccentricity": float(enc.b_plane.eccentricity),
-            "ltof_s": float(enc.b_plane.ltof_s)}
-
-
-def _history_dict(run: TargetingRun) -> dict:
-    history = run.result.history
-    return {
-        "cases": [{"n": c.number, "kind": c.kind, "set": c.partial_set, "index": c.index,
-                   "x": c.x, "y": c.y} for c in history.cases],
-        "partial_sets": [{"set": ps.number, "update": ps.update, "source": ps.source,
-                          "after_case": ps.after_case, "partials": ps.partials,
-                          "determinant": ps.determinant,
-                          "steps": [{"case": s.case, "step": s.step, "total_step": s.total_step}
-                                    for s in ps.steps]}
-                         for ps in history.partial_sets],
-    }
-
-
-def _json(path: Path, problem: BPlaneSearch, run: TargetingRun, analytic: bool,
-          elapsed_s: float) -> dict:
-    result = run.result
-    return {
-        "scenario": str(path),
-        "status": result.status,
-        "flag": result.flag,
-        "exit_code": exit_code(result.status),
-        "x_names": list(problem.x_names),
-        "y_names": list(problem.y_names),
-        "x": result.x,
-        "y": result.y,
-        "targets": result.targets,
-        "miss": result.miss,
-        "tolerances": result.inputs.tolerances,
-        "total_increments_km_s": result.x - result.inputs.x0,
-        "first_guess": problem.first_guess,
-        "v0_km_s": run.encounter.v0_km_s,
-        "v0_first_case_km_s": run.start_km_s,
-        "cases_run": result.n_cases,
-        "cases": {"nominal": result.n_nominal, "perturbed": result.n_perturbed,
-                  "applied": result.n_applied},
-        "trajectories": run.trajectories,
-        "propagations": run.propagations,
-        "analytic_partials": analytic,
-        "wall_time_s": elapsed_s,
-        "encounter": _encounter_dict(problem, run),
-        "history": _history_dict(run),
-    }
-
-
-def _summary(problem: BPlaneSearch, run: TargetingRun, analytic: bool,
-             elapsed_s: float) -> str:
-    import numpy as np
-
-    enc = _encounter_dict(problem, run)
-    dv_m_s = 1e3 * float(np.linalg.norm(run.encounter.v0_km_s - problem.v0_km_s))
-    partials = "ANALYTIC (VARIATIONAL EQUATIONS)" if analytic else "DIFFERENCED"
-    return (
-        f"ENCOUNTER WITH THE {enc['body'].upper()}: PERIAPSIS {enc['periapsis_utc']} UTC "
-        f"(T = {enc['t_periapsis_s']:.3f} S), RADIUS {enc['periapsis_radius_km']:.3f} KM "
-        f"(ALTITUDE {enc['periapsis_altitude_km']:.3f} KM), V_INF {enc['v_inf_km_s']:.6f} KM/S\n"
-        f"TOTAL CHANGE OF THE INJECTION VELOCITY {dv_m_s:.3f} M/S\n"
-        f"{run.trajectories} TRAJECTORIES ({run.propagations} PROPAGATIONS), PARTIALS "
-        f"{partials}, {elapsed_s:.2f} S\n")
-
-
 @app.command("search")
 def search_command(
     scenario: Annotated[Path, typer.Argument(help="B-plane search scenario (TOML).")],
@@ -207,12 +97,9 @@ def search_command(
     """
 
     def body() -> int:
-        import time
-
-        from search import format_report
+        from tapp.api.targeting import problem_of, search
         from tapp.io.outputs import OutputSet, check_paths
         from tapp.io.tomlfile import read_toml
-        from tapp.targeting.program import run_search
 
         check_paths({"SCENARIO": scenario}, {"--write-scenario": write_scenario,
                                              "--json": json_file(json_out)})
@@ -224,26 +111,19 @@ def search_command(
             raise InputError("--write-scenario", str(write_scenario), "no --earth-orientation "
                              "other than the file's (the written scenario states the file's "
                              "model)", orientation)
-        analytic = analytic_partials or problem.analytic_partials
-        start = time.perf_counter()
-        run = run_search(problem, analytic_partials=analytic)
-        elapsed = time.perf_counter() - start
+        result = search(problem, analytic_partials=analytic_partials, source=str(scenario))
         outputs = OutputSet()
-        if write_scenario is not None and run.result.status == "converged":
-            text = _written_scenario(scenario, data, problem, run)
+        if write_scenario is not None and result.converged:
+            text = _written_scenario(scenario, data, problem, result.run)
             outputs.add("--write-scenario", write_scenario,
                         lambda tmp: tmp.write_text(text, encoding="utf-8"))
-        with delivering(json_out, _json(scenario, problem, run, analytic, elapsed),
-                        outputs) as report:
+        with delivering(json_out, result.to_json(), outputs) as report:
             if report:
-                labels = (tuple(_X_LABELS[i] for i in problem.vary),
-                          tuple(_Y_LABELS[i] for i in problem.targeted))
-                typer.echo(format_report(run.result, *labels), nl=False)
-                typer.echo(_summary(problem, run, analytic, elapsed), nl=False)
-        if write_scenario is not None and run.result.status != "converged":
+                typer.echo(result.report(), nl=False)
+        if write_scenario is not None and not result.converged:
             typer.echo(f"note: --write-scenario {write_scenario} not written: SEARCH "
-                       f"{run.result.status}", err=True)
-        return exit_code(run.result.status)
+                       f"{result.status}", err=True)
+        return exit_code(result.status)
 
     code = run_guarded(body)
     if code:

@@ -15,8 +15,6 @@ SPK's comments.
 from __future__ import annotations
 
 import dataclasses
-import json
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -37,11 +35,12 @@ from tapp.cli.common import (
     progress_bar,
     run_guarded,
 )
-from tapp.cli.search_cmd import exit_code as search_exit_code
+from tapp.targeting.exits import exit_code as search_exit_code
 
 if TYPE_CHECKING:
     from rich.console import Console
 
+    from tapp.api.tracking import SimulateResult
     from tapp.io.outputs import OutputSet
     from tapp.io.tape.t13 import T13
     from tapp.tracking.reference import ReferenceFit
@@ -63,12 +62,11 @@ def _spk_body(spk_id: int | None, fit: ReferenceFit | None) -> int:
 
 
 def _simulate_with_bar(scenario: Scenario, raw: bool, quiet: bool, force: bool = False
-                       ) -> tuple[Simulation, float]:
+                       ) -> SimulateResult:
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
-    from tapp.tracking.simulate import simulate as run_simulation
+    from tapp.api.tracking import simulate as run_simulation
 
-    start = time.perf_counter()
     columns = (TextColumn("{task.description:<28}"), BarColumn(), TextColumn(
         "{task.completed}/{task.total}"), TimeElapsedColumn())
     with progress_bar(*columns, quiet=quiet) as bar:
@@ -77,8 +75,7 @@ def _simulate_with_bar(scenario: Scenario, raw: bool, quiet: bool, force: bool =
         def progress(stage: str, done: int, total: int) -> None:
             bar.update(task, description=stage, completed=done, total=total)
 
-        sim = run_simulation(scenario, raw=raw, progress=progress, accept_poor_fit=force)
-    return sim, time.perf_counter() - start
+        return run_simulation(scenario, raw=raw, progress=progress, accept_poor_fit=force)
 
 
 def _outputs(output: Path, sim: Simulation, oem: Path | None,
@@ -136,16 +133,6 @@ def _tdm_text(sim: Simulation, scenario: Path, parsed: Scenario) -> str:
     return format_tdm(tdm_from_tracks(tracks, tape.epoch, comments=(
         f"TAPP I observations of {scenario.name}, tape {tape.iden}: the models' values, "
         "noise-free", *made_under_statements(MadeUnder.of(parsed.orientation), TDM_PREFIX))))
-
-
-def _encounter_dict(tape: T13) -> tuple[dict, dict | None]:
-    """The tape's miss (kind, time, names, nominal values) and its retargeting record."""
-
-    miss = tape.miss
-    record = tape.provenance.get("targeting")
-    return ({"kind": miss.kind, "t_s": miss.t_s, "utc": tape.epoch.iso_after(miss.t_s, 3),
-             "names": list(miss.name), "nominal": miss.nominal.tolist()},
-            json.loads(record) if record else None)
 
 
 def _print_encounter(console: Console, miss: dict, targeting: dict | None) -> None:
@@ -242,7 +229,6 @@ def simulate(
     def body() -> int:
         from tapp.io.ccsds.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem
         from tapp.io.outputs import check_paths
-        from tapp.io.tape.t13 import summary
         from tapp.tracking.encounter import TargetingError
         from tapp.tracking.oem_states import (
             burn_comments,
@@ -261,17 +247,18 @@ def simulate(
         if parsed.reference is not None:
             check_paths({"reference.file": Path(parsed.reference.trajectory.source)}, outputs)
         try:
-            sim, wall_s = _simulate_with_bar(parsed, raw or tdm is not None,
-                                             quiet=json_out == STDOUT, force=force)
+            result = _simulate_with_bar(parsed, raw or tdm is not None,
+                                        quiet=json_out == STDOUT, force=force)
         except TargetingError as exc:
             echo_error(exc)
             code = search_exit_code(exc.status)
             return EXIT_FAILURE if code is None else code
-        tdm_text = None
+        sim, tdm_text = result.simulation, None
         if tdm is not None:
             tdm_text = _tdm_text(sim, scenario, parsed)
             if not raw:  # the raw rows were for the TDM only
                 sim = dataclasses.replace(sim, tape=dataclasses.replace(sim.tape, raw=None))
+                result = dataclasses.replace(result, simulation=sim)
         tape = sim.tape
         fit = sim.reference_fit
         fit_lines = () if fit is None else fit.lines(tape.epoch)
@@ -297,20 +284,8 @@ def simulate(
             def write_spk(tmp: Path) -> None:
                 spk_info["error_km"], spk_info["error_km_s"] = write_trajectory_spk(
                     tmp, sim.scenario, traj, body, comments + traj.comments)
-        out = {"tape": str(output), "bytes": None, "iden": tape.iden,
-               "n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
-               "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
-               "passes": int(tape.passes.station.size),
-               "observations": int(tape.pairs.n_obs.sum()),
-               "stations": summary(tape)["stations"], "raw": raw,
-               "oem": None if oem is None else str(oem),
-               "tdm": None if tdm is None else str(tdm), "spk": spk_info,
-               "wall_s": wall_s, "warnings": list(sim.warnings),
-               "reference": None if fit is None else fit.to_json(tape.epoch),
-               "events": [{"t_s": float(t), "utc": tape.epoch.iso_after(float(t), 6),
-                           "event": label}
-                          for t, label in zip(sim.events.t_s, sim.events.labels(), strict=True)]}
-        out["miss"], out["targeting"] = _encounter_dict(tape)
+        out = result.to_json(tape=str(output), oem=None if oem is None else str(oem),
+                             tdm=None if tdm is None else str(tdm), spk=spk_info)
         # the JSON is written after the tape's temporary, whose size it then holds
         outputs = _outputs(output, sim, oem, oem_text, tdm, tdm_text, sizes=out,
                            spk=write_spk, spk_path=spk)

@@ -11,11 +11,13 @@ pipeline (:mod:`tapp.pipeline.run`); :func:`run_guidance` reads a T32 tape
 from __future__ import annotations
 
 from collections.abc import Callable
+from contextlib import nullcontext
 from pathlib import Path
 
 from iter.execute import Execution
 from tapp.guidance.guidefile import read_guide
 from tapp.guidance.study import GuidanceResult, guidance_study
+from tapp.io.tape.t13 import T13, memory_pairs
 from tapp.io.tape.t13_hdf5 import open_t13
 from tapp.io.tape.t32_hdf5 import read_t32
 from tapp.processor.deck import bind
@@ -25,15 +27,19 @@ from tapp.processor.sequencing import Run, process
 __all__ = ["process_tape", "run_guidance"]
 
 
-def process_tape(path, deck, source: str, progress: Callable[[int, int], None] | None = None
+def process_tape(tape: T13 | Path | str, deck, source: str,
+                 progress: Callable[[int, int], None] | None = None
                  ) -> tuple[Run, Plan, object]:
-    """Run TAPP III on a T13 tape file with a validated deck: (run, plan, the tape header).
+    """Run TAPP III on a T13 tape with a validated deck: (run, plan, the tape header).
 
-    The tape is read lazily (:func:`tapp.io.tape.t13_hdf5.open_t13`) and the deck bound to it
-    (:func:`tapp.processor.deck.bind`): what ``tapp process`` and the pipeline both do.
-    ``source`` (the deck file) is named in errors.
+    A tape file is read lazily (:func:`tapp.io.tape.t13_hdf5.open_t13`), a tape in memory
+    through :func:`tapp.io.tape.t13.memory_pairs`, and the deck bound to it
+    (:func:`tapp.processor.deck.bind`): what ``tapp process``,
+    :func:`tapp.api.processing.process` and the pipeline do. ``source`` (the deck file) is
+    named in errors.
     """
-    with open_t13(path) as data:
+    opened = nullcontext(memory_pairs(tape)) if isinstance(tape, T13) else open_t13(tape)
+    with opened as data:
         plan = bind(deck, data.header, source)
         return process(data, plan, source=source, progress=progress), plan, data.header
 

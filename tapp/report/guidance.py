@@ -340,15 +340,14 @@ def guidance_markdown(r: GuidanceResult) -> str:
 # ---------------------------------------------------------------------------------------------
 
 
-def plot_bplane_scatter(r: GuidanceResult, path: Path, title: str) -> Path:
-    """Final (δB·T, δB·R) of the first :data:`SCATTER_SAMPLES` samples, with the 1σ and 3σ
-    ellipses of the Monte Carlo (solid) and the linear covariance (dashed) and the
-    corridor; needs the B-plane miss components."""
+def draw_bplane_scatter(ax, r: GuidanceResult) -> None:
+    """Draw on ``ax`` the final (δB·T, δB·R) (km) of the first :data:`SCATTER_SAMPLES`
+    samples, with the 1σ and 3σ ellipses of the Monte Carlo (solid) and the linear covariance
+    (dashed) and the corridor; needs the B-plane miss components."""
     from tapp.report.processor import ellipse_points
 
     bp = bplane_rows(r.miss_name)
     miss = r.samples.miss[:SCATTER_SAMPLES]
-    fig, ax = subplots(figsize=(6.4, 6.0))
     ax.plot(miss[:, bp[0]], miss[:, bp[1]], ".", ms=1.5, alpha=0.3, color="0.6",
             label=f"samples ({len(miss):,})", zorder=1)
     for o, color, style in ((r.monte_carlo, "tab:red", "-"), (r.linear, "tab:blue", "--")):
@@ -368,6 +367,12 @@ def plot_bplane_scatter(r: GuidanceResult, path: Path, title: str) -> Path:
     ax.set_ylabel("δB·R (km)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7)
+
+
+def plot_bplane_scatter(r: GuidanceResult, path: Path, title: str) -> Path:
+    """The figure of :func:`draw_bplane_scatter`, titled, written as a PNG at ``path``."""
+    fig, ax = subplots(figsize=(6.4, 6.0))
+    draw_bplane_scatter(ax, r)
     ax.set_title(textwrap.fill(title, 70), fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
@@ -398,6 +403,6 @@ def plot_dv_histograms(r: GuidanceResult, path: Path, title: str) -> Path:
     return path
 
 
-__all__ = ["CONTRADICTED", "SCATTER_SAMPLES", "guidance_dict", "guidance_markdown", "key_path",
-           "left_out",
-           "plot_bplane_scatter", "plot_dv_histograms"]
+__all__ = ["CONTRADICTED", "SCATTER_SAMPLES", "draw_bplane_scatter", "guidance_dict",
+           "guidance_markdown", "key_path", "left_out", "plot_bplane_scatter",
+           "plot_dv_histograms"]

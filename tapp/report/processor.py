@@ -114,30 +114,35 @@ def bplane_rows(history, miss_names: tuple[str, ...]) -> list:
     return rows + [h for h in last if all(h.k != r.k for r in rows)]
 
 
+def draw_bplane_ellipses(ax, h, miss_names: tuple[str, ...]) -> None:
+    """Draw on ``ax`` the 1σ/3σ (B·T, B·R) ellipses (km), fit and real world, of one history
+    row, with their semi-axes and angle in the legend."""
+    ix = [miss_names.index("b_dot_t_km"), miss_names.index("b_dot_r_km")]
+    for cov, color, name in ((h.miss_real, "tab:red", "real"), (h.miss_fit, "tab:blue", "fit")):
+        if cov is None:
+            continue
+        ell = error_ellipse(cov[np.ix_(ix, ix)])
+        for scale, style in ((1.0, "-"), (3.0, ":")):
+            pts = ell.points(scale)
+            axes_km = (f": {scale * ell.semi_major:.3g} x {scale * ell.semi_minor:.3g} km, "
+                       f"{ell.angle_deg:+.1f}°")
+            ax.plot(pts[:, 0], pts[:, 1], style, color=color,
+                    label=f"{name} {scale:g}σ{axes_km}")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("δB·T (km)")
+    ax.set_ylabel("δB·R (km)")
+    ax.set_title(f"{h.kind} k = {h.k}, t = {h.t_s / SECONDS_PER_DAY:.2f} d (angle: major axis "
+                 "from T towards R)", fontsize=8)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+
+
 def plot_bplane_ellipses(history, miss_names: tuple[str, ...], path: Path, title: str) -> Path:
     """1σ/3σ (B·T, B·R) ellipses, fit vs real, at the times of :func:`bplane_rows`."""
     rows = bplane_rows(history, miss_names)
-    ix = [miss_names.index("b_dot_t_km"), miss_names.index("b_dot_r_km")]
     fig, axes = subplots(1, len(rows), figsize=(4.2 * len(rows), 4.2), squeeze=False)
     for ax, h in zip(axes[0], rows, strict=True):
-        for cov, color, name in ((h.miss_real, "tab:red", "real"),
-                                 (h.miss_fit, "tab:blue", "fit")):
-            if cov is None:
-                continue
-            ell = error_ellipse(cov[np.ix_(ix, ix)])
-            for scale, style in ((1.0, "-"), (3.0, ":")):
-                pts = ell.points(scale)
-                axes_km = (f": {scale * ell.semi_major:.3g} x {scale * ell.semi_minor:.3g} km, "
-                           f"{ell.angle_deg:+.1f}°")
-                ax.plot(pts[:, 0], pts[:, 1], style, color=color,
-                        label=f"{name} {scale:g}σ{axes_km}")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("δB·T (km)")
-        ax.set_ylabel("δB·R (km)")
-        ax.set_title(f"{h.kind} k = {h.k}, t = {h.t_s / SECONDS_PER_DAY:.2f} d (angle: major axis "
-                     "from T towards R)", fontsize=8)
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
+        draw_bplane_ellipses(ax, h, miss_names)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
