@@ -325,7 +325,9 @@ def markdown(kind: str) -> str:
     page.queue.append(("", {**document, "description": ""}, "Top level"))
     while page.queue:  # breadth first: every table before the tables inside it
         page.section(*page.queue.pop(0))
-    return "\n".join(page.lines).rstrip() + "\n"
+    appendix = getattr(schema_class(kind), "reference_appendix", "")  # a deck's commands
+    text = "\n".join(page.lines).rstrip() + "\n"
+    return text + f"\n{appendix.rstrip()}\n" if appendix else text
 
 
 def write_reference(folder: Path) -> list[Path]:

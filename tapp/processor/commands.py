@@ -65,6 +65,51 @@ COVARIANCES = ("Lb", "L'", "Lb'", "Sigma")
 _FITTED = ("f1", "fp", "fq")
 
 
+def command_language_markdown() -> str:
+    """The command language of ``[commands]`` as a Markdown section, written from the tables
+    the parser reads (:data:`MATRICES`, the partition and time names), for the deck's
+    reference page (``docs/reference/deck.md``)."""
+    matrices = "\n".join(
+        f"| `{alias}` | `{code}` ({symbol}) | {', '.join(f'({a}, {b})' for a, b in parity)} |"
+        for code, (symbol, alias, parity) in MATRICES.items())
+    words = "\n".join(f"| `{word}` | `{code}` |" for word, code in _SYNONYMS.items())
+    times = "\n".join(f"| `{name}` | {tau} |" for tau, name in ORBIT_SETS.items())
+    return f"""## The command language of `[commands]`
+
+Each print or recycle command is one output entity X₁ [σ₀] X₂ᵀ (seed §3.4, eq. 3-35), in
+either notation; both parse to the same command (`tapp.processor.commands`).
+
+- **Readable**: `"<matrix> <rows> [x <cols>]"`, e.g. `"cov real orbit@current"`,
+  `"cov-real-prior constants@current"`, `"info f1@recycle x fz@recycle"`; for the identity
+  `"partials <rows> wrt <cols> [transposed]"`, e.g. `"partials m wrt fp@current"`. Words
+  may be joined by spaces or hyphens.
+- **Seed**: `"σ0; μ1,τ1,ρ1; μ2,τ2,ρ2"`, e.g. `"Lb'; 0,1,p; 0,1,p"` (τ is `-` for an
+  isolated set); the Unicode symbols are accepted too.
+
+A side (rows or columns) is an isolated set ({', '.join(f'`{k}`' for k in ISOLATED_SETS)}) or
+`<partition>@<time>`; the partitions are the seed's ({', '.join(f'`{k}`' for k in
+SYSTEM_PARTITIONS)}) or these words:
+
+| word | partition |
+|---|---|
+{words}
+
+| time | τ |
+|---|---|
+{times}
+
+| matrix (readable) | seed code (symbol) | parity (μ₁, μ₂) |
+|---|---|---|
+{matrices}
+
+A covariance has parity (0, 0), a normal matrix (1, 1), the identity (0, 1) or (1, 0);
+anything else has no physical meaning and is refused, naming the command. Normal matrices
+take system partitions only; the extended normal matrices (`normal-fit-prior`,
+`normal-fit`) only partitions of the fitted parameters (f1, fp, fq) in print and recycle
+commands. `recycle = "standard"` is the seed's Table B-5 list of recycle commands.
+"""
+
+
 @dataclass(frozen=True, slots=True)
 class Side:
     """(μ, τ, ρ): parity, orbit set option (None for an isolated set) and set partition."""

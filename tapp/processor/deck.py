@@ -123,7 +123,7 @@ import json
 from dataclasses import dataclass
 from fnmatch import fnmatchcase
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
@@ -142,7 +142,7 @@ from tapp.io.station_covariance import (
 )
 from tapp.io.tape.packing import symmetry_defect
 from tapp.measurements import STATION_PARAMETER_NAMES
-from tapp.processor.commands import ROC, Command, Side, parse_command
+from tapp.processor.commands import ROC, Command, Side, command_language_markdown, parse_command
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.plan import Plan, StationOff
 from tapp.processor.representations import ISOLATED_SETS, Systems
@@ -427,6 +427,9 @@ class Output(Schema):
 
 class Deck(Schema):
     """The deck file (module docstring); validated strictly, unknown keys are errors."""
+
+    #: What the reference page adds after the tables (:func:`tapp.io.reference.markdown`).
+    reference_appendix: ClassVar[str] = command_language_markdown()
 
     title: str = Field("", description="Free text, printed in the O3 heading.")
     tape: TapeExpect = Field(TapeExpect(), description="Expectations checked against the tape.")

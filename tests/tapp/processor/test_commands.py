@@ -49,3 +49,20 @@ def test_meaningless_commands_are_refused_naming_the_command(text, fragment):
 
 def test_the_update_commands_may_use_the_extended_normal_matrix_everywhere():
     assert parse_command("S; 1,1,o; 1,1,o", output=False).sigma == "S"
+
+
+def test_the_reference_pages_command_examples_parse_to_what_they_say() -> None:
+    """docs/reference/deck.md's command language (written from the parser's own tables): each
+    readable example parses, and the seed example is the readable one it is said to equal."""
+    import re
+
+    from tapp.processor.commands import command_language_markdown, parse_command
+
+    text = command_language_markdown()
+    examples = re.findall(r'`"([^"`]+)"`', text)
+    readable = [e for e in examples if ";" not in e and "<" not in e]
+    assert {"cov real orbit@current", "cov-real-prior constants@current",
+            "info f1@recycle x fz@recycle", "partials m wrt fp@current"} <= set(readable)
+    for example in readable:
+        parse_command(example)
+    assert parse_command("Lb'; 0,1,p; 0,1,p") == parse_command("cov real orbit@current")
