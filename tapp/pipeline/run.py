@@ -95,8 +95,11 @@ def check_out_dir(out_dir: Path) -> Path:
 
 
 def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | None = None,
-                 plots: bool = True, progress: Progress = _nothing) -> PipelineResult:
-    """Run the three steps into ``out_dir`` (new or empty); return the result.
+                 plots: bool = True, progress: Progress = _nothing,
+                 t13: Path | None = None) -> PipelineResult:
+    """Run the three steps into ``out_dir`` (new or empty); return the result. With ``t13``
+    (a tape of the pipeline's scenario, simulated once for many decks: :func:`tape_case`),
+    TAPP III and II on that tape, not TAPP I.
 
     Raises
     ------
@@ -107,21 +110,22 @@ def run_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | No
         ``out_dir`` could not be written for want of room, or a device error.
     """
     with running_pipeline(pipeline, out_dir, execution=execution, plots=plots,
-                          progress=progress) as result:
+                          progress=progress, t13=t13) as result:
         return result
 
 
 @contextmanager
 def running_pipeline(pipeline: Pipeline, out_dir: Path, *, execution: Execution | None = None,
-                     plots: bool = True, progress: Progress = _nothing
-                     ) -> Iterator[PipelineResult]:
+                     plots: bool = True, progress: Progress = _nothing,
+                     t13: Path | None = None) -> Iterator[PipelineResult]:
     """Run the three steps into a hidden directory beside ``out_dir`` (new or empty), yield
     the result and rename the directory to ``out_dir`` once the block has run (the report
     of the run printed): :func:`run_pipeline` with a block before the directory appears.
     If the block raises, no ``out_dir`` appears. Raises as :func:`run_pipeline`.
     """
     with new_directory(out_dir, "-o/--output", _NEVER_OVERWRITES) as work:
-        yield replace(_run(pipeline, work, execution, plots, progress), directory=out_dir)
+        yield replace(_run(pipeline, work, execution, plots, progress, t13),
+                      directory=out_dir)
 
 
 def bind_parts(pipeline: Pipeline) -> tuple[Scenario, Deck, GuideFile]:
@@ -142,9 +146,8 @@ def bind_parts(pipeline: Pipeline) -> tuple[Scenario, Deck, GuideFile]:
 
 
 def _run(pipeline: Pipeline, work: Path, execution: Execution | None, plots: bool,
-         progress: Progress, t13: Path | None = None) -> PipelineResult:
-    """The three steps into ``work``; with ``t13``, TAPP III and II on that tape of the
-    pipeline's scenario (simulated once for many decks: :func:`tape_case`), not TAPP I."""
+         progress: Progress, t13: Path | None) -> PipelineResult:
+    """The three steps into ``work`` (:func:`run_pipeline`)."""
     wall: dict[str, float] = {}
     start = time.perf_counter()
     scenario, deck, guide = bind_parts(pipeline)
@@ -305,8 +308,9 @@ def tape_case(pipeline: str, tape: str, ddor: float, passes_per_week: float,
     III checks that it is the deck's (its iden). Serial, in a temporary directory.
     """
     pipe, path = check_tape_case(pipeline, tape, ddor, passes_per_week, samples, seed)
-    with new_directory(Path(tempfile.mkdtemp()) / "run", "run", _NEVER_OVERWRITES) as work:
-        result = _run(pipe, work, Execution(serial=True), False, _nothing, t13=path)
+    with tempfile.TemporaryDirectory() as tmp:
+        result = run_pipeline(pipe, Path(tmp) / "run", execution=Execution(serial=True),
+                              plots=False, t13=path)
     return trade_outputs(result)
 
 
