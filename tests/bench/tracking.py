@@ -63,6 +63,13 @@ def _run_once(path: Path, raw: bool, out: Path, model: str = "iau2006"
     return mid - start, time.perf_counter() - start, sim.tape
 
 
+def _best(path: Path, out: Path) -> tuple[float, float, T13]:
+    """:func:`_run_once` of ``path`` (iau2006, no raw rows) after a warm-up: the best of
+    :data:`REPEATS` by total time."""
+    _run_once(path, False, out)
+    return min((_run_once(path, False, out) for _ in range(REPEATS)), key=lambda r: r[1])
+
+
 #: The child of :func:`normal_form`, after :mod:`tests.bench.legacy`'s prelude and the source
 #: of :func:`_run_once` (run there on the normal-matrix commit's library): a warm-up under
 #: each model, then the best of the repeats as :func:`run` takes it; it replies
@@ -182,25 +189,17 @@ def run() -> Section:
                        f", normal form {r['normal']['total_s']:.2f} s"))
                 results.append(r)
         log("study with relativistic light time")
-        out = Path(tmp) / "deep_space_relativity.t13.h5"
-        _run_once(study, False, out)
-        relativity_s = min((_run_once(study, False, out) for _ in range(REPEATS)),
-                           key=lambda r: r[1])[1]
+        relativity_s = _best(study, Path(tmp) / "deep_space_relativity.t13.h5")[1]
         newtonian_s = next(r["total_s"] for r in results
                            if not r["raw"] and r["model"] == "iau2006")
         log("shipped scenario")
         out = Path(tmp) / "deep_space_shipped.t13.h5"
-        _run_once(SHIPPED, False, out)
-        sim_s, total_s, tape = min((_run_once(SHIPPED, False, out) for _ in range(REPEATS)),
-                                   key=lambda r: r[1])
+        sim_s, total_s, tape = _best(SHIPPED, out)
         shipped = {"simulate_s": sim_s, "total_s": total_s, "size_mb": out.stat().st_size / 1e6,
-                   "n_o": tape.n_o, "ratio_to_study": total_s / next(
-                       r["total_s"] for r in results if not r["raw"] and r["model"] == "iau2006")}
+                   "n_o": tape.n_o, "ratio_to_study": total_s / newtonian_s}
         log("Mars cruise")
         out = Path(tmp) / "mars.t13.h5"
-        _run_once(MARS, False, out)
-        sim_s, total_s, tape = min((_run_once(MARS, False, out) for _ in range(REPEATS)),
-                                   key=lambda r: r[1])
+        sim_s, total_s, tape = _best(MARS, out)
         mars = {"simulate_s": sim_s, "total_s": total_s, "size_mb": out.stat().st_size / 1e6,
                 "n_o": tape.n_o, "n_it": tape.n_it,
                 "observations": int(tape.pairs.n_obs.sum()),
