@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 # The test tools (pytest, the peers, mpmath, ...) on top: make scenario does without them.
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: install test test-all scenario readme bench lint clean
+.PHONY: install test test-all scenario readme bench docs lint clean
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -41,8 +41,13 @@ bench: $(TEST_STAMP)
 	$(BIN)/pip install --quiet -e ".[test,bench]"
 	$(BIN)/python tests/bench/run.py
 
+# The reference site into build/site: the API from the docstrings, the input files, the deck's
+# command language, the tutorial; --strict, so a broken reference fails (docs/mkdocs.yml).
+docs: $(TEST_STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict -f docs/mkdocs.yml
+
 lint: $(TEST_STAMP)
-	$(BIN)/ruff check tapp search iter tests scenarios
+	$(BIN)/ruff check tapp search iter tests scenarios docs
 	$(BIN)/lint-imports
 
 clean:

@@ -668,7 +668,8 @@ JsonOpt = Annotated[str | None, typer.Option(
 
 
 def json_file(value: str | None) -> Path | None:
-    """The file ``--json`` names (None: not given, or ``-``), for :func:`check_paths`."""
+    """The file ``--json`` names (None: not given, or ``-``), for
+    :func:`tapp.io.outputs.check_paths`."""
     return None if value is None or value == STDOUT else Path(value)
 
 

@@ -49,14 +49,14 @@ def disc_geometry(r, r_sun, r_body, radius_body_km: float):
     """Return (a, b, c), rad: the apparent radii of the Sun and of the occulting body seen from
     the spacecraft and their apparent separation (module docstring).
 
+    The arguments of asin are clipped to its domain, so no NaN reaches a branch of
+    :func:`shadow_factor` that is not taken.
+
     Parameters
     ----------
     r, r_sun, r_body : SX (3,) positions of the spacecraft, the Sun and the occulting body
         relative to a common origin, km, same axes.
     radius_body_km : radius of the occulting body, km.
-
-    The arguments of asin are clipped to its domain, so no NaN reaches a branch of
-    :func:`shadow_factor` that is not taken.
     """
     s = r_sun - r
     d = r_body - r

@@ -95,15 +95,15 @@ def topocentric_tdb_minus_tt_s(tt_jd: tuple, ut_fraction, site: tuple[float, flo
     :func:`geocentric_tdb_minus_tt_s`): Moyer (1981) and Murray (1983), as ERFA's ``dtdb``
     evaluates them, with its fundamental arguments (Simon et al. 1994).
 
+    The terms are linear in u and v; erfa.dtdb with the site minus erfa.dtdb without it
+    equals them to 1e-19 s (tested).
+
     Parameters
     ----------
     tt_jd : (whole, fraction) TT Julian dates, arrays broadcasting together, days.
     ut_fraction : UT (UT1, or UTC within its 0.9 s) as a fraction of a day: the local solar
         time's argument.
     site : (east longitude rad, distance from the spin axis u km, from the equator v km).
-
-    The terms are linear in u and v; erfa.dtdb with the site minus erfa.dtdb without it
-    equals them to 1e-19 s (tested).
     """
     elong, u, v = site
     w = ((np.asarray(tt_jd[0], float) - _J2000_JD) + tt_jd[1]) / _DAYS_PER_MILLENNIUM / 3600.0

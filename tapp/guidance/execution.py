@@ -77,15 +77,15 @@ def sample_errors(dv_km_s: np.ndarray, normals: np.ndarray, errors: ExecutionErr
                   ) -> np.ndarray:
     """Return execution errors ε (n, 3), km/s, of commanded corrections (module docstring).
 
+    A zero Δv gets no proportional or pointing error. Row i of the result depends on row i
+    of the inputs only (element-wise operations), whatever n is.
+
     Parameters
     ----------
     dv_km_s : (n, 3) commanded corrections Δv, km/s.
     normals : (n, 7) independent standard normals: n, then g (3), then f (3)
         (:meth:`tapp.dynamics.gates.GatesErrors.sample`).
     errors : the 1σ values.
-
-    A zero Δv gets no proportional or pointing error. Row i of the result depends on row i
-    of the inputs only (element-wise operations), whatever n is.
     """
     return errors.gates.sample(dv_km_s, normals)
 

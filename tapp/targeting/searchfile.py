@@ -314,8 +314,9 @@ def scenario_targeting(table: TargetingTable, source: str, *, epoch: Epoch,
       no theta: the aim point is absolute (y_0 + theta would move with the first guess).
     - ``vary``: the velocity components SEARCH moves, one per target: default all three with
       a flight time; two of them must be named without one.
-    - ``first_guess``: "conic" (default; :func:`patched_conic_guess`, arriving at the target
-      flight time or, without one, at the injection's own closest approach) or "injection".
+    - ``first_guess``: "conic" (default;
+      :func:`tapp.targeting.program.patched_conic_guess`, arriving at the target flight time
+      or, without one, at the injection's own closest approach) or "injection".
     - ``tolerances`` (default 1 km, 1 km, 1 s), ``increments`` (default 1e-5 km/s),
       ``iterations_per_partials``, ``partial_sets``, ``analytic_partials``, ``broyden``,
       ``step_halving`` (:class:`SearchControls`), and the scan ``max_flight_time_s``,

@@ -5,7 +5,8 @@
 - :mod:`tapp.tracking.pieces`: the trajectory in pieces, restarted at the stochastic
   accelerations' bounds and at the burns, with the partials of their parameters;
 - :mod:`tapp.tracking.noise`: fit-world and real-world noise, per-pass AᵀWA and AᵀWMWA;
-- :mod:`tapp.tracking.simulate`: trajectory, partials, records, miss partials -> :class:`T13`;
+- :mod:`tapp.tracking.simulate`: trajectory, partials, records, miss partials ->
+  :class:`~tapp.io.tape.t13.T13`;
 - :mod:`tapp.tracking.encounter`: a B-plane miss must be an encounter; ``[targeting]``
   retargets the injection by SEARCH first;
 - :mod:`tapp.io.ccsds.oem`: CCSDS OEM 2.0 (KVN) writer.

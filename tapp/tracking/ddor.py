@@ -29,11 +29,11 @@ angle from the moving spacecraft), with the partials of
 :meth:`tapp.measurements.ddor.DdorModel.quasar_partials`.
 
 Noise in ns is a delay, c σ km; noise in nrad is an angle, whose delay σ |b_proj| km grows
-with the baseline length seen from the spacecraft (:func:`projected_baseline_km`). Fit and
-real tables use the same of the two. The windows are those of the tracking grid
-(``tracking.data_interval_s``, ``start``, ``end``) where both stations see the spacecraft
-above their masks and outside their blackouts; the points of one window share its real-world
-bias.
+with the baseline length seen from the spacecraft
+(:func:`tapp.measurements.ddor.projected_baseline_km`). Fit and real tables use the same of
+the two. The windows are those of the tracking grid (``tracking.data_interval_s``,
+``start``, ``end``) where both stations see the spacecraft above their masks and outside
+their blackouts; the points of one window share its real-world bias.
 """
 
 from __future__ import annotations

@@ -175,8 +175,8 @@ class PassRows:
     Attributes
     ----------
     fit : (n, n_o) W^{1/2} A: fitᵀfit = AᵀWA, 1/(u_a u_b).
-    parts : the :data:`PARTS` of AᵀWMWA: white (n, n_o), bias (1, n_o) and correlated
-        (n, n_o) rows ((0, n_o) where that σ is zero); their Grams sum to AᵀWMWA.
+    parts : the :data:`~tapp.io.tape.t13.PARTS` of AᵀWMWA: white (n, n_o), bias (1, n_o) and
+        correlated (n, n_o) rows ((0, n_o) where that σ is zero); their Grams sum to AᵀWMWA.
     """
 
     fit: np.ndarray

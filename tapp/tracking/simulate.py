@@ -822,14 +822,6 @@ def simulate(scenario: Scenario, *, raw: bool = False,
              accept_poor_fit: bool = False) -> Simulation:
     """Run TAPP I on a scenario: return the T13 tape and the trajectory.
 
-    Parameters
-    ----------
-    scenario : Scenario
-    raw : also keep the per-observation rows (``tape.raw``) for validation.
-    progress : called with (stage, step, total) as the work advances.
-    accept_poor_fit : fly a ``[reference]`` fit worse than its ``max_fit_error_m``
-        (:func:`tapp.tracking.reference.fitted`; refused otherwise).
-
     A ``[reference]`` trajectory is first fitted by the force model over each arc between
     the burns, and the fitted trajectory (the injection state and the burns) is flown
     (:mod:`tapp.tracking.reference`).
@@ -837,6 +829,14 @@ def simulate(scenario: Scenario, *, raw: bool = False,
     A B-plane miss is first checked for an encounter, after the ``[targeting]`` of the
     scenario has retargeted its injection (:func:`tapp.tracking.encounter.prepare_encounter`):
     the tape and the trajectory are those of the targeted injection.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    raw : also keep the per-observation rows (``tape.raw``) for validation.
+    progress : called with (stage, step, total) as the work advances.
+    accept_poor_fit : fly a ``[reference]`` fit worse than its ``max_fit_error_m``
+        (:func:`tapp.tracking.reference.fitted`; refused otherwise).
 
     Raises
     ------
