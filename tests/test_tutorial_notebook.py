@@ -14,6 +14,7 @@ import os
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 
 NOTEBOOK = Path(__file__).resolve().parents[1] / "docs" / "tutorial.ipynb"
 
@@ -47,5 +48,11 @@ def test_every_cell_runs_and_says_what_its_objects_hold(tmp_path: Path) -> None:
     assert f"total: 99 % {total_99:.1f} m/s" in text
     sigma = namespace["miss"]["sigma"]
     assert f"'B·R km': {round(sigma[0], 4)}" in text and sigma[0] > 0
+    frame, budget = namespace["frame"], namespace["miss"]["budget"]
+    assert list(frame.index) == budget["sources"]  # a DataFrame of the budget, every source
+    assert np.allclose(np.sqrt((frame.to_numpy() ** 2).sum(axis=0)), sigma,
+                       rtol=10 * budget["closure"] + 1e-12)
+    top = frame["B·R km"].abs().idxmax()
+    assert text.count(top) >= 1  # the largest source printed first
     assert {p.name for p in tmp_path.iterdir()} == {"bplane_ellipses.png", "bplane_scatter.png"}
     assert matplotlib.get_backend() == backend  # the plots chose no backend
