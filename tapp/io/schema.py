@@ -26,7 +26,7 @@ Field names are the TOML keys; a key that is not a Python identifier, or that cl
 pydantic attribute (``json``, ``copy``, ...), is declared ``x: T = Field(default, alias="key")``
 (messages use the key). Validate one table of a larger file with ``prefix="table"``.
 
-The schemas: :class:`tapp.tracking.scenario.ScenarioFile` (tracking scenarios),
+The schemas: :class:`tapp.tracking.scenario_file.ScenarioFile` (tracking scenarios),
 :class:`tapp.od.setup.StudyFile` (the study file),
 :class:`tapp.targeting.searchfile.SearchFile` (SEARCH scenarios),
 :class:`iter.sweepfile.SweepFile` (ITER sweep files), and the tables they share:

@@ -22,7 +22,7 @@ from tapp.io.tomlfile import read_toml
 from tapp.processor.deck import Deck, bind
 from tapp.processor.sequencing import process
 from tapp.processor.tape32 import build_t32
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 
 SCENARIOS = EXAMPLES

@@ -25,7 +25,7 @@ from tapp.io.tomlfile import read_toml
 from tapp.processor.deck import Deck, bind, read_deck
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.sequencing import Processor, Run
-from tapp.tracking.scenario import read_scenario
+from tapp.tracking.scenario_build import read_scenario
 from tapp.tracking.simulate import simulate
 
 SCENARIOS = EXAMPLES

@@ -14,7 +14,8 @@ from tapp.io.tape.t13 import T13
 from tapp.measurements import wrap_angle_rad
 from tapp.measurements.stations import Station
 from tapp.orbit.elements import elements_to_cartesian
-from tapp.tracking.scenario import Scenario, parse_scenario, read_scenario
+from tapp.tracking.scenario import Scenario
+from tapp.tracking.scenario_build import parse_scenario, read_scenario
 from tapp.tracking.simulate import equinoctial_elements, miss_partials, simulate
 from tests.tapp.tracking.helpers import A_KM, leo_document, leo_scenario, scaled_close
 
