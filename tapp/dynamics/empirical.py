@@ -16,7 +16,7 @@ Three parameters per frame, nominal 0, in km/s²:
 Their sensitivities S = ∂x(t)/∂a = ∫ Φ(t, τ) B(τ) dτ with B = [0; R(τ)] (R the RIC → inertial
 rotation [R̂ Î Ĉ] of the trajectory, or I) come out of the variational equations
 (:mod:`tapp.dynamics.equations`); TAPP I turns them into the partials of piecewise-constant
-stochastic accelerations (:mod:`tapp.tracking.stochastic`). The variational equations take
+stochastic accelerations (:mod:`tapp.tracking.pieces`). The variational equations take
 ∂a/∂r only (the A matrix has no ∂a/∂v block); the RIC term depends on v, but its ∂/∂r and ∂/∂v
 are proportional to a, so they vanish at the nominal a = 0 where TAPP I evaluates them.
 """

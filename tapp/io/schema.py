@@ -154,7 +154,7 @@ def _eop_source(value: object) -> object:
 
 
 #: Where the EOP come from (``eop``): "iers", "none" or a finals2000A file path (relative to
-#: the scenario file); see :func:`tapp.frames.orientation.orientation_for`.
+#: the scenario file); see :func:`tapp.io.eop_file.orientation_for`.
 EopSource = Annotated[str, PlainValidator(_eop_source, json_schema_input_type=str), Field(
     description="Earth orientation parameters of iau2006: \"iers\" (the shipped IERS table), "
     "\"none\" (UT1 = UTC, no polar motion: a study beyond the predictions) or the path of a "

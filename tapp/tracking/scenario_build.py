@@ -22,9 +22,10 @@ from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.manoeuvres import THRUST_NAMES, Burn
 from tapp.errors import InputError
 from tapp.estimation.gauss_markov import StochasticAccelerations
-from tapp.frames.orientation import EarthOrientation, eop_parameters_of, orientation_for
+from tapp.frames.orientation import EarthOrientation, eop_parameters_of
 from tapp.frames.time import Epoch, parse_epoch
 from tapp.frames.timescales import seconds_after
+from tapp.io.eop_file import orientation_for
 from tapp.io.noise_file import FitTable, NoiseTable, RealTable
 from tapp.io.schedule_file import read_schedule
 from tapp.io.schema import validate

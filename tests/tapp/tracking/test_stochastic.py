@@ -2,7 +2,7 @@
 differences, the unchanged transition, and the tape's record of them.
 
 The partials on the tape come from one propagation restarted at the interval boundaries and
-composed forward (tapp.tracking.stochastic). The reference here differences whole trajectories
+composed forward (tapp.tracking.pieces). The reference here differences whole trajectories
 instead: propagated state-only, restarted at t_k and t_{k+1} with the acceleration ±ε switched on
 in interval k alone, from the epoch state the tape's partials are referred to.
 """
