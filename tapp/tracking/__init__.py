@@ -16,8 +16,7 @@
 from tapp.tracking.noise import FitNoise, RealNoise, covariance_block, normal_matrices
 from tapp.tracking.scenario import Parameter, Scenario
 from tapp.tracking.scenario_build import parse_scenario, read_scenario
-from tapp.tracking.simulate import Simulation, equinoctial_elements, miss_partials, simulate
+from tapp.tracking.simulate import Simulation, miss_partials, simulate
 
 __all__ = ["FitNoise", "Parameter", "RealNoise", "Scenario", "Simulation", "covariance_block",
-           "equinoctial_elements", "miss_partials", "normal_matrices", "parse_scenario",
-           "read_scenario", "simulate"]
+           "miss_partials", "normal_matrices", "parse_scenario", "read_scenario", "simulate"]

@@ -20,7 +20,8 @@ from tapp.dynamics.empirical import PARAMETERS
 from tapp.errors import InputError, TapeError
 from tapp.io.tape.t13 import validate
 from tapp.io.tape.t13_hdf5 import read_t13, write_t13
-from tapp.tracking.simulate import equinoctial_elements, simulate
+from tapp.orbit.equinoctial import equinoctial_elements
+from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import leo_scenario
 
 #: 3000 s intervals over the 3 h arc (the last 1800 s), an epoch at 5400 s inside interval 2,
