@@ -28,7 +28,7 @@ light.
 #: The front door: name -> "module:attribute", imported on first access (PEP 562).
 _LAZY = {
     "Scenario": "tapp.tracking.scenario:Scenario",
-    "read_scenario": "tapp.tracking.scenario:read_scenario",
+    "read_scenario": "tapp.tracking.scenario_build:read_scenario",
     "simulate": "tapp.api.tracking:simulate",
     "SimulateResult": "tapp.api.tracking:SimulateResult",
     "process": "tapp.api.processing:process",

@@ -17,7 +17,7 @@ from tapp.io.tomlfile import read_toml
 from tapp.targeting.exits import exit_code
 from tapp.targeting.program import BPlaneSearch, TargetingRun, run_search
 from tapp.targeting.searchfile import scenario_search
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 
 __all__ = ["TargetingResult", "is_tracking_scenario", "problem_of", "search"]
 

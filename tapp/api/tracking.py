@@ -10,7 +10,8 @@ from pathlib import Path
 
 from tapp.io.tape.t13 import T13, summary
 from tapp.io.tape.t13_hdf5 import write_t13
-from tapp.tracking.scenario import Scenario, read_scenario
+from tapp.tracking.scenario import Scenario
+from tapp.tracking.scenario_build import read_scenario
 from tapp.tracking.simulate import ProgressCallback, Simulation
 from tapp.tracking.simulate import simulate as run_simulation
 
@@ -76,7 +77,7 @@ def simulate(scenario: Scenario | Path | str, *, raw: bool = False,
     Parameters
     ----------
     scenario : a parsed scenario, or its TOML file (read by
-        :func:`tapp.tracking.scenario.read_scenario`, ``earth_orientation`` overriding the
+        :func:`tapp.tracking.scenario_build.read_scenario`, ``earth_orientation`` overriding the
         file's model; ignored for a parsed scenario).
     raw : keep every observation's partial row, weight and noise (``tape.raw``).
     progress : called with (stage, step, total) as the work advances.

@@ -22,7 +22,7 @@ Exit codes (every command keeps this contract)
     file is, with the field (``noise.fit.sigma_range_m``, ``records/info``). Input files
     are regular files: a FIFO, a device (a symbolic link to ``/dev/zero``), a socket or a
     directory is refused before it is read (:mod:`iter.inputfile`); a user's EOP table is
-    checked field by field (:mod:`tapp.frames.eop`, naming the line); matrices of decks and
+    checked field by field (:mod:`tapp.frames.iers`, naming the line); matrices of decks and
     tapes are checked symmetric and positive semi-definite on each entry's own scale, and
     numbers that would overflow downstream are refused where they are read (deck σ's within
     1e-30..1e30, tape numbers within 1e60); ``tapp guide`` refuses a tape whose linear
@@ -64,7 +64,7 @@ cases (the product of the loops' ``sets``), TAPP II Monte Carlos of
 ``tapp.targeting.program.MAX_SCAN_STEPS`` steps, local Dask clusters of at most
 ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (no limit with ``--scheduler``), TOML
 files of at most ``iter.inputfile.MAX_TOML_BYTES`` (4 MiB), TDM and CSV observation files of
-``tapp.io.obsfile.MAX_TEXT_BYTES`` (64 MiB), EOP tables of ``tapp.frames.eop.MAX_EOP_BYTES``
+``tapp.io.obsfile.MAX_TEXT_BYTES`` (64 MiB), EOP tables of ``tapp.io.eop_file.MAX_EOP_BYTES``
 (16 MiB), TAPP III decks of at most ``tapp.processor.deck.MAX_COMMANDS`` commands a list and
 runs of at most ``MAX_ENTITIES`` output entities and ``MAX_ENTITY_NUMBERS`` numbers in them;
 each message gives the size that would be needed and the option or field to change.

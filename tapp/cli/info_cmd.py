@@ -29,7 +29,8 @@ def info(json_out: JsonOpt = None) -> None:
         from tapp.constants import MAX_DEGREE
         from tapp.dynamics.compiled import cache_dir
         from tapp.dynamics.ephemeris import de421_path
-        from tapp.frames.eop import finals2000a, iers_data_dir, leap_seconds
+        from tapp.frames.iers import iers_data_dir, leap_seconds
+        from tapp.io.eop_file import finals2000a
         from tapp.io.outputs import check_paths
 
         check_paths({}, {"--json": json_file(json_out)})

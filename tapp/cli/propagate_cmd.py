@@ -87,8 +87,8 @@ def propagate(
         from tapp.dynamics import Propagator, earth_model
         from tapp.dynamics.ephemeris import check_coverage, utc_to_tdb_jd
         from tapp.dynamics.propagate import check_tolerance
-        from tapp.frames.orientation import orientation_for
         from tapp.frames.time import parse_epoch
+        from tapp.io.eop_file import orientation_for
         from tapp.io.orbits import parse_orbit
         from tapp.io.outputs import check_paths
 

@@ -236,7 +236,7 @@ def simulate(
             segment_comments,
             write_trajectory_spk,
         )
-        from tapp.tracking.scenario import read_scenario
+        from tapp.tracking.scenario_build import read_scenario
 
         outputs = {"-o/--output": output, "--oem": oem, "--tdm": tdm, "--spk": spk,
                    "--json": json_file(json_out)}

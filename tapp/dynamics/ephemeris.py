@@ -26,7 +26,8 @@ from jplephem.spk import SPK
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
 from tapp.frames.chebyshev import ChebyshevTable, fit_chebyshev, segment_starts
-from tapp.frames.eop import MJD_OFFSET, EopTable, leap_seconds
+from tapp.frames.eop import MJD_OFFSET, EopTable
+from tapp.frames.iers import leap_seconds
 from tapp.frames.time import Epoch
 from tapp.frames.timescales import TimeScales, TT_MINUS_TAI_s
 

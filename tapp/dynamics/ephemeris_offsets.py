@@ -27,7 +27,7 @@ The offset enters wherever the body's position does:
 The shadow boundaries (integration events) are located on the ephemeris without the offsets:
 with δ ≠ 0 (a differenced run; the nominal is 0) a boundary the state model crosses moves by
 |δ| / v, a fraction of a second for kilometres. The offsets of the Earth (the stations' frame)
-and of the model's centre are refused by the scenario (:mod:`tapp.tracking.scenario`).
+and of the model's centre are refused by the scenario (:mod:`tapp.tracking.scenario_build`).
 """
 
 from __future__ import annotations

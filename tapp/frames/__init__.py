@@ -3,7 +3,8 @@
 Units are km, km/s, s and rad; time is SI seconds from the scenario epoch (a UTC calendar
 date; :mod:`tapp.frames.timescales`). The Earth-fixed frame is reached from the inertial one by
 the scenario's Earth orientation (:mod:`tapp.frames.orientation`): the IAU 2006/2000A GCRS ->
-ITRS rotation with IERS EOP, or the gmst model R3(GMST IAU-82 + omega t) with UT1 = UTC of
+ITRS rotation with IERS EOP (the tables of :mod:`tapp.frames.eop`, the shipped IERS files read
+by :mod:`tapp.frames.iers`), or the gmst model R3(GMST IAU-82 + omega t) with UT1 = UTC of
 :mod:`tapp.frames.rotation`. :mod:`tapp.frames.ric` gives the radial / in-track / cross-track
 axes of a state and rotates covariances into them. Trajectory files are brought into the
 scenario's time and frame by :mod:`tapp.frames.timesystems` (CCSDS time systems, SPICE's ET)

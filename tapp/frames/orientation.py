@@ -51,7 +51,8 @@ import numpy as np
 from tapp.constants import OMEGA_EARTH_rad_s
 from tapp.errors import InputError
 from tapp.frames.chebyshev import ChebyshevTable, fit_chebyshev
-from tapp.frames.eop import EopTable, finals2000a
+from tapp.frames.eop import EopTable
+from tapp.frames.iers import shipped_finals2000a
 from tapp.frames.rotation import earth_rotation_angle_rad, r3
 from tapp.frames.time import Epoch
 from tapp.frames.timescales import TimeScales
@@ -189,7 +190,7 @@ class EarthOrientation:
         InputError
             For an epoch before 1972 or outside the EOP table.
         """
-        scales = TimeScales.of(epoch, finals2000a() if eop is None else eop, source)
+        scales = TimeScales.of(epoch, shipped_finals2000a() if eop is None else eop, source)
         whole, fraction = scales.ut1(np.zeros(1), source)
         return cls("iau2006", float(erfa.era00(whole[0], fraction[0])), scales)
 
@@ -384,29 +385,6 @@ def as_orientation(value: EarthOrientation | float) -> EarthOrientation:
     if isinstance(value, EarthOrientation):
         return value
     return EarthOrientation.gmst_angle(float(value))
-
-
-def orientation_for(model: str, epoch: Epoch, eop: str = "iers", base_dir: Path | None = None,
-                    source: str = "scenario") -> EarthOrientation:
-    """Build a scenario's Earth orientation from its ``earth_orientation`` and ``eop`` keys.
-
-    ``eop``: "iers" (the IERS table shipped in astropy-iers-data), "none" (UT1 = UTC, no polar
-    motion or CIP offsets: a study beyond the predictions) or the path of an IERS
-    ``finals2000A`` file, relative to ``base_dir``. The gmst model uses no EOP.
-
-    Raises
-    ------
-    InputError
-        Naming ``source``: an unknown model, an unreadable EOP file, an epoch outside the table.
-    """
-    table = None
-    if check_model(model, source) == "iau2006" and eop == "none":
-        table = EopTable.zero()
-    elif model == "iau2006" and eop != "iers":
-        path = Path(eop)
-        table = finals2000a((base_dir / path) if base_dir and not path.is_absolute() else path)
-    return EarthOrientation.of(model, epoch, table, source)
-
 
 
 # --- partials w.r.t. constant offsets of the Earth orientation parameters ------------------

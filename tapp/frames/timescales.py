@@ -25,7 +25,8 @@ import erfa
 import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
-from tapp.frames.eop import MJD_OFFSET, EopTable, LeapSeconds, leap_seconds
+from tapp.frames.eop import MJD_OFFSET, EopTable, LeapSeconds
+from tapp.frames.iers import leap_seconds
 from tapp.frames.time import Epoch
 
 #: TT − TAI, s (IAU 1991 Resolution A4).

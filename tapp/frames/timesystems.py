@@ -30,7 +30,8 @@ import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
 from tapp.errors import InputError
-from tapp.frames.eop import MJD_OFFSET, EopTable, leap_seconds
+from tapp.frames.eop import MJD_OFFSET, EopTable
+from tapp.frames.iers import leap_seconds
 from tapp.frames.time import JD_J2000, Epoch
 from tapp.frames.timescales import TimeScales, TT_MINUS_TAI_s
 

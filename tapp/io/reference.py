@@ -39,7 +39,7 @@ class Kind:
 #: Every kind of input file, as ``tapp schema KIND`` names it.
 KINDS: dict[str, Kind] = {
     "scenario": Kind(
-        "tapp.tracking.scenario:ScenarioFile", "Tracking scenario (TAPP I)",
+        "tapp.tracking.scenario_file:ScenarioFile", "Tracking scenario (TAPP I)",
         "What `tapp simulate` (and a pipeline) flies and tracks: the injection, the force "
         "models, the parameters, the stations and their schedule, the fit-world and "
         "real-world noise, the T13 times and the miss parameters; optionally a SEARCH "

@@ -26,7 +26,7 @@ Field names are the TOML keys; a key that is not a Python identifier, or that cl
 pydantic attribute (``json``, ``copy``, ...), is declared ``x: T = Field(default, alias="key")``
 (messages use the key). Validate one table of a larger file with ``prefix="table"``.
 
-The schemas: :class:`tapp.tracking.scenario.ScenarioFile` (tracking scenarios),
+The schemas: :class:`tapp.tracking.scenario_file.ScenarioFile` (tracking scenarios),
 :class:`tapp.od.setup.StudyFile` (the study file),
 :class:`tapp.targeting.searchfile.SearchFile` (SEARCH scenarios),
 :class:`iter.sweepfile.SweepFile` (ITER sweep files), and the tables they share:
@@ -154,7 +154,7 @@ def _eop_source(value: object) -> object:
 
 
 #: Where the EOP come from (``eop``): "iers", "none" or a finals2000A file path (relative to
-#: the scenario file); see :func:`tapp.frames.orientation.orientation_for`.
+#: the scenario file); see :func:`tapp.io.eop_file.orientation_for`.
 EopSource = Annotated[str, PlainValidator(_eop_source, json_schema_input_type=str), Field(
     description="Earth orientation parameters of iau2006: \"iers\" (the shipped IERS table), "
     "\"none\" (UT1 = UTC, no polar motion: a study beyond the predictions) or the path of a "

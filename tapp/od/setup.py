@@ -45,8 +45,9 @@ from tapp.constants import GM_EARTH_km3_s2
 from tapp.dynamics import ForceModel, Propagator, earth_model
 from tapp.errors import InputError
 from tapp.examples import STUDY_FILE
-from tapp.frames.orientation import EarthOrientation, check_model, orientation_for
+from tapp.frames.orientation import EarthOrientation, check_model
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.io.eop_file import orientation_for
 from tapp.io.models_file import GravityName
 from tapp.io.noise_file import FitTable
 from tapp.io.orbits import OrbitTable, parse_orbit

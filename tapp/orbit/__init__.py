@@ -1,6 +1,7 @@
 """Two-body orbit kernels (the ``orbit/`` floor of the layout in DESIGN.md): orbital elements
-and Kepler's equation (:mod:`tapp.orbit.elements`), Lambert's problem (:mod:`tapp.orbit.lambert`)
-and the B-plane of a hyperbolic approach (:mod:`tapp.orbit.bplane`).
+and Kepler's equation (:mod:`tapp.orbit.elements`), equinoctial elements
+(:mod:`tapp.orbit.equinoctial`), Lambert's problem (:mod:`tapp.orbit.lambert`) and the B-plane of
+a hyperbolic approach (:mod:`tapp.orbit.bplane`).
 
 Plain float64 arrays in and out, km, km/s, s; no I/O.
 """
@@ -24,6 +25,7 @@ from tapp.orbit.elements import (
     true_to_hyperbolic_anomaly,
     true_to_mean_anomaly,
 )
+from tapp.orbit.equinoctial import equinoctial_elements
 from tapp.orbit.lambert import lambert
 
 __all__ = [
@@ -35,6 +37,7 @@ __all__ = [
     "eccentric_to_mean_anomaly",
     "eccentric_to_true_anomaly",
     "elements_to_cartesian",
+    "equinoctial_elements",
     "hyperbolic_to_mean_anomaly",
     "hyperbolic_to_true_anomaly",
     "kepler_states",

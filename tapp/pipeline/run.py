@@ -36,10 +36,12 @@ from tapp.io.tape.t13_hdf5 import t13_file_writer
 from tapp.io.tape.t32_hdf5 import read_t32, t32_file_writer
 from tapp.pipeline.spec import Pipeline, read_pipeline, with_overrides
 from tapp.pipeline.steps import process_tape
-from tapp.processor.deck import Deck, observations_used
+from tapp.processor.deck import Deck
+from tapp.processor.deck_bind import observations_used
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.tape32 import build_t32, t32_provenance
-from tapp.tracking.scenario import Scenario, parse_scenario
+from tapp.tracking.scenario import Scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 
 #: What a pipeline directory holds.

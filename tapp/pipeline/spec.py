@@ -15,7 +15,7 @@ Layout::
     shard_size = 5000                   # optional, samples per shard (multiple of 1,000)
 
 Each part is validated by its own schema (the scenario by
-:class:`tapp.tracking.scenario.ScenarioFile`, the deck by :class:`tapp.processor.deck.Deck`,
+:class:`tapp.tracking.scenario_file.ScenarioFile`, the deck by :class:`tapp.processor.deck.Deck`,
 the guidance file by :class:`tapp.guidance.guidefile.GuideFile`); an error in an inlined part
 names this file and the part (``pipe.toml [deck]: times.print: ...``), one in a referenced
 file names that file.

@@ -20,7 +20,7 @@ from tapp.guidance.study import GuidanceResult, guidance_study
 from tapp.io.tape.t13 import T13, memory_pairs
 from tapp.io.tape.t13_hdf5 import open_t13
 from tapp.io.tape.t32_hdf5 import read_t32
-from tapp.processor.deck import bind
+from tapp.processor.deck_bind import bind
 from tapp.processor.plan import Plan
 from tapp.processor.sequencing import Run, process
 
@@ -34,7 +34,7 @@ def process_tape(tape: T13 | Path | str, deck, source: str,
 
     A tape file is read lazily (:func:`tapp.io.tape.t13_hdf5.open_t13`), a tape in memory
     through :func:`tapp.io.tape.t13.memory_pairs`, and the deck bound to it
-    (:func:`tapp.processor.deck.bind`): what ``tapp process``,
+    (:func:`tapp.processor.deck_bind.bind`): what ``tapp process``,
     :func:`tapp.api.processing.process` and the pipeline do. ``source`` (the deck file) is
     named in errors.
     """

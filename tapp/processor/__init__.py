@@ -10,7 +10,8 @@ information factors, shared with TAPP II's navigation). Modules: :mod:`.links` (
 and constraint links), :mod:`.representations` (orbit sets, systems, partitions: the
 partials accumulator), :mod:`.commands` (output entities in the seed's notation and as
 aliases), :mod:`.executive`,
-:mod:`.plan` and :mod:`.deck` (the manual inputs), :mod:`.sequencing` (the four phases),
+:mod:`.plan` and :mod:`.deck` (the manual inputs), :mod:`.deck_bind` (the deck bound to a
+tape), :mod:`.sequencing` (the four phases),
 :mod:`.printout` (O3 text and JSON).
 """
 

@@ -1,6 +1,6 @@
 """A TAPP III run bound to its tape: what the deck asks for, in the tape's indices.
 
-:func:`tapp.processor.deck.bind` builds a :class:`Plan` from a deck file and a T13 header;
+:func:`tapp.processor.deck_bind.bind` builds a :class:`Plan` from a deck file and a T13 header;
 the sequencer (:mod:`tapp.processor.sequencing`) runs it. Indices here are 0-based positions
 and T13 time indices k (0 = injection, record k covers (t_{k-1}, t_k]).
 """

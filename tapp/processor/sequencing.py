@@ -715,7 +715,7 @@ def process(data: TrackingData, plan: Plan, *, source: str = "deck",
     Parameters
     ----------
     data : the tape's header and pair blocks.
-    plan : the bound deck (:func:`tapp.processor.deck.bind`).
+    plan : the bound deck (:func:`tapp.processor.deck_bind.bind`).
     source : named in errors (the deck file).
     progress : called with (k, n_IT) after each cycle.
 

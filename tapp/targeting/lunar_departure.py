@@ -21,8 +21,8 @@ import numpy as np
 from tapp.constants import SECONDS_PER_DAY, GM_EARTH_km3_s2, R_EARTH_km
 from tapp.dynamics import Propagator, earth_model
 from tapp.dynamics.ephemeris import position_km, utc_to_tdb_jd
-from tapp.frames.orientation import orientation_for
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.io.eop_file import orientation_for
 from tapp.targeting.program import BPlaneProgram, BPlaneSearch, run_search
 
 #: Time step of the Moon-velocity central difference, days (1 min).

@@ -17,8 +17,9 @@ from tapp.constants import SECONDS_PER_DAY, RADIUS_km
 from tapp.dynamics import Propagator
 from tapp.dynamics.ephemeris import tdb_reader
 from tapp.errors import InputError
-from tapp.frames.orientation import EarthOrientation, orientation_for
+from tapp.frames.orientation import EarthOrientation
 from tapp.frames.time import Epoch, parse_epoch
+from tapp.io.eop_file import orientation_for
 from tapp.io.models_file import ModelTable
 from tapp.io.orbits import OrbitTable
 from tapp.io.schema import (
@@ -211,7 +212,7 @@ def scenario_search(data: Mapping, source: str) -> BPlaneSearch:
 
     - ``epoch``: UTC date of the injection (t = 0); ``title``: free text (optional);
       ``earth_orientation`` ("iau2006", the default, or "gmst") and ``eop`` ("iers", "none" or
-      a finals2000A path): :func:`tapp.frames.orientation.orientation_for`.
+      a finals2000A path): :func:`tapp.io.eop_file.orientation_for`.
     - ``[injection]``: the injection state, the tracking scenario's table
       (:class:`tapp.io.orbits.OrbitTable`): ``r_km`` (3) and ``v_km_s`` (3, the first guess x0),
       or classical elements; EME2000, Earth-centred; a first guess whose perigee is below the

@@ -1,7 +1,9 @@
 """TAPP I: tracking simulation from a scenario to the T13 tape (and a CCSDS OEM trajectory).
 
-- :mod:`tapp.tracking.scenario`: TOML scenario -> frozen dataclasses (its ``[[manoeuvre]]``
-  tables: :mod:`tapp.tracking.manoeuvres`);
+- :mod:`tapp.tracking.scenario`: the scenario as frozen dataclasses;
+  :mod:`tapp.tracking.scenario_file`: its file's tables and keys (its ``[[manoeuvre]]`` tables:
+  :mod:`tapp.tracking.manoeuvres`); :mod:`tapp.tracking.scenario_build`: reading the file and
+  building the scenario;
 - :mod:`tapp.tracking.pieces`: the trajectory in pieces, restarted at the stochastic
   accelerations' bounds and at the burns, with the partials of their parameters;
 - :mod:`tapp.tracking.noise`: fit-world and real-world noise, per-pass AᵀWA and AᵀWMWA;
@@ -13,9 +15,9 @@
 """
 
 from tapp.tracking.noise import FitNoise, RealNoise, covariance_block, normal_matrices
-from tapp.tracking.scenario import Parameter, Scenario, parse_scenario, read_scenario
-from tapp.tracking.simulate import Simulation, equinoctial_elements, miss_partials, simulate
+from tapp.tracking.scenario import Parameter, Scenario
+from tapp.tracking.scenario_build import parse_scenario, read_scenario
+from tapp.tracking.simulate import Simulation, miss_partials, simulate
 
 __all__ = ["FitNoise", "Parameter", "RealNoise", "Scenario", "Simulation", "covariance_block",
-           "equinoctial_elements", "miss_partials", "normal_matrices", "parse_scenario",
-           "read_scenario", "simulate"]
+           "miss_partials", "normal_matrices", "parse_scenario", "read_scenario", "simulate"]

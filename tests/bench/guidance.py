@@ -73,7 +73,7 @@ from tapp.pipeline.steps import process_tape
 from tapp.processor.deck import Deck
 from tapp.processor.tape32 import build_t32, t32_provenance
 from tapp.report.guidance import guidance_dict
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 from tests.bench import legacy
 from tests.bench.common import (

@@ -21,7 +21,8 @@ from scipy.integrate import solve_ivp
 
 from tapp.dynamics import Propagator
 from tapp.dynamics.equations import initial_augmented, split_augmented
-from tapp.frames.orientation import MODELS, orientation_for
+from tapp.frames.orientation import MODELS
+from tapp.io.eop_file import orientation_for
 from tapp.measurements.observations import predict
 from tapp.od import setup
 from tapp.od.batch import _linearise, differential_correction

@@ -203,7 +203,7 @@ def _agreement(ref, fit) -> dict[str, Any]:
 
 def race(out_path: Path) -> None:
     """Run the race and write its numbers to ``out_path`` (JSON); progress to stderr."""
-    from tapp.frames.orientation import orientation_for
+    from tapp.io.eop_file import orientation_for
     from tapp.od.batch import DCSettings
     from tests.bench import orekit_peer as peer
 

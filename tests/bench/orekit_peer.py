@@ -8,7 +8,7 @@ tapp's problem, and how:
 
 - **Time and Earth orientation.** Orekit reads no data files here. Its UTC − TAI offsets are
   tapp's leap-second table (``Leap_Second.dat`` of astropy-iers-data, read by
-  :func:`tapp.frames.eop.leap_seconds`) and its EOP are the daily rows of the run's
+  :func:`tapp.frames.iers.leap_seconds`) and its EOP are the daily rows of the run's
   :class:`~tapp.frames.eop.EopTable` (``finals2000A.all``, Bulletin B where present, as
   tapp reads it), handed over by two small loaders (:func:`world`). The inertial frame is the
   GCRF (tapp's iau2006 frame) and the Earth frame Orekit's ITRF of the IERS 2010 conventions
@@ -50,7 +50,8 @@ from typing import Any
 import numpy as np
 
 from tapp.constants import GM_EARTH_km3_s2, R_EARTH_km, egm96_coefficients
-from tapp.frames.eop import MJD_OFFSET, leap_seconds
+from tapp.frames.eop import MJD_OFFSET
+from tapp.frames.iers import leap_seconds
 from tapp.frames.orientation import EarthOrientation
 from tapp.measurements.observations import Observations
 from tapp.measurements.stations import Station

@@ -61,7 +61,8 @@ from tapp.io.tape.t13 import (
     TapeStations,
 )
 from tapp.io.tape.t13_hdf5 import _write, open_t13, write_t13
-from tapp.processor.deck import bind, read_deck
+from tapp.processor.deck import read_deck
+from tapp.processor.deck_bind import bind
 from tapp.processor.sequencing import Processor, Run, process
 from tests.bench import legacy
 from tests.bench.common import (
@@ -382,7 +383,8 @@ def _agreement(run: Run, peer: PeerResult) -> float:
 #: tape is version 2, then times each deck as :func:`measure` does; it replies the best times
 #: and the matrices of the check entity at the asked print times.
 _NORMAL_FORM_CHILD = """
-from tapp.processor.deck import bind, read_deck
+from tapp.processor.deck import read_deck
+from tapp.processor.deck_bind import bind
 from tapp.processor.sequencing import process
 from tapp.tape.t13_hdf5 import open_t13
 

@@ -19,7 +19,8 @@ from tapp.io.orbits import OrbitTable
 from tapp.io.tomlfile import read_toml
 from tapp.od.setup import read_study
 from tapp.targeting.searchfile import SearchFile, scenario_search
-from tapp.tracking.scenario import ScenarioFile, parse_scenario, read_scenario
+from tapp.tracking.scenario_build import parse_scenario, read_scenario
+from tapp.tracking.scenario_file import ScenarioFile
 
 
 def _search(path: Path) -> object:

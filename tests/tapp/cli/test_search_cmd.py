@@ -17,7 +17,7 @@ from tapp.cli.common import app
 from tapp.cli.search_cmd import exit_code
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.io.tape.t13_hdf5 import read_t13
-from tapp.tracking.scenario import read_scenario
+from tapp.tracking.scenario_build import read_scenario
 from tests.tapp.tracking.encounter_reference import (
     AIM,
     TARGETING,

@@ -21,7 +21,7 @@ from tapp.examples import FOLDER as EXAMPLES
 from tapp.io.ccsds.oem import INTERPOLATION_TOL_KM, INTERPOLATION_TOL_KM_S
 from tapp.io.schedule_file import MAX_SCHEDULE_BYTES
 from tapp.io.tape.t13_hdf5 import read_t13
-from tapp.tracking.scenario import parse_scenario, read_scenario
+from tapp.tracking.scenario_build import parse_scenario, read_scenario
 from tapp.tracking.simulate import EDITING_RULES, simulate
 from tests.tapp.frames.conftest import EPOCH_LINE, put_field, user_eop_table
 from tests.tapp.tracking.encounter_reference import (

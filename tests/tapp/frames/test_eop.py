@@ -1,4 +1,5 @@
-"""IERS EOP table and leap seconds (tapp.frames.eop) against astropy and ERFA on the same files.
+"""IERS EOP table and leap seconds (tapp.frames.eop, .iers; tapp.io.eop_file) against astropy and
+ERFA on the same files.
 
 References: astropy's ``iers.IERS_A`` reading of the same ``finals2000A`` files (astropy-iers-data's
 ``finals2000A.all`` and synthetic files written here in the byte layout of ``ReadMe.finals2000A``),
@@ -14,8 +15,10 @@ import numpy as np
 import pytest
 
 from tapp.errors import InputError
-from tapp.frames.eop import MJD_OFFSET, ARCSEC_rad, EopTable, MAS_rad, finals2000a, leap_seconds
+from tapp.frames.eop import MJD_OFFSET, ARCSEC_rad, EopTable, MAS_rad
+from tapp.frames.iers import leap_seconds
 from tapp.frames.time import Epoch
+from tapp.io.eop_file import finals2000a
 from tests.tapp.frames.conftest import (
     EPOCH_LINE,
     FUTURE_MJD,

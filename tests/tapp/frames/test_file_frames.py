@@ -10,10 +10,10 @@ import pytest
 from astropy.coordinates import GCRS, ITRS, CartesianDifferential, CartesianRepresentation
 
 from tapp.errors import InputError
-from tapp.frames.eop import finals2000a
 from tapp.frames.file_frames import gcrs_from_scenario, to_scenario_frame
 from tapp.frames.orientation import EarthOrientation
 from tapp.frames.time import Epoch
+from tapp.io.eop_file import finals2000a
 from tests.tapp.frames.conftest import astropy_times, iers_frame_bias, without_cip_offsets
 
 EPOCH = Epoch.from_calendar(2026, 3, 7, 5, 17, 3.25)

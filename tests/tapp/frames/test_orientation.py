@@ -16,11 +16,12 @@ import pytest
 from astropy.coordinates import EarthLocation
 
 from tapp.errors import InputError
-from tapp.frames.eop import MJD_OFFSET, ARCSEC_rad, EopTable, MAS_rad, finals2000a
+from tapp.frames.eop import MJD_OFFSET, ARCSEC_rad, EopTable, MAS_rad
 from tapp.frames.geodesy import geodetic_to_ecef
 from tapp.frames.orientation import EarthOrientation, OMEGA_ERA_rad_s
 from tapp.frames.rotation import r3
 from tapp.frames.time import Epoch
+from tapp.io.eop_file import finals2000a
 from tests.tapp.frames.conftest import (
     ERFA_DUBIOUS_YEAR,
     FUTURE_EPOCHS,

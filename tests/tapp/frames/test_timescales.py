@@ -11,7 +11,7 @@ import pytest
 from astropy.time import Time
 
 from tapp.errors import InputError
-from tapp.frames.eop import MJD_OFFSET, EopTable, finals2000a
+from tapp.frames.eop import MJD_OFFSET, EopTable
 from tapp.frames.time import Epoch
 from tapp.frames.timescales import (
     DTDB_STEP_s,
@@ -19,6 +19,7 @@ from tapp.frames.timescales import (
     TT_MINUS_TAI_s,
     topocentric_tdb_minus_tt_s,
 )
+from tapp.io.eop_file import finals2000a
 from tests.tapp.frames.conftest import (
     ERFA_DUBIOUS_YEAR,
     FUTURE_EPOCHS,

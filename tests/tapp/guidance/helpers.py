@@ -19,10 +19,11 @@ from tapp.io.schema import validate
 from tapp.io.tape.t13 import T13, memory_pairs
 from tapp.io.tape.t32 import T32
 from tapp.io.tomlfile import read_toml
-from tapp.processor.deck import Deck, bind
+from tapp.processor.deck import Deck
+from tapp.processor.deck_bind import bind
 from tapp.processor.sequencing import process
 from tapp.processor.tape32 import build_t32
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 
 SCENARIOS = EXAMPLES

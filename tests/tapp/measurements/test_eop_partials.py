@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from tapp.errors import InputError
-from tapp.frames.eop import finals2000a
 from tapp.frames.orientation import EarthOrientation, OMEGA_ERA_rad_s
 from tapp.frames.time import Epoch
+from tapp.io.eop_file import finals2000a
 from tapp.measurements import LightTime, MeasurementModel, Station
 from tapp.measurements.ddor import DdorModel, quasar_direction
 from tapp.measurements.observables import wrap_angle_rad

@@ -8,7 +8,8 @@ import numpy as np
 
 from tapp.io.schema import validate
 from tapp.io.tape.t13 import T13, memory_pairs
-from tapp.processor.deck import Deck, bind, observations_used
+from tapp.processor.deck import Deck
+from tapp.processor.deck_bind import bind, observations_used
 from tapp.processor.sequencing import Run, process
 from tapp.tracking.noise import RealNoise, covariance_block
 from tapp.tracking.simulate import simulate
@@ -61,7 +62,7 @@ def run(tape: T13, doc: Mapping, source: str = "deck.toml") -> Run:
 
 def used(tape: T13, doc: Mapping) -> int:
     """The scalar observations of ``tape`` that a run with the deck document ``doc`` reads
-    (:func:`tapp.processor.deck.observations_used`)."""
+    (:func:`tapp.processor.deck_bind.observations_used`)."""
     plan = bind(validate(Deck, doc, "deck.toml"), memory_pairs(tape).header, "deck.toml")
     return observations_used(plan, tape.pairs.k, tape.pairs.station, tape.pairs.n_obs)
 

@@ -33,8 +33,8 @@ from tapp.processor.deck import (
     MAX_ENTITY_NUMBERS,
     SIGMA_RANGE,
     Deck,
-    bind,
 )
+from tapp.processor.deck_bind import bind
 from tapp.processor.printout import o3_text, run_dict
 from tapp.processor.tape32 import build_t32
 from tests.tapp.processor.helpers import deck, leo_tape, run, sigmas

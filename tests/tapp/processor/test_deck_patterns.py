@@ -16,7 +16,8 @@ import pytest
 from tapp.errors import InputError
 from tapp.io.schema import validate
 from tapp.io.tape.t13 import memory_pairs
-from tapp.processor.deck import Deck, bind
+from tapp.processor.deck import Deck
+from tapp.processor.deck_bind import bind
 from tapp.processor.printout import o3_text, run_dict
 from tests.tapp.processor.helpers import deck, leo_tape, run, sigmas
 

@@ -25,7 +25,8 @@ import pytest
 from tapp.errors import InputError
 from tapp.io.schema import validate
 from tapp.io.tape.t13 import memory_pairs
-from tapp.processor.deck import Deck, bind
+from tapp.processor.deck import Deck
+from tapp.processor.deck_bind import bind
 from tests.tapp.processor.helpers import (
     Z_LIMIT,
     deck,

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from tapp.examples import FOLDER
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.processor.helpers import N_DRAWS, PRINTS, Z_LIMIT, fit_error_moments, run, z_scores
 

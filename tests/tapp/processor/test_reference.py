@@ -38,10 +38,11 @@ from tapp.io.schema import validate
 from tapp.io.tape.t13 import T13, memory_pairs
 from tapp.io.tomlfile import read_toml
 from tapp.processor import sequencing
-from tapp.processor.deck import Deck, bind
+from tapp.processor.deck import Deck
+from tapp.processor.deck_bind import bind
 from tapp.processor.printout import closure
 from tapp.processor.sequencing import process
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.guidance.helpers import SCENARIOS
 from tests.tapp.processor.helpers import scaled_err

@@ -16,7 +16,8 @@ from tapp.errors import InputError
 from tapp.io.schema import validate
 from tapp.io.tape.t13 import memory_pairs
 from tapp.processor.commands import parse_command
-from tapp.processor.deck import MAX_ENTITY_NUMBERS, Deck, bind
+from tapp.processor.deck import MAX_ENTITY_NUMBERS, Deck
+from tapp.processor.deck_bind import bind
 from tapp.processor.executive import Entity
 from tapp.processor.printout import (
     entity_dict,

@@ -9,7 +9,8 @@ import pytest
 from tapp.errors import InputError
 from tapp.io.schema import validate
 from tapp.io.tape.t13_hdf5 import open_t13, write_t13
-from tapp.processor.deck import Deck, bind
+from tapp.processor.deck import Deck
+from tapp.processor.deck_bind import bind
 from tapp.processor.sequencing import Run, process
 from tests.tapp.io.tape.legacy import bits, write_t13_version
 from tests.tapp.processor.helpers import (

@@ -22,7 +22,8 @@ from tapp.errors import InputError
 from tapp.io.schema import validate
 from tapp.io.tape.t13 import memory_pairs
 from tapp.io.tape.t32 import validate as validate_t32
-from tapp.processor.deck import Deck, bind
+from tapp.processor.deck import Deck
+from tapp.processor.deck_bind import bind
 from tapp.processor.sequencing import process
 from tapp.processor.tape32 import build_t32
 from tests.tapp.processor.helpers import (

@@ -22,10 +22,11 @@ from tapp.io.schema import validate
 from tapp.io.tape.t13 import memory_pairs
 from tapp.io.tape.t13_hdf5 import write_t13
 from tapp.io.tomlfile import read_toml
-from tapp.processor.deck import Deck, bind, read_deck
+from tapp.processor.deck import Deck, read_deck
+from tapp.processor.deck_bind import bind
 from tapp.processor.links import Constraint, Permutation
 from tapp.processor.sequencing import Processor, Run
-from tapp.tracking.scenario import read_scenario
+from tapp.tracking.scenario_build import read_scenario
 from tapp.tracking.simulate import simulate
 
 SCENARIOS = EXAMPLES

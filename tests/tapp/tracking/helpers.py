@@ -10,7 +10,8 @@ import numpy as np
 
 from tapp.constants import GM_EARTH_km3_s2, OMEGA_EARTH_rad_s
 from tapp.io.tape.t13 import T13
-from tapp.tracking.scenario import Scenario, parse_scenario
+from tapp.tracking.scenario import Scenario
+from tapp.tracking.scenario_build import parse_scenario
 
 SOURCE = "test_scenario.toml"
 A_KM = 6550.524

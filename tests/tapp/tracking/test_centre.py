@@ -14,7 +14,7 @@ import pytest
 from tapp.constants import C_LIGHT_km_s, GM_km3_s2
 from tapp.dynamics.ephemeris import barycentric_state
 from tapp.errors import InputError
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 
 SOURCE = "centre.toml"

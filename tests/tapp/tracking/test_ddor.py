@@ -14,7 +14,7 @@ from tapp.errors import InputError
 from tapp.io.tape.t13 import T13
 from tapp.measurements import LightTime
 from tapp.measurements.ddor import DdorModel, quasar_direction
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.processor.helpers import deck, final, run, scaled_err
 from tests.tapp.tracking.helpers import SOURCE, geo_document, leo_document, scaled_close

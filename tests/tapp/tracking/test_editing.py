@@ -11,7 +11,7 @@ import pytest
 from tapp.constants import GM_EARTH_km3_s2, OMEGA_EARTH_rad_s, WGS84_A_km
 from tapp.errors import InputError
 from tapp.io.tape.t13 import T13
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import EDITING_RULES, simulate
 from tests.tapp.tracking.helpers import (
     GEO_BIAS_M,

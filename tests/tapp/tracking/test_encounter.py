@@ -23,7 +23,7 @@ from tapp.tracking.encounter import (
     attraction_radius_km,
     prepare_encounter,
 )
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tests.tapp.tracking.encounter_reference import (
     AIM,
     TARGETING,

@@ -17,7 +17,7 @@ from tapp.io.tape.t13_hdf5 import read_t13, write_t13
 from tapp.io.tomlfile import read_toml
 from tapp.measurements import MeasurementModel
 from tapp.measurements.ddor import DdorModel, quasar_direction
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.guidance.helpers import SCENARIOS
 from tests.tapp.processor.helpers import deck, run, sigmas

@@ -9,7 +9,7 @@ import pytest
 from tapp.errors import InputError
 from tapp.frames.time import Epoch
 from tapp.tracking.eop_days import eop_days
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.processor.helpers import deck, run, sigmas
 from tests.tapp.tracking.helpers import SOURCE, geo_document

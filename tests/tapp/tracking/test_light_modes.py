@@ -19,7 +19,7 @@ from tapp.errors import InputError
 from tapp.frames.time import parse_epoch
 from tapp.measurements.bands import BANDS
 from tapp.measurements.doppler import hz_per_km_s
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import _measurement_model, relativity_choice, simulate
 from tests.tapp.tracking.helpers import SOURCE, geo_document, leo_document
 

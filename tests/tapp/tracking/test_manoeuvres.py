@@ -38,8 +38,9 @@ from tapp.io.ccsds.oem import (
 )
 from tapp.io.tape.t13 import summary, validate
 from tapp.io.tape.t13_hdf5 import read_t13, write_t13
+from tapp.orbit.equinoctial import equinoctial_elements
 from tapp.tracking.oem_states import oem_trajectory, segment_comments, write_trajectory_spk
-from tapp.tracking.simulate import equinoctial_elements, simulate
+from tapp.tracking.simulate import simulate
 from tests.tapp.dynamics.burn_reference import axes, executed, turned
 from tests.tapp.tracking.helpers import leo_document, leo_scenario
 

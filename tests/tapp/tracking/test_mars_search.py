@@ -15,7 +15,7 @@ import pytest
 
 from tapp.examples import FOLDER
 from tapp.targeting.program import run_search
-from tapp.tracking.scenario import read_scenario
+from tapp.tracking.scenario_build import read_scenario
 
 ONE_M_S_km_s = 1e-3
 

@@ -16,7 +16,7 @@ from tapp.errors import InputError
 from tapp.io.tape.t13_hdf5 import read_t13, write_t13
 from tapp.measurements import MeasurementModel
 from tapp.measurements.media import standard_atmosphere
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import _measurement_model, simulate
 from tests.tapp.processor.helpers import SIGMA, SIGMA_STATION, run
 from tests.tapp.tracking.helpers import SOURCE, geo_document, leo_document

@@ -18,7 +18,8 @@ import pytest
 from tapp.errors import InputError
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.io.tomlfile import read_toml
-from tapp.tracking.scenario import Scenario, parse_scenario
+from tapp.tracking.scenario import Scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import miss_partials, simulate
 
 DEEP_SPACE = EXAMPLES / "deep_space.toml"

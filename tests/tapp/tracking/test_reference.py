@@ -36,7 +36,7 @@ from tapp.dynamics.ephemeris import de421_path
 from tapp.frames.time import parse_epoch
 from tapp.io.tape.t13_hdf5 import read_t13
 from tapp.io.trajectory_file import ReferenceTable
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import miss_partials
 from tests.tapp.frames.conftest import iers_frame_bias
 from tests.tapp.tracking.helpers import leo_document

@@ -25,7 +25,7 @@ from tapp.io.ccsds.oem import INTERPOLATION, INTERPOLATION_DEGREE, format_oem
 from tapp.io.tape.t13_hdf5 import read_t13
 from tapp.tracking.oem_states import oem_trajectory
 from tapp.tracking.reference import fitted
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tests.tapp.tracking.helpers import leo_document
 from tests.tapp.tracking.test_reference import (
     B_JITTER,

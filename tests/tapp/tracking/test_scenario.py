@@ -11,7 +11,7 @@ import pytest
 
 from tapp.errors import InputError
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.tracking.scenario import parse_scenario, read_scenario
+from tapp.tracking.scenario_build import parse_scenario, read_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import SOURCE, leo_document, leo_scenario
 

@@ -17,7 +17,7 @@ from tapp.errors import InputError
 from tapp.io.tape.t13 import T13
 from tapp.io.tape.t13_hdf5 import write_t13
 from tapp.tracking.editing import EDITING_RULES
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import Simulation, simulate
 from tests.tapp.tracking.helpers import (
     geo_document,

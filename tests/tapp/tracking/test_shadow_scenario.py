@@ -18,7 +18,7 @@ from tapp.io.ccsds.oem import (
     lagrange_interpolate,
 )
 from tapp.tracking.oem_states import oem_trajectory
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tapp.tracking.simulate import simulate
 from tests.tapp.dynamics.conftest import periapsis_state
 from tests.tapp.dynamics.srp_reference import SrpOrbit, integrate

@@ -13,9 +13,9 @@ from tapp.examples import FOLDER as EXAMPLES
 from tapp.io.tape.t13 import T13
 from tapp.measurements import wrap_angle_rad
 from tapp.measurements.stations import Station
-from tapp.orbit.elements import elements_to_cartesian
-from tapp.tracking.scenario import Scenario, parse_scenario, read_scenario
-from tapp.tracking.simulate import equinoctial_elements, miss_partials, simulate
+from tapp.tracking.scenario import Scenario
+from tapp.tracking.scenario_build import parse_scenario, read_scenario
+from tapp.tracking.simulate import miss_partials, simulate
 from tests.tapp.tracking.helpers import A_KM, leo_document, leo_scenario, scaled_close
 
 # Sums of a few hundred products in another order: round-off, on the scale sqrt(J_aa J_bb).
@@ -332,13 +332,3 @@ def test_classical_miss_partials_of_an_eccentric_orbit() -> None:
     fd = _b_by_differences(scenario, names, steps)
     rel = np.abs(fd - big_b[:, columns]) / np.abs(fd).max(axis=1, keepdims=True)
     assert rel.max() < MISS_FD, rel
-
-
-def test_equinoctial_elements_of_an_inclined_eccentric_orbit() -> None:
-    a, e, i, raan, argp, m = 8000.0, 0.1, 0.5, 1.0, 2.0, 0.3
-    state = elements_to_cartesian(np.array([a, e, i, raan, argp, m]), GM_EARTH_km3_s2)
-    out = equinoctial_elements(state, GM_EARTH_km3_s2)
-    expected = [a, e * math.cos(argp + raan), e * math.sin(argp + raan),
-                math.tan(i / 2) * math.cos(raan), math.tan(i / 2) * math.sin(raan),
-                (m + argp + raan) % (2 * math.pi)]
-    np.testing.assert_allclose(out, expected, rtol=1e-12, atol=1e-12)

@@ -2,7 +2,7 @@
 differences, the unchanged transition, and the tape's record of them.
 
 The partials on the tape come from one propagation restarted at the interval boundaries and
-composed forward (tapp.tracking.stochastic). The reference here differences whole trajectories
+composed forward (tapp.tracking.pieces). The reference here differences whole trajectories
 instead: propagated state-only, restarted at t_k and t_{k+1} with the acceleration ±ε switched on
 in interval k alone, from the epoch state the tape's partials are referred to.
 """
@@ -20,7 +20,8 @@ from tapp.dynamics.empirical import PARAMETERS
 from tapp.errors import InputError, TapeError
 from tapp.io.tape.t13 import validate
 from tapp.io.tape.t13_hdf5 import read_t13, write_t13
-from tapp.tracking.simulate import equinoctial_elements, simulate
+from tapp.orbit.equinoctial import equinoctial_elements
+from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import leo_scenario
 
 #: 3000 s intervals over the 3 h arc (the last 1800 s), an epoch at 5400 s inside interval 2,

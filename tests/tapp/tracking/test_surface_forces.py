@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from tapp.cli import app
 from tapp.errors import InputError
-from tapp.tracking.scenario import parse_scenario
+from tapp.tracking.scenario_build import parse_scenario
 from tests.tapp.tracking.helpers import SOURCE, leo_document, leo_scenario
 
 SURFACE = {"area_to_mass_m2_kg": 0.01, "srp": True, "c_r": 1.4,
