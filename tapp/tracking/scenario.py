@@ -35,9 +35,11 @@ ISO strings or TOML dates)::
                        area_to_mass_m2_kg, c_r, c_d, srp / var_srp, shadows /
                        var_shadows, atmosphere / var_atmosphere ("none", "exponential",
                        "harris_priester")
-    [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", "Cr", "Cd", "dr_mars_x", ...]
-                       (tapp.dynamics.forces names; dr_<body>_x|y|z: a third body's
-                       ephemeris offset, km, not the Earth's: tapp.dynamics.ephemeris_offsets),
+    [parameters]       dynamic = ["GM_km3_s2", "GM_moon_km3_s2", "J2", "C22", "Cr", "Cd",
+                       "dr_mars_x_km", ...] (named as on the tape: tapp.dynamics.parameters;
+                       GM, GM_moon, dr_mars_x are read with a warning; dr_<body>_x_km: a
+                       third body's ephemeris offset, km, not the Earth's:
+                       tapp.dynamics.ephemeris_offsets),
                        station_location = "cylindrical" |
                        "ecef" | "none", station_biases = ["range", "range_rate",
                        "doppler"],
@@ -141,6 +143,7 @@ from tapp.dynamics.ephemeris_offsets import offset_of
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.manoeuvres import KIND as EXECUTION
 from tapp.dynamics.manoeuvres import THRUST_NAMES, Burn
+from tapp.dynamics.parameters import ORBIT_PARAMETERS, model_parameter, parse
 from tapp.errors import InputError
 from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerations
 from tapp.frames.orientation import (
@@ -196,17 +199,13 @@ KINDS = tuple(o.value for o in Observable)
 #: Kinds that can carry a station bias in q (names and units: ``BIAS_NAMES``).
 BIAS_KINDS = ("range", "range_rate", "doppler")
 LOCATION_MODES = ("cylindrical", "ecef", "none")
-#: The media whose zenith parameters may be in q ([parameters] media), and their units.
+#: The media whose zenith parameters may be in q ([parameters] media).
 MEDIA_EFFECTS = ("troposphere", "ionosphere")
-MEDIA_UNITS = ("km", "km", "TECU")
 #: Most T13 input times a scenario may ask for (each is a tape record, held in memory).
 MAX_INPUT_TIMES = 100_000
 LIGHT_TIME_MODES = ("none", "one_way", "two_way")
 #: Where the samples come from: [tracking] use (tapp.tracking.schedule).
 USES = ("visibility", "schedule", "both")
-#: The p part of x: Cartesian state at the epoch, EME2000, Earth-centred.
-ORBIT_PARAMETERS = (("x_km", "km"), ("y_km", "km"), ("z_km", "km"), ("vx_km_s", "km/s"),
-                    ("vy_km_s", "km/s"), ("vz_km_s", "km/s"))
 #: Miss quantities of each kind, with units.
 MISS_QUANTITIES = {
     "bplane": (("b_dot_r_km", "km"), ("b_dot_t_km", "km"), ("ltof_s", "s"),
@@ -291,23 +290,26 @@ class TrackingStation:
             values = self.station.location(self.location)
             for pname, value in zip(STATION_PARAMETER_NAMES[self.location], values,
                                     strict=True):
-                out.append(Parameter(f"{self.station.name}.{pname}", _unit_of(pname),
-                                     "location", float(value), self.number))
+                name = f"{self.station.name}.{pname}"
+                out.append(Parameter(name, parse(name).unit, "location", float(value),
+                                     self.number))
         nominal = {"range": self.range_bias_km, "range_rate": self.range_rate_bias_km_s,
                    "doppler": self.doppler_bias_km_s}
         for kind, bname in zip(BIAS_KINDS, BIAS_NAMES, strict=True):
             if kind in self.biases:
-                out.append(Parameter(f"{self.station.name}.{bname}", _unit_of(bname), "bias",
-                                     nominal[kind], self.number))
+                name = f"{self.station.name}.{bname}"
+                out.append(Parameter(name, parse(name).unit, "bias", nominal[kind],
+                                     self.number))
         suffixes = ([""] if self.media_per == "station"
                     else [pass_suffix(i) for i in range(self.media_passes)])
         if self.media_parameters:
             for suffix in suffixes:
-                for zname, kind, unit, value in zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS,
-                                                    MEDIA_UNITS, self.media.zenith, strict=True):
+                for zname, kind, value in zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS,
+                                              self.media.zenith, strict=True):
                     if kind in self.media_parameters:
-                        out.append(Parameter(f"{self.station.name}.{zname}{suffix}", unit,
-                                             kind, float(value), self.number))
+                        name = f"{self.station.name}.{zname}{suffix}"
+                        out.append(Parameter(name, parse(name).unit, kind, float(value),
+                                             self.number))
         return tuple(out)
 
 
@@ -478,10 +480,7 @@ class Scenario:
         values = default_parameters(self.state_model, self.dynamic)
         values.update(dict(self.dynamic_values))
         for name in self.dynamic:
-            gm = name == "GM" or name.startswith("GM_")
-            unit = "km^3/s^2" if gm else "km" if offset_of(name) else "1"
-            suffix = {"km^3/s^2": "_km3_s2", "km": "_km", "1": ""}[unit]
-            out.append(Parameter(f"{name}{suffix}", unit, "dynamic", values[name]))
+            out.append(Parameter(name, parse(name).unit, "dynamic", values[name]))
         for st in self.stations:
             out.extend(st.parameters())
         out.extend(Parameter(name, EOP_UNITS[name.split(".")[1]], EOP_KIND, 0.0)
@@ -511,13 +510,6 @@ class Scenario:
         return len(self.parameters)
 
 
-def _unit_of(name: str) -> str:
-    for suffix, unit in (("_km_s", "km/s"), ("_km", "km"), ("_rad", "rad")):
-        if name.endswith(suffix):
-            return unit
-    return "1"
-
-
 # ---------------------------------------------------------------------------------------------
 # Schema: the file's tables and keys, their types and bounds (tapp.io.schema)
 # ---------------------------------------------------------------------------------------------
@@ -539,10 +531,12 @@ class ParametersTable(Schema):
     """``[parameters]``: the parameters q of x = [p; q] beside the epoch state p."""
 
     dynamic: Annotated[list[str], Unique] = Field(
-        [], description="Model parameters in q: \"GM\", \"GM_moon\" (a third body's), "
-        "\"J2\", \"C22\", \"S22\", ... of the state model, \"Cr\" (with model.srp), "
-        "\"Cd\" (with a model.atmosphere) and \"dr_mars_x\", \"dr_mars_y\", \"dr_mars_z\" "
-        "(a third body's ephemeris offset, km, ICRF; not the Earth's).")
+        [], description="Model parameters in q, named as on the tape: \"GM_km3_s2\" (the "
+        "centre's), \"GM_moon_km3_s2\" (a third body's), \"J2\", \"C22\", \"S22\", ... of "
+        "the state model, \"Cr\" (with model.srp), \"Cd\" (with a model.atmosphere) and "
+        "\"dr_mars_x_km\", \"dr_mars_y_km\", \"dr_mars_z_km\" (a third body's ephemeris "
+        "offset, km, ICRF; not the Earth's). The earlier spellings GM, GM_moon, dr_mars_x are "
+        "read with a warning.")
     station_location: LocationMode = Field("none", description=_LOCATION)
     station_biases: Annotated[list[BiasKind], Unique] = Field([], description=_BIASES)
     media: Annotated[list[Literal[MEDIA_EFFECTS]], Unique] = Field(  # type: ignore[valid-type]
@@ -554,8 +548,8 @@ class ParametersTable(Schema):
         "(STATION.zenith_wet_km), or one per pass, its calibration's (STATION.zenith_wet_km.p1, "
         ".p2, ... in the station's pass order, named once TAPP I has found the passes).")
     values: dict[str, float] = Field(
-        {}, description="Values other than nominal of dynamic parameters, by name (GM in "
-        "km³/s²).")
+        {}, description="Values other than nominal of dynamic parameters, by name "
+        "(GM_km3_s2 in km³/s²).")
     earth_orientation: bool | Annotated[list[Literal[EOP_PARAMETERS]],  # type: ignore[valid-type]
                                         Unique] = Field(
         False, description="Constant offsets of the Earth orientation parameters from the IERS "
@@ -831,7 +825,8 @@ def _epoch(p: _Parser, value: object) -> Epoch:
 
 def _dynamic(p: _Parser, par: ParametersTable, state_model: ForceModel
              ) -> tuple[tuple[str, ...], tuple[tuple[str, float], ...]]:
-    for i, name in enumerate(par.dynamic):
+    dynamic = _canonical_names(p, par.dynamic, "parameters.dynamic")
+    for i, name in enumerate(dynamic):
         if name in THRUST_NAMES:
             p.fail(f"parameters.dynamic[{i}]", "a model parameter (a burn's thrust is set by "
                    "its [[manoeuvre]] table)", name)
@@ -844,13 +839,28 @@ def _dynamic(p: _Parser, par: ParametersTable, state_model: ForceModel
                    "the Earth (the stations' frame) and the model's centre (the frame of every "
                    "state)", name)
     chosen = []
-    for name, value in par.values.items():
-        if name not in par.dynamic:
-            p.fail(f"parameters.values.{name}",
-                   f"a name of parameters.dynamic ({', '.join(par.dynamic) or 'none'})", name)
-        chosen.append((name, check_parameter_value(name, value, p.source,
-                                                   f"parameters.values.{name}")))
-    return tuple(par.dynamic), tuple(chosen)
+    for given, value in par.values.items():
+        field = f"parameters.values.{given}"
+        name = _canonical_names(p, [given], field, indexed=False)[0]
+        if name not in dynamic:
+            p.fail(field, f"a name of parameters.dynamic ({', '.join(dynamic) or 'none'})",
+                   given)
+        chosen.append((name, check_parameter_value(name, value, p.source, field)))
+    return dynamic, tuple(chosen)
+
+
+def _canonical_names(p: _Parser, names: list[str], field: str, indexed: bool = True
+                     ) -> tuple[str, ...]:
+    """``names`` in their one spelling (:mod:`tapp.dynamics.parameters`: an earlier one warns,
+    naming ``field[i]``, or ``field`` if not ``indexed``); a name that is no model parameter's
+    is left for the force model to refuse with what it expects."""
+    out = []
+    for i, name in enumerate(names):
+        found = model_parameter(name, p.source, f"{field}[{i}]" if indexed else field)
+        out.append(name if found is None else found.canonical)
+    if len(set(out)) < len(out):
+        p.fail(field, "each parameter once (in either spelling)", list(names))
+    return tuple(out)
 
 
 def _noise_key(prefix: str, kind: str) -> str:
