@@ -22,9 +22,9 @@ scenario, and no tape, printout or figure changes.
 
 The scenario used to name ``GM``, ``GM_<body>`` and ``dr_<body>_<axis>`` without their units
 (only the tape added them). These :data:`LEGACY` spellings are still read wherever a name is
-read, with a :class:`DeprecatedSpelling` warning naming the file, the field and the spelling
-to write; any other unknown name is one :class:`~tapp.errors.InputError` naming the file, the
-field and the names expected.
+read, with a :class:`~tapp.errors.DeprecatedSpelling` warning naming the file, the field and
+the spelling to write (the CLI prints it as one ``warning:`` line); any other unknown name is
+one :class:`~tapp.errors.InputError` naming the file, the field and the names expected.
 
 The other kinds are named by what owns them, ``<owner>.<label>``: a station's location
 (``GOLDSTONE.spin_radius_km``), bias (``GOLDSTONE.range_bias_km``) and zenith media
@@ -45,7 +45,7 @@ from tapp.dynamics.empirical import COMPONENTS
 from tapp.dynamics.empirical import NAMES as EMPIRICAL_NAMES
 from tapp.dynamics.gates import PARAMETERS as GATES_PARAMETERS
 from tapp.dynamics.manoeuvres import THRUST_NAMES
-from tapp.errors import InputError
+from tapp.errors import DeprecatedSpelling, InputError
 from tapp.frames.orientation import EOP_KIND, EOP_UNITS
 
 #: The kinds of parameter name. Model parameters of the force model (``dynamic`` on the tape):
@@ -69,7 +69,7 @@ OFFSET_AXES = ("x", "y", "z")
 #: The surface-force input (:class:`tapp.dynamics.spec.SurfaceForces` field) that is each
 #: coefficient parameter's nominal value.
 SURFACE_FIELDS = {"Cr": "c_r", "Cd": "c_d"}
-#: Earlier spellings, still read with a :class:`DeprecatedSpelling` warning.
+#: Earlier spellings, still read with a :class:`~tapp.errors.DeprecatedSpelling` warning.
 LEGACY = ("GM", "GM_<body>", "dr_<body>_<axis>")
 #: What a model parameter's name may be (for messages).
 EXPECTED = ("GM_km3_s2 (the centre's), GM_<body>_km3_s2, J<n>, C<n><m>, S<n><m>, Cr, Cd, "
@@ -89,10 +89,6 @@ _THRUST_UNITS = {"thr_flow_1_s": "1/s", "thr_start_s": "s"}
 #: Unit of a label from the end of its name, longest first.
 _SUFFIX_UNITS = (("_km_s", "km/s"), ("_km", "km"), ("_rad", "rad"), ("_tecu", "TECU"),
                  ("_s", "s"))
-
-
-class DeprecatedSpelling(DeprecationWarning):
-    """A parameter name in an earlier spelling: read, and the spelling to write is named."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -163,7 +159,8 @@ def unit_of_label(label: str) -> str:
 def parse(name: str, source: str = "parameters", field: str = "name") -> ParameterName:
     """Return what the parameter ``name`` means.
 
-    An earlier spelling (:data:`LEGACY`) is read with a :class:`DeprecatedSpelling` warning
+    An earlier spelling (:data:`LEGACY`) is read with a
+    :class:`~tapp.errors.DeprecatedSpelling` warning
     ``SOURCE: FIELD: 'GM_moon' is an earlier spelling: write 'GM_moon_km3_s2'``.
 
     Raises

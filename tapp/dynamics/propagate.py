@@ -187,7 +187,9 @@ class Propagator:
         if self.method not in METHODS:
             raise InputError("propagator", "method", f"one of {', '.join(METHODS)}",
                              self.method)
-        nominal = default_parameters(self.state_model, self.params)
+        nominal = default_parameters(self.state_model, tuple(
+            getattr(model_parameter(name, "propagator", f"params[{i}]"), "canonical", name)
+            for i, name in enumerate(self.params)))
         if len(nominal) != len(self.params):
             raise InputError("propagator", "params", "each parameter once", self.params)
         object.__setattr__(self, "params", tuple(nominal))

@@ -143,8 +143,8 @@ def test_the_moons_ephemeris_offset_moves_the_miss_as_central_differences_say() 
     through re-propagated trajectories with the Moon offset, row-relative (measured 2.9e-7;
     the largest partial 0.91 km/km)."""
     doc = _document()
-    doc["parameters"]["dynamic"] = [*doc["parameters"]["dynamic"], "dr_moon_x", "dr_moon_y",
-                                    "dr_moon_z"]
+    doc["parameters"]["dynamic"] = [*doc["parameters"]["dynamic"], "dr_moon_x_km", "dr_moon_y_km",
+                                    "dr_moon_z_km"]
     scenario = parse_scenario(doc, SOURCE)
     names = ("dr_moon_x_km", "dr_moon_y_km", "dr_moon_z_km")
     units = {p.name: p.unit for p in scenario.parameters}
@@ -168,7 +168,7 @@ def test_the_offset_of_the_earth_is_refused() -> None:
     """The Earth, the centre of deep_space.toml, is the stations' frame: no offset."""
     body = "earth"
     doc = _document()
-    doc["parameters"]["dynamic"] = [*doc["parameters"]["dynamic"], f"dr_{body}_x"]
+    doc["parameters"]["dynamic"] = [*doc["parameters"]["dynamic"], f"dr_{body}_x_km"]
     with pytest.raises(InputError) as info:
         parse_scenario(doc, SOURCE)
     assert info.value.field.startswith("parameters.dynamic[")

@@ -183,7 +183,7 @@ def _perturbed(name: str, sign: float, light_time: str, angles: bool
         short = name.removesuffix("_km3_s2")
         base = {p.name: p.nominal for p in parse_scenario(doc, "fd.toml").parameters}
         h = STEP[short]
-        doc["parameters"]["values"] = {short: base[name] + sign * h}
+        doc["parameters"]["values"] = {name: base[name] + sign * h}
         return parse_scenario(doc, "fd.toml"), h
     station, pname = name.split(".")
     if pname.endswith("bias_km") or pname.endswith("bias_km_s"):
