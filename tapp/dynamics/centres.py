@@ -45,9 +45,9 @@ interval's own propagation (zero at b_k),
     \\Phi(t, t_0) = \\Phi_k(t, b_k)\\,\\Phi(b_k, t_0),\\qquad
     S(t) = \\Phi_k(t, b_k)\\,S(b_k) + S_k(t),
 
-exactly, the columns of S_k matched by :func:`names_about` (the model's ``GM`` is the interval
-about K's ``GM_<C>``, the model's ``GM_<K>`` its ``GM``). The ephemeris enters through the
-translations and the bodies' positions relative to K. With an ephemeris offset δ_K of K
+exactly, the columns of S_k matched by :func:`names_about` (the model's ``GM_km3_s2`` is the
+interval about K's ``GM_<C>_km3_s2``, the model's ``GM_<K>_km3_s2`` its ``GM_km3_s2``). The
+ephemeris enters through the translations and the bodies' positions relative to K. With an ephemeris offset δ_K of K
 among the parameters (:mod:`tapp.dynamics.ephemeris_offsets`) the translations move by it:
 S enters K's interval as S(b_k) − E_K and leaves each output as ... + E_K (E_K the identity
 in the position rows of δ_K's columns), and on the interval the other bodies sit at

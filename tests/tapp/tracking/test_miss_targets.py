@@ -60,10 +60,9 @@ def scenario() -> Scenario:
 
 def _perturbed(scenario: Scenario, name: str, delta: float) -> Scenario:
     if name.endswith("_km3_s2"):
-        short = name.removesuffix("_km3_s2")
         nominal = {p.name: p.nominal for p in scenario.parameters}[name]
         return dataclasses.replace(scenario, dynamic_values=(
-            *scenario.dynamic_values, (short, nominal + delta)))
+            *scenario.dynamic_values, (name, nominal + delta)))
     x0 = np.array(scenario.x0)
     x0[("x_km", "y_km", "z_km", "vx_km_s", "vy_km_s", "vz_km_s").index(name)] += delta
     return dataclasses.replace(scenario, x0=x0)
@@ -154,7 +153,7 @@ def test_the_moons_ephemeris_offset_moves_the_miss_as_central_differences_say() 
 
     def offset(name: str, delta: float) -> Scenario:
         return dataclasses.replace(scenario, dynamic_values=(
-            *scenario.dynamic_values, (name.removesuffix("_km"), delta)))
+            *scenario.dynamic_values, (name, delta)))
 
     step_km = 0.01
     fd = np.stack([(miss_partials(offset(n, step_km))[0] - miss_partials(offset(n, -step_km))[0])
