@@ -48,10 +48,11 @@ interval's own propagation (zero at b_k),
 exactly, the columns of S_k matched by :func:`names_about` (the model's ``GM_km3_s2`` is the
 interval about K's ``GM_<C>_km3_s2``, the model's ``GM_<K>_km3_s2`` its ``GM_km3_s2``). The
 ephemeris enters through the translations and the bodies' positions relative to K. With an
-ephemeris offset δ_K of K among the parameters (:mod:`tapp.dynamics.ephemeris_offsets`) the translations move by it:
-S enters K's interval as S(b_k) − E_K and leaves each output as ... + E_K (E_K the identity
-in the position rows of δ_K's columns), and on the interval the other bodies sit at
-s_j/K + δ_j − δ_K as the spacecraft sees them (S_k carries that through ∂a/∂s_j).
+ephemeris offset δ_K of K among the parameters (:mod:`tapp.dynamics.ephemeris_offsets`) the
+translations move by it: S enters K's interval as S(b_k) − E_K and leaves each output as
+... + E_K (E_K the identity in the position rows of δ_K's columns), and on the interval the
+other bodies sit at s_j/K + δ_j − δ_K as the spacecraft sees them (S_k carries that through
+∂a/∂s_j).
 
 Parameters whose force follows the orbit about the centre (empirical accelerations in RIC
 axes, a finite burn's thrust in RIC or VNB axes: :mod:`tapp.dynamics.empirical`,
