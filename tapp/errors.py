@@ -24,6 +24,12 @@ class InputError(TappError, ValueError):
         super().__init__(f"{source}: {field}: expected {expected}{detail}")
 
 
+class DeprecatedSpelling(DeprecationWarning):
+    """An input in an earlier spelling: it is read, and the warning names the spelling to
+    write (parameter names: :mod:`tapp.dynamics.parameters`). The CLI shows it on stderr
+    (Python hides a DeprecationWarning raised outside ``__main__`` by default)."""
+
+
 class WriteError(TappError):
     """An output could not be written for a reason that is not the input's (a full disk, a
     device error): names the option as typed and the requested path, never a temporary."""

@@ -129,7 +129,7 @@ from typer.core import TyperGroup
 
 from iter.errors import ClusterError
 from iter.execute import MAX_WORKERS_PER_CORE
-from tapp.errors import InputError, TapeError, TappError
+from tapp.errors import DeprecatedSpelling, InputError, TapeError, TappError
 from tapp.io.outputs import OutputSet
 
 if TYPE_CHECKING:
@@ -223,11 +223,16 @@ def one_line_warnings() -> Iterator[None]:
     matrices; an old results file's) is written as one ``warning: MESSAGE`` line on stderr,
     not as Python's lines with the source path, line number and code. Which warnings are
     shown, and where, is left to the filters (``-W``, ``PYTHONWARNINGS``) and to whoever
-    records them (``warnings.catch_warnings(record=True)``): only their text changes."""
+    records them (``warnings.catch_warnings(record=True)``): only their text changes, and an
+    input's earlier spelling (:class:`~tapp.errors.DeprecatedSpelling`, a DeprecationWarning
+    Python would hide) is shown unless ``-W`` says otherwise."""
     saved = warnings.formatwarning
     warnings.formatwarning = _one_line_warning
     try:
-        yield
+        with warnings.catch_warnings():
+            if not sys.warnoptions:  # an input's earlier spelling is the user's to see
+                warnings.simplefilter("default", DeprecatedSpelling)
+            yield
     finally:
         warnings.formatwarning = saved
 

@@ -45,13 +45,14 @@ interval's own propagation (zero at b_k),
     \\Phi(t, t_0) = \\Phi_k(t, b_k)\\,\\Phi(b_k, t_0),\\qquad
     S(t) = \\Phi_k(t, b_k)\\,S(b_k) + S_k(t),
 
-exactly, the columns of S_k matched by :func:`names_about` (the model's ``GM`` is the interval
-about K's ``GM_<C>``, the model's ``GM_<K>`` its ``GM``). The ephemeris enters through the
-translations and the bodies' positions relative to K. With an ephemeris offset δ_K of K
-among the parameters (:mod:`tapp.dynamics.ephemeris_offsets`) the translations move by it:
-S enters K's interval as S(b_k) − E_K and leaves each output as ... + E_K (E_K the identity
-in the position rows of δ_K's columns), and on the interval the other bodies sit at
-s_j/K + δ_j − δ_K as the spacecraft sees them (S_k carries that through ∂a/∂s_j).
+exactly, the columns of S_k matched by :func:`names_about` (the model's ``GM_km3_s2`` is the
+interval about K's ``GM_<C>_km3_s2``, the model's ``GM_<K>_km3_s2`` its ``GM_km3_s2``). The
+ephemeris enters through the translations and the bodies' positions relative to K. With an
+ephemeris offset δ_K of K among the parameters (:mod:`tapp.dynamics.ephemeris_offsets`) the
+translations move by it: S enters K's interval as S(b_k) − E_K and leaves each output as
+... + E_K (E_K the identity in the position rows of δ_K's columns), and on the interval the
+other bodies sit at s_j/K + δ_j − δ_K as the spacecraft sees them (S_k carries that through
+∂a/∂s_j).
 
 Parameters whose force follows the orbit about the centre (empirical accelerations in RIC
 axes, a finite burn's thrust in RIC or VNB axes: :mod:`tapp.dynamics.empirical`,
@@ -63,18 +64,19 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 from tapp.dynamics.empirical import PARAMETERS as EMPIRICAL_PARAMETERS
 from tapp.dynamics.manoeuvres import thrust_moves_with_velocity
+from tapp.dynamics.parameters import gm_name, meaning
 from tapp.dynamics.spec import BODIES, ForceModel, GravitySpec
 from tapp.errors import InputError
 
-#: Parameters of the model centre's own forces (its field beyond the point mass, drag): they
-#: act on its intervals only (module docstring).
-_CENTRE_ONLY = re.compile(r"^(J\d|[CS]\d\d|Cd)$")
+#: Kinds of the parameters of the model centre's own forces (its field beyond the point
+#: mass, drag: :mod:`tapp.dynamics.parameters`): they act on its intervals only (module
+#: docstring).
+_CENTRE_ONLY = ("zonal", "harmonic", "drag")
 
 
 @dataclass(frozen=True, slots=True)
@@ -154,16 +156,18 @@ def model_about(model: ForceModel, centre: str) -> ForceModel:
 def names_about(params: tuple[str, ...], model: ForceModel, centre: str
                 ) -> tuple[str | None, ...]:
     """Each of the model's parameter names as the model about ``centre``
-    (:func:`model_about`) spells it: ``GM`` → ``GM_<model centre>``, ``GM_<centre>`` → ``GM``,
-    None for a parameter of the model centre's own forces, others unchanged."""
+    (:func:`model_about`) spells it: ``GM_km3_s2`` → ``GM_<model centre>_km3_s2``,
+    ``GM_<centre>_km3_s2`` → ``GM_km3_s2``, None for a parameter of the model centre's own
+    forces, others unchanged."""
     if centre == model.center:
         return params
 
     def about(name: str) -> str | None:
-        if name == "GM":
-            return f"GM_{model.center}"
-        if name == f"GM_{centre}":
-            return "GM"
-        return None if _CENTRE_ONLY.match(name) else name
+        if name == gm_name():
+            return gm_name(model.center)
+        if name == gm_name(centre):
+            return gm_name()
+        found = meaning(name)
+        return None if found is not None and found.kind in _CENTRE_ONLY else name
 
     return tuple(about(name) for name in params)

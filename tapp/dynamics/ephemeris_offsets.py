@@ -3,8 +3,8 @@
 The error of a planet's ephemeris is a leading error of a planetary approach (the B-plane is
 measured from the planet's centre, which the ephemeris places). tapp models it as a constant
 offset δ_B of body B's DE421 position over the arc, in ICRF axes, km: the three dynamic
-parameters ``dr_<body>_x``, ``dr_<body>_y``, ``dr_<body>_z`` (nominal 0; on a tape
-``dr_<body>_x_km``, ...). A constant offset is the first term of an ephemeris error over the
+parameters ``dr_<body>_x_km``, ``dr_<body>_y_km``, ``dr_<body>_z_km`` (nominal 0; named by
+:mod:`tapp.dynamics.parameters`). A constant offset is the first term of an ephemeris error over the
 weeks of an approach, where the planet's ephemeris uncertainty is a near-constant position
 error (its velocity error moves it by ~1e-3 of itself in a month).
 
@@ -32,26 +32,23 @@ and of the model's centre are refused by the scenario (:mod:`tapp.tracking.scena
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping
 
 import casadi as ca
 import numpy as np
 
-#: The axes of an offset, in the order of its parameters.
-AXES = ("x", "y", "z")
-_NAME = re.compile(r"^dr_([a-z]+)_([xyz])$")
+from tapp.dynamics.parameters import OFFSET_AXES, meaning, offset_name
 
 
 def offset_names(body: str) -> tuple[str, str, str]:
     """The three parameter names of ``body``'s ephemeris offset."""
-    return tuple(f"dr_{body}_{a}" for a in AXES)  # type: ignore[return-value]
+    return tuple(offset_name(body, i) for i in range(len(OFFSET_AXES)))  # type: ignore[return-value]
 
 
 def offset_of(name: str) -> tuple[str, int] | None:
     """(body, axis index) of an offset parameter's name, else None."""
-    m = _NAME.match(name)
-    return None if m is None else (m.group(1), AXES.index(m.group(2)))
+    found = meaning(name)
+    return (found.body, found.axis) if found and found.kind == "ephemeris_offset" else None
 
 
 def offset_bodies(r_bodies: Mapping[str, ca.SX], q: Mapping[str, ca.SX], centre: str

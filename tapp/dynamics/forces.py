@@ -55,10 +55,12 @@ co-rotating atmosphere (:mod:`tapp.dynamics.atmosphere`, Earth centre only); dra
 acceleration depend on v.
 
 Model parameters (values in :func:`default_parameters`) may be symbols so that their
-sensitivities come out of the variational equations: ``GM`` (centre, km^3/s^2), ``Jn``
-(unnormalised zonal, \\bar C_{n0} = -J_n/\\sqrt{2n+1}), ``Cnm``/``Snm`` (normalised, single
-digits n, m), ``GM_<body>`` for a third body, ``Cr`` (radiation pressure coefficient) and
-``Cd`` (drag coefficient), dimensionless; the constant empirical accelerations of
+sensitivities come out of the variational equations, named as :mod:`tapp.dynamics.parameters`
+says: ``GM_km3_s2`` (centre, km^3/s^2), ``Jn`` (unnormalised zonal,
+\\bar C_{n0} = -J_n/\\sqrt{2n+1}), ``Cnm``/``Snm`` (normalised, single digits n, m),
+``GM_<body>_km3_s2`` for a third body, ``dr_<body>_x_km``, ... its ephemeris offset
+(:mod:`tapp.dynamics.ephemeris_offsets`), ``Cr`` (radiation pressure coefficient) and ``Cd``
+(drag coefficient), dimensionless; the constant empirical accelerations of
 :mod:`tapp.dynamics.empirical` (``acc_R``, ``acc_x``, ..., km/s², nominal 0) and the thrust of
 a finite burn (:data:`tapp.dynamics.manoeuvres.THRUST_PARAMETERS`, nominal 0: set by TAPP I
 on the burn's arc), whose terms :mod:`tapp.dynamics.equations` adds.
@@ -67,7 +69,6 @@ on the burn's arc), whose terms :mod:`tapp.dynamics.equations` adds.
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Callable, Mapping
 
 import casadi as ca
@@ -81,20 +82,18 @@ from tapp.constants import (
     egm96_coefficients,
 )
 from tapp.dynamics.atmosphere import density_kg_m3, drag_acceleration
-from tapp.dynamics.empirical import NAMES as EMPIRICAL_NAMES
-from tapp.dynamics.ephemeris_offsets import offset_bodies, offset_of
-from tapp.dynamics.manoeuvres import THRUST_NAMES
+from tapp.dynamics.ephemeris_offsets import offset_bodies
+from tapp.dynamics.parameters import gm_name, meaning, model_parameter
 from tapp.dynamics.radiation import srp_acceleration
 from tapp.dynamics.spec import ForceModel, check_surface_value
 from tapp.errors import InputError
 from tapp.frames.orientation import OMEGA_ERA_rad_s, itrs_from_gcrs_elements
 
-_HARMONIC = re.compile(r"^([CS])(\d)(\d)$")
-_ZONAL_J = re.compile(r"^J(\d)$")
-
 
 def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, float]:
-    """Return the nominal value of each named model parameter (units as in the module doc).
+    """Return the nominal value of each named model parameter (units as in the module doc),
+    by its one spelling (:mod:`tapp.dynamics.parameters`; an earlier one is read with a
+    warning).
 
     Raises
     ------
@@ -105,34 +104,34 @@ def default_parameters(model: ForceModel, names: tuple[str, ...]) -> dict[str, f
     c_bar, s_bar = egm96_coefficients()
     values: dict[str, float] = {}
     for name in names:
-        if name == "GM":
-            values[name] = model.gm_center_km3_s2
-        elif name in EMPIRICAL_NAMES or name in THRUST_NAMES:
-            values[name] = 0.0
-        elif name.startswith("GM_") and name[3:] in model.third_bodies:
-            values[name] = GM_km3_s2[name[3:]]
-        elif (found := offset_of(name)) and (found[0] in model.third_bodies
-                                             or found[0] == model.center):
-            values[name] = 0.0  # an ephemeris offset, km (tapp.dynamics.ephemeris_offsets)
-        elif name == "Cr" and model.srp:
-            values[name] = model.surface.c_r
-        elif name == "Cd" and model.drag:
-            values[name] = model.surface.c_d
-        elif (m := _ZONAL_J.match(name)) and _in_field(model, int(m.group(1)), 0):
-            n = int(m.group(1))
-            values[name] = (-math.sqrt(2 * n + 1) * c_bar[n, 0] if model.center == "earth"
-                            else J2_CENTRE[model.center])
-        elif (m := _HARMONIC.match(name)) and model.center == "earth" and _in_field(
-                model, int(m.group(2)), int(m.group(3))):
-            n, mm = int(m.group(2)), int(m.group(3))
-            if m.group(1) == "S" and mm == 0:
+        p = model_parameter(name)
+        kind = None if p is None else p.kind
+        if kind == "gm" and not p.body:
+            values[p.canonical] = model.gm_center_km3_s2
+        elif kind in ("empirical", "thrust"):
+            values[p.canonical] = 0.0
+        elif kind == "gm" and p.body in model.third_bodies:
+            values[p.canonical] = GM_km3_s2[p.body]
+        elif kind == "ephemeris_offset" and (p.body in model.third_bodies
+                                             or p.body == model.center):
+            values[p.canonical] = 0.0  # km (tapp.dynamics.ephemeris_offsets)
+        elif kind in ("radiation", "drag") and (model.srp if kind == "radiation"
+                                                else model.drag):
+            values[p.canonical] = getattr(model.surface, p.surface_field)
+        elif kind == "zonal" and _in_field(model, p.degree, 0):
+            values[p.canonical] = (-math.sqrt(2 * p.degree + 1) * c_bar[p.degree, 0]
+                                   if model.center == "earth" else J2_CENTRE[model.center])
+        elif kind == "harmonic" and model.center == "earth" and _in_field(
+                model, p.degree, p.order):
+            if p.coefficient == "S" and p.order == 0:
                 raise InputError("model", "parameters", "no S_n0 (identically zero)", name)
-            values[name] = (c_bar if m.group(1) == "C" else s_bar)[n, mm]
+            values[p.canonical] = (c_bar if p.coefficient == "C" else s_bar)[p.degree, p.order]
         else:
             raise InputError("model", "parameters",
-                             f"GM, Jn, Cnm, Snm within {model.gravity.name}, GM_<third body>, "
-                             "dr_<third body>_x|y|z, Cr (with srp), Cd (with an atmosphere) or "
-                             "acc_R, acc_I, acc_C, acc_x, acc_y, acc_z", name)
+                             f"GM_km3_s2, Jn, Cnm, Snm within {model.gravity.name}, "
+                             "GM_<third body>_km3_s2, dr_<third body>_x_km|y_km|z_km, Cr (with "
+                             "srp), Cd (with an atmosphere) or acc_R, acc_I, acc_C, acc_x, "
+                             "acc_y, acc_z", name)
     return values
 
 
@@ -140,18 +139,19 @@ def check_parameter_value(name: str, value: float, source: str = "model",
                           field: str = "parameters") -> float:
     """Return a model parameter's value as a float: finite, and > 0 for a GM.
 
-    A gravitational parameter GM (``GM``, ``GM_<body>``, km^3/s^2) <= 0 would make the body
-    repel or vanish: it is refused with the value and the limit. ``Cr`` and ``Cd`` must lie
-    in the ranges of :func:`tapp.dynamics.spec.check_surface_value`.
+    A gravitational parameter GM (``GM_km3_s2``, ``GM_<body>_km3_s2``, km^3/s^2) <= 0 would
+    make the body repel or vanish: it is refused with the value and the limit. ``Cr`` and
+    ``Cd`` must lie in the ranges of :func:`tapp.dynamics.spec.check_surface_value`.
 
     Raises
     ------
     InputError
         Naming ``source`` and ``field``.
     """
-    if name in ("Cr", "Cd"):
-        return check_surface_value(name, value, source, field)
-    gm = name == "GM" or name.startswith("GM_")
+    p = model_parameter(name, source, field)
+    if p is not None and p.surface_field:
+        return check_surface_value(p.canonical, value, source, field)
+    gm = p is not None and p.kind == "gm"
     ok = (isinstance(value, int | float) and not isinstance(value, bool)
           and math.isfinite(value) and (value > 0 or not gm))
     if not ok:
@@ -233,12 +233,12 @@ def field_coefficients(model: ForceModel, q: Mapping[str, ca.SX]
                 if m > 0:
                     coeffs["S", n, m] = float(s_bar[n, m])
     for name, sym in q.items():
-        if m := _ZONAL_J.match(name):
-            n = int(m.group(1))
-            if ("C", n, 0) in coeffs:
-                coeffs["C", n, 0] = -sym / math.sqrt(2 * n + 1)
-        elif m := _HARMONIC.match(name):
-            key = (m.group(1), int(m.group(2)), int(m.group(3)))
+        p = meaning(name)
+        if p is not None and p.kind == "zonal":
+            if ("C", p.degree, 0) in coeffs:
+                coeffs["C", p.degree, 0] = -sym / math.sqrt(2 * p.degree + 1)
+        elif p is not None and p.kind == "harmonic":
+            key = (p.coefficient, p.degree, p.order)
             if key in coeffs:
                 coeffs[key] = sym
     return coeffs
@@ -287,7 +287,7 @@ def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mappin
         (:func:`body_fixed_position`), if oriented or a :attr:`ForceModel.pole_field`.
     v : SX (3,) inertial velocity, km/s; needed by drag only.
     """
-    gm = q.get("GM", model.gm_center_km3_s2)
+    gm = q.get(gm_name(), model.gm_center_km3_s2)
     r_fixed, r2 = body_fixed_position(model, r, t, theta0, slow)
     u = central_potential(model, r_fixed, gm, field_coefficients(model, q), r2=r2)
     acc = ca.gradient(u, r)
@@ -298,7 +298,7 @@ def acceleration(model: ForceModel, t: ca.SX, r: ca.SX, theta0: ca.SX, q: Mappin
     for body in model.third_bodies:
         s = r_bodies[body]
         d = r - seen[body]
-        gm_b = q.get(f"GM_{body}", GM_km3_s2[body])
+        gm_b = q.get(gm_name(body), GM_km3_s2[body])
         acc = acc - gm_b * (d / ca.norm_2(d) ** 3 + s / ca.norm_2(s) ** 3)
     return surface_acceleration(model, acc, r, v, q, seen)
 

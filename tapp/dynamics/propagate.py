@@ -55,6 +55,7 @@ from tapp.dynamics.equations import (
 )
 from tapp.dynamics.events import Events
 from tapp.dynamics.forces import check_parameter_value, default_parameters
+from tapp.dynamics.parameters import model_parameter
 from tapp.dynamics.poles import pole_table
 from tapp.dynamics.spec import ForceModel
 from tapp.errors import InputError, TappError
@@ -148,7 +149,8 @@ class Propagator:
     state_model, var_model : ForceModel
         ``var_model`` defaults to ``state_model`` (exact variational equations).
     params : names of the model parameters whose sensitivities are wanted (see
-        :mod:`tapp.dynamics.forces`).
+        :mod:`tapp.dynamics.forces`), held in their one spelling
+        (:mod:`tapp.dynamics.parameters`; an earlier one is read with a warning).
     rtol, atol : relative and absolute (km, km/s) local error tolerances, each within
         :data:`TOLERANCE_RANGE` = [1e-15, 1e-6]. The default
         1e-13 keeps a day of an e = 0.3 orbit within 1 mm of the Kepler solution (1e-12
@@ -185,12 +187,18 @@ class Propagator:
         if self.method not in METHODS:
             raise InputError("propagator", "method", f"one of {', '.join(METHODS)}",
                              self.method)
+        nominal = default_parameters(self.state_model, tuple(
+            getattr(model_parameter(name, "propagator", f"params[{i}]"), "canonical", name)
+            for i, name in enumerate(self.params)))
+        if len(nominal) != len(self.params):
+            raise InputError("propagator", "params", "each parameter once", self.params)
+        object.__setattr__(self, "params", tuple(nominal))
+        object.__setattr__(self, "_nominal", nominal)
         if self.method == "rkn12" and _velocity_dependent(self.state_model, self.var_model,
                                                           self.params):
             raise InputError("propagator", "method", "'dop853' for a model with velocity-"
                              "dependent forces ('rkn12' integrates r'' = a(t, r) only)",
                              self.method)
-        object.__setattr__(self, "_nominal", default_parameters(self.state_model, self.params))
         object.__setattr__(self, "centre_changes", check_centre_changes(
             self.centre_changes, self.state_model, self.var_model, self.params))
 
@@ -237,7 +245,9 @@ class Propagator:
         if not (steps.min() >= 0 or steps.max() <= 0):
             raise InputError("propagate", "times", "times monotonic away from t0", None)
         values = dict(self._nominal)
-        for name, value in (param_values or {}).items():
+        for given, value in (param_values or {}).items():
+            found = model_parameter(given, "propagate", "param_values")
+            name = given if found is None else found.canonical
             if name not in values:
                 raise InputError("propagate", "param_values", f"one of {self.params}", name)
             values[name] = check_parameter_value(name, value, "propagate",

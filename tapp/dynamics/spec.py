@@ -14,6 +14,7 @@ import re
 from dataclasses import dataclass, field
 
 from tapp.constants import J2_CENTRE, MAX_DEGREE, GM_km3_s2
+from tapp.dynamics.parameters import SURFACE_FIELDS
 from tapp.errors import InputError
 from tapp.frames.orientation import check_model
 
@@ -48,17 +49,16 @@ SURFACE_RANGES = {
     "h0_km": (0.0, 2500.0, True, "km above the ellipsoid, within the atmosphere"),
     "scale_height_km": (0.0, 1000.0, False, "km: thermospheric scale heights are 5-300 km"),
 }
-#: Parameter names of q that are surface-force inputs.
-_PARAMETER_FIELDS = {"Cr": "c_r", "Cd": "c_d"}
 
 
 def check_surface_value(name: str, value: object, source: str = "model",
                         field: str | None = None) -> float:
     """Return ``value`` as a float if the input ``name`` (a key of :data:`SURFACE_RANGES`,
-    or the parameter ``Cr``/``Cd``) accepts it, else raise InputError naming ``source``,
-    ``field`` (default ``name``), the range and its reason."""
+    or the parameter ``Cr``/``Cd`` of its field: :data:`tapp.dynamics.parameters.SURFACE_FIELDS`)
+    accepts it, else raise InputError naming ``source``, ``field`` (default ``name``), the
+    range and its reason."""
     field = name if field is None else field
-    key = _PARAMETER_FIELDS.get(name, name)
+    key = SURFACE_FIELDS.get(name, name)
     if key not in SURFACE_RANGES:
         raise InputError(source, field, f"one of {', '.join(SURFACE_RANGES)}", name)
     lo, hi, closed, why = SURFACE_RANGES[key]

@@ -1,8 +1,10 @@
 """The TAPP III deck (TOML, one file per run): its layout, limits and schema, and reading it.
 
 The deck holds the manual inputs I₃ of the seed (§1 a–i, Appendix A.1). Parameters are named
-as on the tape (``"GM_moon_km3_s2"``, ``"GOLDSTONE.rho_km"``) or given by their 1-based
-position as in the seed; times are T13 time indices (TOML integers, as the seed's POT/RET),
+as on the tape and in the scenario (``"GM_moon_km3_s2"``, ``"GOLDSTONE.spin_radius_km"``:
+one spelling, :mod:`tapp.dynamics.parameters`; the earlier ``"GM_moon"``, ``"dr_mars_x"``
+are read with a warning naming the new one) or given by their 1-based position as in the
+seed; times are T13 time indices (TOML integers, as the seed's POT/RET),
 seconds from the tape epoch (floats) or UTC dates (strings), and must be T13 times. Layout::
 
     title = "..."

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from tapp.constants import SECONDS_PER_DAY
+from tapp.dynamics.parameters import model_parameter
 from tapp.errors import InputError
 from tapp.estimation.factors import scaled_min_eigenvalue
 from tapp.estimation.gauss_markov import KIND as STOCHASTIC
@@ -144,11 +145,21 @@ class _Binder:
                 raise self.fail(field, f"a position 1..{self.n_o}", ref)
             self.positional.append(field)
             return ref - 1
+        ref = self._tape_name(ref, field)
         bare = [n.rstrip("'") for n in order]
         if ref not in bare:
             raise self.fail(field, "a parameter name of the tape (" + ", ".join(self.names)
                             + ")", ref)
         return bare.index(ref)
+
+    def _tape_name(self, ref: str, field: str) -> str:
+        """``ref``, or the tape's name of the model parameter it names in an earlier spelling
+        (``GM_moon`` for ``GM_moon_km3_s2``: :mod:`tapp.dynamics.parameters`, whose warning
+        names ``field``)."""
+        if ref in self.names:
+            return ref
+        found = model_parameter(ref, self.source, field)
+        return ref if found is None else found.canonical
 
     def time_index(self, value: object, field: str) -> int:
         """T13 time index of an index (int), seconds (float) or UTC date (string)."""
@@ -345,12 +356,14 @@ class _Binder:
         """A σ table with its patterns expanded (:meth:`sigma_table`); a list or None as is."""
         if not isinstance(sigma, dict):
             return sigma
-        explicit = {self._named(key) for key in sigma if not self._is_pattern(key)}
+        named = {key: self._tape_name(key, f"{field}.{key}") for key in sigma
+                 if not self._is_pattern(key)}
+        explicit = {self._named(key) for key in named.values()}
         out: dict[str, float] = {}
         origin: dict[str, str] = {}
         for key, value in sigma.items():
-            if not self._is_pattern(key):
-                out[key] = value
+            if key in named:
+                out[named[key]] = value
                 continue
             for name in self._matching(key, f"{field}.{key}"):
                 if name in explicit:

@@ -56,6 +56,7 @@ from search import EXIT_FLAG
 from tapp.constants import GM_km3_s2
 from tapp.dynamics import PropagationError, Propagator
 from tapp.dynamics.forces import default_parameters
+from tapp.dynamics.parameters import gm_name
 from tapp.errors import DivergenceError, InputError, NotHyperbolicError, TappError
 from tapp.io.orbits import check_perigee
 from tapp.orbit.bplane import b_plane
@@ -176,9 +177,9 @@ def check_encounter(scenario: Scenario, *, retargeted: bool = False) -> None:
                epoch_jd_utc=scenario.epoch.jd)
     program = _program(scenario, miss.t_s)
     z = traj.states[0] - program.target_state(np.array([miss.t_s]))[0][0]
-    gm_name = f"GM_{miss.body}"
-    gm = {**default_parameters(scenario.state_model, (gm_name,)),
-          **dict(scenario.dynamic_values)}[gm_name]
+    name = gm_name(miss.body)
+    gm = {**default_parameters(scenario.state_model, (name,)),
+          **dict(scenario.dynamic_values)}[name]
     r_km = float(np.linalg.norm(z[:3]))
     energy = 0.5 * float(z[3:] @ z[3:]) - gm / r_km
     radius_km = attraction_radius_km(program, miss.t_s)

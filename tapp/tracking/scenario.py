@@ -17,10 +17,10 @@ import numpy as np
 
 from tapp.dynamics import ForceModel, Propagator
 from tapp.dynamics.centres import CentreChange
-from tapp.dynamics.ephemeris_offsets import offset_of
 from tapp.dynamics.forces import default_parameters
 from tapp.dynamics.manoeuvres import KIND as EXECUTION
 from tapp.dynamics.manoeuvres import Burn
+from tapp.dynamics.parameters import ORBIT_PARAMETERS, parse
 from tapp.estimation.gauss_markov import KIND, UNIT, StochasticAccelerations
 from tapp.frames.orientation import EOP_KIND, EOP_UNITS, EarthOrientation
 from tapp.frames.time import Epoch
@@ -41,15 +41,11 @@ KINDS = tuple(o.value for o in Observable)
 #: Kinds that can carry a station bias in q (names and units: ``BIAS_NAMES``).
 BIAS_KINDS = ("range", "range_rate", "doppler")
 LOCATION_MODES = ("cylindrical", "ecef", "none")
-#: The media whose zenith parameters may be in q ([parameters] media), and their units.
+#: The media whose zenith parameters may be in q ([parameters] media).
 MEDIA_EFFECTS = ("troposphere", "ionosphere")
-MEDIA_UNITS = ("km", "km", "TECU")
 LIGHT_TIME_MODES = ("none", "one_way", "two_way")
 #: Where the samples come from: [tracking] use (tapp.tracking.schedule).
 USES = ("visibility", "schedule", "both")
-#: The p part of x: Cartesian state at the epoch, EME2000, Earth-centred.
-ORBIT_PARAMETERS = (("x_km", "km"), ("y_km", "km"), ("z_km", "km"), ("vx_km_s", "km/s"),
-                    ("vy_km_s", "km/s"), ("vz_km_s", "km/s"))
 #: Miss quantities of each kind, with units.
 MISS_QUANTITIES = {
     "bplane": (("b_dot_r_km", "km"), ("b_dot_t_km", "km"), ("ltof_s", "s"),
@@ -133,23 +129,26 @@ class TrackingStation:
             values = self.station.location(self.location)
             for pname, value in zip(STATION_PARAMETER_NAMES[self.location], values,
                                     strict=True):
-                out.append(Parameter(f"{self.station.name}.{pname}", _unit_of(pname),
-                                     "location", float(value), self.number))
+                name = f"{self.station.name}.{pname}"
+                out.append(Parameter(name, parse(name).unit, "location", float(value),
+                                     self.number))
         nominal = {"range": self.range_bias_km, "range_rate": self.range_rate_bias_km_s,
                    "doppler": self.doppler_bias_km_s}
         for kind, bname in zip(BIAS_KINDS, BIAS_NAMES, strict=True):
             if kind in self.biases:
-                out.append(Parameter(f"{self.station.name}.{bname}", _unit_of(bname), "bias",
-                                     nominal[kind], self.number))
+                name = f"{self.station.name}.{bname}"
+                out.append(Parameter(name, parse(name).unit, "bias", nominal[kind],
+                                     self.number))
         suffixes = ([""] if self.media_per == "station"
                     else [pass_suffix(i) for i in range(self.media_passes)])
         if self.media_parameters:
             for suffix in suffixes:
-                for zname, kind, unit, value in zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS,
-                                                    MEDIA_UNITS, self.media.zenith, strict=True):
+                for zname, kind, value in zip(MEDIA_PARAMETER_NAMES, MEDIA_KINDS,
+                                              self.media.zenith, strict=True):
                     if kind in self.media_parameters:
-                        out.append(Parameter(f"{self.station.name}.{zname}{suffix}", unit,
-                                             kind, float(value), self.number))
+                        name = f"{self.station.name}.{zname}{suffix}"
+                        out.append(Parameter(name, parse(name).unit, kind, float(value),
+                                             self.number))
         return tuple(out)
 
 
@@ -320,10 +319,7 @@ class Scenario:
         values = default_parameters(self.state_model, self.dynamic)
         values.update(dict(self.dynamic_values))
         for name in self.dynamic:
-            gm = name == "GM" or name.startswith("GM_")
-            unit = "km^3/s^2" if gm else "km" if offset_of(name) else "1"
-            suffix = {"km^3/s^2": "_km3_s2", "km": "_km", "1": ""}[unit]
-            out.append(Parameter(f"{name}{suffix}", unit, "dynamic", values[name]))
+            out.append(Parameter(name, parse(name).unit, "dynamic", values[name]))
         for st in self.stations:
             out.extend(st.parameters())
         out.extend(Parameter(name, EOP_UNITS[name.split(".")[1]], EOP_KIND, 0.0)
@@ -352,12 +348,6 @@ class Scenario:
         """Number of TAPP I parameters."""
         return len(self.parameters)
 
-
-def _unit_of(name: str) -> str:
-    for suffix, unit in (("_km_s", "km/s"), ("_km", "km"), ("_rad", "rad")):
-        if name.endswith(suffix):
-            return unit
-    return "1"
 
 def with_passes(scenario: Scenario, passes: Sequence[int]) -> Scenario:
     """The scenario with each station's number of passes (in ``scenario.stations`` order),

@@ -20,6 +20,7 @@ from tapp.dynamics.ephemeris import tdb_reader
 from tapp.dynamics.ephemeris_offsets import offset_of
 from tapp.dynamics.forces import check_parameter_value, default_parameters
 from tapp.dynamics.manoeuvres import THRUST_NAMES, Burn
+from tapp.dynamics.parameters import model_parameter
 from tapp.errors import InputError
 from tapp.estimation.gauss_markov import StochasticAccelerations
 from tapp.frames.orientation import EarthOrientation, eop_parameters_of
@@ -117,7 +118,8 @@ def _epoch(p: _Parser, value: object) -> Epoch:
 
 def _dynamic(p: _Parser, par: ParametersTable, state_model: ForceModel
              ) -> tuple[tuple[str, ...], tuple[tuple[str, float], ...]]:
-    for i, name in enumerate(par.dynamic):
+    dynamic = _canonical_names(p, par.dynamic, "parameters.dynamic")
+    for i, name in enumerate(dynamic):
         if name in THRUST_NAMES:
             p.fail(f"parameters.dynamic[{i}]", "a model parameter (a burn's thrust is set by "
                    "its [[manoeuvre]] table)", name)
@@ -130,13 +132,28 @@ def _dynamic(p: _Parser, par: ParametersTable, state_model: ForceModel
                    "the Earth (the stations' frame) and the model's centre (the frame of every "
                    "state)", name)
     chosen = []
-    for name, value in par.values.items():
-        if name not in par.dynamic:
-            p.fail(f"parameters.values.{name}",
-                   f"a name of parameters.dynamic ({', '.join(par.dynamic) or 'none'})", name)
-        chosen.append((name, check_parameter_value(name, value, p.source,
-                                                   f"parameters.values.{name}")))
-    return tuple(par.dynamic), tuple(chosen)
+    for given, value in par.values.items():
+        field = f"parameters.values.{given}"
+        name = _canonical_names(p, [given], field, indexed=False)[0]
+        if name not in dynamic:
+            p.fail(field, f"a name of parameters.dynamic ({', '.join(dynamic) or 'none'})",
+                   given)
+        chosen.append((name, check_parameter_value(name, value, p.source, field)))
+    return dynamic, tuple(chosen)
+
+
+def _canonical_names(p: _Parser, names: list[str], field: str, indexed: bool = True
+                     ) -> tuple[str, ...]:
+    """``names`` in their one spelling (:mod:`tapp.dynamics.parameters`: an earlier one warns,
+    naming ``field[i]``, or ``field`` if not ``indexed``); a name that is no model parameter's
+    is left for the force model to refuse with what it expects."""
+    out = []
+    for i, name in enumerate(names):
+        found = model_parameter(name, p.source, f"{field}[{i}]" if indexed else field)
+        out.append(name if found is None else found.canonical)
+    if len(set(out)) < len(out):
+        p.fail(field, "each parameter once (in either spelling)", list(names))
+    return tuple(out)
 
 
 def _noise_key(prefix: str, kind: str) -> str:

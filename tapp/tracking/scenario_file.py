@@ -36,9 +36,11 @@ ISO strings or TOML dates)::
                        area_to_mass_m2_kg, c_r, c_d, srp / var_srp, shadows /
                        var_shadows, atmosphere / var_atmosphere ("none", "exponential",
                        "harris_priester")
-    [parameters]       dynamic = ["GM", "GM_moon", "J2", "C22", "Cr", "Cd", "dr_mars_x", ...]
-                       (tapp.dynamics.forces names; dr_<body>_x|y|z: a third body's
-                       ephemeris offset, km, not the Earth's: tapp.dynamics.ephemeris_offsets),
+    [parameters]       dynamic = ["GM_km3_s2", "GM_moon_km3_s2", "J2", "C22", "Cr", "Cd",
+                       "dr_mars_x_km", ...] (named as on the tape: tapp.dynamics.parameters;
+                       GM, GM_moon, dr_mars_x are read with a warning; dr_<body>_x_km: a
+                       third body's ephemeris offset, km, not the Earth's:
+                       tapp.dynamics.ephemeris_offsets),
                        station_location = "cylindrical" |
                        "ecef" | "none", station_biases = ["range", "range_rate",
                        "doppler"],
@@ -172,10 +174,12 @@ class ParametersTable(Schema):
     """``[parameters]``: the parameters q of x = [p; q] beside the epoch state p."""
 
     dynamic: Annotated[list[str], Unique] = Field(
-        [], description="Model parameters in q: \"GM\", \"GM_moon\" (a third body's), "
-        "\"J2\", \"C22\", \"S22\", ... of the state model, \"Cr\" (with model.srp), "
-        "\"Cd\" (with a model.atmosphere) and \"dr_mars_x\", \"dr_mars_y\", \"dr_mars_z\" "
-        "(a third body's ephemeris offset, km, ICRF; not the Earth's).")
+        [], description="Model parameters in q, named as on the tape: \"GM_km3_s2\" (the "
+        "centre's), \"GM_moon_km3_s2\" (a third body's), \"J2\", \"C22\", \"S22\", ... of "
+        "the state model, \"Cr\" (with model.srp), \"Cd\" (with a model.atmosphere) and "
+        "\"dr_mars_x_km\", \"dr_mars_y_km\", \"dr_mars_z_km\" (a third body's ephemeris "
+        "offset, km, ICRF; not the Earth's). The earlier spellings GM, GM_moon, dr_mars_x are "
+        "read with a warning.")
     station_location: LocationMode = Field("none", description=_LOCATION)
     station_biases: Annotated[list[BiasKind], Unique] = Field([], description=_BIASES)
     media: Annotated[list[Literal[MEDIA_EFFECTS]], Unique] = Field(  # type: ignore[valid-type]
@@ -187,8 +191,8 @@ class ParametersTable(Schema):
         "(STATION.zenith_wet_km), or one per pass, its calibration's (STATION.zenith_wet_km.p1, "
         ".p2, ... in the station's pass order, named once TAPP I has found the passes).")
     values: dict[str, float] = Field(
-        {}, description="Values other than nominal of dynamic parameters, by name (GM in "
-        "km³/s²).")
+        {}, description="Values other than nominal of dynamic parameters, by name "
+        "(GM_km3_s2 in km³/s²).")
     earth_orientation: bool | Annotated[list[Literal[EOP_PARAMETERS]],  # type: ignore[valid-type]
                                         Unique] = Field(
         False, description="Constant offsets of the Earth orientation parameters from the IERS "

@@ -109,6 +109,7 @@ from tapp.dynamics import Propagator, Trajectory
 from tapp.dynamics.ephemeris_offsets import offset_of, offset_values
 from tapp.dynamics.events import Events
 from tapp.dynamics.forces import default_parameters
+from tapp.dynamics.parameters import gm_name
 from tapp.errors import InputError
 from tapp.estimation.factors import triangularize
 from tapp.io.tape.t13 import (
@@ -674,7 +675,7 @@ def _miss_function(scenario: Scenario, gm_values: dict[str, float]
                           miss.t_s + bp.time_to_periapsis_s, fpa)
             return np.array([float(all_values[i]) for i in index])
 
-        name = f"GM_{miss.body}"
+        name = gm_name(miss.body)
         return bplane, name, gm_values[name], -body
 
     def elements(x: np.ndarray, gm: float) -> np.ndarray:
@@ -682,7 +683,7 @@ def _miss_function(scenario: Scenario, gm_values: dict[str, float]
             return equinoctial_elements(x, gm)[index]
         return np.asarray(cartesian_to_elements(x, gm), dtype=float)[index]
 
-    return elements, "GM", gm_values["GM"], np.zeros(6)
+    return elements, gm_name(), gm_values[gm_name()], np.zeros(6)
 
 
 def _difference(f: Callable[[np.ndarray], np.ndarray], x: np.ndarray, steps: np.ndarray,
@@ -728,10 +729,10 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
             scenario.x0, np.array([miss.t_s]), stm=True, param_values=values,
             orientation=scenario.orientation, epoch_jd_utc=scenario.epoch.jd)
         x, phi, sens = traj.states[0], traj.stm[0], traj.sensitivity[0]
-    body_gm = f"GM_{miss.body}" if miss.kind == "bplane" else "GM"
+    body_gm = gm_name(miss.body if miss.kind == "bplane" else "")
     gm_values = default_parameters(scenario.state_model, (body_gm,))
     gm_values.update(values)
-    f, gm_name, gm, offset = _miss_function(scenario, gm_values)
+    f, gm_param, gm, offset = _miss_function(scenario, gm_values)
     # Steps scale with the state the formulas see (target-relative for a B-plane: |z| of a
     # flyby is 1e-2 of the Earth-centred |x|, and G's position block needs the finer step).
     rel = x + offset
@@ -751,8 +752,8 @@ def miss_partials(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     big_b = np.zeros((len(nominal), scenario.n_o))
     big_b[:, :6] = g @ phi
     big_b[:, 6:6 + sens.shape[-1]] = g @ sens
-    if gm_name in scenario.dynamic:
-        column = 6 + scenario.dynamic.index(gm_name)
+    if gm_param in scenario.dynamic:
+        column = 6 + scenario.dynamic.index(gm_param)
         big_b[:, column] += _difference(lambda q: f(x, float(q[0])), np.array([gm]),
                                         np.array([MISS_STEP * gm]), angles)[:, 0]
     if miss.kind == "bplane":  # z = x - (s_B + δ_B): the body's ephemeris offset, -G E

@@ -91,7 +91,7 @@ def test_tape_info_text(tmp_path: Path) -> None:
     ('stations = ["QUITO", "KOUROU"', 'stations = ["QUITO", "NOWHERE"', "tracking.stations[1]"),
     ('observables = ["range", "range_rate"]', 'observables = ["range", "phase"]',
      "tracking.observables[1]"),
-    ('dynamic = ["GM", "J2"]', 'dynamic = ["GM", "J9"]', "parameters.dynamic[1]"),
+    ('dynamic = ["GM_km3_s2", "J2"]', 'dynamic = ["GM_km3_s2", "J9"]', "parameters.dynamic[1]"),
     ("sigma_range_m = 15.0", "sigma_range_m = 0.0", "noise.fit.sigma_range_m"),
     ("epochs = [43200.0]", "epochs = [43200.0, 21600.0]", "times.epochs"),
     ("blackouts = []", "blackouts = [[0.0, 90000.0]]", "tracking"),
@@ -331,7 +331,8 @@ def test_simulate_prints_the_targeted_injection_and_the_miss(retargeted_run) -> 
     (("[targeting.tolerances]", "[targeting.increments]\nvz_km_s = 0.0\n\n"
       "[targeting.tolerances]"), "targeting.increments.vz_km_s"),
     (('time = "periapsis"', 'time = "2026-03-15T02:05:58.384"'), "miss.time"),
-    (('dynamic = ["GM", "GM_moon"]', 'dynamic = ["GM", "GM_moon"]\nvalues = {GM_moon = 4900.0}'),
+    (('dynamic = ["GM_km3_s2", "GM_moon_km3_s2"]',
+      'dynamic = ["GM_km3_s2", "GM_moon_km3_s2"]\nvalues = {GM_moon_km3_s2 = 4900.0}'),
      "parameters.values"),
 ])
 def test_bad_targeting_fields_are_one_line_naming_the_field(tmp_path: Path, edit, field: str

@@ -133,7 +133,7 @@ def test_a_poor_fit_is_refused_unless_forced_and_then_said(tmp_path: Path, flown
     """Two-body against the J2 trajectory: kilometres off over 3 h."""
     scenario = _case(tmp_path, flown, {"file": "leo.oem"},
                      model={"gravity": "J0", "var_gravity": "J0"},
-                     parameters={"dynamic": ["GM"]})
+                     parameters={"dynamic": ["GM_km3_s2"]})
     res, before = _run(tmp_path, scenario)
     assert res.exit_code == 2
     (line,) = res.stderr.strip().splitlines()

@@ -159,8 +159,8 @@ def test_stm_of_a_low_mars_orbit_matches_central_differences(method: str) -> Non
 
 
 def test_j2_is_a_parameter_of_the_centre() -> None:
-    assert default_parameters(_model("mars"), ("J2", "GM")) == {
-        "J2": J2_CENTRE["mars"], "GM": GM_km3_s2["mars"]}
+    assert default_parameters(_model("mars"), ("J2", "GM_km3_s2")) == {
+        "J2": J2_CENTRE["mars"], "GM_km3_s2": GM_km3_s2["mars"]}
     with pytest.raises(InputError, match="parameters"):
         default_parameters(_model("mars"), ("C20",))
     with pytest.raises(InputError, match="parameters"):

@@ -125,13 +125,13 @@ def test_stm_and_gm_sensitivities_across_two_changes_match_central_differences()
     which at 1e-6 of GM♂ (0.04 km of response) left 8e-5. Measured column errors: Φ below
     1.7e-8, S 9e-11 (GM⊕, GM☉) and 2.9e-8 (GM♂).
     """
-    params = ("GM", "GM_sun", "GM_mars")
+    params = ("GM_km3_s2", "GM_sun_km3_s2", "GM_mars_km3_s2")
     prop = Propagator(EARTH_MODEL, params=params, centre_changes=CHANGES, rtol=1e-14,
                       atol=1e-14)
     t_s = np.array([0.0, 171.5 * DAY_s])
     traj = prop.propagate(X0_EARTH, t_s, epoch_jd_utc=EPOCH_JD_UTC)
-    nominal = {"GM": GM_km3_s2["earth"], "GM_sun": GM_km3_s2["sun"],
-               "GM_mars": GM_km3_s2["mars"]}
+    nominal = {"GM_km3_s2": GM_km3_s2["earth"], "GM_sun_km3_s2": GM_km3_s2["sun"],
+               "GM_mars_km3_s2": GM_km3_s2["mars"]}
 
     def final(x0: np.ndarray, values: dict[str, float]) -> np.ndarray:
         return prop.propagate(x0, t_s, stm=False, param_values=values,

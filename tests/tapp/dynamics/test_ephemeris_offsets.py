@@ -82,7 +82,7 @@ def test_the_translation_terms_are_there() -> None:
     """On the Moon's interval the outputs about the Earth carry +E; leaving out the
     translations' ±E (E the selector) would misplace S by the identity at the periapsis,
     far beyond the columns' agreement above."""
-    params = MOON + ("GM_moon",)
+    params = MOON + ("GM_moon_km3_s2",)
     e = selector(params, "moon")
     assert e[:3, :3].tolist() == np.eye(3).tolist() and not e[3:].any() and not e[:, 3].any()
     assert not selector(params, "mars").any()
@@ -91,4 +91,4 @@ def test_the_translation_terms_are_there() -> None:
 def test_offsets_of_a_body_the_model_has_not_are_refused() -> None:
     model = ForceModel(GravitySpec(0, 0), "earth", ("moon", "sun"))
     with pytest.raises(InputError):
-        Propagator(model, model, ("dr_mars_x",)).propagate(X0, T_s[:1], epoch_jd_utc=JD_UTC)
+        Propagator(model, model, ("dr_mars_x_km",)).propagate(X0, T_s[:1], epoch_jd_utc=JD_UTC)

@@ -48,19 +48,19 @@ def test_a_third_body_given_twice_is_refused() -> None:
 
 @pytest.mark.parametrize("gm", [0.0, -398600.4415, math.nan, math.inf])
 def test_a_gm_that_is_not_positive_and_finite_is_refused(gm: float) -> None:
-    prop = Propagator(earth_model("J2"), params=("GM", "J2"))
+    prop = Propagator(earth_model("J2"), params=("GM_km3_s2", "J2"))
     with pytest.raises(InputError) as info:
-        prop.propagate(LEO, np.array([60.0]), stm=False, param_values={"GM": gm})
-    assert (info.value.source, info.value.field) == ("propagate", "param_values.GM")
-    assert info.value.expected == "a finite GM > 0 km^3/s^2 for GM"
-    with pytest.raises(InputError, match="GM_moon: expected a finite GM > 0"):
-        check_parameter_value("GM_moon", gm, "model", "GM_moon")
+        prop.propagate(LEO, np.array([60.0]), stm=False, param_values={"GM_km3_s2": gm})
+    assert (info.value.source, info.value.field) == ("propagate", "param_values.GM_km3_s2")
+    assert info.value.expected == "a finite GM > 0 km^3/s^2 for GM_km3_s2"
+    with pytest.raises(InputError, match="GM_moon_km3_s2: expected a finite GM > 0"):
+        check_parameter_value("GM_moon_km3_s2", gm, "model", "GM_moon_km3_s2")
 
 
 def test_other_parameters_may_be_negative_but_must_be_finite() -> None:
     assert check_parameter_value("J2", -1e-3) == -1e-3
     with pytest.raises(InputError, match="a finite value of J2"):
         check_parameter_value("J2", math.nan)
-    prop = Propagator(earth_model("J2"), params=("GM",))
-    out = prop.propagate(LEO, np.array([60.0]), stm=False, param_values={"GM": 398600.0})
+    prop = Propagator(earth_model("J2"), params=("GM_km3_s2",))
+    out = prop.propagate(LEO, np.array([60.0]), stm=False, param_values={"GM_km3_s2": 398600.0})
     assert np.all(np.isfinite(out.states))

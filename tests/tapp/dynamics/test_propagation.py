@@ -177,14 +177,14 @@ def test_truncated_variational_model_changes_stm_not_trajectory(method: str) -> 
 
 
 def test_parameter_sensitivities_match_central_differences(method: str) -> None:
-    params = ("GM", "J2", "C22", "S22")
+    params = ("GM_km3_s2", "J2", "C22", "S22")
     prop = Propagator(earth_model("4x4"), params=params, **TIGHT, method=method)
     x0 = periapsis_state(7000.0, 0.1, 40.0)
     t = np.array([0.0, 4 * 3600.0])
     tr = prop.propagate(x0, t, theta0_rad=0.3)
     nominal = dict(zip(params, [MU, unnormalised_zonal_j(2), 0.0, 0.0], strict=True))
     nominal.update({k: v for k, v in prop._nominal.items() if k in ("C22", "S22")})
-    steps = {"GM": 1e-2, "J2": 1e-7, "C22": 1e-7, "S22": 1e-7}
+    steps = {"GM_km3_s2": 1e-2, "J2": 1e-7, "C22": 1e-7, "S22": 1e-7}
     for j, name in enumerate(params):
         hi = prop.propagate(x0, t, stm=False, theta0_rad=0.3,
                             param_values={name: nominal[name] + steps[name]}).states[-1]

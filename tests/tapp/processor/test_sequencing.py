@@ -114,7 +114,7 @@ def test_re_referencing_through_the_update_phase_equals_a_tape_without_epoch_cha
 
 
 def test_dropping_a_station_with_flags_equals_simulating_without_it():
-    no_station_parameters = {"dynamic": ["GM", "J2"], "station_location": "none",
+    no_station_parameters = {"dynamic": ["GM_km3_s2", "J2"], "station_location": "none",
                              "station_biases": []}
     all3 = leo_tape(parameters=no_station_parameters, tracking={"station": None})
     two = leo_tape(parameters=no_station_parameters,
@@ -133,7 +133,7 @@ def test_dropping_a_station_with_flags_equals_simulating_without_it():
 
 
 def test_a_time_window_flag_equals_a_blackout_of_the_same_records():
-    params = {"dynamic": ["GM", "J2"], "station_location": "none", "station_biases": []}
+    params = {"dynamic": ["GM_km3_s2", "J2"], "station_location": "none", "station_biases": []}
     full = leo_tape(parameters=params, tracking={"station": None})
     blacked = leo_tape(parameters=params,
                        tracking={"station": {"QUITO": {"blackouts": [[3600.5, 7200.0]]}}})

@@ -37,8 +37,8 @@ class Reference:
         tdb = scenario.orientation.scales.tdb(grid)
         self.moon = CubicSpline(grid, position_km("moon", "earth", *tdb), axis=0)
         self.sun = CubicSpline(grid, position_km("sun", "earth", *tdb), axis=0)
-        values = default_parameters(scenario.state_model, ("GM", "J2"))
-        mu, j2 = float(values["GM"]), float(values["J2"])
+        values = default_parameters(scenario.state_model, ("GM_km3_s2", "J2"))
+        mu, j2 = float(values["GM_km3_s2"]), float(values["J2"])
         pole = scenario.orientation.pole(np.array([0.0]))[0, 0]
 
         def rhs(t: float, y: np.ndarray) -> np.ndarray:
@@ -113,7 +113,8 @@ def moved_deep_space(shipped: str, *, days: int = 1, targeting: str | None = Non
     pressure (the reference has gravity only; it moves B by ~3 km); with ``targeting`` (a
     [targeting] table) appended and the miss time at "periapsis"."""
     replacements = [("srp = true", "srp = false"),
-                    ('dynamic = ["GM", "GM_moon", "Cr"]', 'dynamic = ["GM", "GM_moon"]'),
+                    ('dynamic = ["GM_km3_s2", "GM_moon_km3_s2", "Cr"]',
+                     'dynamic = ["GM_km3_s2", "GM_moon_km3_s2"]'),
                     ('epoch = "2026-03-10T12:00:00"', f'epoch = "2026-03-{10 + days}T12:00:00"'),
                     ('end = "2026-04-09T12:00:00"', "end = 259200.0"),
                     ('end = "2026-04-09T12:00:00"', "end = 259200.0"),

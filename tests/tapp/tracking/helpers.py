@@ -28,7 +28,7 @@ _BASE = {
                    V_CIRC_KM_S * math.sin(math.radians(INCLINATION_DEG))],
     },
     "model": {"gravity": "J2", "var_gravity": "J2"},
-    "parameters": {"dynamic": ["GM", "J2"], "station_location": "cylindrical",
+    "parameters": {"dynamic": ["GM_km3_s2", "J2"], "station_location": "cylindrical",
                    "station_biases": ["range", "range_rate"]},
     "stations": {
         "QUITO": {"lat_deg": -0.6226, "lon_deg": -78.5786, "h_km": 3.55, "elev_mask_deg": 5.0},

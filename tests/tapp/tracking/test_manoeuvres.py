@@ -273,7 +273,7 @@ def test_bad_manoeuvres_are_input_errors_naming_the_field(tables, message):
 def test_a_thrust_parameter_is_no_model_parameter_of_the_file():
     with pytest.raises(InputError, match=r"parameters.dynamic\[2\]: expected a model parameter "
                        r"\(a burn's thrust is set by its \[\[manoeuvre\]\] table\)"):
-        leo_scenario(parameters={"dynamic": ["GM", "J2", "thr_ric_1"]})
+        leo_scenario(parameters={"dynamic": ["GM_km3_s2", "J2", "thr_ric_1"]})
 
 
 def test_rkn12_takes_a_thrust_in_inertial_axes_only():

@@ -53,11 +53,11 @@ def test_the_shipped_scenarios_parse() -> None:
     deep = read_scenario(SCENARIOS / "deep_space.toml")
     assert deep.n_o == 24 + 45     # 15 two-day intervals x 3 stochastic accelerations
     assert deep.stochastic.n_intervals == 15 and deep.stochastic.frame == "ric"
-    assert deep.dynamic == ("GM", "GM_moon", "Cr")
+    assert deep.dynamic == ("GM_km3_s2", "GM_moon_km3_s2", "Cr")
     assert deep.state_model.name == "J2+sun+moon+srp"
     assert deep.var_model.name == "J2+sun+moon+srp"
     drag = read_scenario(SCENARIOS / "leo_drag.toml")
-    assert drag.n_o == 13 and drag.dynamic == ("GM", "J2", "Cd")
+    assert drag.n_o == 13 and drag.dynamic == ("GM_km3_s2", "J2", "Cd")
     assert drag.state_model.name == drag.var_model.name == "J2+drag(harris_priester)"
     assert [s.station.name for s in deep.stations] == ["GOLDSTONE", "CANBERRA", "MADRID"]
     assert deep.miss.quantities == ("b_dot_r_km", "b_dot_t_km", "flight_time_s")
@@ -84,9 +84,10 @@ def _with(path: tuple[str, ...], value) -> dict:
     (("tracking", "station", "NOWHERE"), {}, "tracking.station.NOWHERE"),
     (("tracking", "light_time"), "three_way", "tracking.light_time"),
     (("tracking", "data_interval_s"), 0.0, "tracking.data_interval_s"),
-    (("parameters", "dynamic"), ["GM", "J9"], "parameters.dynamic[1]"),
-    (("parameters", "dynamic"), ["GM_mars"], "parameters.dynamic[0]"),
-    (("parameters", "values"), {"GM_moon": 4902.8}, "parameters.values.GM_moon"),
+    (("parameters", "dynamic"), ["GM_km3_s2", "J9"], "parameters.dynamic[1]"),
+    (("parameters", "dynamic"), ["GM_mars_km3_s2"], "parameters.dynamic[0]"),
+    (("parameters", "values"), {"GM_moon_km3_s2": 4902.8},
+     "parameters.values.GM_moon_km3_s2"),
     (("parameters", "station_location"), "polar", "parameters.station_location"),
     (("parameters", "station_biases"), ["azimuth"], "parameters.station_biases[0]"),
     (("noise", "fit", "sigma_range_m"), 0.0, "noise.fit.sigma_range_m"),
@@ -141,7 +142,7 @@ def test_a_schedule_that_yields_no_observation_is_an_input_error() -> None:
 def test_classical_miss_elements_of_a_circular_orbit_are_refused() -> None:
     # Two-body motion keeps e = 0 (with J2 the osculating e reaches 1e-3 and is accepted).
     sc = leo_scenario(miss={"kind": "classical"}, model={"gravity": "J0", "var_gravity": "J0"},
-                      parameters={"dynamic": ["GM"]})
+                      parameters={"dynamic": ["GM_km3_s2"]})
     with pytest.raises(InputError, match="miss.kind: expected equinoctial"):
         simulate(sc)
 
@@ -249,9 +250,9 @@ def test_a_station_height_outside_the_ground_band_is_refused() -> None:
 
 
 def test_a_non_positive_gm_is_refused() -> None:
-    text = _message(leo_document(parameters={"values": {"GM": -398600.0}}))
-    assert text == (f"{SOURCE}: parameters.values.GM: expected a finite GM > 0 km^3/s^2 for GM "
-                    "(got -398600.0)")
+    text = _message(leo_document(parameters={"values": {"GM_km3_s2": -398600.0}}))
+    assert text == (f"{SOURCE}: parameters.values.GM_km3_s2: expected a finite GM > 0 km^3/s^2 "
+                    "for GM_km3_s2 (got -398600.0)")
 
 
 def test_the_noise_schema_declares_every_kind_in_its_edge_unit() -> None:

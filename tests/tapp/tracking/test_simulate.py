@@ -183,7 +183,7 @@ def _perturbed(name: str, sign: float, light_time: str, angles: bool
         short = name.removesuffix("_km3_s2")
         base = {p.name: p.nominal for p in parse_scenario(doc, "fd.toml").parameters}
         h = STEP[short]
-        doc["parameters"]["values"] = {short: base[name] + sign * h}
+        doc["parameters"]["values"] = {name: base[name] + sign * h}
         return parse_scenario(doc, "fd.toml"), h
     station, pname = name.split(".")
     if pname.endswith("bias_km") or pname.endswith("bias_km_s"):
@@ -271,10 +271,9 @@ def _b_by_differences(scenario: Scenario, names: tuple[str, ...], steps: dict[st
                 x0[i] += sign * steps[name]
                 s = dataclasses.replace(scenario, x0=x0)
             else:
-                short = name.removesuffix("_km3_s2")
                 nominal = {p.name: p.nominal for p in scenario.parameters}[name]
                 s = dataclasses.replace(scenario, dynamic_values=(
-                    *scenario.dynamic_values, (short, nominal + sign * steps[name])))
+                    *scenario.dynamic_values, (name, nominal + sign * steps[name])))
             out.append(miss_partials(s)[0])
         diff = out[0] - out[1]
         angles = np.array([u == "rad" for u in scenario.miss.units])

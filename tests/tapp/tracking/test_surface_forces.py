@@ -21,7 +21,7 @@ SURFACE = {"area_to_mass_m2_kg": 0.01, "srp": True, "c_r": 1.4,
 
 def test_surface_keys_build_both_models_and_the_parameters() -> None:
     sc = leo_scenario(model={**SURFACE, "var_srp": False},
-                      parameters={"dynamic": ["GM", "Cr", "Cd"], "values": {"Cd": 2.3}})
+                      parameters={"dynamic": ["GM_km3_s2", "Cr", "Cd"], "values": {"Cd": 2.3}})
     assert sc.state_model.name == "J2+srp+drag(harris_priester)"
     assert sc.var_model.name == "J2+drag(harris_priester)"  # var_srp = false, drag inherited
     assert sc.state_model.surface.area_to_mass_m2_kg == 0.01
