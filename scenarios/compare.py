@@ -19,6 +19,7 @@ import json
 import re
 import sys
 from collections.abc import Iterator
+from difflib import SequenceMatcher
 from pathlib import Path
 
 import h5py
@@ -29,18 +30,28 @@ from matplotlib.image import imread
 #: Keys, HDF5 attributes and text lines that measure the run, not its result: compared by
 #: presence only. A key matches if any of these patterns is found in it.
 VOLATILE = re.compile(r"wall|elapsed|seconds_per|per_s$|^bytes$|created|creation|CREATION"
-                      r"|started|finished|date_utc|_at$|python|version|platform|host|path"
-                      r"|folder|file$|^tape$|^oem$|^tdm$|^t13$|^t32$|^output|workers"
-                      r"|timing|duration_s$|speed")
-#: A text line holding a time measured (wall, elapsed, "in 3.2 s") or a path of the run.
-VOLATILE_LINE = re.compile(r"wall|elapsed|\bin [0-9.]+ ?(s|min|ms)\b|[0-9.]+ s wall"
-                           r"|CREATION_DATE|/tmp/|/work/|results/|seconds? per")
+                      r"|started|finished|updated|git_commit|python|version|platform|host"
+                      r"|workers|timing|speed")
+#: The run's clock in a text: when the file was written.
+STAMP = re.compile(r"CREATION_DATE\s*=\s*\S+|\b[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:.]+ ?(UTC|Z)?")
+#: A time measured in a text line ("0.17 s", "3.86 S", "1:44"): masked before lines are
+#: compared, so that a line differing only there is the same line.
+TIME = re.compile(r"\b[0-9]+(\.[0-9]+)? ?(s|S|ms|min)\b|\b[0-9]+:[0-9]{2}(:[0-9]{2})?\b")
+#: An absolute path: the folders differ between two checkouts, the file's name must not.
+ABSOLUTE_PATH = re.compile(r"(?<![\w.])/(?:[\w.+-]+/)+")
 #: Differences shown per file.
 SHOWN = 4
 
 
+def _same_text(a: str, b: str) -> bool:
+    """Whether two strings are equal once their absolute paths are reduced to the files'
+    names."""
+    return ABSOLUTE_PATH.sub("", a) == ABSOLUTE_PATH.sub("", b)
+
+
 def json_differences(a: object, b: object, where: str = "") -> Iterator[str]:
-    """The paths where two JSON values differ (volatile keys compared by presence only)."""
+    """The paths where two JSON values differ (volatile keys compared by presence only;
+    absolute paths by the file's name)."""
     if isinstance(a, dict) and isinstance(b, dict):
         for key in sorted(set(a) | set(b)):
             if key not in a or key not in b:
@@ -53,12 +64,23 @@ def json_differences(a: object, b: object, where: str = "") -> Iterator[str]:
         else:
             for i, (x, y) in enumerate(zip(a, b, strict=True)):
                 yield from json_differences(x, y, f"{where}[{i}]")
+    elif isinstance(a, str) and isinstance(b, str):
+        if not _same_text(a, b):
+            yield f"{where}: {a!r} -> {b!r}"
     elif a != b and not (isinstance(a, float) and isinstance(b, float)
                          and np.isnan(a) and np.isnan(b)):
         yield f"{where}: {a!r} -> {b!r}"
 
 
 def _arrays_differ(a: np.ndarray, b: np.ndarray) -> str | None:
+    """What differs between two arrays (strings: once their absolute paths are names), or
+    None."""
+    if a.dtype.kind in "OSU" and b.dtype.kind in "OSU" and a.shape == b.shape == ():
+        x, y = (v.decode() if isinstance(v, bytes) else str(v) for v in (a.item(), b.item()))
+        if x[:1] in ("{", "[") and y[:1] in ("{", "["):  # JSON held in an attribute
+            found = list(json_differences(json.loads(x), json.loads(y)))
+            return "; ".join(found[:SHOWN]) or None
+        return None if _same_text(x, y) else f"{x[:60]!r} -> {y[:60]!r}"
     if a.shape != b.shape or a.dtype.kind != b.dtype.kind:
         return f"shape/dtype {a.shape} {a.dtype} -> {b.shape} {b.dtype}"
     if a.dtype.kind in "fc":
@@ -87,6 +109,8 @@ def hdf5_differences(path_a: Path, path_b: Path) -> Iterator[str]:
                 continue
             obj_a = items_a[name] if name else fa
             obj_b = items_b[name] if name else fb
+            if VOLATILE.search(name.rsplit("/")[-1]):
+                continue  # a run's measure: its data and attributes (a checksum) alike
             for key in sorted(set(obj_a.attrs) | set(obj_b.attrs)):
                 if key not in obj_a.attrs or key not in obj_b.attrs:
                     yield f"/{name}@{key}: only on one side"
@@ -94,13 +118,14 @@ def hdf5_differences(path_a: Path, path_b: Path) -> Iterator[str]:
                     a, b = np.asarray(obj_a.attrs[key]), np.asarray(obj_b.attrs[key])
                     if (found := _arrays_differ(a, b)) is not None:
                         yield f"/{name}@{key}: {found}"
-            if isinstance(obj_a, h5py.Dataset) and not VOLATILE.search(name.rsplit("/")[-1]):
+            if isinstance(obj_a, h5py.Dataset):
                 if (found := _arrays_differ(obj_a[()], obj_b[()])) is not None:
                     yield f"/{name}: {found}"
 
 
 def csv_differences(path_a: Path, path_b: Path) -> Iterator[str]:
-    """Cells that differ between two CSV files (columns named volatile skipped)."""
+    """Cells that differ between two CSV files (columns named volatile skipped, absolute
+    paths compared by the file's name)."""
     rows_a = list(csv.reader(path_a.read_text().splitlines()))
     rows_b = list(csv.reader(path_b.read_text().splitlines()))
     if len(rows_a) != len(rows_b) or (rows_a and rows_a[0] != rows_b[0]):
@@ -109,20 +134,24 @@ def csv_differences(path_a: Path, path_b: Path) -> Iterator[str]:
     header = rows_a[0] if rows_a else []
     for i, (ra, rb) in enumerate(zip(rows_a[1:], rows_b[1:], strict=True), start=2):
         for column, x, y in zip(header, ra, rb, strict=True):
-            if x != y and not VOLATILE.search(column):
+            if not _same_text(x, y) and not VOLATILE.search(column):
                 yield f"line {i}, {column}: {x} -> {y}"
 
 
+def _tokens(text: str) -> list[str]:
+    """The words of a text once the run's dates, times measured and absolute paths are
+    masked: a line wrapped elsewhere (a longer path) is the same text."""
+    return ABSOLUTE_PATH.sub("", TIME.sub("<time>", STAMP.sub("<date>", text))).split()
+
+
 def text_differences(path_a: Path, path_b: Path) -> Iterator[str]:
-    """Lines that differ between two text files (lines holding a run's time or path
-    skipped)."""
-    lines_a = path_a.read_text().splitlines()
-    lines_b = path_b.read_text().splitlines()
-    if len(lines_a) != len(lines_b):
-        yield f"{len(lines_a)} lines before, {len(lines_b)} after"
-    for i, (x, y) in enumerate(zip(lines_a, lines_b, strict=False), start=1):
-        if x != y and not (VOLATILE_LINE.search(x) and VOLATILE_LINE.search(y)):
-            yield f"line {i}: {x.strip()[:70]!r} -> {y.strip()[:70]!r}"
+    """The passages where two texts differ, word by word (:func:`_tokens`)."""
+    a, b = _tokens(path_a.read_text()), _tokens(path_b.read_text())
+    matcher = SequenceMatcher(None, a, b, autojunk=False)
+    for op, i1, i2, j1, j2 in matcher.get_opcodes():
+        if op != "equal":
+            yield (f"word {i1 + 1}: ...{' '.join(a[max(i1 - 4, 0):i2 + 2])[:90]!r} -> "
+                   f"{' '.join(b[max(j1 - 4, 0):j2 + 2])[:90]!r}")
 
 
 def png_differences(path_a: Path, path_b: Path) -> Iterator[str]:
