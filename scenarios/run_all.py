@@ -57,6 +57,7 @@ from iter import CaseStatus, Execution, load_sweep, run_sweep
 from scenarios import readme
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.od.study import planned_cases, run_study
+from tapp.od.study_file import shipped_study
 from tapp.report.markdown import table
 from tapp.report.od import write_report
 from tapp.report.pipeline import ellipse_and_ric_sections, recycle_sigma_table
@@ -92,9 +93,10 @@ def approx_stm_study() -> None:
     start = time.perf_counter()
     with Progress(TextColumn("{task.description:<40}"), BarColumn(),
                   TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn()) as bar:
-        task = bar.add_task("approximate-STM study", total=planned_cases())
-        results = run_study(advance=lambda label: bar.update(task, advance=1,
-                                                             description=label))
+        study = shipped_study()
+        task = bar.add_task("approximate-STM study", total=planned_cases(study))
+        results = run_study(study, advance=lambda label: bar.update(task, advance=1,
+                                                                    description=label))
     report = write_report(results, RESULTS / "approx_stm", time.perf_counter() - start)
     print(f"approximate-STM study -> {report}")
 

@@ -8,7 +8,7 @@ The Python front door (:mod:`tapp.api`), one verb per program, each taking paths
 in memory and returning a result that renders itself (``to_json()``, a text rendering,
 ``plot(ax=None)``) as the command does::
 
-    from tapp import read_scenario, simulate, process, guide, search, sweep
+    from tapp import read_scenario, simulate, process, guide, search, sweep, fit, ekf, rsig
 
 - ``read_scenario(path)`` -> :class:`Scenario`
 - ``simulate(scenario_or_path, *, raw=False, progress=None)`` -> :class:`SimulateResult`
@@ -20,6 +20,13 @@ in memory and returning a result that renders itself (``to_json()``, a text rend
 - ``search(path_or_problem)`` -> :class:`TargetingResult` (``.status``, ``.converged``,
   ``.report()``, ``.to_json()``)
 - ``sweep(path, *, output_h5=None, execution=None)`` -> :class:`iter.SweepResult`
+- ``fit(orbit, *, arc="24h", ..., study=None)`` -> :class:`FitResult` (the batch DC of
+  ``tapp dc``: ``.iterations``, ``.linearisation()`` with the STMs and partials,
+  ``.status``, ``.text()``, ``.to_json()``, ``.plot(ax)``)
+- ``ekf(orbit, *, arc="18h", apriori="1", ..., study=None)`` -> :class:`FilterResult`
+  (``.result``: residuals, gains, covariances, process noise per row)
+- ``rsig(orbit, *, span="48h", step="300s", ..., study=None)`` -> :class:`RSigResult`
+  (``.signature``: R(t))
 
 The names are imported on first use, so that ``import tapp`` (and ``tapp --help``) stays
 light.
@@ -38,6 +45,13 @@ _LAZY = {
     "search": "tapp.api.targeting:search",
     "TargetingResult": "tapp.api.targeting:TargetingResult",
     "sweep": "tapp.api.sweeps:sweep",
+    "fit": "tapp.api.od:fit",
+    "FitResult": "tapp.api.od:FitResult",
+    "IllConditionedFit": "tapp.od.runs:IllConditionedFit",
+    "ekf": "tapp.api.od:ekf",
+    "FilterResult": "tapp.api.od:FilterResult",
+    "rsig": "tapp.api.od:rsig",
+    "RSigResult": "tapp.api.od:RSigResult",
 }
 
 __all__ = ["__version__", *_LAZY]

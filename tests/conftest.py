@@ -32,6 +32,7 @@ TOGETHER = {
     "tests/tapp/cli/test_search_cmd.py": "the search that writes a scenario",
     "tests/tapp/cli/test_od_cmd.py": "the observations and the README's TDM",
     "tests/tapp/test_api.py": "the 3-day deep-space simulate -> process -> guide",
+    "tests/tapp/test_api_od.py": "the DC, EKF and R(t) runs of SATORB1",
     "tests/tapp/processor/test_reference.py": "the deep-space runs and their exact reference",
     "tests/tapp/guidance/test_agreement.py": "the Monte Carlo studies",
     "tests/tapp/guidance/test_monte_carlo.py": "the Monte Carlo samples",

@@ -388,7 +388,7 @@ FILE_CASES = [
     FileCase("deep_space.toml", _simulate, ("run.oem", "run.t13.h5"), 8,
              shrink=_short_deep_space),
     FileCase("leo_drag.toml", _simulate, ("run.oem", "run.t13.h5"), 15),
-    # DC: 3 diverged, 4 ill-conditioned, 5 stalled, 6 converging (tapp.cli.od_cmd)
+    # DC: 3 diverged, 4 ill-conditioned, 5 stalled, 6 converging (tapp.od.exits)
     FileCase("approx_stm.toml", _dc, ("obs.h5",), 30, frozenset({3, 4, 5, 6})),
     # SEARCH: 3 diverged, 4 singular, 1 a case that failed (missed the sphere of influence)
     FileCase("search_bplane.toml", _search, (), 20, frozenset({1, 3, 4})),

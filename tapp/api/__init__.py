@@ -9,6 +9,9 @@ them (argument parsing, progress bars, exit codes).
 :func:`guidance.guide`      TAPP II: a T32 tape and a guidance file -> :class:`guidance.GuideResult`
 :func:`targeting.search`    SEARCH: a B-plane search -> :class:`targeting.TargetingResult`
 :func:`sweeps.sweep`        ITER: a sweep file -> :class:`iter.SweepResult`
+:func:`od.fit`              DC: an orbit of a study -> :class:`od.FitResult`
+:func:`od.ekf`              EKF: an orbit of a study -> :class:`od.FilterResult`
+:func:`od.rsig`             R(t): an orbit of a study -> :class:`od.RSigResult`
 ==========================  ==========================================================
 
 Inputs are paths (str or Path) or the objects the programs take in memory; results are

@@ -57,9 +57,9 @@ observation) are one line each on stderr, ``warning: SOURCE: FIELD: what`` like 
 (:func:`echo_warning`, :func:`one_line_warnings`); a command's own (not a library's) come
 last, once its outputs are written, so that a failed run's one line is its error.
 
-Limits checked before allocating: output grids of at most :data:`MAX_GRID_SAMPLES` samples
-(``--arc`` or ``--span`` with ``--step``), ITER sweeps of at most ``iter.loops.MAX_CASES``
-cases (the product of the loops' ``sets``), TAPP II Monte Carlos of
+Limits checked before allocating: output grids of at most ``tapp.io.options.MAX_GRID_SAMPLES``
+samples (``--arc`` or ``--span`` with ``--step``), ITER sweeps of at most
+``iter.loops.MAX_CASES`` cases (the product of the loops' ``sets``), TAPP II Monte Carlos of
 ``tapp.guidance.study.MIN_SAMPLES`` to ``MAX_SAMPLES`` samples, SEARCH scans of at most
 ``tapp.targeting.program.MAX_SCAN_STEPS`` steps, local Dask clusters of at most
 ``iter.execute.MAX_WORKERS_PER_CORE`` workers per core (no limit with ``--scheduler``), TOML
@@ -434,8 +434,6 @@ T = TypeVar("T")
 EXIT_INPUT = 2
 #: Exit code for any other failure: a computation that could not be completed, or a bug.
 EXIT_FAILURE = 1
-#: Largest output grid (samples of a trajectory, with its STM) a command allocates.
-MAX_GRID_SAMPLES = 1_000_000
 
 
 def _version_callback(value: bool) -> None:
@@ -461,21 +459,6 @@ def positive_option(name: str, value: float) -> float:
     """Return ``value`` if finite and > 0, else raise InputError naming the option."""
     if not (math.isfinite(value) and value > 0):
         raise InputError(name, "value", "a finite number > 0", value)
-    return value
-
-
-def nonnegative_option(name: str, value: float) -> float:
-    """Return ``value`` if finite and >= 0, else raise InputError naming the option."""
-    if not (math.isfinite(value) and value >= 0):
-        raise InputError(name, "value", "a finite number >= 0", value)
-    return value
-
-
-def seed_option(name: str, value: int | None) -> int | None:
-    """Return a noise seed (None for the scenario's) if it is >= 0, else raise InputError."""
-    if value is not None and value < 0:
-        raise InputError(name, "value", "a whole number >= 0 (a seed for numpy's "
-                         "SeedSequence)", value)
     return value
 
 
@@ -531,34 +514,6 @@ def execution_options(scheduler: str | None, workers: int | None, timeout_s: flo
     except SweepInputError as exc:
         raise InputError(f"--{exc.field.replace('_', '-')}", "value", exc.expected,
                          exc.got) from None
-
-
-def check_grid_size(option: str, n: float, limit: int = MAX_GRID_SAMPLES,
-                    what: str = "output samples") -> int:
-    """Return ``n`` as an int if it is at most ``limit``, else raise InputError naming
-    ``option`` with the size that would be needed.
-
-    Call it before allocating anything of size ``n`` (``n`` may be inf or NaN, from huge
-    or tiny option values).
-
-    >>> check_grid_size("--step", 1441.0)
-    1441
-    >>> check_grid_size("--step", 8.6e13)
-    Traceback (most recent call last):
-    ...
-    tapp.errors.InputError: --step: value: expected a value giving at most 1,000,000 \
-output samples (got 'it would need 8.6e+13')
-    """
-    if not (math.isfinite(n) and n <= limit):
-        raise InputError(option, "value", f"a value giving at most {limit:,} {what}",
-                         f"it would need {n:.3g}")
-    return int(n)
-
-
-def grid_samples(span_s: float, step_s: float) -> float:
-    """Return the number of samples of a grid 0, step, ..., span (float: may be inf)."""
-    ratio = span_s / step_s
-    return float(math.floor(ratio)) + 2.0 if math.isfinite(ratio) else math.inf
 
 
 @contextmanager

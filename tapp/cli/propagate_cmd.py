@@ -12,15 +12,14 @@ from tapp.cli.common import (
     EarthOrientationOpt,
     JsonOpt,
     app,
-    check_grid_size,
     delivering,
     earth_orientation_option,
-    grid_samples,
     json_file,
     run_guarded,
 )
-from tapp.cli.durations import DURATION_FORMS, span_option, step_option, warn_deprecated
+from tapp.cli.durations import span_option, step_option, warn_deprecated
 from tapp.errors import InputError
+from tapp.io.options import DURATION_FORMS, check_grid_size, grid_samples
 
 
 def _third_bodies(names: list[str]) -> tuple[str, ...]:

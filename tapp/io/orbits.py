@@ -300,7 +300,7 @@ def parse_orbit(text: str, *, scenario: Path | None = None, source: str = "--orb
     ``allow_subsurface`` (``--allow-subsurface``) accepts an orbit whose perigee is below
     the Earth's surface; otherwise it is refused with its perigee radius and the limit.
     ``orbits``: the ``[orbits.NAME]`` tables of ``scenario``, when the caller has read them
-    already (:class:`tapp.od.setup.Study`); otherwise they are read from it.
+    already (:class:`tapp.od.study_file.Study`); otherwise they are read from it.
     """
     text = text.strip()
     if "=" in text:

@@ -71,7 +71,7 @@ KINDS: dict[str, Kind] = {
         "force models, the target body's B-plane and SEARCH's targets, tolerances, "
         "increments and iteration control."),
     "study": Kind(
-        "tapp.od.setup:StudyFile", "Approximate-STM study file",
+        "tapp.od.study_schema:StudyFile", "Approximate-STM study file",
         "The orbits, stations, simulated tracking and runs of the approximate-STM study "
         "(`tapp dc`, `tapp ekf`, `tapp rsig`, `--orbit NAME` and `make scenario`); the "
         "shipped `approx_stm.toml` is the default."),

@@ -27,7 +27,7 @@ pydantic attribute (``json``, ``copy``, ...), is declared ``x: T = Field(default
 (messages use the key). Validate one table of a larger file with ``prefix="table"``.
 
 The schemas: :class:`tapp.tracking.scenario_file.ScenarioFile` (tracking scenarios),
-:class:`tapp.od.setup.StudyFile` (the study file),
+:class:`tapp.od.study_schema.StudyFile` (the study file),
 :class:`tapp.targeting.searchfile.SearchFile` (SEARCH scenarios),
 :class:`iter.sweepfile.SweepFile` (ITER sweep files), and the tables they share:
 :class:`tapp.io.orbits.OrbitTable`, :class:`tapp.io.stations_file.StationTable`.

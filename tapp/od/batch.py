@@ -311,15 +311,47 @@ def rms_tail_probability(rms: float, n_residuals: int, n_parameters: int = N_STA
     return float(chi2.sf(n_residuals * rms**2, dof))
 
 
-def _linearise(obs: Observations, prop: Propagator, x0: np.ndarray,
-               orientation: EarthOrientation) -> tuple[np.ndarray, np.ndarray]:
-    """Return prefit residuals y (M k,) and epoch-mapped partials H (M k, 6)."""
+@dataclass(frozen=True, slots=True)
+class Linearisation:
+    """The DC's linearisation about an epoch estimate x0: the reference trajectory, its STM,
+    and every measurement's residual and partials (module docstring's equation).
+
+    Shapes: M observation rows of k kinds (``obs.kinds``, their units: km, km/s, rad).
+
+    Attributes
+    ----------
+    t_s : (M,) s from the epoch.
+    states : (M, 6) km, km/s: the state model's trajectory x_N(t_i) from x0.
+    stm : (M, 6, 6) Φ_M(t_i, t0), the variational model's STM along it.
+    residuals : (M, k) prefit residuals y_i = z_i − h(x_N(t_i)).
+    state_partials : (M, k, 6) H̃_i = ∂h/∂x at t_i.
+    partials : (M, k, 6) H_i = H̃_i Φ_M(t_i, t0), the partials with respect to x0.
+    """
+
+    t_s: np.ndarray
+    states: np.ndarray
+    stm: np.ndarray
+    residuals: np.ndarray
+    state_partials: np.ndarray
+    partials: np.ndarray
+
+
+def linearise(obs: Observations, prop: Propagator, x0: np.ndarray,
+              orientation: EarthOrientation) -> Linearisation:
+    """Propagate ``prop``'s (J_N, J_M) pair from x0 (6,) at t = 0 over ``obs``'s times and
+    return the residuals and epoch-mapped partials of every measurement (one DC iteration's
+    linearisation).
+
+    Raises
+    ------
+    PropagationError
+        The reference trajectory cannot be propagated.
+    """
     traj = prop.propagate(x0, obs.t_s, orientation=orientation)
     h, h_tilde = predict(obs, traj.states, orientation)
-    y = residuals(obs, h)
     # H_i = H~_i Φ(t_i, t0)
     big_h = np.einsum("mkj,mjl->mkl", h_tilde, traj.stm)
-    return y.reshape(-1), big_h.reshape(-1, 6)
+    return Linearisation(traj.t_s, traj.states, traj.stm, residuals(obs, h), h_tilde, big_h)
 
 
 def scaled_condition(normal: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -423,10 +455,11 @@ def differential_correction(obs: Observations, prop: Propagator, x_start: np.nda
     status, reason, q, more = DCOutcome.DIVERGED, "", math.nan, None
     for k in range(1, settings.max_iterations + 1):
         try:
-            y, big_h = _linearise(obs, prop, x, orientation)
+            lin = linearise(obs, prop, x, orientation)
         except PropagationError as exc:
             reason = f"reference trajectory failed at iteration {k}: {exc}"
             break
+        y, big_h = lin.residuals.reshape(-1), lin.partials.reshape(-1, 6)
         rms = float(np.sqrt(np.sum(w * y**2) / y.size))
         if not np.isfinite(rms):
             reason = f"non-finite residuals at iteration {k}"

@@ -42,13 +42,32 @@ class PassResidual:
 
 @dataclass(frozen=True, slots=True)
 class EKFResult:
-    """Filter output: prefit residuals (M, k), final estimate and covariance, per-pass maxima."""
+    """Filter output: the final estimate and what each measurement row did to it.
+
+    M rows of k kinds (``obs.kinds``, their units: km, km/s, rad), processed in order.
+
+    Attributes
+    ----------
+    prefit : (M, k) prefit residuals y = z − h(x⁻).
+    x, P : final estimate (6,) km, km/s and its covariance (6, 6), at ``t_s``.
+    t_s : time of the last row, s from the epoch.
+    passes : per pass, the largest |prefit|.
+    states : (M, 6) the estimate after each row's update.
+    covariances : (M, 6, 6) its covariance P⁺ after each row's update.
+    gains : (M, 6, k) the Kalman gain K of each row.
+    process_noise : (M, 6, 6) Q added in the time update to each row's time (zero for a row
+        at the time of the one before).
+    """
 
     prefit: np.ndarray
     x: np.ndarray
     P: np.ndarray
     t_s: float
     passes: tuple[PassResidual, ...]
+    states: np.ndarray
+    covariances: np.ndarray
+    gains: np.ndarray
+    process_noise: np.ndarray
 
 
 def process_noise(q_km2_s3: float, dt_s: float) -> np.ndarray:
@@ -82,26 +101,33 @@ def extended_kalman_filter(obs: Observations, prop: Propagator, x0: np.ndarray, 
     models = [MeasurementModel(s, orientation, obs.kinds) for s in obs.stations]
     R = np.diag(obs.sigma**2)
     x, P, t_prev = np.asarray(x0, dtype=float).copy(), P0.copy(), 0.0
+    m, k = obs.values.shape
     prefit = np.empty_like(obs.values)
-    for row in range(obs.t_s.size):
+    states, covariances = np.empty((m, 6)), np.empty((m, 6, 6))
+    gains, noise = np.empty((m, 6, k)), np.zeros((m, 6, 6))
+    for row in range(m):
         t = float(obs.t_s[row])
         if t != t_prev:
             seg = prop.propagate(x, [t], t0_s=t_prev, orientation=orientation)
             phi = seg.stm[-1]
             x = seg.states[-1]
+            noise[row] = process_noise(q_km2_s3, t - t_prev)
             # P⁻ = Φ P Φᵀ + Q
-            P = phi @ P @ phi.T + process_noise(q_km2_s3, t - t_prev)
+            P = phi @ P @ phi.T + noise[row]
             t_prev = t
         model = models[obs.station[row]]
         h = model.compute(obs.t_s[row:row + 1], x[None, :])[0]
         H = model.state_partials(obs.t_s[row:row + 1], x[None, :])[0]
         y = model.residual(obs.values[row:row + 1], h[None, :])[0]
         prefit[row] = y
+        # K = P⁻ Hᵀ S⁻¹, S = H P⁻ Hᵀ + R: the gain update() applies (P⁻ symmetric)
+        gains[row] = np.linalg.solve(H @ P @ H.T + R, H @ P).T
         dx, P = update(np.zeros(6), P, y, R, H)
         P = 0.5 * (P + P.T)
         x = x + dx
+        states[row], covariances[row] = x, P
     passes = tuple(
         PassResidual(obs.stations[obs.station[rows[0]]].name, float(obs.t_s[rows[0]]),
                      float(obs.t_s[rows[-1]]), np.abs(prefit[rows]).max(axis=0))
         for rows in obs.passes())
-    return EKFResult(prefit, x, P, t_prev, passes)
+    return EKFResult(prefit, x, P, t_prev, passes, states, covariances, gains, noise)

@@ -2,13 +2,13 @@
 
 The runs are read from the study's scenario file (``[[dc]]``, ``[ekf]``, ``[rsig]``,
 ``[rate_vs_arc]``, ``[rate_vs_inclination]``; see ``approx_stm.toml``, validated by
-:class:`tapp.od.setup.StudyFile`); each DC run uses the brief's offset initial estimate and the
-5-day simulated observation file of its orbit and truth model, cut to the run's arc. Beside
-each DC run go the predicted convergence rate ρ of its (J_N, J_M) pair on the same
-observations at the true state (:mod:`tapp.od.rate`) and the study's own predictor, the
-ratio R_M / R_N of the error-growth signatures (:mod:`tapp.od.rsig`) of the variational and
-the state model at the end of the arc. The ρ curves use noise-free observations (ρ depends on
-the times, stations and weights only). Every run uses the study's one Earth orientation
+:class:`tapp.od.study_schema.StudyFile`); each DC run uses the brief's offset initial estimate
+and the 5-day simulated observation file of its orbit and truth model, cut to the run's arc.
+Beside each DC run go the predicted convergence rate ρ of its (J_N, J_M) pair on the same
+observations at the true state (:mod:`tapp.od.rate`) and the study's own predictor, the ratio
+R_M / R_N of the error-growth signatures (:mod:`tapp.od.rsig`) of the variational and the state
+model at the end of the arc. The ρ curves use noise-free observations (ρ depends on the times,
+stations and weights only). Every run uses the study's one Earth orientation
 (``earth_orientation`` and ``eop`` of the file, or the model passed in), for the data and the
 estimators alike; the results record it. The results are plain dataclasses;
 :mod:`tapp.report.od` turns them into the report.
@@ -30,6 +30,7 @@ from tapp.od.batch import DCResult, DCSettings, differential_correction
 from tapp.od.ekf import EKFResult, extended_kalman_filter
 from tapp.od.rate import PredictedRate, predicted_rate
 from tapp.od.rsig import RSignature, r_signature
+from tapp.od.study_file import Offset, Study, offset, tracking
 from tapp.orbit.elements import cartesian_to_elements, elements_to_cartesian
 
 
@@ -108,15 +109,14 @@ class StudyResults:
     inclination_arc_h: float = float("nan")
     inclination_network: str = ""
     settings: DCSettings = DCSettings()
-    offset: setup.Offset | None = None
+    offset: Offset | None = None
     #: :func:`tapp.od.setup.orientation_record` over the tracking span
     earth_orientation: dict = field(default_factory=dict)
 
 
-def planned_cases(study: setup.Study | None = None) -> int:
-    """Number of runs the study will make (for a progress bar); given no study, the shipped
-    one's."""
-    file = (setup.shipped_study() if study is None else study).file
+def planned_cases(study: Study) -> int:
+    """Number of runs the study will make (for a progress bar)."""
+    file = study.file
     n = sum(len(b.orbits) * len(b.var_gravity) * len(b.arcs_h) for b in file.dc)
     if file.ekf:
         n += len(file.ekf.var_gravity) * len(file.ekf.apriori)
@@ -148,10 +148,10 @@ def with_inclination(x: np.ndarray, inclination_rad: float) -> np.ndarray:
     return np.asarray(elements_to_cartesian(el, GM_EARTH_km3_s2), dtype=float)
 
 
-def run_study(study: setup.Study | None = None, advance: Callable[[str], None] = lambda _: None,
+def run_study(study: Study, advance: Callable[[str], None] = lambda _: None,
               earth_orientation: str | None = None) -> StudyResults:
-    """Run every case of ``study`` (read once by :func:`tapp.od.setup.read_study`; the shipped
-    study's when None); ``advance(label)`` is called after each case.
+    """Run every case of ``study`` (read once by :func:`tapp.od.study_file.read_study`);
+    ``advance(label)`` is called after each case.
 
     ``earth_orientation`` overrides the file's model ("iau2006" or "gmst").
 
@@ -160,7 +160,6 @@ def run_study(study: setup.Study | None = None, advance: Callable[[str], None] =
     InputError
         A bad study file, an unknown model, an epoch or span outside the EOP table.
     """
-    study = setup.shipped_study() if study is None else study
     file, path = study.file, study.path
     settings = DCSettings(**file.dc_settings.model_dump())
     orient = setup.orientation(study, earth_orientation)
@@ -168,7 +167,7 @@ def run_study(study: setup.Study | None = None, advance: Callable[[str], None] =
     def model(spec: str, where: str):
         return setup.force_model(spec, orient, str(path), where)
 
-    off = setup.offset(study)
+    off = offset(study)
     network: dict[str, tuple[str, ...]] = {}
     obs_cache: dict[tuple[str, str], object] = {}
 
@@ -283,7 +282,7 @@ def run_study(study: setup.Study | None = None, advance: Callable[[str], None] =
             inc_curves.append(_curve(ri.orbit, ri.gravity, stm, incs, rates))
             advance(f"rho vs inclination ({ri.gravity},{stm})")
 
-    trk = setup.tracking(study)
+    trk = tracking(study)
     return StudyResults(tuple(dc_runs), tuple(blocks), tuple(ekf_runs),
                         ekf.title if ekf else "", ekf.last_passes if ekf else 0, tuple(r_runs),
                         trk.sigma, network, tuple(arc_curves),

@@ -96,13 +96,16 @@ log = logger(NAME)
 def _problem() -> dict[str, Any]:
     """The arc, simulated once by tapp (module docstring)."""
     from tapp.od import setup
+    from tapp.od.study_file import epoch, offset, shipped_study
 
-    orient = setup.orientation(model="iau2006")
-    x_true = setup.true_orbit(ORBIT)
-    stations = setup.network_for(x_true, NETWORK)
-    obs = setup.simulated_observations(x_true, FIELD, stations, orient=orient, span_s=ARC_s)
+    study = shipped_study()
+    orient = setup.orientation(study, model="iau2006")
+    x_true = setup.true_orbit(ORBIT, study)
+    stations = setup.network_for(x_true, NETWORK, study)
+    obs = setup.simulated_observations(x_true, FIELD, stations, study, orient=orient,
+                                       span_s=ARC_s)
     return {"orient": orient, "x_true": x_true, "stations": stations, "obs": obs,
-            "x_start": setup.initial_estimate(x_true, setup.offset()), "epoch": setup.epoch()}
+            "x_start": setup.initial_estimate(x_true, offset(study)), "epoch": epoch(study)}
 
 
 def _tapp_fit(p: dict[str, Any], method: str, orient=None):
@@ -120,11 +123,11 @@ def _implied_shift(p: dict[str, Any], dh: np.ndarray) -> np.ndarray:
     dh = h_Orekit − h_tapp (M, 2) cause: δx = −(HᵀWH)⁻¹ HᵀW dh, tapp's H at the true orbit."""
     from tapp.dynamics import Propagator
     from tapp.od import setup
-    from tapp.od.batch import _linearise
+    from tapp.od.batch import linearise
 
     obs, orient = p["obs"], p["orient"]
     prop = Propagator(setup.force_model(FIELD, orient, "bench", "model"))
-    _, big_h = _linearise(obs, prop, p["x_true"], orient)
+    big_h = linearise(obs, prop, p["x_true"], orient).partials.reshape(-1, 6)
     w = np.tile(1.0 / obs.sigma**2, obs.t_s.size)
     normal = big_h.T @ (w[:, None] * big_h)
     # a model that computes dh more fits the same data with the state moved by −δx

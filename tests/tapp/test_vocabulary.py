@@ -17,7 +17,7 @@ from tapp.examples import FOLDER as EXAMPLES
 from tapp.io.models_file import ModelTable
 from tapp.io.orbits import OrbitTable
 from tapp.io.tomlfile import read_toml
-from tapp.od.setup import read_study
+from tapp.od.study_file import read_study
 from tapp.targeting.searchfile import SearchFile, scenario_search
 from tapp.tracking.scenario_build import parse_scenario, read_scenario
 from tapp.tracking.scenario_file import ScenarioFile

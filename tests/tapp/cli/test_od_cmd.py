@@ -17,12 +17,13 @@ from scipy.stats import chi2
 from typer.testing import CliRunner
 
 from tapp.cli import app
-from tapp.cli.durations import parse_duration_s
 from tapp.examples import FOLDER as EXAMPLES
 from tapp.io.obsfile import read_observations, write_observations
+from tapp.io.options import parse_duration_s
 from tapp.io.stations_file import load_stations
 from tapp.measurements.observations import MadeUnder
 from tapp.od import setup
+from tapp.od.study_file import epoch, shipped_study, tracking
 
 runner = CliRunner()
 
@@ -123,7 +124,8 @@ def test_an_arc_too_short_for_the_estimator_is_bad_input_naming_arc() -> None:
 def test_data_with_too_few_measurements_in_all_fail_exit_1(tmp_path: Path, small_obs) -> None:
     """Two rows, four measurements: no arc of them is enough for the DC."""
     path = tmp_path / "two_rows.h5"
-    write_observations(path, small_obs.window(240.0), epoch=setup.epoch(), spacecraft="SATORB1")
+    write_observations(path, small_obs.window(240.0), epoch=epoch(shipped_study()),
+                       spacecraft="SATORB1")
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "4m", "--obs", str(path)])
     assert res.exit_code == 1
     assert res.stderr.splitlines() == ["error: too few measurements: need at least 6, got 4"]
@@ -180,17 +182,18 @@ def test_a_duration_is_a_number_and_its_unit(text: str, seconds: float):
 
 @pytest.fixture(scope="module")
 def small_obs():
-    x = setup.true_orbit("SATORB1")
-    obs = setup.simulated_observations(x, "J2", setup.network_for(x, None))
+    study = shipped_study()
+    x = setup.true_orbit("SATORB1", study)
+    obs = setup.simulated_observations(x, "J2", setup.network_for(x, None, study), study)
     return obs.window(6 * 3600.0)
 
 
 @pytest.mark.parametrize("suffix", [".h5", ".csv", ".tdm"])
 def test_observation_file_round_trip(tmp_path: Path, small_obs, suffix: str) -> None:
     path = tmp_path / f"obs{suffix}"
-    write_observations(path, small_obs, epoch=setup.epoch(), spacecraft="SATORB1")
-    stations = load_stations(setup.shipped_study().data, "approx_stm.toml")
-    back = read_observations(path, stations, small_obs.sigma, epoch=setup.epoch())
+    write_observations(path, small_obs, epoch=epoch(shipped_study()), spacecraft="SATORB1")
+    stations = load_stations(shipped_study().data, "approx_stm.toml")
+    back = read_observations(path, stations, small_obs.sigma, epoch=epoch(shipped_study()))
     np.testing.assert_array_equal(back.t_s, small_obs.t_s)
     np.testing.assert_array_equal(back.values, small_obs.values)
     np.testing.assert_array_equal(back.sigma, small_obs.sigma)
@@ -337,7 +340,7 @@ def test_earth_orientation_option_overrides_the_file(command: list[str]) -> None
 def test_predicted_eop_are_reported(tmp_path: Path) -> None:
     """An epoch ten days past the last measured EOP (the table's predictions, still within
     it): the DC runs, and its outputs say that predicted EOP were used."""
-    table = setup.orientation(model="iau2006").scales.eop
+    table = setup.orientation(shipped_study(), model="iau2006").scales.eop
     when = datetime(1858, 11, 17) + timedelta(days=table.predicted_from_mjd + 10)  # MJD 0
     path = _study(tmp_path, 'epoch = "2026-01-01T00:00:00"',
                   f'epoch = "{when:%Y-%m-%dT00:00:00}"')
@@ -516,8 +519,8 @@ def test_saved_observations_state_and_check_their_model(tmp_path: Path, suffix: 
     first = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--save-obs",
                                 str(saved), "--earth-orientation", "iau2006"])
     assert first.exit_code == 0, first.output
-    back = read_observations(saved, load_stations(setup.shipped_study().data, "study"),
-                             setup.tracking().sigma)
+    back = read_observations(saved, load_stations(shipped_study().data, "study"),
+                             tracking(shipped_study()).sigma)
     assert back.made_under == MadeUnder("iau2006", "finals2000A.all", "GCRS")
     for command in ("dc", "ekf"):
         _refused([command, "--orbit", "SATORB1", "--arc", "5h", "--obs", str(saved)],
@@ -571,7 +574,7 @@ def test_a_file_that_states_no_model_is_fitted_under_the_runs_with_a_note(
     note on stderr saying so, JSON null."""
     path = tmp_path / "obs.tdm"
     write_observations(path, dataclasses.replace(small_obs, made_under=None),
-                       epoch=setup.epoch(), spacecraft="SATORB1")
+                       epoch=epoch(shipped_study()), spacecraft="SATORB1")
     assert "tapp:" not in path.read_text()
     res = runner.invoke(app, ["dc", "--orbit", "SATORB1", "--arc", "6h", "--obs", str(path),
                               "--json", "-"])

@@ -23,14 +23,17 @@ from tapp.od.batch import (
     DCSettings,
     IllConditionedError,
     _at_limit,
-    _linearise,
     contraction_factor,
     differential_correction,
+    linearise,
     rms_bound,
     rms_tail_probability,
 )
 from tapp.od.rate import predicted_rate
+from tapp.od.study_file import offset, shipped_study, tracking
 
+#: The shipped study file, read once: every case here is one of its orbits.
+STUDY = shipped_study()
 TEN_METRES_km = 1e-2
 ONE_CM_km = 1e-5
 TEN_KM_km = 10.0
@@ -42,12 +45,12 @@ ROUNDING = 1e-9
 
 @pytest.fixture(scope="module")
 def satorb1() -> tuple[np.ndarray, np.ndarray]:
-    x_true = setup.true_orbit("SATORB1")
-    return x_true, setup.initial_estimate(x_true, setup.offset())
+    x_true = setup.true_orbit("SATORB1", STUDY)
+    return x_true, setup.initial_estimate(x_true, offset(STUDY))
 
 
 def _network(x_true):
-    return setup.network_for(x_true, None)
+    return setup.network_for(x_true, None, STUDY)
 
 
 def _models(orient: EarthOrientation, *specs: str):
@@ -60,9 +63,9 @@ def test_ci_contrast_j2j2_converges_j2j0_diverges(satorb1, model: str) -> None:
     to the true orbit; (J2,J0) diverges. The same under either Earth orientation model, the
     data simulated and fitted with it (the study file's gmst, and iau2006)."""
     x_true, x_start = satorb1
-    orient = setup.orientation(model=model)
+    orient = setup.orientation(STUDY, model=model)
     assert orient.model == model
-    obs = setup.simulated_observations(x_true, "J2", _network(x_true),
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true), STUDY,
                                        orient=orient).window(86400.0)
     j2, j0 = _models(orient, "J2", "J0")
     good = differential_correction(obs, Propagator(j2, j2), x_start, orientation=orient)
@@ -134,7 +137,7 @@ def test_noise_larger_than_stated_is_inconsistent(satorb1, noise_scale: float,
     x_true, x_start = satorb1
     prop = Propagator(earth_model("J2"))
     orient = EarthOrientation.gmst_angle(0.0)
-    sigma = setup.tracking().sigma
+    sigma = tracking(STUDY).sigma
     t = np.arange(0.0, 6 * 3600.0 + 1, 30.0)
     drawn = simulate(prop, x_true, _network(x_true), t, noise_scale * sigma,
                      np.random.default_rng(18), orient)
@@ -158,12 +161,12 @@ def test_gmst_does_not_fit_iau2006_data(satorb1) -> None:
     residuals inconsistent with the noise model", not "converged". The iau2006 DC on the same
     data converges to the truth and passes the χ² test."""
     x_true, x_start = satorb1
-    iau, gmst = setup.orientation(model="iau2006"), setup.orientation(model="gmst")
-    obs = setup.simulated_observations(x_true, "J2", _network(x_true),
+    iau, gmst = setup.orientation(STUDY, model="iau2006"), setup.orientation(STUDY, model="gmst")
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true), STUDY,
                                        orient=iau).window(86400.0)
     w = np.tile(1.0 / obs.sigma**2, obs.t_s.size)
     (j2_gmst,) = _models(gmst, "J2")
-    y, _ = _linearise(obs, Propagator(j2_gmst), x_true, gmst)
+    y = linearise(obs, Propagator(j2_gmst), x_true, gmst).residuals.reshape(-1)
     assert np.sqrt(np.mean(w * y**2)) > 1000  # the 31 km station error, in σ
     (j2_iau,) = _models(iau, "J2")
     right = differential_correction(obs, Propagator(j2_iau), x_start, orientation=iau)
@@ -180,8 +183,8 @@ def test_predicted_rate_separates_the_contrast(satorb1) -> None:
     """ρ at the true state: > 1 for the diverging (J2,J0) DC over 24 h, 0 to rounding for the
     exact (J2,J2) one (M = 0 when H̃ = H)."""
     x_true, _ = satorb1
-    obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(86400.0)
-    orient = setup.orientation()
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true), STUDY).window(86400.0)
+    orient = setup.orientation(STUDY)
     diverging = predicted_rate(obs, earth_model("J2"), earth_model("J0"), x_true, orient)
     assert diverging.rho > 1 and not diverging.oscillating
     assert diverging.eigenvalues.shape == (6,)
@@ -194,13 +197,13 @@ def test_slow_convergence_pace_matches_the_predicted_rate() -> None:
     """SATORB3, (J2,J0), 24 h: a slow, linear convergence. With 30 iterations (of about 60
     it needs) the DC is "converging", and the factor by which its corrections shrink in
     the linear regime is ρ within 5 %; the projection counts the iterations left."""
-    x_true = setup.true_orbit("SATORB3")
-    obs = setup.simulated_observations(x_true, "J2", _network(x_true), span_s=86400.0)
-    orient = setup.orientation()
+    x_true = setup.true_orbit("SATORB3", STUDY)
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true), STUDY, span_s=86400.0)
+    orient = setup.orientation(STUDY)
     rate = predicted_rate(obs, earth_model("J2"), earth_model("J0"), x_true, orient)
     assert 0.5 < rate.rho < 1
     res = differential_correction(obs, Propagator(earth_model("J2"), earth_model("J0")),
-                                  setup.initial_estimate(x_true, setup.offset()),
+                                  setup.initial_estimate(x_true, offset(STUDY)),
                                   orientation=orient,
                                   settings=DCSettings(max_iterations=30, divergence_ratio=1e3))
     assert res.status == DCOutcome.CONVERGING and res.converged_at is None
@@ -217,10 +220,10 @@ def test_a_short_arc_is_diagnosed_not_iterated(satorb1) -> None:
     """10 minutes from one near-equatorial station: the out-of-plane components (z, vz) of
     an equatorial orbit are undetermined; the DC says so before the first correction."""
     x_true, x_start = satorb1
-    obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(600.0)
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true), STUDY).window(600.0)
     with pytest.raises(IllConditionedError) as info:
         differential_correction(obs, Propagator(earth_model("J2")), x_start,
-                                orientation=setup.orientation())
+                                orientation=setup.orientation(STUDY))
     err = info.value
     assert err.condition > err.limit == DCSettings().max_condition
     assert err.directions.shape == (1, 6) and err.n_measurements == obs.count
@@ -233,21 +236,21 @@ def test_a_short_arc_is_diagnosed_not_iterated(satorb1) -> None:
 def test_eccentric_orbits_start_a_few_hundred_sigma_off(orbit: str, largest: float) -> None:
     """The additive offset (+0.00012 on e): SATORB7 and SATORB8 start near their own e, and
     the first RMS of a 6 h DC is a few hundred, not the 1e5 of an orbit made circular."""
-    x_true = setup.true_orbit(orbit)
-    obs = setup.simulated_observations(x_true, "J2", _network(x_true), span_s=6 * 3600.0)
+    x_true = setup.true_orbit(orbit, STUDY)
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true), STUDY, span_s=6 * 3600.0)
     res = differential_correction(obs, Propagator(earth_model("J2")),
-                                  setup.initial_estimate(x_true, setup.offset()),
-                                  orientation=setup.orientation(),
+                                  setup.initial_estimate(x_true, offset(STUDY)),
+                                  orientation=setup.orientation(STUDY),
                                   settings=DCSettings(max_iterations=2))
     assert 10 < res.rms[0] < largest
 
 
 def test_no_measurement_in_the_arc_is_too_few(satorb1) -> None:
     x_true, x_start = satorb1
-    obs = setup.simulated_observations(x_true, "J2", _network(x_true)).window(60.0)
+    obs = setup.simulated_observations(x_true, "J2", _network(x_true), STUDY).window(60.0)
     with pytest.raises(TooFewMeasurementsError):
         differential_correction(obs, Propagator(earth_model("J2")), x_start,
-                                orientation=setup.orientation())
+                                orientation=setup.orientation(STUDY))
 
 
 def _history(rms: list[float], steps: list[float]) -> list[DCIteration]:
@@ -291,7 +294,7 @@ def test_noise_free_matching_models_recover_truth(satorb1) -> None:
     prop = Propagator(earth_model("J2"))
     t = np.arange(0.0, 86400.0 + 1, 30.0)
     orient = EarthOrientation.gmst_angle(0.4)
-    obs = simulate(prop, x_true, _network(x_true), t, setup.tracking().sigma, None, orient)
+    obs = simulate(prop, x_true, _network(x_true), t, tracking(STUDY).sigma, None, orient)
     result = differential_correction(obs, prop, x_start, orientation=orient,
                                      settings=DCSettings(rms_rel_tol=1e-6))
     assert result.converged
@@ -301,11 +304,11 @@ def test_noise_free_matching_models_recover_truth(satorb1) -> None:
 def test_formal_covariance_matches_scatter_of_noisy_runs() -> None:
     """NEES = Σ (x̂-x)ᵀ P⁻¹ (x̂-x) over N runs is χ²(6N) when P is the true covariance;
     accept at the two-sided 99.9 % level. 120 runs of a 6-hour SATORB2 arc."""
-    x_true = setup.true_orbit("SATORB2")
+    x_true = setup.true_orbit("SATORB2", STUDY)
     prop = Propagator(earth_model("J2"))
     stations = _network(x_true)
     t = np.arange(0.0, 6 * 3600.0 + 1, 30.0)
-    sigma = setup.tracking().sigma
+    sigma = tracking(STUDY).sigma
     root = np.random.SeedSequence(2024)
     n_runs = 120
     nees = 0.0

@@ -11,6 +11,7 @@ import pytest
 
 from tapp.od.batch import NOISE_MODEL_PROBABILITY
 from tapp.od.study import planned_cases, run_study
+from tapp.od.study_file import shipped_study
 from tapp.report.od import write_report
 
 #: The issue's bound on |q - ρ| / ρ in the linear regime.
@@ -20,8 +21,8 @@ FIVE_PERCENT = 0.05
 @pytest.mark.slow
 def test_the_study_rho_predicts_every_outcome(tmp_path: Path) -> None:
     labels: list[str] = []
-    results = run_study(advance=labels.append)
-    assert len(labels) == planned_cases()
+    results = run_study(shipped_study(), advance=labels.append)
+    assert len(labels) == planned_cases(shipped_study())
     truncated = [r for r in results.dc if r.stm != r.truth]
     for r in truncated:
         good = r.result.iteration_converges

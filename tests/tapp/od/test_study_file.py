@@ -13,6 +13,8 @@ from tapp.constants import GM_EARTH_km3_s2
 from tapp.errors import InputError
 from tapp.examples import STUDY_FILE
 from tapp.od import setup
+from tapp.od.study_file import epoch, offset, read_study, shipped_study, tracking
+from tapp.od.study_schema import StudyFile
 from tapp.orbit.elements import cartesian_to_elements
 
 SHIPPED = STUDY_FILE.read_text()
@@ -27,22 +29,23 @@ def _study(tmp_path: Path, old: str, new: str) -> Path:
 
 def _error(path: Path) -> InputError:
     with pytest.raises(InputError) as info:
-        setup.read_study(path)
+        read_study(path)
     text = str(info.value)
     assert "\n" not in text and text.startswith(f"{path}: ")
     return info.value
 
 
 def test_the_shipped_study_file_validates() -> None:
-    study = setup.shipped_study().file
+    study = shipped_study().file
     assert study.tracking.seed == 1969 and len(study.orbits) == 8
     assert [b.gravity for b in study.dc] == ["J2", "5x5", "J2", "J2", "J2"]
     assert study.ekf.apriori["1"][0] == 0.68 and study.rsig.cases[0] == ["J0", "J0"]
-    assert setup.tracking().seed == 1969 and setup.shipped_study().data["tracking"]["seed"] == 1969
+    shipped = shipped_study()
+    assert tracking(shipped).seed == 1969 and shipped.data["tracking"]["seed"] == 1969
     assert study.dc_settings.max_iterations == 100
     # the paper's model (see the file's comment); iau2006 is the default for new files
     assert (study.earth_orientation, study.eop) == ("gmst", "iers")
-    assert setup.StudyFile.model_fields["earth_orientation"].default == "iau2006"
+    assert StudyFile.model_fields["earth_orientation"].default == "iau2006"
     arcs = study.rate_vs_arc.arcs_h.values()
     assert (arcs[0], arcs[-1]) == (6.0, 48.0)
     incs = study.rate_vs_inclination.inclinations_deg.values()
@@ -52,12 +55,12 @@ def test_the_shipped_study_file_validates() -> None:
 def test_the_offset_is_added_to_e() -> None:
     """The brief: the same error added to every orbit, +0.00012 on e (SATORB7 starts at
     e = 0.10012, SATORB8 at 0.30012, the circular orbits at 0.00012)."""
-    off = setup.offset()
+    off = offset(shipped_study())
     assert (off.de, off.e) == (0.00012, None)
     for name, e0 in (("SATORB1", 0.0), ("SATORB7", 0.1), ("SATORB8", 0.3)):
-        x = setup.initial_estimate(setup.true_orbit(name), off)
+        x = setup.initial_estimate(setup.true_orbit(name, shipped_study()), off)
         a, e, i = cartesian_to_elements(x, GM_EARTH_km3_s2)[:3]
-        true = setup.shipped_study().file.orbits[name]
+        true = shipped_study().file.orbits[name]
         assert e == pytest.approx(e0 + 0.00012, abs=1e-12)
         assert a == pytest.approx(true.a_km + 0.1, abs=1e-9)
         assert math.degrees(i) == pytest.approx(true.i_deg + 0.002, abs=1e-9)
@@ -66,8 +69,8 @@ def test_the_offset_is_added_to_e() -> None:
 def test_the_earlier_reading_e_set_still_reads_and_one_of_the_two_is_required(
         tmp_path: Path) -> None:
     path = _study(tmp_path, "de = 0.00012", "e = 0.00012")
-    study = setup.read_study(path)
-    off = setup.offset(study)
+    study = read_study(path)
+    off = offset(study)
     x = setup.initial_estimate(setup.true_orbit("SATORB7", study), off)
     assert cartesian_to_elements(x, GM_EARTH_km3_s2)[1] == pytest.approx(0.00012, abs=1e-12)
     (tmp_path / "both").mkdir()
@@ -145,23 +148,24 @@ def test_bad_entries_name_file_and_field(tmp_path: Path, old: str, new: str, fie
 def test_the_runner_and_the_commands_read_the_validated_file(tmp_path: Path) -> None:
     path = _study(tmp_path, "seed = 1969", "sed = 1969")
     with pytest.raises(InputError, match=r"tracking\.sed: expected no such key"):
-        setup.read_study(path)
+        read_study(path)
 
 
 def test_the_orientation_follows_the_file_or_the_override() -> None:
     """One EarthOrientation per file and model (cached: its slow-term series are fitted once
     per run); the override names --earth-orientation when it is unknown."""
-    assert setup.orientation().model == "gmst"
-    assert setup.orientation().theta0_rad == setup.epoch().gmst_rad()  # the study's angle
-    iau = setup.orientation(model="iau2006")
-    assert iau.model == "iau2006" and iau is setup.orientation(model="iau2006")
+    shipped = shipped_study()
+    assert setup.orientation(shipped).model == "gmst"
+    assert setup.orientation(shipped).theta0_rad == epoch(shipped).gmst_rad()  # the study's angle
+    iau = setup.orientation(shipped, model="iau2006")
+    assert iau.model == "iau2006" and iau is setup.orientation(shipped, model="iau2006")
     with pytest.raises(InputError) as info:
-        setup.orientation(model="itrf")
+        setup.orientation(shipped, model="itrf")
     assert (info.value.source, info.value.got) == ("--earth-orientation", "itrf")
 
 
 def _two_days_before_the_table_ends() -> str:
-    last_mjd = float(setup.orientation(model="iau2006").scales.eop.mjd[-1])
+    last_mjd = float(setup.orientation(shipped_study(), model="iau2006").scales.eop.mjd[-1])
     when = dt.datetime(1858, 11, 17) + dt.timedelta(days=last_mjd - 2)  # MJD 0
     return f"{when:%Y-%m-%dT%H:%M:%S}"
 
@@ -174,8 +178,8 @@ def test_an_epoch_or_span_outside_the_eop_table_names_file_and_epoch(
     path.write_text(path.read_text().replace('earth_orientation = "gmst"',
                                              'earth_orientation = "iau2006"'))
     with pytest.raises(InputError) as info:
-        setup.orientation(setup.read_study(path))
+        setup.orientation(read_study(path))
     err = info.value
     assert (err.source, err.field) == (str(path), "epoch") and "\n" not in str(err)
     assert "IERS EOP table" in err.expected
-    assert setup.orientation(setup.read_study(path), "gmst").model == "gmst"  # gmst needs no EOP
+    assert setup.orientation(read_study(path), "gmst").model == "gmst"  # gmst needs no EOP
