@@ -872,7 +872,7 @@ def bind(deck: Deck, header, source: str) -> Plan:
 
     Parameters
     ----------
-    deck : a validated deck (:func:`read_deck`).
+    deck : a validated deck (:func:`tapp.processor.deck.read_deck`).
     header : the tape's T13 header (parameters, stations, miss, records, epoch, iden, n_p).
     source : the deck file, named in errors.
 
