@@ -8,14 +8,19 @@ TEST_STAMP := $(VENV)/.installed-test
 
 .PHONY: install test test-all scenario readme bench docs lint clean
 
+# uv installs what pip would (the newest releases pyproject.toml admits, from PyPI) in a third
+# of the time: 16 s instead of 51 s for the test install on this 2-core machine, its cache
+# cold. The venv keeps its pip (tests/test_install.py builds the wheel with it).
+UV := $(BIN)/uv pip install --quiet --python $(BIN)/python
+
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
-	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e .
+	$(BIN)/pip install --quiet uv
+	$(UV) -e .
 	touch $(STAMP)
 
 $(TEST_STAMP): $(STAMP)
-	$(BIN)/pip install --quiet -e '.[test]'
+	$(UV) -e '.[test]'
 	touch $(TEST_STAMP)
 
 install: $(TEST_STAMP)
@@ -38,7 +43,7 @@ readme: $(STAMP)
 	$(BIN)/python -m scenarios.readme
 
 bench: $(TEST_STAMP)
-	$(BIN)/pip install --quiet -e ".[test,bench]"
+	$(UV) -e ".[test,bench]"
 	$(BIN)/python tests/bench/run.py
 
 # The reference site into build/site: the API from the docstrings, the input files, the deck's
