@@ -383,8 +383,7 @@ def _agreement(run: Run, peer: PeerResult) -> float:
 #: tape is version 2, then times each deck as :func:`measure` does; it replies the best times
 #: and the matrices of the check entity at the asked print times.
 _NORMAL_FORM_CHILD = """
-from tapp.processor.deck import read_deck
-from tapp.processor.deck_bind import bind
+from tapp.processor.deck import bind, read_deck
 from tapp.processor.sequencing import process
 from tapp.tape.t13_hdf5 import open_t13
 

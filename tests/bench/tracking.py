@@ -77,7 +77,7 @@ def _best(path: Path, out: Path) -> tuple[float, float, T13]:
 _NORMAL_FORM_CHILD = """
 import h5py
 from tapp.tape.t13_hdf5 import write_t13
-from tapp.tracking.scenario_build import read_scenario
+from tapp.tracking.scenario import read_scenario
 from tapp.tracking.simulate import simulate
 
 SCENARIO = Path(ARGS["scenario"])
