@@ -3,7 +3,7 @@
 Every layer that takes a parameter by name asks :func:`parse` (or :func:`canonical`): the
 force model (:mod:`tapp.dynamics.forces`, :mod:`tapp.dynamics.spec`), the propagator, the
 scenario's list of q and the T13 tape's names and units (:mod:`tapp.tracking.scenario`), and
-the TAPP III deck's name binding (:mod:`tapp.processor.deck`). A name parses into a
+the TAPP III deck's name binding (:mod:`tapp.processor.deck_bind`). A name parses into a
 :class:`ParameterName`: its kind (:data:`KINDS`), the body, degree and order, axis, station or
 burn it refers to, its unit and its canonical spelling.
 
