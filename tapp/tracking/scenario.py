@@ -182,6 +182,7 @@ from tapp.measurements.media import (
     day_of_year,
     standard_atmosphere,
 )
+from tapp.measurements.noise import EDGE_UNITS, FitNoise, RealNoise
 from tapp.measurements.stations import Station
 from tapp.orbit.bplane import REFERENCE_PLANES
 from tapp.targeting.program import REFERENCE_HELP, BPlaneSearch, check_reference
@@ -189,7 +190,6 @@ from tapp.targeting.searchfile import TargetingTable, scenario_targeting
 from tapp.tracking.ddor import QUASAR_KIND, DdorTable, TrackingBaseline, tracking_baselines
 from tapp.tracking.eop_days import EopDays, eop_days
 from tapp.tracking.manoeuvres import MAX_MANOEUVRES, ManoeuvreTable, scenario_manoeuvres
-from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 
 #: Observable kinds, in the order of ``tapp.measurements.Observable``.
 KINDS = tuple(o.value for o in Observable)

@@ -57,6 +57,7 @@ from tapp.frames.orientation import INERTIAL_FRAME
 from tapp.frames.time import Epoch
 from tapp.io.tape.checks import PACKINGS, SYMMETRY_TOL, Checker, frozen
 from tapp.io.tape.packing import pack_tr, scaled_difference, tr_diagonal, tr_rows, tr_size
+from tapp.measurements.noise import PARTS
 
 #: Provenance attributes the simulator stamps: the scenario (JSON) and its file, the Earth
 #: orientation model ("iau2006" or "gmst"), the EOP source of the run and, when SEARCH
@@ -76,10 +77,6 @@ VERSION = 4
 SUPPORTED_VERSIONS = (1, 2, 3, 4)
 #: Versions that carry normal matrices, not factors (read with a warning).
 NORMAL_MATRIX_VERSIONS = (1, 2)
-#: Names of the parts of the real-world information R̃ᵀR̃ = AᵀWMWA (``pairs/Rt_parts``), in
-#: order: white noise, per-pass biases, correlated noise (tapp.tracking.noise makes them,
-#: TAPP III's budget names its noise sources by them).
-PARTS = ("white", "bias", "correlated")
 #: Largest relative difference between the diagonal of R̃ᵀR̃ and the sum of its parts'
 #: (column norms squared) accepted: the rounding of a QR of a few thousand rows.
 PARTS_TOL = 1e-10
@@ -91,7 +88,7 @@ UNITS_NOTE = ("km, km/s, s, rad; normal matrices in 1/(u_a u_b), partials in (ro
 #: :class:`tapp.io.tape.t13_hdf5.T13File`; bytes of packed matrices).
 BLOCK_BYTES = 1 << 25
 
-__all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PARTS", "PARTS_TOL",
+__all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PARTS_TOL",
            "SUPPORTED_VERSIONS", "SYMMETRY_TOL", "T13", "VERSION", "MemoryPairs", "PairBlock",
            "LEGACY_PSD_TOL", "TapeEditing", "TapeMiss", "TapePairs", "TapeParameters",
            "TapePasses", "TapeRaw", "TapeRecords", "TapeStations", "check_factors",
@@ -189,9 +186,9 @@ class TapePairs:
     R, Rt : (n_pairs, n_o, n_o) upper-triangular factors, diagonal >= 0, with RᵀR = AᵀWA and
         R̃ᵀR̃ = AᵀWMWA, 1/u_b; None in the header of a lazily read tape
         (:attr:`tapp.io.tape.t13_hdf5.T13File.header`).
-    Rt_parts : (n_pairs, 3, n_o, n_o) the factors of the :data:`PARTS` of AᵀWMWA (white,
-        bias, correlated), their Gram matrices summing to R̃ᵀR̃; or None (not on the tape, or
-        a header).
+    Rt_parts : (n_pairs, 3, n_o, n_o) the factors of the parts of AᵀWMWA (white, bias,
+        correlated: :data:`tapp.measurements.noise.PARTS`), their Gram matrices summing to
+        R̃ᵀR̃; or None (not on the tape, or a header).
     """
 
     k: np.ndarray
@@ -339,7 +336,8 @@ class PairBlock:
     station : (m,) int station number, ascending within a record.
     n_obs : (m,) int scalar observations of each pair.
     R, Rt : (m, L) factors of AᵀWA and AᵀWMWA, 1/u_b.
-    Rt_parts : (m, 3, L) the factors of the :data:`PARTS`, or None when the tape has none.
+    Rt_parts : (m, 3, L) the factors of the parts (:data:`tapp.measurements.noise.PARTS`), or
+        None when the tape has none.
     """
 
     k: np.ndarray

@@ -47,7 +47,7 @@ pairs/Rt_parts (optional)   (n_pairs, 3, L)        the factors of the white-nois
                                                    bias and exponentially correlated parts of
                                                    AᵀWMWA (attr ``parts`` = white, bias,
                                                    correlated: the rows of ``pass_rows`` of
-                                                   tapp.tracking.noise), whose Gram matrices
+                                                   tapp.measurements.noise), whose Gram matrices
                                                    sum to R̃ᵀR̃
 passes/station, t_start_s,  (n_passes,)            tracking passes (before any split at T13
 t_end_s, n_obs                                     times)
@@ -85,7 +85,7 @@ raw/... (optional)          (N, ...)               one row per scalar observatio
                                                    to t_j of the record, weight = 1/σ²,
                                                    m_white_var, m_bias_var, m_corr_var,
                                                    m_tau_s (the real-world M of each segment,
-                                                   :func:`tapp.tracking.noise.covariance_block`)
+                                                   :func:`tapp.measurements.noise.covariance_block`)
 ==========================  =====================  ===========================================
 
 Units of the factors: entry (r, b) in 1/u_b with u the parameters' units (of the normal
@@ -140,7 +140,6 @@ from tapp.io.tape.t13 import (
     FORMAT,
     INFO_COLUMNS,
     NORMAL_MATRIX_VERSIONS,
-    PARTS,
     PARTS_TOL,
     SCENARIO_PROVENANCE,
     SUPPORTED_VERSIONS,
@@ -167,6 +166,7 @@ from tapp.io.tape.t13 import (
     packed_column_sums,
     validate,
 )
+from tapp.measurements.noise import PARTS
 
 __all__ = ["COMPRESSION_OF_VERSION", "T13File", "open_t13", "read_t13", "t13_file_writer",
            "write_t13"]

@@ -8,9 +8,9 @@ import numpy as np
 
 from tapp.io.schema import validate
 from tapp.io.tape.t13 import T13, memory_pairs
+from tapp.measurements.noise import RealNoise, covariance_block
 from tapp.processor.deck import Deck, bind, observations_used
 from tapp.processor.sequencing import Run, process
-from tapp.tracking.noise import RealNoise, covariance_block
 from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import leo_scenario
 
