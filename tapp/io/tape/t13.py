@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -89,7 +89,8 @@ UNITS_NOTE = ("km, km/s, s, rad; normal matrices in 1/(u_a u_b), partials in (ro
 BLOCK_BYTES = 1 << 25
 
 __all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PARTS_TOL",
-           "SUPPORTED_VERSIONS", "SYMMETRY_TOL", "T13", "VERSION", "MemoryPairs", "PairBlock",
+           "SUPPORTED_VERSIONS", "SYMMETRY_TOL", "T13", "T13Header", "VERSION", "MemoryPairs",
+           "PairBlock",
            "LEGACY_PSD_TOL", "TapeEditing", "TapeMiss", "TapePairs", "TapeParameters",
            "TapePasses", "TapeRaw", "TapeRecords", "TapeStations", "check_factors",
            "check_parts_sum", "column_norms2", "factor_normal_matrices", "memory_pairs",
@@ -208,6 +209,13 @@ class TapePairs:
         """AᵀWMWA = R̃ᵀR̃, (n_pairs, n_o, n_o), 1/(u_a u_b)."""
         return np.swapaxes(self.Rt, -1, -2) @ self.Rt
 
+    @property
+    def dJt_parts(self) -> np.ndarray | None:
+        """The parts' Gram matrices (n_pairs, 3, n_o, n_o), 1/(u_a u_b), summing to AᵀWMWA;
+        None without parts."""
+        parts = self.Rt_parts
+        return None if parts is None else np.swapaxes(parts, -1, -2) @ parts
+
 
 @dataclass(frozen=True, slots=True, eq=False)
 class TapePasses:
@@ -278,15 +286,34 @@ class TapeRaw:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class T13:
-    """A T13 tape in memory: what TAPP I writes and TAPP III reads.
+class T13Header:
+    """Everything of a T13 tape but its pair factors and raw rows: what TAPP III binds its
+    deck to and sequences by (:attr:`tapp.io.tape.t13_hdf5.T13File.header`,
+    :attr:`MemoryPairs.header`). A whole tape (:class:`T13`) is a header too.
 
-    ``provenance`` holds the root attributes that describe how the tape was made
-    (scenario JSON and source on writing; plus tapp_version, git_commit, created_utc on
-    reading). ``editing`` is None on tapes written before it was recorded. ``stochastic``
-    defines the parameters of kind "stochastic" (None without them), ``manoeuvres`` the burns
-    TAPP I flew, ascending in time, whose execution errors are the parameters of kind
-    "execution".
+    Attributes
+    ----------
+    iden : identification of the run (text).
+    epoch : the tape epoch t_0 = 0 s (injection), UTC.
+    n_p : number of orbit parameters p (the first n_p of the n_o parameters).
+    parameters : the n_o parameters x = [p; q], names with units, nominal values at t_0 in
+        their ``unit``.
+    stations : the n_ts stations, geodetic positions (deg, km) and elevation masks (deg).
+    miss : the n_m miss parameters (in their ``unit``) at ``t_s`` (s) and B = ∂m/∂x(t_0),
+        (n_m, n_o) in (row unit)/(column unit).
+    records : the T13 times (s from the epoch) and the n_it records: epoch index j, state at
+        t_k (km, km/s), U = ∂p(t_k)/∂x(t_j) (n_it, n_p, n_o).
+    pairs : the (record, station) pairs with data and their observation counts; the factors
+        ``R``, ``Rt``, ``Rt_parts`` are None in a header (1/u_b in a :class:`T13`).
+    passes : tracking passes: station, first and last observation times (s), observations.
+    provenance : the root attributes that describe how the tape was made (text: scenario
+        JSON and source on writing; plus tapp_version, git_commit, created_utc on reading).
+    editing : what the schedule asked for and each rule removed (None on tapes written
+        before it was recorded).
+    stochastic : the definition of the parameters of kind "stochastic" (σ km/s², τ s,
+        interval boundaries s), or None without them.
+    manoeuvres : the burns TAPP I flew, ascending in time, whose execution errors are the
+        parameters of kind "execution".
     """
 
     iden: str
@@ -298,7 +325,6 @@ class T13:
     records: TapeRecords
     pairs: TapePairs
     passes: TapePasses
-    raw: TapeRaw | None = None
     provenance: dict[str, str] = field(default_factory=dict)
     editing: TapeEditing | None = None
     stochastic: StochasticAccelerations | None = None
@@ -323,6 +349,16 @@ class T13:
     def n_it(self) -> int:
         """Number of records."""
         return int(self.records.k.size)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class T13(T13Header):
+    """A T13 tape in memory: what TAPP I writes and TAPP III reads: its header
+    (:class:`T13Header`) with the pair factors (``pairs.R``, ``pairs.Rt``, optionally
+    ``pairs.Rt_parts``) and, optionally, one row per scalar observation (``raw``).
+    """
+
+    raw: TapeRaw | None = None
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -531,7 +567,7 @@ def _validate_manoeuvres(c: Checker, burns: tuple[Burn, ...], par: TapeParameter
                starts.tolist())
 
 
-def _validate_header(c: Checker, tape: T13) -> None:
+def _validate_header(c: Checker, tape: T13Header) -> None:
     """Everything of :func:`validate` but the pair matrices and the raw rows."""
     n_o, n_p, n_m, n_ts, n_it = tape.n_o, tape.n_p, tape.n_m, tape.n_ts, tape.n_it
     par = tape.parameters
@@ -660,7 +696,7 @@ def _validate_raw(c: Checker, raw: TapeRaw, n_o: int, n_ts: int, n_it: int) -> N
 # ---------------------------------------------------------------------------------------------
 
 
-def _record_range(header: T13, k_first: int, k_last: int) -> tuple[int, int]:
+def _record_range(header: T13Header, k_first: int, k_last: int) -> tuple[int, int]:
     """Pair indices [lo, hi) of records k_first..k_last (pairs sorted by k)."""
     n_it = header.n_it
     if not (isinstance(k_first, int | np.integer) and isinstance(k_last, int | np.integer)
@@ -672,10 +708,12 @@ def _record_range(header: T13, k_first: int, k_last: int) -> tuple[int, int]:
             int(np.searchsorted(k, k_last, side="right")))
 
 
-def _header(tape: T13) -> T13:
+def header_of(tape: T13Header) -> T13Header:
+    """The header of a tape: its fields but the pair factors (and the raw rows)."""
+    values = {f.name: getattr(tape, f.name) for f in fields(T13Header)}
     pairs = tape.pairs
-    return replace(tape, pairs=TapePairs(pairs.k, pairs.station, pairs.n_obs, None, None, None),
-                   raw=None)
+    values["pairs"] = TapePairs(pairs.k, pairs.station, pairs.n_obs, None, None, None)
+    return T13Header(**values)
 
 
 class _PairSource:
@@ -684,7 +722,7 @@ class _PairSource:
 
     __slots__ = ()
 
-    header: T13
+    header: T13Header
 
     def pair_block(self, k_first: int, k_last: int, *, parts: bool = True
                    ) -> PairBlock:  # pragma: no cover
@@ -721,8 +759,8 @@ class MemoryPairs(_PairSource):
 
     Attributes
     ----------
-    header : T13
-        The tape without its pair matrices and raw rows.
+    header : T13Header
+        The tape without its pair factors and raw rows.
     """
 
     __slots__ = ("_tape", "header")
@@ -730,7 +768,7 @@ class MemoryPairs(_PairSource):
     def __init__(self, tape: T13, source: str = "T13"):
         validate(tape, source)
         self._tape = tape
-        self.header = _header(tape)
+        self.header = header_of(tape)
 
     def pair_block(self, k_first: int, k_last: int, *, parts: bool = True) -> PairBlock:
         """Return the pairs of records k_first..k_last (inclusive), factors packed TR.
@@ -761,7 +799,7 @@ def memory_pairs(tape: T13) -> MemoryPairs:
     return MemoryPairs(tape)
 
 
-def summary(tape: T13, *, version: int = VERSION) -> dict:
+def summary(tape: T13Header, *, version: int = VERSION) -> dict:
     """Return a JSON-ready summary: dimensions, parameters, stations with their passes and
     observations (and, when the tape has them, the observations scheduled and removed by each
     rule: :class:`TapeEditing`), epoch times, records and provenance (``version``: of the tape
@@ -787,7 +825,8 @@ def summary(tape: T13, *, version: int = VERSION) -> dict:
         "dimensions": {"n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                        "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
                        "passes": int(tape.passes.station.size),
-                       "raw_rows": None if tape.raw is None else int(tape.raw.t_s.size)},
+                       "raw_rows": int(tape.raw.t_s.size) if isinstance(tape, T13)
+                       and tape.raw is not None else None},
         "span_s": [float(rec.times_s[0]), float(rec.times_s[-1])],
         "parameters": [{"name": n, "unit": u, "kind": k}
                        for n, u, k in zip(tape.parameters.name, tape.parameters.unit,
