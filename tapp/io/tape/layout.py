@@ -459,3 +459,18 @@ def sourced(obj: object, source: str) -> object:
             return None
         obj = getattr(obj, name)
     return obj
+
+
+def resolve(shape: tuple[str, ...], dims: dict[str, int]) -> tuple[int, ...] | None:
+    """The shape in numbers: each symbol a number, a name of ``dims`` or ``name+1``; None
+    when ``dims`` lacks a name (a shape checked elsewhere: ``L``, ``K+1``, ``rows``)."""
+    out = []
+    for symbol in shape:
+        name, plus, one = symbol.partition("+")
+        if name.isdigit():
+            out.append(int(name))
+        elif name in dims:
+            out.append(dims[name] + (int(one) if plus else 0))
+        else:
+            return None
+    return tuple(out)

@@ -56,6 +56,7 @@ from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerat
 from tapp.frames.orientation import INERTIAL_FRAME
 from tapp.frames.time import Epoch
 from tapp.io.tape.checks import PACKINGS, SYMMETRY_TOL, Checker, frozen
+from tapp.io.tape.layout import T13_LAYOUT, rows, sourced
 from tapp.io.tape.packing import pack_tr, scaled_difference, tr_diagonal, tr_rows, tr_size
 from tapp.measurements.noise import PARTS
 
@@ -576,55 +577,42 @@ def _validate_header(c: Checker, tape: T13Header) -> None:
     _validate_stochastic(c, tape.stochastic, par)
     _validate_manoeuvres(c, tape.manoeuvres, par)
 
+    dims = {"n_o": n_o, "n_p": n_p, "n_m": n_m, "n_ts": n_ts, "n_it": n_it,
+            "n_pairs": tape.pairs.k.size, "n_passes": tape.passes.station.size}
+
+    def check(*prefixes: str) -> None:
+        """The shapes (and finite numbers) of the layout's rows under ``prefixes``."""
+        for prefix in prefixes:
+            c.rows(rows(T13_LAYOUT, VERSION, prefix), lambda f: sourced(tape, f.source), dims)
+
     st = tape.stations
-    c.shape("stations/id", st.id, (n_ts,))
+    check("stations/")
     if not np.array_equal(st.id, np.arange(1, n_ts + 1)):
         c.fail("stations/id", f"station numbers 1..{n_ts}", st.id.tolist())
-    for name in ("lat_deg", "lon_deg", "h_km", "elev_mask_deg"):
-        c.shape(f"stations/{name}", getattr(st, name), (n_ts,))
-        c.finite(f"stations/{name}", getattr(st, name))
-    if len(st.observables) != n_ts:
-        c.fail("stations/observables", f"{n_ts} entries", len(st.observables))
     if np.any((par.station < 0) | (par.station > n_ts)):
         c.fail("parameters/station", f"station numbers in 0..{n_ts}", par.station.tolist())
 
     miss = tape.miss
-    if len(miss.unit) != n_m:
-        c.fail("miss/unit", f"{n_m} entries", len(miss.unit))
-    c.shape("miss/nominal", miss.nominal, (n_m,))
-    c.finite("miss/nominal", miss.nominal)
-    c.shape("B", miss.B, (n_m, n_o))
-    c.finite("B", miss.B)
+    check("miss/", "B")
     if not math.isfinite(miss.t_s):
         c.fail("miss/nominal.attrs/t_s", "a finite time (s)", miss.t_s)
 
     rec = tape.records
-    for dataset, values in (("times/t_s", rec.times_s), ("times/is_epoch", rec.is_epoch),
-                            ("times/is_input", rec.is_input)):
-        c.shape(dataset, values, (n_it + 1,))
-    c.finite("times/t_s", rec.times_s)
+    check("times/", "records/")
     if rec.times_s[0] != 0.0 or np.any(np.diff(rec.times_s) <= 0):
         c.fail("times/t_s", "strictly ascending times from t_0 = 0 s", rec.times_s[:8].tolist())
     if not rec.is_epoch[0] or not np.all(rec.is_epoch | rec.is_input):
         c.fail("times/is_epoch", "t_0 an epoch and every time an epoch or an input time")
-    c.shape("records/k", rec.k, (n_it,))
     if not np.array_equal(rec.k, np.arange(1, n_it + 1)):
         c.fail("records/k", f"1..{n_it} in order", rec.k[:8].tolist())
-    c.shape("records/j", rec.j, (n_it,))
     expected_j = np.maximum.accumulate(np.where(rec.is_epoch[:-1], np.arange(n_it), 0))
     if not np.array_equal(rec.j, expected_j):
         k = int(np.argmax(rec.j != expected_j)) + 1
         c.fail("records/j", "j_k = the last epoch index <= k-1 (j stays or changes to k-1)",
                f"j_{k} = {rec.j[k - 1]}, expected {expected_j[k - 1]}")
-    c.shape("records/info", rec.info, (n_it, 6))
-    c.finite("records/info", rec.info)
-    c.shape("records/U", rec.U, (n_it, n_p, n_o))
-    c.finite("records/U", rec.U)
 
     pairs = tape.pairs
-    n_pairs = pairs.k.size
-    for name in ("k", "station", "n_obs"):
-        c.shape(f"pairs/{name}", getattr(pairs, name), (n_pairs,))
+    check("pairs/")
     if np.any((pairs.k < 1) | (pairs.k > n_it)):
         c.fail("pairs/k", f"record indices in 1..{n_it}", pairs.k.tolist())
     if np.any((pairs.station < 1) | (pairs.station > n_ts)):
@@ -639,11 +627,7 @@ def _validate_header(c: Checker, tape: T13Header) -> None:
                f"({pairs.k[first - 1]}, {pairs.station[first - 1]})")
 
     ps = tape.passes
-    n_passes = ps.station.size
-    for name in ("station", "t_start_s", "t_end_s", "n_obs"):
-        c.shape(f"passes/{name}", getattr(ps, name), (n_passes,))
-    c.finite("passes/t_start_s", ps.t_start_s)
-    c.finite("passes/t_end_s", ps.t_end_s)
+    check("passes/")
     if np.any((ps.station < 1) | (ps.station > n_ts)) or np.any(ps.t_end_s < ps.t_start_s):
         c.fail("passes/station", f"station numbers in 1..{n_ts} and t_start_s <= t_end_s")
     if tape.editing is not None:
@@ -673,14 +657,9 @@ def _validate_editing(c: Checker, ed: TapeEditing, pairs: TapePairs, n_ts: int) 
 
 
 def _validate_raw(c: Checker, raw: TapeRaw, n_o: int, n_ts: int, n_it: int) -> None:
-    n = raw.t_s.size
-    for name in ("t_s", "station", "kind", "record", "segment", "value", "weight",
-                 "m_white_var", "m_bias_var", "m_corr_var", "m_tau_s"):
-        c.shape(f"raw/{name}", getattr(raw, name), (n,))
-        if name != "m_tau_s":  # inf: no correlated noise
-            c.finite(f"raw/{name}", getattr(raw, name))
-    c.shape("raw/A", raw.A, (n, n_o))
-    c.finite("raw/A", raw.A)
+    # shapes of the layout's rows, finite numbers but m_tau_s (inf: no correlated noise)
+    c.rows(rows(T13_LAYOUT, VERSION, "raw/"), lambda f: getattr(raw, f.name),
+           {"N": raw.t_s.size, "n_o": n_o})
     if np.any(raw.weight <= 0):
         c.fail("raw/weight", "weights 1/σ² > 0")
     if np.any((raw.kind < 0) | (raw.kind >= len(raw.kinds))):
