@@ -7,10 +7,10 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from tapp.errors import TappError
-from tapp.io.tape.t13 import T13
+from tapp.io.tape.t13 import T13, T13Header
 from tapp.io.tape.t32 import T32
 from tapp.io.tape.t32_hdf5 import write_t32
 from tapp.pipeline.steps import process_tape
@@ -39,7 +39,7 @@ class ProcessResult:
 
     run: Run
     plan: Plan
-    header: Any
+    header: T13Header
     deck: Deck
     deck_source: str
     tape_source: str

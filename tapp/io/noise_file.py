@@ -1,7 +1,7 @@
 """The ``[noise]`` table of tracking scenarios and of the study file: measurement noise.
 
 Keys are ``<part>_<kind>_<unit>``, the kinds and edge units of
-:data:`tapp.tracking.noise.EDGE_UNITS` (range in m, range rate and count-based Doppler in
+:data:`tapp.measurements.noise.EDGE_UNITS` (range in m, range rate and count-based Doppler in
 mm/s, angles in deg; Doppler also ``<part>_doppler_hz``, converted at the station's band by
 :func:`tapp.measurements.doppler.range_rate_from_hz`, one of the two)::
 

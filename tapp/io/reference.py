@@ -7,7 +7,8 @@ without a default is simply left out; each key's unit, from its name (``_km``, `
 or declared, is the keyword ``unit``; keys the table had under another name are
 ``renamedKeys``. :func:`markdown` renders that JSON Schema as the page
 ``docs/reference/KIND.md``: every table, and for every key its type, unit, default, allowed
-values and meaning. The committed pages are checked against this rendering by the tests;
+values and meaning; :func:`tapes_markdown` renders the tapes' layout tables as
+``docs/reference/tapes.md``. The committed pages are checked against this rendering by the tests;
 ``python -m tapp.io.reference docs/reference`` writes them again after a schema changes.
 """
 
@@ -330,15 +331,30 @@ def markdown(kind: str) -> str:
     return text + f"\n{appendix.rstrip()}\n" if appendix else text
 
 
+#: The page of the tapes' format, beside the input files' (:func:`tapes_markdown`).
+TAPES_PAGE = "tapes.md"
+
+
+def tapes_markdown() -> str:
+    """The format reference of the T13 and T32 tapes (``docs/reference/tapes.md``), from the
+    layout tables the tapes' writers and readers use (:mod:`tapp.io.tape.layout`)."""
+    from tapp.io.tape import layout, t13, t32  # NumPy: only when the page is wanted
+
+    return layout.markdown(t13.VERSION, t32.VERSION)
+
+
 def write_reference(folder: Path) -> list[Path]:
-    """Write ``KIND.md`` of every kind into ``folder``; return the paths."""
+    """Write ``KIND.md`` of every kind and :data:`TAPES_PAGE` into ``folder``; return the
+    paths."""
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     for kind in KINDS:
         path = folder / f"{kind}.md"
         path.write_text(markdown(kind), encoding="utf-8")
         written.append(path)
-    return written
+    path = folder / TAPES_PAGE
+    path.write_text(tapes_markdown(), encoding="utf-8")
+    return [*written, path]
 
 
 if __name__ == "__main__":

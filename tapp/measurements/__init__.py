@@ -1,6 +1,8 @@
 """Tracking measurements: stations, observables with partials (ΔDOR on a baseline:
 :mod:`tapp.measurements.ddor`; troposphere and ionosphere: :mod:`tapp.measurements.media`),
-visibility and passes.
+visibility and passes; fit-world and real-world measurement noise and the per-pass
+square-root information (:mod:`tapp.measurements.noise`, with the names of the real-world
+noise parts).
 
 Numerical kernels only (pure NumPy, no I/O), shared by the tracking simulator (TAPP I) and the
 orbit-determination code. Conventions: km, km/s, s, rad; time-major arrays (N, ...); spacecraft

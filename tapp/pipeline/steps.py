@@ -17,7 +17,7 @@ from pathlib import Path
 from iter.execute import Execution
 from tapp.guidance.guidefile import read_guide
 from tapp.guidance.study import GuidanceResult, guidance_study
-from tapp.io.tape.t13 import T13, memory_pairs
+from tapp.io.tape.t13 import T13, T13Header, memory_pairs
 from tapp.io.tape.t13_hdf5 import open_t13
 from tapp.io.tape.t32_hdf5 import read_t32
 from tapp.processor.deck_bind import bind
@@ -29,7 +29,7 @@ __all__ = ["process_tape", "run_guidance"]
 
 def process_tape(tape: T13 | Path | str, deck, source: str,
                  progress: Callable[[int, int], None] | None = None
-                 ) -> tuple[Run, Plan, object]:
+                 ) -> tuple[Run, Plan, T13Header]:
     """Run TAPP III on a T13 tape with a validated deck: (run, plan, the tape header).
 
     A tape file is read lazily (:func:`tapp.io.tape.t13_hdf5.open_t13`), a tape in memory

@@ -28,6 +28,7 @@ from tapp.io.station_covariance import (
     read_station_covariance,
 )
 from tapp.io.tape.packing import symmetry_defect
+from tapp.io.tape.t13 import T13Header
 from tapp.measurements import STATION_PARAMETER_NAMES
 from tapp.processor.commands import ROC, Command, Side, parse_command
 from tapp.processor.deck import (
@@ -82,7 +83,7 @@ class _Generated:
     sources: tuple[tuple[str, tuple[str, ...]], ...]
 
 
-def _generated(header, names: tuple[str, ...]) -> tuple[_Generated, ...]:
+def _generated(header: T13Header, names: tuple[str, ...]) -> tuple[_Generated, ...]:
     """The generated kinds of a tape: its stochastic accelerations, its burns' execution
     errors (each when it has them)."""
     kinds = tuple(header.parameters.kind)
@@ -115,7 +116,7 @@ _GENERATED_KEYS = ("stochastic", "manoeuvres")
 class _Binder:
     """Resolves the deck's names, positions and times against a T13 header."""
 
-    def __init__(self, deck: Deck, header, source: str):
+    def __init__(self, deck: Deck, header: T13Header, source: str):
         self.deck, self.h, self.source = deck, header, source
         self.names = tuple(header.parameters.name)
         self.n_o, self.n_p = len(self.names), int(header.n_p)
@@ -867,7 +868,7 @@ class _Binder:
                     self.frames())
 
 
-def bind(deck: Deck, header, source: str) -> Plan:
+def bind(deck: Deck, header: T13Header, source: str) -> Plan:
     """Return the :class:`~tapp.processor.plan.Plan` of a deck on a tape.
 
     Parameters

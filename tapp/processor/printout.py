@@ -31,7 +31,7 @@ from tapp.estimation.ellipse import ErrorEllipse, error_ellipse, probability_ins
 from tapp.estimation.factors import gram
 from tapp.frames.ric import RIC_NAMES
 from tapp.frames.time import Epoch
-from tapp.io.tape.t13 import INFO_COLUMNS
+from tapp.io.tape.t13 import INFO_COLUMNS, T13Header
 from tapp.processor.executive import Entity
 from tapp.processor.sequencing import Block, HistoryRow, Run
 
@@ -164,7 +164,7 @@ def block_lines(block: Block, epoch: Epoch, info_names: tuple[str, ...]) -> list
     return lines
 
 
-def o3_text(run: Run, header, deck_source: str, tape_source: str) -> str:
+def o3_text(run: Run, header: T13Header, deck_source: str, tape_source: str) -> str:
     """The whole O3 printout of a run."""
     lines = [f"TAPP III O3 printout   tape {tape_source} (iden {header.iden}, epoch "
              f"{header.epoch.iso(3)} UTC)   deck {deck_source}",
@@ -208,7 +208,7 @@ def _matrix_dict(ent: Entity) -> dict:
     return out
 
 
-def run_dict(run: Run, header, deck_source: str, tape_source: str) -> dict:
+def run_dict(run: Run, header: T13Header, deck_source: str, tape_source: str) -> dict:
     """The run as a JSON-ready dict (the O3 content, the σ history, the recycles)."""
     return {
         "tape": tape_source, "iden": header.iden, "deck": deck_source,

@@ -77,8 +77,9 @@ from tapp.estimation.factors import (
 from tapp.estimation.regression import FitSystem, SingularFitError, regression
 from tapp.frames.ric import RIC_NAMES, ric_state_rotation, rotate_covariance, rotate_rows
 from tapp.io.tape.packing import tr_nonzero_rows, upper_from_tr
-from tapp.io.tape.t13 import PARTS
+from tapp.io.tape.t13 import T13Header
 from tapp.io.tape.t32 import T32Entity, T32Recycle
+from tapp.measurements.noise import PARTS, WHITE
 from tapp.processor.commands import UPC, Command
 from tapp.processor.executive import Budget, Entity, evaluate, transform
 from tapp.processor.plan import Plan
@@ -159,7 +160,7 @@ class TrackingData(Protocol):
     (a T13 file opened by :func:`tapp.io.tape.t13_hdf5.open_t13`, or
     :func:`tapp.io.tape.t13.memory_pairs`)."""
 
-    header: object
+    header: T13Header
 
     def pair_block(self, k_first: int, k_last: int, *, parts: bool = True): ...
 
@@ -531,7 +532,7 @@ class Processor:
         for i, src in enumerate(self.sources):
             station, part = src.rsplit(" ", 1)
             if not self.has_parts:
-                if part != "white":
+                if part != WHITE:
                     continue
                 src = f"{station} total"
             sources.append(src)

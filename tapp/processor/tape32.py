@@ -8,6 +8,7 @@ the representation of the recycle time, the system chains and the names of every
 
 from __future__ import annotations
 
+from tapp.io.tape.t13 import T13Header
 from tapp.io.tape.t32 import T32, T32Partition
 from tapp.processor.deck import deck_json
 from tapp.processor.plan import Plan
@@ -30,7 +31,7 @@ def _partitions(plan: Plan, miss_names: tuple[str, ...]) -> tuple[T32Partition, 
     return tuple(out)
 
 
-def build_t32(run: Run, plan: Plan, header, provenance: dict[str, str]) -> T32:
+def build_t32(run: Run, plan: Plan, header: T13Header, provenance: dict[str, str]) -> T32:
     """Return the T32 tape of a run (module docstring)."""
     sy = plan.systems
     miss_names = tuple(header.miss.name)
@@ -43,7 +44,7 @@ def build_t32(run: Run, plan: Plan, header, provenance: dict[str, str]) -> T32:
                provenance)
 
 
-def t32_provenance(header, deck, deck_source: str, t13_source: str) -> dict[str, str]:
+def t32_provenance(header: T13Header, deck, deck_source: str, t13_source: str) -> dict[str, str]:
     """The provenance a T32 tape carries: the deck (JSON) and its file, the T13 tape's file
     and identification, and the T13's Earth orientation model and EOP source."""
     return {"deck": deck_json(deck), "deck_source": deck_source, "t13_source": t13_source,

@@ -6,7 +6,6 @@
   building the scenario;
 - :mod:`tapp.tracking.pieces`: the trajectory in pieces, restarted at the stochastic
   accelerations' bounds and at the burns, with the partials of their parameters;
-- :mod:`tapp.tracking.noise`: fit-world and real-world noise, per-pass AᵀWA and AᵀWMWA;
 - :mod:`tapp.tracking.simulate`: trajectory, partials, records, miss partials ->
   :class:`~tapp.io.tape.t13.T13`;
 - :mod:`tapp.tracking.encounter`: a B-plane miss must be an encounter; ``[targeting]``
@@ -14,10 +13,9 @@
 - :mod:`tapp.io.ccsds.oem`: CCSDS OEM 2.0 (KVN) writer.
 """
 
-from tapp.tracking.noise import FitNoise, RealNoise, covariance_block, normal_matrices
 from tapp.tracking.scenario import Parameter, Scenario
 from tapp.tracking.scenario_build import parse_scenario, read_scenario
 from tapp.tracking.simulate import Simulation, miss_partials, simulate
 
-__all__ = ["FitNoise", "Parameter", "RealNoise", "Scenario", "Simulation", "covariance_block",
-           "miss_partials", "normal_matrices", "parse_scenario", "read_scenario", "simulate"]
+__all__ = ["Parameter", "Scenario", "Simulation", "miss_partials", "parse_scenario",
+           "read_scenario", "simulate"]

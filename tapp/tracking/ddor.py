@@ -50,8 +50,8 @@ from tapp.errors import InputError
 from tapp.io.noise_file import NonNegative, Positive
 from tapp.io.schema import Schema
 from tapp.measurements.ddor import DDOR_KIND, QUASAR_PARAMETER_NAMES
+from tapp.measurements.noise import FitNoise, RealNoise
 from tapp.measurements.stations import Station
-from tapp.tracking.noise import FitNoise, RealNoise
 
 #: Factors from the edge units to the noise units: ns -> km (× c), nrad -> rad.
 NS_km = C_LIGHT_km_s * 1e-9

@@ -30,11 +30,11 @@ from tapp.measurements import BIAS_NAMES, STATION_PARAMETER_NAMES, Observable
 from tapp.measurements.bands import DEFAULT_BAND
 from tapp.measurements.doppler import DEFAULT_COUNT_TIME_s
 from tapp.measurements.media import MEDIA_KINDS, MEDIA_PARAMETER_NAMES, MediaModel
+from tapp.measurements.noise import FitNoise, RealNoise
 from tapp.measurements.stations import Station
 from tapp.targeting.program import BPlaneSearch
 from tapp.tracking.ddor import QUASAR_KIND, TrackingBaseline
 from tapp.tracking.eop_days import EopDays
-from tapp.tracking.noise import FitNoise, RealNoise
 
 #: Observable kinds, in the order of ``tapp.measurements.Observable``.
 KINDS = tuple(o.value for o in Observable)

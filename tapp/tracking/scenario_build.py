@@ -35,13 +35,13 @@ from tapp.io.trajectory_file import Reference
 from tapp.measurements.bands import BANDS, DEFAULT_BAND
 from tapp.measurements.doppler import DEFAULT_COUNT_TIME_s, range_rate_from_hz
 from tapp.measurements.media import MediaModel, check_meteorology, day_of_year, standard_atmosphere
+from tapp.measurements.noise import EDGE_UNITS, FitNoise, RealNoise
 from tapp.measurements.stations import Station
 from tapp.targeting.program import BPlaneSearch, check_reference
 from tapp.targeting.searchfile import scenario_targeting
 from tapp.tracking.ddor import tracking_baselines
 from tapp.tracking.eop_days import EopDays, eop_days
 from tapp.tracking.manoeuvres import scenario_manoeuvres
-from tapp.tracking.noise import EDGE_UNITS, FitNoise, RealNoise
 from tapp.tracking.scenario import (
     MISS_QUANTITIES,
     OPT_IN_MISS,

@@ -63,7 +63,7 @@ What is computed (seed TAPP III §1 and §4.1; notation n_o, n_p, j, k, U, ΔJ, 
 
 3. **Square-root information.** Per (record k, station s): upper-triangular factors R and R̃
    with RᵀR = ΔJ = AᵀWA and R̃ᵀR̃ = ΔJ̃ = AᵀWMWA over the observations in (t_{k-1}, t_k],
-   from a Householder QR of the whitened rows (:func:`tapp.tracking.noise.pass_rows`: exact
+   from a Householder QR of the whitened rows (:func:`tapp.measurements.noise.pass_rows`: exact
    for the correlated real world, O(n) per pass), never from a formed normal matrix. The
    real world's M is block-diagonal over (station, observable kind, pass) *and record*: a
    pass that straddles a T13 time is split there, since the tape has no place for the cross
@@ -113,7 +113,6 @@ from tapp.dynamics.parameters import gm_name
 from tapp.errors import InputError
 from tapp.estimation.factors import triangularize
 from tapp.io.tape.t13 import (
-    PARTS,
     T13,
     TapeEditing,
     TapeMiss,
@@ -140,6 +139,7 @@ from tapp.measurements.ddor import (
     quasar_direction,
 )
 from tapp.measurements.media import MEDIA_KINDS, MEDIA_PARAMETER_NAMES
+from tapp.measurements.noise import PARTS, pass_rows
 from tapp.measurements.relativity import (
     SHAPIRO_BODIES,
     AUTO_DISTANCE_km,
@@ -159,7 +159,6 @@ from tapp.tracking.editing import (
     removed_text,
 )
 from tapp.tracking.encounter import check_entry, prepare_encounter
-from tapp.tracking.noise import pass_rows
 from tapp.tracking.pieces import Forcing, SegmentPartials, fly, propagate_pieces
 from tapp.tracking.reference import ReferenceFit, fitted
 from tapp.tracking.scenario import (
@@ -581,7 +580,7 @@ def _accumulate(ts: TrackingStation | TrackingBaseline, data: _StationData, n_o:
                 ) -> dict[int, tuple[np.ndarray, np.ndarray, int, np.ndarray]]:
     """Per record k: the station's factors [R (n_o, n_o), R̃ (n_o, n_o), n_obs, the factors of
     R̃'s parts (3, n_o, n_o)] (module docstring, item 3): the rows of
-    :func:`tapp.tracking.noise.pass_rows` of every segment and kind in the record,
+    :func:`tapp.measurements.noise.pass_rows` of every segment and kind in the record,
     triangularised by Householder QR; R̃ is the QR of the three part factors stacked."""
     rows: dict[int, list] = {}
     bounds = np.flatnonzero(np.diff(data.segment, prepend=-1, append=data.segment[-1] + 1))

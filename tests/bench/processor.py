@@ -51,7 +51,6 @@ from tapp.frames.time import Epoch
 from tapp.io.tape import hdf5io
 from tapp.io.tape.packing import tr_size, unpack_tr
 from tapp.io.tape.t13 import (
-    PARTS,
     T13,
     TapeMiss,
     TapePairs,
@@ -61,6 +60,7 @@ from tapp.io.tape.t13 import (
     TapeStations,
 )
 from tapp.io.tape.t13_hdf5 import _write, open_t13, write_t13
+from tapp.measurements.noise import PARTS
 from tapp.processor.deck import read_deck
 from tapp.processor.deck_bind import bind
 from tapp.processor.sequencing import Processor, Run, process

@@ -2,16 +2,21 @@
 
 :class:`Checker` checks shapes, finiteness, symmetry and UTF-8 text and turns every failure
 into a :class:`~tapp.errors.TapeError` ``"{file}: {dataset}: expected ... (got ...)"``;
-:func:`frozen` returns read-only copies of arrays; :data:`PACKINGS` names the storages of
-symmetric matrices. :func:`tapp.io.tape.t13.validate` and :func:`tapp.io.tape.t32.validate` use them
-on a tape in memory, the reader of :mod:`tapp.io.tape.hdf5io` on the values it reads.
+:meth:`Checker.rows` checks the shapes of the rows of a layout table
+(:mod:`tapp.io.tape.layout`); :func:`frozen` returns read-only copies of arrays;
+:data:`PACKINGS` names the storages of symmetric matrices. :func:`tapp.io.tape.t13.validate`
+and :func:`tapp.io.tape.t32.validate` use them on a tape in memory, the reader of
+:mod:`tapp.io.tape.hdf5io` on the values it reads.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
+
 import numpy as np
 
 from tapp.errors import TapeError
+from tapp.io.tape.layout import Field, resolve
 from tapp.io.tape.packing import symmetry_defect
 
 #: Storage of symmetric matrices: "TR" (upper triangle by rows) or "full" (n² entries).
@@ -89,6 +94,26 @@ class Checker:
             i, col = (int(v) for v in np.argwhere(low)[0])
             self.fail(dataset, f"a non-negative diagonal ({what})",
                       f"{diag[i, col]:.3g}{where(i)}, row {col}")
+
+    def rows(self, fields: Iterable[Field], value_of: Callable[[Field], object],
+             dims: dict[str, int]) -> None:
+        """Check the values of layout rows (:mod:`tapp.io.tape.layout`) against their shapes,
+        the symbols resolved by ``dims`` (rows whose shape has another symbol, attributes and
+        packed matrices are checked elsewhere): text by its count ("expected N entries"),
+        arrays by :meth:`shape`, numbers by :meth:`finite` unless the row allows
+        non-finite values."""
+        for field in fields:
+            shape = resolve(field.shape, dims)
+            if field.is_attr or field.dtype in ("factor", "symmetric") or shape is None:
+                continue
+            value = value_of(field)
+            if field.dtype == "str":
+                if len(value) != shape[0]:
+                    self.fail(field.path, f"{shape[0]} entries", len(value))
+                continue
+            self.shape(field.path, value, shape)
+            if field.dtype == "float" and field.finite:
+                self.finite(field.path, value)
 
     def text(self, where: str, value: object) -> str:
         """Return ``value`` (bytes or str) as text; fail unless it is valid UTF-8."""

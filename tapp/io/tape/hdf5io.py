@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import subprocess
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from datetime import UTC, datetime
 from pathlib import Path
@@ -43,6 +43,7 @@ from iter.inputfile import regular_file
 from tapp import __version__
 from tapp.errors import InputError, TapeError
 from tapp.io.tape.checks import PACKINGS, Checker, frozen
+from tapp.io.tape.layout import Field
 from tapp.io.tape.packing import pack_tr, tr_size, unpack_tr, upper_from_tr
 
 #: Target size of a chunk (bytes): whole rows of axis 0 up to this size.
@@ -207,6 +208,40 @@ def write_packed(group: h5py.Group, name: str, matrices, units: str, packing: st
     return ds
 
 
+def write_rows(f: h5py.File | h5py.Group, fields: Iterable[Field],
+               value_of: Callable[[Field], object], *, checksums: bool = True,
+               compression: str = "gzip", packing: str = "TR",
+               big: Callable[[Field], bool] = lambda field: field.big) -> None:
+    """Write the rows of a layout table (:mod:`tapp.io.tape.layout`), in order, into ``f``.
+
+    ``value_of(row)`` gives each row's value (None: absent, not written); groups are created
+    as their first row needs them. Text datasets by :func:`write_strings`, packed matrices
+    (types factor, symmetric) by :func:`write_packed` in ``packing``, other datasets by
+    :func:`write_numbers` (compressed when ``big(row)``), attributes by :func:`write_attrs`;
+    every dataset gets the row's unit as its ``units`` attribute.
+    """
+    for field in fields:
+        value = value_of(field)
+        if value is None:
+            continue
+        if field.is_attr:
+            owner = f.require_group(field.owner) if field.owner and field.owner not in f \
+                else f[field.owner] if field.owner else f
+            write_attrs(owner, {field.name: value}, checksums=checksums)
+            continue
+        folder, _, name = field.path.rpartition("/")
+        group = f.require_group(folder) if folder else f
+        if field.dtype == "str":
+            write_strings(group, name, value, field.unit, checksums=checksums)
+        elif field.dtype in ("factor", "symmetric"):
+            write_packed(group, name, value, field.unit, packing,
+                         "factor" if field.dtype == "factor" else "symmetric", big=big(field),
+                         checksums=checksums, compression=compression)
+        else:
+            write_numbers(group, name, value, field.unit, big=big(field), checksums=checksums,
+                          compression=compression)
+
+
 # ---------------------------------------------------------------------------------------------
 # Reading
 # ---------------------------------------------------------------------------------------------
@@ -231,6 +266,9 @@ def open_tape(path: Path | str, what: str = "tape") -> h5py.File:
                         f"{exc})") from None
 
 
+#: How :meth:`Reader.row` reads a dataset and an attribute of each row type.
+_ROW_KINDS = {"int": "i", "float": "f", "bool": "b"}
+_ATTR_KINDS = {"str": str, "int": int, "float": float, "str[]": list}
 _KINDS = {"f": ("fiu", "numbers", float), "i": ("iu", "integers", np.int64),
           "b": ("b", "booleans", bool), "s": ("OS", "strings", None)}
 
@@ -367,6 +405,26 @@ class Reader:
 
     def strings(self, name: str) -> tuple[str, ...]:
         return tuple(self.read(name, "s"))
+
+    def present(self, field: Field) -> bool:
+        """Whether a row the tape may lack (:attr:`Field.optional`) is on the tape."""
+        if not field.optional:
+            return True
+        if field.optional == field.path and field.is_attr:
+            return (field.owner == "" or self.has(field.owner)) and \
+                self.has_attr(field.name, field.owner)
+        return self.has(field.optional)
+
+    def row(self, field: Field, default: object = ...):
+        """Read a row of a layout table by its type: a dataset as :meth:`read` (text as a
+        tuple), an attribute as :meth:`attr`; packed matrices are read by
+        :meth:`symmetric` and :meth:`triangular`, not here."""
+        if field.is_attr:
+            return self.attr(field.name, _ATTR_KINDS[field.dtype], owner=field.owner,
+                             default=default)
+        if field.dtype == "str":
+            return self.strings(field.path)
+        return self.read(field.path, _ROW_KINDS[field.dtype])
 
     def packing(self, name: str) -> str:
         packing = self.attr("packing", str, owner=name, default="TR")

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -56,7 +56,9 @@ from tapp.estimation.gauss_markov import FRAMES, KIND, UNIT, StochasticAccelerat
 from tapp.frames.orientation import INERTIAL_FRAME
 from tapp.frames.time import Epoch
 from tapp.io.tape.checks import PACKINGS, SYMMETRY_TOL, Checker, frozen
+from tapp.io.tape.layout import T13_LAYOUT, rows, sourced
 from tapp.io.tape.packing import pack_tr, scaled_difference, tr_diagonal, tr_rows, tr_size
+from tapp.measurements.noise import PARTS
 
 #: Provenance attributes the simulator stamps: the scenario (JSON) and its file, the Earth
 #: orientation model ("iau2006" or "gmst"), the EOP source of the run and, when SEARCH
@@ -76,10 +78,6 @@ VERSION = 4
 SUPPORTED_VERSIONS = (1, 2, 3, 4)
 #: Versions that carry normal matrices, not factors (read with a warning).
 NORMAL_MATRIX_VERSIONS = (1, 2)
-#: Names of the parts of the real-world information R̃ᵀR̃ = AᵀWMWA (``pairs/Rt_parts``), in
-#: order: white noise, per-pass biases, correlated noise (tapp.tracking.noise makes them,
-#: TAPP III's budget names its noise sources by them).
-PARTS = ("white", "bias", "correlated")
 #: Largest relative difference between the diagonal of R̃ᵀR̃ and the sum of its parts'
 #: (column norms squared) accepted: the rounding of a QR of a few thousand rows.
 PARTS_TOL = 1e-10
@@ -91,8 +89,9 @@ UNITS_NOTE = ("km, km/s, s, rad; normal matrices in 1/(u_a u_b), partials in (ro
 #: :class:`tapp.io.tape.t13_hdf5.T13File`; bytes of packed matrices).
 BLOCK_BYTES = 1 << 25
 
-__all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PARTS", "PARTS_TOL",
-           "SUPPORTED_VERSIONS", "SYMMETRY_TOL", "T13", "VERSION", "MemoryPairs", "PairBlock",
+__all__ = ["FORMAT", "INFO_COLUMNS", "NORMAL_MATRIX_VERSIONS", "PACKINGS", "PARTS_TOL",
+           "SUPPORTED_VERSIONS", "SYMMETRY_TOL", "T13", "T13Header", "VERSION", "MemoryPairs",
+           "PairBlock",
            "LEGACY_PSD_TOL", "TapeEditing", "TapeMiss", "TapePairs", "TapeParameters",
            "TapePasses", "TapeRaw", "TapeRecords", "TapeStations", "check_factors",
            "check_parts_sum", "column_norms2", "factor_normal_matrices", "memory_pairs",
@@ -189,9 +188,9 @@ class TapePairs:
     R, Rt : (n_pairs, n_o, n_o) upper-triangular factors, diagonal >= 0, with RᵀR = AᵀWA and
         R̃ᵀR̃ = AᵀWMWA, 1/u_b; None in the header of a lazily read tape
         (:attr:`tapp.io.tape.t13_hdf5.T13File.header`).
-    Rt_parts : (n_pairs, 3, n_o, n_o) the factors of the :data:`PARTS` of AᵀWMWA (white,
-        bias, correlated), their Gram matrices summing to R̃ᵀR̃; or None (not on the tape, or
-        a header).
+    Rt_parts : (n_pairs, 3, n_o, n_o) the factors of the parts of AᵀWMWA (white, bias,
+        correlated: :data:`tapp.measurements.noise.PARTS`), their Gram matrices summing to
+        R̃ᵀR̃; or None (not on the tape, or a header).
     """
 
     k: np.ndarray
@@ -210,6 +209,13 @@ class TapePairs:
     def dJt(self) -> np.ndarray:
         """AᵀWMWA = R̃ᵀR̃, (n_pairs, n_o, n_o), 1/(u_a u_b)."""
         return np.swapaxes(self.Rt, -1, -2) @ self.Rt
+
+    @property
+    def dJt_parts(self) -> np.ndarray | None:
+        """The parts' Gram matrices (n_pairs, 3, n_o, n_o), 1/(u_a u_b), summing to AᵀWMWA;
+        None without parts."""
+        parts = self.Rt_parts
+        return None if parts is None else np.swapaxes(parts, -1, -2) @ parts
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -281,15 +287,34 @@ class TapeRaw:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class T13:
-    """A T13 tape in memory: what TAPP I writes and TAPP III reads.
+class T13Header:
+    """Everything of a T13 tape but its pair factors and raw rows: what TAPP III binds its
+    deck to and sequences by (:attr:`tapp.io.tape.t13_hdf5.T13File.header`,
+    :attr:`MemoryPairs.header`). A whole tape (:class:`T13`) is a header too.
 
-    ``provenance`` holds the root attributes that describe how the tape was made
-    (scenario JSON and source on writing; plus tapp_version, git_commit, created_utc on
-    reading). ``editing`` is None on tapes written before it was recorded. ``stochastic``
-    defines the parameters of kind "stochastic" (None without them), ``manoeuvres`` the burns
-    TAPP I flew, ascending in time, whose execution errors are the parameters of kind
-    "execution".
+    Attributes
+    ----------
+    iden : identification of the run (text).
+    epoch : the tape epoch t_0 = 0 s (injection), UTC.
+    n_p : number of orbit parameters p (the first n_p of the n_o parameters).
+    parameters : the n_o parameters x = [p; q], names with units, nominal values at t_0 in
+        their ``unit``.
+    stations : the n_ts stations, geodetic positions (deg, km) and elevation masks (deg).
+    miss : the n_m miss parameters (in their ``unit``) at ``t_s`` (s) and B = ∂m/∂x(t_0),
+        (n_m, n_o) in (row unit)/(column unit).
+    records : the T13 times (s from the epoch) and the n_it records: epoch index j, state at
+        t_k (km, km/s), U = ∂p(t_k)/∂x(t_j) (n_it, n_p, n_o).
+    pairs : the (record, station) pairs with data and their observation counts; the factors
+        ``R``, ``Rt``, ``Rt_parts`` are None in a header (1/u_b in a :class:`T13`).
+    passes : tracking passes: station, first and last observation times (s), observations.
+    provenance : the root attributes that describe how the tape was made (text: scenario
+        JSON and source on writing; plus tapp_version, git_commit, created_utc on reading).
+    editing : what the schedule asked for and each rule removed (None on tapes written
+        before it was recorded).
+    stochastic : the definition of the parameters of kind "stochastic" (σ km/s², τ s,
+        interval boundaries s), or None without them.
+    manoeuvres : the burns TAPP I flew, ascending in time, whose execution errors are the
+        parameters of kind "execution".
     """
 
     iden: str
@@ -301,7 +326,6 @@ class T13:
     records: TapeRecords
     pairs: TapePairs
     passes: TapePasses
-    raw: TapeRaw | None = None
     provenance: dict[str, str] = field(default_factory=dict)
     editing: TapeEditing | None = None
     stochastic: StochasticAccelerations | None = None
@@ -329,6 +353,16 @@ class T13:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
+class T13(T13Header):
+    """A T13 tape in memory: what TAPP I writes and TAPP III reads: its header
+    (:class:`T13Header`) with the pair factors (``pairs.R``, ``pairs.Rt``, optionally
+    ``pairs.Rt_parts``) and, optionally, one row per scalar observation (``raw``).
+    """
+
+    raw: TapeRaw | None = None
+
+
+@dataclass(frozen=True, slots=True, eq=False)
 class PairBlock:
     """Pairs of records k_first..k_last (inclusive), factors packed TR (upper triangle by
     rows, L = n_o (n_o + 1) / 2: :func:`tapp.io.tape.packing.pack_tr`).
@@ -339,7 +373,8 @@ class PairBlock:
     station : (m,) int station number, ascending within a record.
     n_obs : (m,) int scalar observations of each pair.
     R, Rt : (m, L) factors of AᵀWA and AᵀWMWA, 1/u_b.
-    Rt_parts : (m, 3, L) the factors of the :data:`PARTS`, or None when the tape has none.
+    Rt_parts : (m, 3, L) the factors of the parts (:data:`tapp.measurements.noise.PARTS`), or
+        None when the tape has none.
     """
 
     k: np.ndarray
@@ -533,7 +568,7 @@ def _validate_manoeuvres(c: Checker, burns: tuple[Burn, ...], par: TapeParameter
                starts.tolist())
 
 
-def _validate_header(c: Checker, tape: T13) -> None:
+def _validate_header(c: Checker, tape: T13Header) -> None:
     """Everything of :func:`validate` but the pair matrices and the raw rows."""
     n_o, n_p, n_m, n_ts, n_it = tape.n_o, tape.n_p, tape.n_m, tape.n_ts, tape.n_it
     par = tape.parameters
@@ -542,55 +577,42 @@ def _validate_header(c: Checker, tape: T13) -> None:
     _validate_stochastic(c, tape.stochastic, par)
     _validate_manoeuvres(c, tape.manoeuvres, par)
 
+    dims = {"n_o": n_o, "n_p": n_p, "n_m": n_m, "n_ts": n_ts, "n_it": n_it,
+            "n_pairs": tape.pairs.k.size, "n_passes": tape.passes.station.size}
+
+    def check(*prefixes: str) -> None:
+        """The shapes (and finite numbers) of the layout's rows under ``prefixes``."""
+        for prefix in prefixes:
+            c.rows(rows(T13_LAYOUT, VERSION, prefix), lambda f: sourced(tape, f.source), dims)
+
     st = tape.stations
-    c.shape("stations/id", st.id, (n_ts,))
+    check("stations/")
     if not np.array_equal(st.id, np.arange(1, n_ts + 1)):
         c.fail("stations/id", f"station numbers 1..{n_ts}", st.id.tolist())
-    for name in ("lat_deg", "lon_deg", "h_km", "elev_mask_deg"):
-        c.shape(f"stations/{name}", getattr(st, name), (n_ts,))
-        c.finite(f"stations/{name}", getattr(st, name))
-    if len(st.observables) != n_ts:
-        c.fail("stations/observables", f"{n_ts} entries", len(st.observables))
     if np.any((par.station < 0) | (par.station > n_ts)):
         c.fail("parameters/station", f"station numbers in 0..{n_ts}", par.station.tolist())
 
     miss = tape.miss
-    if len(miss.unit) != n_m:
-        c.fail("miss/unit", f"{n_m} entries", len(miss.unit))
-    c.shape("miss/nominal", miss.nominal, (n_m,))
-    c.finite("miss/nominal", miss.nominal)
-    c.shape("B", miss.B, (n_m, n_o))
-    c.finite("B", miss.B)
+    check("miss/", "B")
     if not math.isfinite(miss.t_s):
         c.fail("miss/nominal.attrs/t_s", "a finite time (s)", miss.t_s)
 
     rec = tape.records
-    for dataset, values in (("times/t_s", rec.times_s), ("times/is_epoch", rec.is_epoch),
-                            ("times/is_input", rec.is_input)):
-        c.shape(dataset, values, (n_it + 1,))
-    c.finite("times/t_s", rec.times_s)
+    check("times/", "records/")
     if rec.times_s[0] != 0.0 or np.any(np.diff(rec.times_s) <= 0):
         c.fail("times/t_s", "strictly ascending times from t_0 = 0 s", rec.times_s[:8].tolist())
     if not rec.is_epoch[0] or not np.all(rec.is_epoch | rec.is_input):
         c.fail("times/is_epoch", "t_0 an epoch and every time an epoch or an input time")
-    c.shape("records/k", rec.k, (n_it,))
     if not np.array_equal(rec.k, np.arange(1, n_it + 1)):
         c.fail("records/k", f"1..{n_it} in order", rec.k[:8].tolist())
-    c.shape("records/j", rec.j, (n_it,))
     expected_j = np.maximum.accumulate(np.where(rec.is_epoch[:-1], np.arange(n_it), 0))
     if not np.array_equal(rec.j, expected_j):
         k = int(np.argmax(rec.j != expected_j)) + 1
         c.fail("records/j", "j_k = the last epoch index <= k-1 (j stays or changes to k-1)",
                f"j_{k} = {rec.j[k - 1]}, expected {expected_j[k - 1]}")
-    c.shape("records/info", rec.info, (n_it, 6))
-    c.finite("records/info", rec.info)
-    c.shape("records/U", rec.U, (n_it, n_p, n_o))
-    c.finite("records/U", rec.U)
 
     pairs = tape.pairs
-    n_pairs = pairs.k.size
-    for name in ("k", "station", "n_obs"):
-        c.shape(f"pairs/{name}", getattr(pairs, name), (n_pairs,))
+    check("pairs/")
     if np.any((pairs.k < 1) | (pairs.k > n_it)):
         c.fail("pairs/k", f"record indices in 1..{n_it}", pairs.k.tolist())
     if np.any((pairs.station < 1) | (pairs.station > n_ts)):
@@ -605,11 +627,7 @@ def _validate_header(c: Checker, tape: T13) -> None:
                f"({pairs.k[first - 1]}, {pairs.station[first - 1]})")
 
     ps = tape.passes
-    n_passes = ps.station.size
-    for name in ("station", "t_start_s", "t_end_s", "n_obs"):
-        c.shape(f"passes/{name}", getattr(ps, name), (n_passes,))
-    c.finite("passes/t_start_s", ps.t_start_s)
-    c.finite("passes/t_end_s", ps.t_end_s)
+    check("passes/")
     if np.any((ps.station < 1) | (ps.station > n_ts)) or np.any(ps.t_end_s < ps.t_start_s):
         c.fail("passes/station", f"station numbers in 1..{n_ts} and t_start_s <= t_end_s")
     if tape.editing is not None:
@@ -639,14 +657,9 @@ def _validate_editing(c: Checker, ed: TapeEditing, pairs: TapePairs, n_ts: int) 
 
 
 def _validate_raw(c: Checker, raw: TapeRaw, n_o: int, n_ts: int, n_it: int) -> None:
-    n = raw.t_s.size
-    for name in ("t_s", "station", "kind", "record", "segment", "value", "weight",
-                 "m_white_var", "m_bias_var", "m_corr_var", "m_tau_s"):
-        c.shape(f"raw/{name}", getattr(raw, name), (n,))
-        if name != "m_tau_s":  # inf: no correlated noise
-            c.finite(f"raw/{name}", getattr(raw, name))
-    c.shape("raw/A", raw.A, (n, n_o))
-    c.finite("raw/A", raw.A)
+    # shapes of the layout's rows, finite numbers but m_tau_s (inf: no correlated noise)
+    c.rows(rows(T13_LAYOUT, VERSION, "raw/"), lambda f: getattr(raw, f.name),
+           {"N": raw.t_s.size, "n_o": n_o})
     if np.any(raw.weight <= 0):
         c.fail("raw/weight", "weights 1/σ² > 0")
     if np.any((raw.kind < 0) | (raw.kind >= len(raw.kinds))):
@@ -662,7 +675,7 @@ def _validate_raw(c: Checker, raw: TapeRaw, n_o: int, n_ts: int, n_it: int) -> N
 # ---------------------------------------------------------------------------------------------
 
 
-def _record_range(header: T13, k_first: int, k_last: int) -> tuple[int, int]:
+def _record_range(header: T13Header, k_first: int, k_last: int) -> tuple[int, int]:
     """Pair indices [lo, hi) of records k_first..k_last (pairs sorted by k)."""
     n_it = header.n_it
     if not (isinstance(k_first, int | np.integer) and isinstance(k_last, int | np.integer)
@@ -674,10 +687,12 @@ def _record_range(header: T13, k_first: int, k_last: int) -> tuple[int, int]:
             int(np.searchsorted(k, k_last, side="right")))
 
 
-def _header(tape: T13) -> T13:
+def header_of(tape: T13Header) -> T13Header:
+    """The header of a tape: its fields but the pair factors (and the raw rows)."""
+    values = {f.name: getattr(tape, f.name) for f in fields(T13Header)}
     pairs = tape.pairs
-    return replace(tape, pairs=TapePairs(pairs.k, pairs.station, pairs.n_obs, None, None, None),
-                   raw=None)
+    values["pairs"] = TapePairs(pairs.k, pairs.station, pairs.n_obs, None, None, None)
+    return T13Header(**values)
 
 
 class _PairSource:
@@ -686,7 +701,7 @@ class _PairSource:
 
     __slots__ = ()
 
-    header: T13
+    header: T13Header
 
     def pair_block(self, k_first: int, k_last: int, *, parts: bool = True
                    ) -> PairBlock:  # pragma: no cover
@@ -723,8 +738,8 @@ class MemoryPairs(_PairSource):
 
     Attributes
     ----------
-    header : T13
-        The tape without its pair matrices and raw rows.
+    header : T13Header
+        The tape without its pair factors and raw rows.
     """
 
     __slots__ = ("_tape", "header")
@@ -732,7 +747,7 @@ class MemoryPairs(_PairSource):
     def __init__(self, tape: T13, source: str = "T13"):
         validate(tape, source)
         self._tape = tape
-        self.header = _header(tape)
+        self.header = header_of(tape)
 
     def pair_block(self, k_first: int, k_last: int, *, parts: bool = True) -> PairBlock:
         """Return the pairs of records k_first..k_last (inclusive), factors packed TR.
@@ -763,7 +778,7 @@ def memory_pairs(tape: T13) -> MemoryPairs:
     return MemoryPairs(tape)
 
 
-def summary(tape: T13, *, version: int = VERSION) -> dict:
+def summary(tape: T13Header, *, version: int = VERSION) -> dict:
     """Return a JSON-ready summary: dimensions, parameters, stations with their passes and
     observations (and, when the tape has them, the observations scheduled and removed by each
     rule: :class:`TapeEditing`), epoch times, records and provenance (``version``: of the tape
@@ -789,7 +804,8 @@ def summary(tape: T13, *, version: int = VERSION) -> dict:
         "dimensions": {"n_o": tape.n_o, "n_p": tape.n_p, "n_m": tape.n_m, "n_ts": tape.n_ts,
                        "n_it": tape.n_it, "pairs": int(tape.pairs.k.size),
                        "passes": int(tape.passes.station.size),
-                       "raw_rows": None if tape.raw is None else int(tape.raw.t_s.size)},
+                       "raw_rows": int(tape.raw.t_s.size) if isinstance(tape, T13)
+                       and tape.raw is not None else None},
         "span_s": [float(rec.times_s[0]), float(rec.times_s[-1])],
         "parameters": [{"name": n, "unit": u, "kind": k}
                        for n, u, k in zip(tape.parameters.name, tape.parameters.unit,

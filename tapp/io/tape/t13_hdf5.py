@@ -3,90 +3,11 @@
 The tape in memory (its types, notation and validation) is :mod:`tapp.io.tape.t13`;
 DESIGN.md ("Tapes") fixes this form.
 
-HDF5 layout, version 4 (every dataset has a ``units`` attribute and a Fletcher-32 checksum,
-:mod:`tapp.io.tape.hdf5io`; the large datasets are compressed by :data:`COMPRESSION_OF_VERSION`):
-
-==========================  =====================  ===========================================
-path                        shape                  content
-==========================  =====================  ===========================================
-attrs                                              format="T13", version, iden, n_o, n_p, n_m,
-                                                   n_ts, n_it, epoch (ISO UTC), epoch_jd_whole,
-                                                   epoch_jd_fraction, time_scale, frame, center,
-                                                   units, packing; provenance: tapp_version,
-                                                   git_commit, created_utc, scenario (JSON),
-                                                   scenario_source, earth_orientation, eop,
-                                                   relativity, targeting, schedule
-                                                   (t13.SCENARIO_PROVENANCE)
-parameters/name, unit, kind (n_o,) str             names carry units (``x_km``, ``GM_km3_s2``)
-parameters/station          (n_o,) int             station number s of a station parameter, 0
-parameters/nominal          (n_o,) float           values of x at t_0, units ``unit``
-stations/id                 (n_ts,) int            station number s = 1..n_ts
-stations/name, observables  (n_ts,) str            observables comma-separated
-stations/lat_deg, lon_deg,  (n_ts,) float          geodetic WGS84, height km, mask deg
-h_km, elev_mask_deg
-miss/name, unit             (n_m,) str
-miss/nominal                (n_m,) float           attrs: kind, t_s (time of the miss, s)
-B                           (n_m, n_o)             ∂m/∂x at injection (t_0)
-times/t_s                   (n_it+1,) float        T13 times t_0..t_{n_it}, s from the epoch
-times/is_epoch, is_input    (n_it+1,) bool         which list each time came from
-records/j, records/k        (n_it,) int            epoch index j, current index k = 1..n_it
-records/t_s                 (n_it,) float          t_k, s (= times/t_s[1:])
-records/info                (n_it, 6) float        state at t_k (km, km/s), EME2000
-records/U                   (n_it, n_p, n_o)       ∂p(t_k)/∂x(t_j)
-pairs/k, pairs/station      (n_pairs,) int         (record, station) pairs with data, each
-                                                   once, sorted by (k, station)
-pairs/n_obs                 (n_pairs,) int         scalar observations in the pair
-pairs/R, pairs/Rt           (n_pairs, L)           square-root information over (t_{k-1},
-                                                   t_k] referred to t_j: upper-triangular
-                                                   R, R̃ (diagonal >= 0) with RᵀR = AᵀWA,
-                                                   R̃ᵀR̃ = AᵀWMWA; L = n_o(n_o+1)/2 ("TR",
-                                                   upper triangle by rows) or n_o² ("full",
-                                                   zero below the diagonal); attrs packing,
-                                                   order (= n_o), form = "factor"
-pairs/Rt_parts (optional)   (n_pairs, 3, L)        the factors of the white-noise, per-pass
-                                                   bias and exponentially correlated parts of
-                                                   AᵀWMWA (attr ``parts`` = white, bias,
-                                                   correlated: the rows of ``pass_rows`` of
-                                                   tapp.tracking.noise), whose Gram matrices
-                                                   sum to R̃ᵀR̃
-passes/station, t_start_s,  (n_passes,)            tracking passes (before any split at T13
-t_end_s, n_obs                                     times)
-editing/ (optional)                                what the schedule asked for and what each
-                                                   rule removed (tapp.io.tape.t13.TapeEditing):
-editing/rule                (n_rules,) str         the rules, in the order they apply
-editing/scheduled_obs       (n_ts,) int            scalar observations on the schedule's
-                                                   sample times
-editing/removed_obs,        (n_ts, n_rules) int    observations, passes removed by each rule
-removed_passes                                     (each observation under the first rule that
-                                                   removed it: scheduled_obs = kept (sum of
-                                                   pairs/n_obs) + sum of removed_obs)
-editing/added_passes        (n_ts,) int            passes added by splitting passes longer
-                                                   than the scenario's max_pass_s
-stochastic/ (optional)                             the parameters of kind "stochastic" (tapp.
-                                                   estimation.gauss_markov): attrs frame,
-                                                   components, sigma_km_s2, tau_s
-stochastic/boundaries_s     (K+1,) float           interval boundaries, s
-manoeuvres/ (optional)                             the burns whose execution errors are the
-                                                   parameters of kind "execution" (tapp.
-                                                   dynamics.manoeuvres), ascending in time:
-manoeuvres/name, kind, axes (n_b,) str             name, "impulsive" or "finite", "inertial",
-                                                   "ric" or "vnb"
-manoeuvres/t_start_s,       (n_b,) float           time (ignition), s; duration (0: impulsive)
-duration_s
-manoeuvres/vector           (n_b, 3) float         Δv (km/s, impulsive) or the thrust's unit
-                                                   direction (finite), in the burn's axes
-manoeuvres/thrust_N,        (n_b,) float           thrust (N), mass at ignition (kg), mass flow
-mass_kg, mass_flow_kg_s                            (kg/s) of a finite burn; 0 for impulsive
-manoeuvres/sigma            (n_b, 4) float         Gates' σ₁..σ₄ (1, km/s, rad, km/s: tapp.
-                                                   dynamics.gates)
-raw/... (optional)          (N, ...)               one row per scalar observation: t_s,
-                                                   station, kind (code into attr ``kinds``),
-                                                   record, segment, value, A (N, n_o) referred
-                                                   to t_j of the record, weight = 1/σ²,
-                                                   m_white_var, m_bias_var, m_corr_var,
-                                                   m_tau_s (the real-world M of each segment,
-                                                   :func:`tapp.tracking.noise.covariance_block`)
-==========================  =====================  ===========================================
+HDF5 layout: the rows of :data:`tapp.io.tape.layout.T13_LAYOUT` (every dataset and
+attribute, with its type, shape, units and versions; rendered as ``docs/reference/tapes.md``),
+which :func:`_write` writes in order and :func:`_read` reads by their types. Every dataset has
+a ``units`` attribute and a Fletcher-32 checksum (:mod:`tapp.io.tape.hdf5io`); the large
+datasets are compressed by :data:`COMPRESSION_OF_VERSION`.
 
 Units of the factors: entry (r, b) in 1/u_b with u the parameters' units (of the normal
 matrices RᵀR: 1/(u_a u_b)); U and B entries in (unit of row)/(unit of column). Every dataset is
@@ -121,6 +42,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Callable
+from dataclasses import fields
 from pathlib import Path
 
 import h5py
@@ -133,14 +55,14 @@ from tapp.estimation.gauss_markov import StochasticAccelerations
 from tapp.frames.time import Epoch
 from tapp.io.atomic import atomic_write
 from tapp.io.tape import hdf5io
-from tapp.io.tape.checks import PACKINGS, frozen
+from tapp.io.tape.checks import PACKINGS, Checker, frozen
 from tapp.io.tape.hdf5io import Reader
+from tapp.io.tape.layout import T13_LAYOUT, Field, rows, sourced
 from tapp.io.tape.packing import pack_tr, scaled_difference, unpack_tr
 from tapp.io.tape.t13 import (
     FORMAT,
     INFO_COLUMNS,
     NORMAL_MATRIX_VERSIONS,
-    PARTS,
     PARTS_TOL,
     SCENARIO_PROVENANCE,
     SUPPORTED_VERSIONS,
@@ -148,6 +70,7 @@ from tapp.io.tape.t13 import (
     UNITS_NOTE,
     VERSION,
     PairBlock,
+    T13Header,
     TapeEditing,
     TapeMiss,
     TapePairs,
@@ -167,6 +90,7 @@ from tapp.io.tape.t13 import (
     packed_column_sums,
     validate,
 )
+from tapp.measurements.noise import PARTS
 
 __all__ = ["COMPRESSION_OF_VERSION", "T13File", "open_t13", "read_t13", "t13_file_writer",
            "write_t13"]
@@ -182,133 +106,38 @@ COMPRESSION_OF_VERSION = {1: "gzip", 2: "gzip", 3: "gzip", 4: "lz4"}
 
 
 def _write(f: h5py.File, tape: T13, packing: str, version: int = VERSION) -> None:
-    """Write ``tape`` into the open file ``f``.
+    """Write ``tape`` into the open file ``f``: the rows of :data:`T13_LAYOUT` ``version``
+    carries, in order.
 
     ``version`` 1, 2 or 3 writes the layout of that version (1 and 2: the normal matrices
     RᵀR of the factors, version 1 without checksums and parts; 3: gzip for LZ4): kept so
     that the readers of those versions stay tested.
     """
     cs = version >= 2
-    compression = COMPRESSION_OF_VERSION[version]
+    parts = None if tape.pairs.Rt_parts is None or not cs else list(PARTS)
+    computed = {
+        "attrs/format": FORMAT, "attrs/version": version, "attrs/n_o": tape.n_o,
+        "attrs/n_p": tape.n_p, "attrs/n_m": tape.n_m, "attrs/n_ts": tape.n_ts,
+        "attrs/n_it": tape.n_it, "attrs/epoch": tape.epoch.iso(6),
+        "attrs/epoch_jd_whole": tape.epoch.jd_whole,
+        "attrs/epoch_jd_fraction": tape.epoch.jd_fraction, "attrs/time_scale": "UTC",
+        "attrs/frame": frame_of(tape.provenance), "attrs/center": "earth",
+        "attrs/units": UNITS_NOTE, "attrs/packing": packing,
+        **{f"attrs/{key}": value for key, value in hdf5io.provenance_attrs().items()},
+        **{f"attrs/{key}": tape.provenance.get(key, "") for key in SCENARIO_PROVENANCE},
+        "records/info.attrs/columns": list(INFO_COLUMNS),
+        "pairs/Rt_parts.attrs/parts": parts, "pairs/dJt_parts.attrs/parts": parts,
+        **_manoeuvre_values(tape.manoeuvres)}
 
-    def strings(group: h5py.Group, name: str, values, units: str = "") -> None:
-        hdf5io.write_strings(group, name, values, units, checksums=cs)
+    def value_of(field: Field) -> object:
+        if field.path in computed:
+            return computed[field.path]
+        if field.path in ("pairs/dJt_parts", "pairs/Rt_parts") and not cs:
+            return None
+        return sourced(tape, field.source)
 
-    def numbers(group: h5py.Group, name: str, values, units: str, *, big: bool = False
-                ) -> h5py.Dataset:
-        return hdf5io.write_numbers(group, name, values, units, big=big, checksums=cs,
-                                    compression=compression)
-
-    hdf5io.write_attrs(f, dict(
-        format=FORMAT, version=version, iden=tape.iden, n_o=tape.n_o, n_p=tape.n_p,
-        n_m=tape.n_m, n_ts=tape.n_ts, n_it=tape.n_it, epoch=tape.epoch.iso(6),
-        epoch_jd_whole=tape.epoch.jd_whole, epoch_jd_fraction=tape.epoch.jd_fraction,
-        time_scale="UTC", frame=frame_of(tape.provenance), center="earth", units=UNITS_NOTE,
-        packing=packing, **hdf5io.provenance_attrs()), checksums=cs)
-    hdf5io.write_attrs(f, {key: tape.provenance.get(key, "") for key in SCENARIO_PROVENANCE},
-                       checksums=cs)
-
-    par = tape.parameters
-    g = f.create_group("parameters")
-    strings(g, "name", par.name)
-    strings(g, "unit", par.unit)
-    strings(g, "kind", par.kind)
-    numbers(g, "station", par.station, "")
-    numbers(g, "nominal", par.nominal, "see unit")
-
-    st = tape.stations
-    g = f.create_group("stations")
-    numbers(g, "id", st.id, "")
-    strings(g, "name", st.name)
-    strings(g, "observables", st.observables)
-    numbers(g, "lat_deg", st.lat_deg, "deg")
-    numbers(g, "lon_deg", st.lon_deg, "deg")
-    numbers(g, "h_km", st.h_km, "km")
-    numbers(g, "elev_mask_deg", st.elev_mask_deg, "deg")
-
-    miss = tape.miss
-    g = f.create_group("miss")
-    strings(g, "name", miss.name)
-    strings(g, "unit", miss.unit)
-    ds = numbers(g, "nominal", miss.nominal, "see unit")
-    hdf5io.write_attrs(ds, {"kind": miss.kind, "t_s": miss.t_s}, checksums=cs)
-    numbers(f, "B", miss.B, "miss/unit per parameters/unit")
-
-    rec = tape.records
-    g = f.create_group("times")
-    numbers(g, "t_s", rec.times_s, "s")
-    numbers(g, "is_epoch", rec.is_epoch, "")
-    numbers(g, "is_input", rec.is_input, "")
-    g = f.create_group("records")
-    numbers(g, "j", rec.j, "")
-    numbers(g, "k", rec.k, "")
-    numbers(g, "t_s", rec.t_s, "s")
-    ds = numbers(g, "info", rec.info, "km, km/s")
-    hdf5io.write_attrs(ds, {"columns": list(INFO_COLUMNS)}, checksums=cs)
-    numbers(g, "U", rec.U, "parameters/unit of p(t_k) per parameters/unit of x(t_j)", big=True)
-
-    pairs = tape.pairs
-    g = f.create_group("pairs")
-    numbers(g, "k", pairs.k, "")
-    numbers(g, "station", pairs.station, "")
-    numbers(g, "n_obs", pairs.n_obs, "")
-    names = _pair_datasets(version)
-    if version in NORMAL_MATRIX_VERSIONS:
-        units = "1/(u_a u_b), u = parameters/unit"
-        matrices = (pairs.dJ, pairs.dJt,
-                    None if pairs.Rt_parts is None else gram_stack(pairs.Rt_parts))
-        form = "symmetric"
-    else:
-        units = "1/u_b, u = parameters/unit"
-        matrices = (pairs.R, pairs.Rt, pairs.Rt_parts)
-        form = "factor"
-    for name, m in zip(names[:2], matrices[:2], strict=True):
-        hdf5io.write_packed(g, name.removeprefix("pairs/"), m, units, packing, form, big=True,
-                            checksums=cs, compression=compression)
-    if cs and matrices[2] is not None:
-        ds = hdf5io.write_packed(g, names[2].removeprefix("pairs/"), matrices[2], units,
-                                 packing, form, big=True, compression=compression)
-        hdf5io.write_attrs(ds, {"parts": list(PARTS)})
-
-    ps = tape.passes
-    g = f.create_group("passes")
-    numbers(g, "station", ps.station, "")
-    numbers(g, "t_start_s", ps.t_start_s, "s")
-    numbers(g, "t_end_s", ps.t_end_s, "s")
-    numbers(g, "n_obs", ps.n_obs, "")
-
-    if tape.editing is not None:
-        ed = tape.editing
-        g = f.create_group("editing")
-        strings(g, "rule", ed.rule)
-        numbers(g, "scheduled_obs", ed.scheduled_obs, "scalar observations")
-        numbers(g, "removed_obs", ed.removed_obs, "scalar observations")
-        numbers(g, "removed_passes", ed.removed_passes, "passes")
-        numbers(g, "added_passes", ed.added_passes, "passes")
-
-    if tape.stochastic is not None:
-        sto = tape.stochastic
-        g = f.create_group("stochastic")
-        hdf5io.write_attrs(g, {"frame": sto.frame, "components": list(sto.components),
-                               "sigma_km_s2": sto.sigma_km_s2, "tau_s": sto.tau_s},
-                           checksums=cs)
-        numbers(g, "boundaries_s", np.asarray(sto.boundaries_s), "s")
-
-    if tape.manoeuvres:
-        _write_manoeuvres(f.create_group("manoeuvres"), tape.manoeuvres, strings, numbers)
-
-    if tape.raw is not None:
-        raw = tape.raw
-        g = f.create_group("raw")
-        hdf5io.write_attrs(g, {"kinds": list(raw.kinds)}, checksums=cs)
-        for name, units in (("t_s", "s"), ("station", ""), ("kind", "code into attr kinds"),
-                            ("record", ""), ("segment", ""), ("value", "km, km/s or rad"),
-                            ("A", "observable unit per parameters/unit"),
-                            ("weight", "1/(observable unit)^2"),
-                            ("m_white_var", "(observable unit)^2"),
-                            ("m_bias_var", "(observable unit)^2"),
-                            ("m_corr_var", "(observable unit)^2"), ("m_tau_s", "s")):
-            numbers(g, name, getattr(raw, name), units, big=True)
+    hdf5io.write_rows(f, rows(T13_LAYOUT, version), value_of, checksums=cs,
+                      compression=COMPRESSION_OF_VERSION[version], packing=packing)
 
 
 def t13_file_writer(tape: T13, packing: str = "TR", *, source: str = "T13"
@@ -368,15 +197,12 @@ def write_t13(path: Path | str, tape: T13, *, packing: str = "TR") -> Path:
 
 
 def _pair_datasets(version: int) -> tuple[str, str, str]:
-    """The pair datasets of a version: (AᵀWA, AᵀWMWA, its parts) as factors or matrices."""
-    if version in NORMAL_MATRIX_VERSIONS:
-        return "pairs/dJ", "pairs/dJt", "pairs/dJt_parts"
-    return "pairs/R", "pairs/Rt", "pairs/Rt_parts"
-
-
-def gram_stack(factors: np.ndarray) -> np.ndarray:
-    """KᵀK of each factor of a stack (..., m, n) -> (..., n, n)."""
-    return np.swapaxes(factors, -1, -2) @ factors
+    """The pair datasets of a version: (AᵀWA, AᵀWMWA, its parts) as factors or, before
+    version 3, matrices (the packed rows of :data:`T13_LAYOUT`; the parts' also of version
+    1, which has none: the reader finds them absent)."""
+    packed = [f.path for f in T13_LAYOUT if f.dtype in ("factor", "symmetric")
+              and f.path.startswith("pairs/") and f.in_version(max(version, 2))]
+    return packed[0], packed[1], packed[2]
 
 
 def _reader(f: h5py.File, source: str) -> tuple[Reader, int]:
@@ -423,33 +249,48 @@ def _check_legacy_parts(c, name: str, parts: np.ndarray, total: np.ndarray, offs
                f"{defect[first]:.3g} in pair {first + offset}")
 
 
-def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, np.ndarray]:
-    """Return the tape (pair factors None unless ``matrices``; their stored shapes checked
-    all the same) and records/t_s (checked against times/t_s once those are valid)."""
+#: Values of optional attributes a tape lacks, by source.
+_DEFAULTS = {"miss.kind": "", "miss.t_s": math.nan, "raw.kinds": ()}
+
+
+def _build(cls, group: str, values: dict[str, object]):
+    """An instance of the dataclass ``cls`` from the values read, by source ``group.field``."""
+    return cls(**{f.name: values[f"{group}.{f.name}"] for f in fields(cls)})
+
+
+def _read(r: Reader, version: int, *, raw: bool, matrices: bool
+          ) -> tuple[T13Header, np.ndarray]:
+    """Return the tape (a :class:`T13` with its factors if ``matrices``, else its
+    :class:`T13Header`; the factors' stored shapes checked all the same) and records/t_s
+    (checked against times/t_s once those are valid).
+
+    The rows of :data:`T13_LAYOUT` are read by their types, the pair matrices last (after
+    the dimensions are checked against the datasets).
+    """
     dims = {name: r.attr(name, int) for name in ("n_o", "n_p", "n_m", "n_ts", "n_it")}
     epoch = Epoch(r.attr("epoch_jd_whole", float), r.attr("epoch_jd_fraction", float))
-
-    parameters = TapeParameters(r.strings("parameters/name"), r.strings("parameters/unit"),
-                                r.strings("parameters/kind"), r.read("parameters/station", "i"),
-                                r.read("parameters/nominal"))
-    stations = TapeStations(r.read("stations/id", "i"), r.strings("stations/name"),
-                            r.strings("stations/observables"), r.read("stations/lat_deg"),
-                            r.read("stations/lon_deg"), r.read("stations/h_km"),
-                            r.read("stations/elev_mask_deg"))
-    nominal = r.read("miss/nominal")
-    miss = TapeMiss(r.attr("kind", str, owner="miss/nominal", default=""),
-                    r.attr("t_s", float, owner="miss/nominal", default=math.nan),
-                    r.strings("miss/name"), r.strings("miss/unit"), nominal, r.read("B"))
-    records = TapeRecords(r.read("times/t_s"), r.read("times/is_epoch", "b"),
-                          r.read("times/is_input", "b"), r.read("records/j", "i"),
-                          r.read("records/k", "i"), r.read("records/info"),
-                          r.read("records/U"))
+    values: dict[str, object] = {}
+    provenance: dict[str, str] = {}
+    for field in rows(T13_LAYOUT, version):
+        computed = field.is_attr and not field.source and field.optional != field.path
+        packed = field.dtype in ("factor", "symmetric")  # read below
+        if computed or packed or (field.path.startswith("raw") and not raw) \
+                or not r.present(field):
+            continue
+        value = r.row(field)
+        if field.path.startswith("attrs/") and field.optional:
+            provenance[field.name] = value
+        values[field.source or field.path] = value
+    values.update({key: value for key, value in _DEFAULTS.items() if key not in values})
+    parameters = _build(TapeParameters, "parameters", values)
+    stations = _build(TapeStations, "stations", values)
+    miss = _build(TapeMiss, "miss", values)
+    records = _build(TapeRecords, "records", values)
     for name, value in (("n_o", len(parameters.name)), ("n_m", len(miss.name)),
                         ("n_ts", len(stations.name)), ("n_it", records.k.size)):
         if dims[name] != value:
             r.check.fail(f"attrs/{name}", f"{name} = {value} as the datasets have", dims[name])
-    k = r.read("pairs/k", "i")
-    n_pairs, n_o = k.size, dims["n_o"]
+    n_pairs, n_o = values["pairs.k"].size, dims["n_o"]
     names = _pair_datasets(version)
     has_parts = r.has(names[2])
     if has_parts:
@@ -467,98 +308,87 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool) -> tuple[T13, n
         for i, (name, lead) in enumerate(zip(names, leads, strict=True)):
             if i < 2 or has_parts:
                 r.stored_shape(name, lead, n_o)
-    pairs = TapePairs(k, r.read("pairs/station", "i"), r.read("pairs/n_obs", "i"), *factors)
-    passes = TapePasses(r.read("passes/station", "i"), r.read("passes/t_start_s"),
-                        r.read("passes/t_end_s"), r.read("passes/n_obs", "i"))
-    editing = None
-    if r.has("editing"):
-        editing = TapeEditing(r.strings("editing/rule"),
-                              *(r.read(f"editing/{name}", "i") for name in (
-                                  "scheduled_obs", "removed_obs", "removed_passes",
-                                  "added_passes")))
+    pairs = TapePairs(values["pairs.k"], values["pairs.station"], values["pairs.n_obs"],
+                      *factors)
+    editing = _build(TapeEditing, "editing", values) if "editing.rule" in values else None
     stochastic = None
-    if r.has("stochastic"):
+    if "stochastic.frame" in values:
         stochastic = StochasticAccelerations(
-            r.attr("frame", str, owner="stochastic"),
-            tuple(r.attr("components", list, owner="stochastic")),
-            tuple(float(t) for t in r.read("stochastic/boundaries_s")),
-            r.attr("sigma_km_s2", float, owner="stochastic"),
-            r.attr("tau_s", float, owner="stochastic"))
-    manoeuvres = _read_manoeuvres(r) if r.has("manoeuvres") else ()
-    tape_raw = None
-    if raw and r.has("raw"):
-        kinds = r.attr("kinds", list, owner="raw", default=())
-        tape_raw = TapeRaw(kinds, *(r.read(f"raw/{name}", kind) for name, kind in (
-            ("t_s", "f"), ("station", "i"), ("kind", "i"), ("record", "i"), ("segment", "i"),
-            ("value", "f"), ("A", "f"), ("weight", "f"), ("m_white_var", "f"),
-            ("m_bias_var", "f"), ("m_corr_var", "f"), ("m_tau_s", "f"))))
-    provenance = {key: r.attr(key, str) for key in ("tapp_version", "git_commit",
-                                                    "created_utc", *SCENARIO_PROVENANCE)
-                  if r.has_attr(key)}
-    tape = T13(r.attr("iden", str), epoch, dims["n_p"], parameters, stations, miss, records,
-               pairs, passes, tape_raw, provenance, editing, stochastic, manoeuvres)
-    return tape, r.read("records/t_s")
+            values["stochastic.frame"], tuple(values["stochastic.components"]),
+            tuple(float(t) for t in values["stochastic.boundaries_s"]),
+            values["stochastic.sigma_km_s2"], values["stochastic.tau_s"])
+    manoeuvres = _read_manoeuvres(r.check, values) if "manoeuvres/name" in values else ()
+    header = T13Header(values["iden"], epoch, dims["n_p"], parameters, stations, miss,
+                       records, pairs, _build(TapePasses, "passes", values), provenance,
+                       editing, stochastic, manoeuvres)
+    if not matrices:
+        return header, values["records.t_s"]
+    tape_raw = _build(TapeRaw, "raw", values) if "raw.t_s" in values else None
+    return T13(**{f.name: getattr(header, f.name) for f in fields(T13Header)}, raw=tape_raw), \
+        values["records.t_s"]
 
 
-#: The numbers of a burn on the tape beside its name, kind, axes, vector and σ's, with their
-#: units (those an impulsive burn has not are 0 on the tape).
-_BURN_NUMBERS = (("t_start_s", "s"), ("duration_s", "s"), ("thrust_N", "N"), ("mass_kg", "kg"),
-                 ("mass_flow_kg_s", "kg/s"))
+#: The numbers of a burn on the tape beside its name, kind, axes, vector and σ's (those an
+#: impulsive burn has not are 0 on the tape).
+_BURN_NUMBERS = ("t_start_s", "duration_s", "thrust_N", "mass_kg", "mass_flow_kg_s")
 
 
-def _write_manoeuvres(g: h5py.Group, burns: tuple[Burn, ...], strings, numbers) -> None:
-    """The ``manoeuvres/`` group (module docstring)."""
-    for name in ("name", "kind", "axes"):
-        strings(g, name, [getattr(b, name) for b in burns])
-    for name, units in _BURN_NUMBERS:
-        numbers(g, name, np.array([getattr(b, name, 0.0) for b in burns]), units)
-    numbers(g, "vector", np.array([b.dv_km_s if b.kind == "impulsive" else b.direction
-                                   for b in burns]), "km/s (impulsive) or 1 (finite), in the "
-            "burn's axes")
-    numbers(g, "sigma", np.array([b.errors.sources for b in burns]), "1, km/s, rad, km/s")
+def _manoeuvre_values(burns: tuple[Burn, ...]) -> dict[str, object]:
+    """The rows of the ``manoeuvres/`` group by path (none without burns)."""
+    if not burns:
+        return {}
+    out: dict[str, object] = {f"manoeuvres/{name}": [getattr(b, name) for b in burns]
+                              for name in ("name", "kind", "axes")}
+    for name in _BURN_NUMBERS:
+        out[f"manoeuvres/{name}"] = np.array([getattr(b, name, 0.0) for b in burns])
+    out["manoeuvres/vector"] = np.array([b.dv_km_s if b.kind == "impulsive" else b.direction
+                                         for b in burns])
+    out["manoeuvres/sigma"] = np.array([b.errors.sources for b in burns])
+    return out
 
 
-def _read_manoeuvres(r: Reader) -> tuple[Burn, ...]:
-    """The burns of the ``manoeuvres/`` group, checked as the scenario's were."""
-    names, kinds, axes = (r.strings(f"manoeuvres/{n}") for n in ("name", "kind", "axes"))
+def _read_manoeuvres(c: Checker, values: dict[str, object]) -> tuple[Burn, ...]:
+    """The burns of the ``manoeuvres/`` rows read (by path), checked as the scenario's were."""
+    names, kinds, axes = (values[f"manoeuvres/{n}"] for n in ("name", "kind", "axes"))
     n_b = len(names)
-    values = {name: r.read(f"manoeuvres/{name}") for name, *_ in _BURN_NUMBERS}
-    vector, sigma = r.read("manoeuvres/vector"), r.read("manoeuvres/sigma")
+    numbers = {name: values[f"manoeuvres/{name}"] for name in _BURN_NUMBERS}
+    vector, sigma = values["manoeuvres/vector"], values["manoeuvres/sigma"]
     for name, a, shape in (("kind", kinds, n_b), ("axes", axes, n_b)):
         if len(a) != shape:
-            r.check.fail(f"manoeuvres/{name}", f"{n_b} entries", len(a))
-    for name, a in values.items():
-        r.check.shape(f"manoeuvres/{name}", a, (n_b,))
-        r.check.finite(f"manoeuvres/{name}", a)
-    r.check.shape("manoeuvres/vector", vector, (n_b, 3))
-    r.check.finite("manoeuvres/vector", vector)
-    r.check.shape("manoeuvres/sigma", sigma, (n_b, 4))
+            c.fail(f"manoeuvres/{name}", f"{n_b} entries", len(a))
+    for name, a in numbers.items():
+        c.shape(f"manoeuvres/{name}", a, (n_b,))
+        c.finite(f"manoeuvres/{name}", a)
+    c.shape("manoeuvres/vector", vector, (n_b, 3))
+    c.finite("manoeuvres/vector", vector)
+    c.shape("manoeuvres/sigma", sigma, (n_b, 4))
     out = []
     for i in range(n_b):
         if kinds[i] not in BURN_KINDS:
-            r.check.fail("manoeuvres/kind", f"one of {', '.join(BURN_KINDS)}", kinds[i])
+            c.fail("manoeuvres/kind", f"one of {', '.join(BURN_KINDS)}", kinds[i])
         if axes[i] not in AXES:
-            r.check.fail("manoeuvres/axes", f"one of {', '.join(AXES)}", axes[i])
+            c.fail("manoeuvres/axes", f"one of {', '.join(AXES)}", axes[i])
         try:
             errors = GatesErrors(*(float(x) for x in sigma[i]))
         except GatesRangeError as exc:
-            r.check.fail("manoeuvres/sigma", exc.expected, exc.got)
+            c.fail("manoeuvres/sigma", exc.expected, exc.got)
         common = {"name": names[i], "axes": axes[i], "errors": errors}
         v = tuple(float(x) for x in vector[i])
         if kinds[i] == "impulsive":
-            out.append(ImpulsiveBurn(**common, t_s=float(values["t_start_s"][i]), dv_km_s=v))
+            out.append(ImpulsiveBurn(**common, t_s=float(numbers["t_start_s"][i]), dv_km_s=v))
         else:
-            if min(values[n][i] for n in ("duration_s", "thrust_N", "mass_kg",
-                                          "mass_flow_kg_s")) <= 0 or \
-                    values["mass_flow_kg_s"][i] * values["duration_s"][i] >= values["mass_kg"][i]:
-                r.check.fail("manoeuvres/duration_s", "a finite burn's positive duration, "
-                             "thrust, mass and mass flow, mass left at cut-off", names[i])
+            if min(numbers[n][i] for n in ("duration_s", "thrust_N", "mass_kg",
+                                           "mass_flow_kg_s")) <= 0 or \
+                    numbers["mass_flow_kg_s"][i] * numbers["duration_s"][i] >= \
+                    numbers["mass_kg"][i]:
+                c.fail("manoeuvres/duration_s", "a finite burn's positive duration, thrust, "
+                       "mass and mass flow, mass left at cut-off", names[i])
             out.append(FiniteBurn(**common, direction=v, **{
-                name: float(values[name][i]) for name, *_ in _BURN_NUMBERS}))
+                name: float(numbers[name][i]) for name in _BURN_NUMBERS}))
     return tuple(out)
 
 
-def _check_record_times(source: str, record_times: np.ndarray, tape: T13) -> None:
+def _check_record_times(source: str, record_times: np.ndarray, tape: T13Header) -> None:
     if not np.array_equal(record_times, tape.records.t_s):
         raise TapeError(f"{source}: records/t_s: expected the record times t_k = "
                         "times/t_s[1:]")
@@ -598,7 +428,6 @@ def read_t13(path: Path | str, *, raw: bool = True) -> T13:
     return tape
 
 
-
 class T13File(_PairSource):
     """A T13 tape open for lazy reading of its pair factors (from :func:`open_t13`).
 
@@ -606,9 +435,9 @@ class T13File(_PairSource):
 
     Attributes
     ----------
-    header : T13
+    header : T13Header
         Everything of the tape but the pair factors (``header.pairs.R``, ``Rt`` and
-        ``Rt_parts`` are None) and the raw rows (``header.raw`` is None), validated.
+        ``Rt_parts`` are None) and the raw rows, validated.
     path : Path
     version : int
         Version of the tape.

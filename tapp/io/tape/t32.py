@@ -43,6 +43,7 @@ import numpy as np
 from tapp.estimation.factors import gram
 from tapp.frames.time import Epoch
 from tapp.io.tape.checks import MAX_MAGNITUDE, Checker
+from tapp.io.tape.layout import T32_SYMMETRIC
 from tapp.io.tape.t13 import TapeParameters, check_parameters
 
 FORMAT = "T32"
@@ -51,13 +52,10 @@ SUPPORTED_VERSIONS = (1, 2)
 #: Systems a partition may belong to; the systems with a chain on the tape.
 SYSTEMS = ("standard", "common", "fit", "real", "miss")
 CHAINED = ("common", "fit", "real")
-#: Symmetric matrices of a recycle: (name, "normal" or "covariance", units of the matrix).
-#: Version 2 stores the factor of each (``<name>_factor``, units the square roots).
-SYMMETRIC = (("S_fit", "normal", "1/(u_a u_b)"), ("Lambda_fit", "covariance", "u_a u_b"),
-             ("Lambda_real", "covariance", "u_a u_b"), ("Sigma", "covariance", "u_a u_b"),
-             ("J", "normal", "1/(u_a u_b)"), ("Jt", "normal", "1/(u_a u_b)"))
-#: Units of the factor of a normal matrix and of a covariance.
-FACTOR_UNITS = {"normal": "1/u_b", "covariance": "u_b"}
+#: Symmetric matrices of a recycle: (name, "normal" or "covariance", units of the matrix),
+#: from the layout (:data:`tapp.io.tape.layout.T32_SYMMETRIC`). Version 2 stores the factor of
+#: each (``<name>_factor``, units the square roots).
+SYMMETRIC = tuple((name, what, units) for name, what, units, _ in T32_SYMMETRIC)
 #: Version 1 only (it carried Σ = Λ' J̃ Λ' formed as a product): the variance of a parameter
 #: the data barely reach cancels to ~0 and its rounding can come out negative (−1.5e-9 Λ̄'_ii
 #: seen when a station is switched off); since Σ <= Λ̄' in exact arithmetic, Σ_ii down to
@@ -71,8 +69,6 @@ V1_PSD_TOL = 1e-3
 #: TAPP III inverts the tape's STMs exactly and rounds the result, so the product is I to
 #: ~1e-12 of the terms; anything beyond this is not the adjoint of that transition.
 ADJOINT_TOL = 1e-6
-#: Provenance the writer stamps itself (a value given for these is replaced).
-STAMPED = ("tapp_version", "git_commit", "created_utc")
 #: Root attributes of the schema: not available as provenance names.
 SCHEMA_ATTRS = ("format", "version", "iden", "n_o", "n_p", "n_m", "n_recycles",
                 "n_partitions", "epoch", "epoch_jd_whole", "epoch_jd_fraction", "time_scale",
@@ -80,8 +76,6 @@ SCHEMA_ATTRS = ("format", "version", "iden", "n_o", "n_p", "n_m", "n_recycles",
 UNITS_NOTE = ("km, km/s, s, rad; with u the units of parameters/unit (the orbit at t_k in "
               "the units of p): normal matrices 1/(u_a u_b), covariances u_a u_b, partials "
               "(row unit)/(column unit)")
-#: Unit note of the state in ``recycles/info``.
-INFO_UNITS = "km, km/s (x, y, z, vx, vy, vz), EME2000"
 _ORBIT_UNITS = ("km", "km", "km", "km/s", "km/s", "km/s")
 
 __all__ = ["FORMAT", "SUPPORTED_VERSIONS", "SYSTEMS", "T32", "VERSION", "T32Entity",

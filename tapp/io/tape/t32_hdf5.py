@@ -3,73 +3,15 @@
 The tape in memory (its types, notation and validation) is :mod:`tapp.io.tape.t32`;
 DESIGN.md ("Tapes") fixes this form.
 
-HDF5 layout, version 2. Every dataset is chunked with a Fletcher-32 checksum and has a
-``units`` attribute; text is fixed-length UTF-8 (attributes too: h5py reads them as bytes);
-every symmetric matrix M (normal matrix or covariance) is stored as its upper-triangular
-factor K, M = KᵀK, diagonal >= 0 (``<name>_factor``), packed "TR" (upper triangle by rows,
-L = n_o(n_o+1)/2 entries; attrs ``packing`` = "TR", ``order`` = n_o, ``form`` = "factor") as
-on the T13 tape (:mod:`tapp.io.tape.hdf5io`); units of a factor: 1/u_b (normal) or u_b
-(covariance):
-
-===============================  ===============  =============================================
-path                             shape            content
-===============================  ===============  =============================================
-attrs                                             format="T32", version, iden, n_o, n_p, n_m,
-                                                  n_recycles, n_partitions, epoch (ISO UTC),
-                                                  epoch_jd_whole, epoch_jd_fraction,
-                                                  time_scale, units; provenance: tapp_version,
-                                                  git_commit, created_utc, provenance_keys
-                                                  (the names of the further provenance attrs:
-                                                  e.g. deck (JSON), deck_source, t13_source,
-                                                  t13_iden)
-parameters/name, unit, kind      (n_o,) str       the standard parameters, from the T13 tape
-parameters/station               (n_o,) int       station number of a station parameter, 0
-parameters/nominal               (n_o,) float     values at t_0, units ``unit``
-miss/name, unit                  (n_m,) str       miss parameters
-systems/<s>/chain                (n_o, n_o)       ∂x^s/∂x, s = common, fit, real: the system
-                                                  chain of the deck (permutations and
-                                                  constraints of q), (row unit)/(column unit)
-systems/<s>/names                (n_o,) str       row names of the system vector x^s
-partitions/name, system          (n_p',) str      the n_p' = n_partitions set partitions of
-                                                  Table B-4; system one of standard, common,
-                                                  fit, real, miss
-partitions/tail, head            (n_p',) int      rows tail..head-1 (0-based, head exclusive)
-                                                  of that system's vector
-partitions/names                 (Σ (head-tail),) the row names of every partition, joined in
-                                 str              partition order: partition i owns the
-                                                  head_i - tail_i entries after those of
-                                                  partitions 0..i-1; they equal the system's
-                                                  names tail..head-1
-apriori/S0_fit_factor            (L,)             S⁰ fit-world a priori normal matrix at
-                                                  injection, in x^0
-apriori/Lambda0_real_factor      (L,)             Λ̄⁰ real-world a priori covariance at
-                                                  injection, in x^0
-recycles/number                  (n_r,) int       recycle number i' = 1..n_r
-recycles/k, l, j                 (n_r,) int       current, last recycle and program epoch
-                                                  T13 indices (k ascending, l_1 < k_1,
-                                                  l_i = k_{i-1})
-recycles/t_s, t_l_s              (n_r,) float     t_k and t_l, s from the tape epoch
-recycles/info                    (n_r, 6) float   state at t_k, km, km/s, EME2000
-recycles/<i'>/S_fit_factor       (L,)             S' fit-world normal matrix (extended)
-recycles/<i'>/Lambda_fit_factor  (L,)             Λ' fit-world covariance
-recycles/<i'>/Lambda_real_factor (L,)             Λ̄' real-world covariance
-recycles/<i'>/Sigma_factor       (L,)             Λ' J̃ Λ', this interval's tracking-noise
-                                                  covariance
-recycles/<i'>/J_factor,          (L,)             AᵀWA, AᵀWMWA from t_l to t_k
-Jt_factor
-recycles/<i'>/L                  (n_o, n_o)       ∂(a posteriori error)/∂(a priori error at
-                                                  t_l), both in x^k, u_a/u_b
-recycles/<i'>/B                  (n_m, n_o)       ∂m/∂x^k, (miss unit)/u_b
-recycles/<i'>/transition         (n_o, n_o)       ∂x^k/∂x^{k_prev}, from the previous
-                                                  recycle's representation (x^0 for the
-                                                  first), u_a/u_b
-recycles/<i'>/transition_adjoint (n_o, n_o)       its inverse transposed, u_b/u_a
-recycles/<i'>/entities/<ω>/      (r, c)           output of recycle command ω (1-based) of
-matrix                                            Table B-5; attrs command (seed notation,
-                                                  e.g. "I; 0,-,pk; 1,2,fp"), alias (readable)
-recycles/<i'>/entities/<ω>/      (r,), (c,) str   row and column labels (parameter names
-rows, cols                                        with units)
-===============================  ===============  =============================================
+HDF5 layout: the rows of :data:`tapp.io.tape.layout.T32_LAYOUT` (every dataset and
+attribute, with its type, shape, units and versions; rendered as ``docs/reference/tapes.md``),
+which :func:`_write` writes in order. Every dataset is chunked with a Fletcher-32 checksum and
+has a ``units`` attribute; text is fixed-length UTF-8 (attributes too: h5py reads them as
+bytes); every symmetric matrix M (normal matrix or covariance) is stored as its
+upper-triangular factor K, M = KᵀK, diagonal >= 0 (``<name>_factor``), packed "TR" (upper
+triangle by rows, L = n_o(n_o+1)/2 entries; attrs ``packing`` = "TR", ``order`` = n_o,
+``form`` = "factor") as on the T13 tape (:mod:`tapp.io.tape.hdf5io`); units of a factor: 1/u_b
+(normal) or u_b (covariance).
 
 All n_o x n_o matrices of a recycle are in x^k, with k that recycle's record index.
 
@@ -95,6 +37,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import h5py
@@ -106,14 +49,12 @@ from tapp.io.atomic import atomic_write
 from tapp.io.tape import hdf5io
 from tapp.io.tape.checks import MAX_MAGNITUDE
 from tapp.io.tape.hdf5io import Reader
+from tapp.io.tape.layout import STAMPED, T32_LAYOUT, Field, rows, sourced
 from tapp.io.tape.t13 import TapeParameters
 from tapp.io.tape.t32 import (
     CHAINED,
-    FACTOR_UNITS,
     FORMAT,
-    INFO_UNITS,
     SIGMA_ROUNDING,
-    STAMPED,
     SUPPORTED_VERSIONS,
     SYMMETRIC,
     T32,
@@ -135,75 +76,51 @@ __all__ = ["read_t32", "t32_file_writer", "write_t32"]
 
 
 def _write(f: h5py.File, t32: T32) -> None:
-    n_o = t32.n_o
+    """Write ``t32`` into the open file ``f``: the rows of :data:`T32_LAYOUT` of
+    :data:`VERSION`, the systems', recycles' and entities' once per system, recycle and
+    command, then the further provenance."""
+    n_o, rcs, parts = t32.n_o, t32.recycles, t32.partitions
     extra = {k: v for k, v in t32.provenance.items() if k not in STAMPED}
-    hdf5io.write_attrs(f, dict(
-        format=FORMAT, version=VERSION, iden=t32.iden, n_o=n_o, n_p=t32.n_p, n_m=t32.n_m,
-        n_recycles=len(t32.recycles), n_partitions=len(t32.partitions),
-        epoch=t32.epoch.iso(6), epoch_jd_whole=t32.epoch.jd_whole,
-        epoch_jd_fraction=t32.epoch.jd_fraction, time_scale="UTC", units=UNITS_NOTE,
-        provenance_keys=list(extra), **hdf5io.provenance_attrs()))
-    hdf5io.write_attrs(f, extra)
-    strings, numbers = hdf5io.write_strings, hdf5io.write_numbers
+    computed = {
+        "attrs/format": FORMAT, "attrs/version": VERSION, "attrs/n_o": n_o,
+        "attrs/n_p": t32.n_p, "attrs/n_m": t32.n_m, "attrs/n_recycles": len(rcs),
+        "attrs/n_partitions": len(parts), "attrs/epoch": t32.epoch.iso(6),
+        "attrs/epoch_jd_whole": t32.epoch.jd_whole,
+        "attrs/epoch_jd_fraction": t32.epoch.jd_fraction, "attrs/time_scale": "UTC",
+        "attrs/units": UNITS_NOTE, "attrs/provenance_keys": list(extra),
+        **{f"attrs/{key}": value for key, value in hdf5io.provenance_attrs().items()},
+        "miss/name": t32.miss_name, "miss/unit": t32.miss_unit,
+        "partitions/name": [p.name for p in parts],
+        "partitions/system": [p.system for p in parts],
+        "partitions/tail": np.array([p.tail for p in parts], dtype=np.int64),
+        "partitions/head": np.array([p.head for p in parts], dtype=np.int64),
+        "partitions/names": [n for p in parts for n in p.names],
+        "recycles/info": np.array([r.info for r in rcs], dtype=float).reshape(len(rcs), 6)}
+    for field in rows(T32_LAYOUT, VERSION, "recycles/"):
+        if "{" not in field.path and field.path not in computed:
+            computed[field.path] = np.array([getattr(r, field.source) for r in rcs],
+                                            dtype=np.int64 if field.dtype == "int" else float)
 
-    par = t32.parameters
-    g = f.create_group("parameters")
-    strings(g, "name", par.name)
-    strings(g, "unit", par.unit)
-    strings(g, "kind", par.kind)
-    numbers(g, "station", par.station, "")
-    numbers(g, "nominal", par.nominal, "see unit")
-    g = f.create_group("miss")
-    strings(g, "name", t32.miss_name)
-    strings(g, "unit", t32.miss_unit)
+    def big(field: Field) -> bool:
+        return field.big and n_o > 100
 
-    g = f.create_group("systems")
+    def write(prefix: str, obj: object, values: dict[str, object], **names: object) -> None:
+        """The rows under ``prefix`` (with {s}, {i}, {omega} filled in from ``names``)."""
+        table = tuple(replace(field, path=field.path.format(**names))
+                      for field in rows(T32_LAYOUT, VERSION, prefix)
+                      if field.path.count("{") == len(names))
+        hdf5io.write_rows(f, table, lambda field: values[field.path] if field.path in values
+                          else sourced(obj, field.source), big=big)
+
+    write("", t32, computed)
     for name in CHAINED:
-        s = g.create_group(name)
-        numbers(s, "chain", t32.systems[name], "(row unit)/(column unit)")
-        strings(s, "names", t32.system_names[name])
-
-    g = f.create_group("partitions")
-    parts = t32.partitions
-    strings(g, "name", [p.name for p in parts])
-    strings(g, "system", [p.system for p in parts])
-    numbers(g, "tail", np.array([p.tail for p in parts], dtype=np.int64), "row (0-based)")
-    numbers(g, "head", np.array([p.head for p in parts], dtype=np.int64),
-            "row (0-based, exclusive)")
-    strings(g, "names", [n for p in parts for n in p.names])
-
-    g = f.create_group("apriori")
-    hdf5io.write_packed(g, "S0_fit_factor", t32.S0_fit_factor, FACTOR_UNITS["normal"],
-                        form="factor")
-    hdf5io.write_packed(g, "Lambda0_real_factor", t32.Lambda0_real_factor,
-                        FACTOR_UNITS["covariance"], form="factor")
-
-    g = f.create_group("recycles")
-    rcs = t32.recycles
-    for name in ("number", "k", "l", "j"):
-        numbers(g, name, np.array([getattr(r, name) for r in rcs], dtype=np.int64), "")
-    numbers(g, "t_s", np.array([r.t_s for r in rcs], dtype=float), "s")
-    numbers(g, "t_l_s", np.array([r.t_l_s for r in rcs], dtype=float), "s")
-    numbers(g, "info", np.array([r.info for r in rcs], dtype=float).reshape(len(rcs), 6),
-            INFO_UNITS)
+        write("systems/{s}/", None, {f"systems/{name}/chain": t32.systems[name],
+                                     f"systems/{name}/names": t32.system_names[name]}, s=name)
     for rc in rcs:
-        rg = g.create_group(str(rc.number))
-        for name, what, _ in SYMMETRIC:
-            hdf5io.write_packed(rg, f"{name}_factor", getattr(rc, f"{name}_factor"),
-                                FACTOR_UNITS[what], form="factor", big=n_o > 100)
-        numbers(rg, "L", rc.L, "u_a/u_b", big=n_o > 100)
-        numbers(rg, "transition", rc.transition, "u_a/u_b", big=n_o > 100)
-        numbers(rg, "transition_adjoint", rc.transition_adjoint, "u_b/u_a", big=n_o > 100)
-        numbers(rg, "B", rc.B, "miss/unit per parameters/unit")
-        eg = rg.create_group("entities")
+        write("recycles/{i}/", rc, {}, i=rc.number)
         for e in rc.entities:
-            ent = eg.create_group(str(int(e.omega)))
-            hdf5io.write_attrs(ent, {"command": e.command, "alias": e.alias})
-            numbers(ent, "matrix", np.asarray(e.matrix, dtype=float),
-                    "(row unit)/(column unit), or their product for normal and covariance "
-                    "blocks: see rows, cols")
-            strings(ent, "rows", e.rows)
-            strings(ent, "cols", e.cols)
+            write("recycles/{i}/entities/{omega}", e, {}, i=rc.number, omega=int(e.omega))
+    hdf5io.write_attrs(f, extra)
 
 
 def t32_file_writer(t32: T32, *, source: str = "T32") -> Callable[[Path], None]:

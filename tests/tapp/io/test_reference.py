@@ -18,7 +18,15 @@ import pytest
 from tapp.errors import InputError
 from tapp.examples import FILES
 from tapp.examples import FOLDER as EXAMPLES
-from tapp.io.reference import KINDS, _objects, json_schema, markdown, schema_class
+from tapp.io.reference import (
+    KINDS,
+    TAPES_PAGE,
+    _objects,
+    json_schema,
+    markdown,
+    schema_class,
+    tapes_markdown,
+)
 from tapp.io.schema import validate
 from tapp.io.tomlfile import read_toml
 
@@ -33,8 +41,16 @@ def test_the_committed_reference_page_is_the_generated_one(kind: str) -> None:
         "`.venv/bin/python -m tapp.io.reference docs/reference` and commit the result")
 
 
-def test_the_reference_folder_holds_one_page_per_kind_and_nothing_else() -> None:
-    assert sorted(p.name for p in REFERENCE.iterdir()) == sorted(f"{k}.md" for k in KINDS)
+def test_the_committed_tapes_page_is_the_generated_one() -> None:
+    committed = (REFERENCE / TAPES_PAGE).read_text(encoding="utf-8")
+    assert committed == tapes_markdown(), (
+        f"docs/reference/{TAPES_PAGE} differs from the layout tables: run "
+        "`.venv/bin/python -m tapp.io.reference docs/reference` and commit the result")
+
+
+def test_the_reference_folder_holds_one_page_per_kind_the_tapes_page_and_nothing_else() -> None:
+    assert sorted(p.name for p in REFERENCE.iterdir()) == sorted(
+        [*(f"{k}.md" for k in KINDS), TAPES_PAGE])
 
 
 @pytest.mark.parametrize("kind", KINDS)

@@ -8,10 +8,10 @@ import numpy as np
 
 from tapp.io.schema import validate
 from tapp.io.tape.t13 import T13, memory_pairs
+from tapp.measurements.noise import RealNoise, covariance_block
 from tapp.processor.deck import Deck
 from tapp.processor.deck_bind import bind, observations_used
 from tapp.processor.sequencing import Run, process
-from tapp.tracking.noise import RealNoise, covariance_block
 from tapp.tracking.simulate import simulate
 from tests.tapp.tracking.helpers import leo_scenario
 

@@ -257,7 +257,7 @@ def test_a_non_positive_gm_is_refused() -> None:
 
 def test_the_noise_schema_declares_every_kind_in_its_edge_unit() -> None:
     from tapp.io.noise_file import FitTable, RealTable
-    from tapp.tracking.noise import EDGE_UNITS
+    from tapp.measurements.noise import EDGE_UNITS
     from tapp.tracking.scenario import KINDS
 
     assert set(EDGE_UNITS) == set(KINDS)

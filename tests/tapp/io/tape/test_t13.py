@@ -24,8 +24,9 @@ from tapp.io.tape import t13, t13_hdf5
 from tapp.io.tape.files import describe, verify
 from tapp.io.tape.hdf5io import write_numbers
 from tapp.io.tape.packing import tr_size
-from tapp.io.tape.t13 import PARTS, T13, VERSION
+from tapp.io.tape.t13 import T13, VERSION
 from tapp.io.tape.t13_hdf5 import open_t13, read_t13, write_t13
+from tapp.measurements.noise import PARTS
 from tapp.tracking.simulate import simulate
 from tests.tapp.io.tape.legacy import (
     EPS,

@@ -7,7 +7,7 @@ import pytest
 
 from tapp.errors import InputError
 from tapp.estimation.factors import ar1_whitened, gram
-from tapp.tracking.noise import (
+from tapp.measurements.noise import (
     FitNoise,
     RealNoise,
     covariance_block,

@@ -52,6 +52,13 @@ from tapp.estimation.gauss_markov import gauss_markov_covariance
 from tapp.measurements import OBSERVABLE_UNITS, Observable
 from tapp.measurements.ddor import DDOR_KIND, DDOR_UNIT
 
+#: Names of the parts of the real-world information AᵀWMWA, in the order of
+#: :attr:`PassRows.parts`: white noise, per-pass bias, exponentially correlated noise. The T13
+#: tape stores the parts' factors in this order (``pairs/Rt_parts``, attribute ``parts``) and
+#: TAPP III names the noise sources of its error budget by them.
+PARTS: tuple[str, str, str] = ("white", "bias", "correlated")
+WHITE, BIAS, CORRELATED = PARTS
+
 #: Edge unit of each observable kind's noise in scenario files, and the factor to the internal
 #: unit: σ_internal = σ_edge * factor (m -> km, mm/s -> km/s, deg -> rad).
 EDGE_UNITS: dict[str, tuple[str, float]] = {
