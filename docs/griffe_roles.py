@@ -49,14 +49,39 @@ class SphinxRoles(griffe.Extension):
             if root not in collection:
                 griffe.load(root, modules_collection=collection,
                             search_paths=[str(pkg.filepath.parent.parent)])
-        for root in FIRST_PARTY:
-            if root in self.rewritten:
-                continue
-            self.rewritten.add(root)
+        roots = [root for root in FIRST_PARTY if root not in self.rewritten]
+        self.rewritten.update(roots)
+        comment_docstrings(collection, roots)  # first, so a reference knows its target's
+        for root in roots:
             for obj in _walk(collection[root]):
                 if obj.docstring is not None:
                     obj.docstring.value = _described_parameters(_fenced_doctests(_ROLE.sub(
                         lambda m, o=obj: _link(m, o, collection), obj.docstring.value)))
+
+
+def comment_docstrings(collection: griffe.ModulesCollection, roots: list[str]) -> None:
+    """Give every attribute of the ``roots`` packages without a docstring its ``#:`` comments
+    (:func:`_comment_docstring`)."""
+    for root in roots:
+        for obj in _walk(collection[root]):
+            if obj.docstring is None and obj.is_attribute:
+                _comment_docstring(obj)
+
+
+def _comment_docstring(obj: griffe.Attribute) -> None:
+    """Give an attribute documented by ``#:`` comments above it (the Sphinx convention this
+    project uses for constants and fields) those comments as its docstring."""
+    lines = obj.module.lines
+    if obj.lineno is None or not lines:
+        return
+    comments = []
+    for line in reversed(lines[:obj.lineno - 1]):
+        stripped = line.strip()
+        if not stripped.startswith("#:"):
+            break
+        comments.append(stripped[2:].strip())
+    if comments:
+        obj.docstring = griffe.Docstring("\n".join(reversed(comments)), parent=obj)
 
 
 def _walk(obj: griffe.Object):
@@ -160,7 +185,8 @@ def _lazy_homes(module: griffe.Object) -> dict[str, str]:
 
 def _documented(path: str, collection: griffe.ModulesCollection) -> bool:
     """Whether the site renders ``path`` (its mkdocstrings heading is an autoref anchor):
-    a first-party object outside :data:`UNDOCUMENTED` with no private name on its path."""
+    a first-party object outside :data:`UNDOCUMENTED` with no private name on its path and a
+    docstring (its own, its ``#:`` comments' or a member's: the site shows only those)."""
     if path.split(".")[0] not in FIRST_PARTY:
         return False
     if any(path == u or path.startswith(u + ".") for u in UNDOCUMENTED):
@@ -169,7 +195,8 @@ def _documented(path: str, collection: griffe.ModulesCollection) -> bool:
     if any(p.startswith("_") and not (p.startswith("__") and p.endswith("__")) for p in parts):
         return False
     obj = _member(collection, path)
-    return obj is not None and not (obj.parent is not None and obj.parent.is_function)
+    return (obj is not None and obj.has_docstrings
+            and not (obj.parent is not None and obj.parent.is_function))
 
 
 def _member(collection: griffe.ModulesCollection, path: str) -> griffe.Object | None:

@@ -33,6 +33,7 @@ def rewrite():
     collection = griffe.ModulesCollection()
     for root in roles.FIRST_PARTY:
         griffe.load(root, modules_collection=collection, search_paths=[str(ROOT)])
+    roles.comment_docstrings(collection, list(roles.FIRST_PARTY))
 
     def run(text: str, path: str, caplog: pytest.LogCaptureFixture) -> tuple[str, list[str]]:
         obj = collection.get_member(path)
@@ -64,6 +65,14 @@ def test_a_name_is_resolved_as_sphinx_resolves_it(rewrite, caplog):
 def test_a_method_finds_its_class_first(rewrite, caplog):
     text, warned = rewrite(":meth:`to_json`", "tapp.api.tracking.SimulateResult.write", caplog)
     assert text == "[`to_json`][tapp.api.tracking.SimulateResult.to_json]"
+    assert warned == []
+
+
+def test_a_constant_documented_by_its_comments_is_linked(rewrite, caplog):
+    """``#:`` comments above a constant are its docstring on the site, so it is linked; an
+    attribute with neither is not rendered, so it is code without a link (not broken)."""
+    text, warned = rewrite(":data:`PARTS`", "tapp.measurements.noise", caplog)
+    assert text == "[`PARTS`][tapp.measurements.noise.PARTS]"
     assert warned == []
 
 
