@@ -42,6 +42,7 @@ import math
 import os
 import re
 import secrets
+import stat
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -133,9 +134,26 @@ def stale_temporaries(path: Path) -> list[Path]:
     return sorted(p for p in folder.iterdir() if pattern.match(p.name))
 
 
+def _device(path: Path) -> bool:
+    """Whether ``path`` is an existing device, pipe or socket (``/dev/null``, a FIFO): written
+    into, never renamed over (a rename would replace the device with a regular file)."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
 @contextmanager
 def _atomic_path(path: Path) -> Iterator[Path]:
-    """Yield a temporary path beside ``path`` (parents created); rename it over ``path``."""
+    """Yield a temporary path beside ``path`` (parents created); rename it over ``path``. A
+    device or a pipe (:func:`_device`) is yielded itself, and written in place."""
+    if _device(path):
+        try:
+            yield path
+        except OSError as exc:
+            raise ResultWriteError(str(path), exc) from None
+        return
     tmp = path.with_name(f".{path.name}.{secrets.token_hex(8)}.tmp")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -19,7 +19,9 @@ Two mechanisms, used by every command that writes files:
   option, never the temporary (:func:`unwritable`: a path at fault is bad input, a full disk
   or a device error is a :class:`~tapp.errors.WriteError`). Temporaries of the same target
   left behind by an earlier run that was killed are removed before writing; so are hidden
-  temporary folders (``tapp pipeline``'s, :func:`temporary_name`), whole.
+  temporary folders (``tapp pipeline``'s, :func:`temporary_name`), whole. An output that
+  names a device or a pipe (``--json /dev/null``) is written into it, last, never renamed
+  over (:func:`written_in_place`).
   :meth:`OutputSet.staged` runs a block (a command's report) between the writing and the
   renaming: if the block fails, nothing is renamed.
 
@@ -40,6 +42,7 @@ import os
 import re
 import secrets
 import shutil
+import stat
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -154,15 +157,32 @@ def _nearest_existing(path: Path) -> Path:
     return Path(path.anchor or "/")
 
 
+def written_in_place(path: Path) -> bool:
+    """Whether ``path`` is an existing device, pipe or socket (``/dev/null``, a FIFO,
+    ``/dev/stdout`` on a pipe), which an output is written into, never renamed over: a rename
+    would replace the device itself with a regular file (``--json /dev/null`` run as root
+    did that to the machine's ``/dev/null``)."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
 def check_writable(option: str, path: Path) -> None:
     """Raise InputError naming ``option`` unless ``path`` can be created or replaced.
 
     ``path`` must not be a folder, and the nearest existing folder above it must be a
-    writable folder (missing folders are created when the output is written).
+    writable folder (missing folders are created when the output is written); a device or a
+    pipe (:func:`written_in_place`) must be writable itself.
     """
     path = Path(path)
     if path.is_dir():
         raise InputError(option, str(path), "a file path, not a folder")
+    if written_in_place(path):
+        if not os.access(path, os.W_OK):
+            raise InputError(option, str(path), "a device or pipe this user can write")
+        return
     check_folder(option, path)
 
 
@@ -359,23 +379,28 @@ class OutputSet:
         """
         written: list[tuple[_Output, Path]] = []
         created: list[Path] = []
+        in_place = [out for out in self._outputs if written_in_place(out.path)]
+        files = [out for out in self._outputs if all(out is not o for o in in_place)]
         current = None
         try:
-            for out in self._outputs:
+            for out in files:
                 current = out
                 created += make_folders(out.path.parent)
                 remove_stale_temporaries(out.path)
-            for out in self._outputs:
+            for out in files:
                 current = out
                 tmp = temporary_name(out.path)
                 written.append((out, tmp))
                 out.write(tmp)
                 os.chmod(tmp, FILE_MODE)
             current = None  # what the block raises is its own, not an output's
-            yield tuple(out.path for out, _ in written)
+            yield tuple(out.path for out in self._outputs)
             for out, tmp in written:
                 current = out
                 os.replace(tmp, out.path)
+            for out in in_place:  # last: what a device or pipe takes cannot be taken back
+                current = out
+                out.write(out.path)
         except OSError as exc:
             if current is None:
                 raise

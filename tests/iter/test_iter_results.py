@@ -145,3 +145,24 @@ def test_version_1_files_without_digests_are_read_with_a_warning(tmp_path):
         f.visititems(strip)
     with pytest.warns(ResultFileWarning, match="format_version 1 results carry no checksums"):
         assert read_hdf5(path).table == TABLE
+
+
+def test_a_csv_into_a_pipe_leaves_the_pipe_a_pipe(tmp_path):
+    """A results file named by a device or pipe (``--output-csv /dev/null``) is written into,
+    never renamed over (a rename replaces the device with a regular file)."""
+    import os
+    import stat
+    import threading
+
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    received: list[str] = []
+    reader = threading.Thread(target=lambda: received.append(fifo.read_text()))
+    reader.start()
+    write_csv(fifo, TABLE)
+    reader.join(timeout=10)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    plain = tmp_path / "plain.csv"
+    write_csv(plain, TABLE)
+    assert received == [plain.read_text()]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo", "plain.csv"]

@@ -171,3 +171,31 @@ def test_a_full_disk_is_the_machine_s_failure_and_a_read_only_folder_the_input_s
     assert type(made) is error
     assert str(made).startswith(f"--tape: {tmp_path / 'run.t32.h5'}: ")
     assert os.strerror(code) in str(made)
+
+
+def test_a_pipe_or_device_is_written_into_never_replaced(tmp_path):
+    """``--json /dev/null`` run as root renamed a regular file over the machine's /dev/null:
+    an output that names a device or a pipe is written into it (last), and stays what it
+    is; the other outputs of the set are still renamed into place."""
+    import os
+    import stat
+    import threading
+
+    from tapp.io.outputs import OutputSet, check_writable, written_in_place
+
+    fifo, plain = tmp_path / "fifo", tmp_path / "plain.txt"
+    os.mkfifo(fifo)
+    assert written_in_place(fifo) and not written_in_place(plain)
+    check_writable("--json", fifo)  # no writable folder needed, the pipe itself is
+    received: list[str] = []
+    reader = threading.Thread(target=lambda: received.append(fifo.read_text()))
+    reader.start()
+    outputs = OutputSet()
+    outputs.add("--json", fifo, lambda p: p.write_text('{"a": 1}'))
+    outputs.add("-o", plain, lambda p: p.write_text("plain"))
+    assert outputs.commit() == (fifo, plain)
+    reader.join(timeout=10)
+    assert received == ['{"a": 1}']
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert plain.read_text() == "plain"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo", "plain.txt"]
