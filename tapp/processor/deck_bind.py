@@ -88,14 +88,14 @@ def _generated(header: T13Header, names: tuple[str, ...]) -> tuple[_Generated, .
     errors (each when it has them)."""
     kinds = tuple(header.parameters.kind)
     out = []
-    sto = getattr(header, "stochastic", None)
+    sto = header.stochastic
     mine = tuple(n for n, k in zip(names, kinds, strict=True) if k == STOCHASTIC)
     if sto is not None and mine:
         out.append(_Generated("stochastic", "stochastic accelerations",
                               "stochastic acceleration", "a", "their correlations are the "
                               "Gauss-Markov process's", mine, sto.covariance(),
                               sto.information(), (("stochastic accelerations", mine),)))
-    burns = getattr(header, "manoeuvres", ())
+    burns = header.manoeuvres
     params = [(b.name, p) for b in burns for p in b.parameters()]
     if params:
         variance = np.array([sigma for _, (_, _, sigma) in params]) ** 2

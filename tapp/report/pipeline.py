@@ -10,10 +10,14 @@ scatter and the ΔV histograms of TAPP II).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from tapp.constants import SECONDS_PER_DAY
 from tapp.report import BPLANE_PNG, HISTOGRAM_PNG, RIC_PNG, SCATTER_PNG, SIGMA_PNG
 from tapp.report.markdown import table
+
+if TYPE_CHECKING:
+    from tapp.io.tape.t13 import T13Header
 
 #: Lines of the O3 printout quoted in the report (the whole printout is o3.txt).
 O3_EXCERPT_LINES = 40
@@ -65,7 +69,7 @@ def ric_sigma_table(content: dict) -> str:
                                           ("radial R", "in-track I", "cross-track C"))], rows)
 
 
-def _plots(folder: Path, run, header, guidance, title: str) -> list[Path]:
+def _plots(folder: Path, run, header: T13Header, guidance, title: str) -> list[Path]:
     from tapp.report.guidance import plot_bplane_scatter, plot_dv_histograms
     from tapp.report.processor import (
         bplane_rows,
@@ -103,8 +107,9 @@ def ellipse_and_ric_sections(content: dict) -> list[str]:
             for line in (caption, "", markdown, "")]
 
 
-def write_report(folder: Path, pipeline, run, header, content: dict, guidance,
-                 observations: int, wall_s: dict[str, float], plots: bool = True) -> Path:
+def write_report(folder: Path, pipeline, run, header: T13Header, content: dict,
+                 guidance, observations: int, wall_s: dict[str, float], plots: bool = True
+                 ) -> Path:
     """Write ``folder/report.md`` (and the plots into ``folder/plots`` when asked)."""
     from tapp.report.guidance import guidance_markdown
 

@@ -52,8 +52,10 @@ class Checker:
         raise TapeError(f"{self.source}: {dataset}: expected {expected}{detail}")
 
     def shape(self, dataset: str, a: np.ndarray | None, shape: tuple[int, ...]) -> None:
-        if a is None:
-            self.fail(dataset, f"an array of shape {shape}", "None")
+        """Check that ``a`` is an array of ``shape``."""
+        if not isinstance(a, np.ndarray):
+            self.fail(dataset, f"an array of shape {shape}",
+                      "None" if a is None else type(a).__name__)
         if a.shape != shape:
             self.fail(dataset, f"shape {shape}", a.shape)
 
@@ -96,12 +98,13 @@ class Checker:
                       f"{diag[i, col]:.3g}{where(i)}, row {col}")
 
     def rows(self, fields: Iterable[Field], value_of: Callable[[Field], object],
-             dims: dict[str, int]) -> None:
+             dims: dict[str, int], *, finite: bool = True) -> None:
         """Check the values of layout rows (:mod:`tapp.io.tape.layout`) against their shapes,
         the symbols resolved by ``dims`` (rows whose shape has another symbol, attributes and
         packed matrices are checked elsewhere): text by its count ("expected N entries"),
         arrays by :meth:`shape`, numbers by :meth:`finite` unless the row allows
-        non-finite values."""
+        non-finite values or ``finite`` is False (shapes only: a reader indexing rows it
+        leaves the validation of values to)."""
         for field in fields:
             shape = resolve(field.shape, dims)
             if field.is_attr or field.dtype in ("factor", "symmetric") or shape is None:
@@ -112,7 +115,7 @@ class Checker:
                     self.fail(field.path, f"{shape[0]} entries", len(value))
                 continue
             self.shape(field.path, value, shape)
-            if field.dtype == "float" and field.finite:
+            if finite and field.dtype == "float" and field.finite:
                 self.finite(field.path, value)
 
     def text(self, where: str, value: object) -> str:

@@ -19,7 +19,7 @@ memory keeps the value (a dotted attribute path from the tape, or, under ``{i}``
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 #: Types of a row: text, integers, numbers, booleans, a list of texts (attributes), and the
 #: packed upper-triangular factors and symmetric matrices of :func:`tapp.io.tape.hdf5io.
@@ -41,7 +41,9 @@ class Field:
     optional : the path (a group, a dataset or this row's own) whose absence makes the row
         absent; "" for a row every tape of its versions has.
     description : what it holds.
-    source : where the tape in memory keeps the value ("" where the writer computes it).
+    source : where the tape in memory keeps the value ("" where the writer computes it); of
+        a row only older versions carry, where the reader keeps what it makes of it (the
+        factor of a T32 version-1 matrix).
     big : compressed (T32: when n_o > 100).
     finite : numbers checked finite and bounded (:meth:`tapp.io.tape.checks.Checker.rows`).
     """
@@ -84,6 +86,16 @@ def rows(table: tuple[Field, ...], version: int, prefix: str = "", *, attrs: boo
     only attributes (``attrs=True``) or only datasets (False)."""
     return tuple(f for f in table if f.in_version(version) and f.path.startswith(prefix)
                  and (attrs is None or f.is_attr == attrs))
+
+
+def filled(table: tuple[Field, ...], version: int, prefix: str, **names: object
+           ) -> tuple[Field, ...]:
+    """The rows of :func:`rows` under ``prefix`` whose paths have as many placeholders
+    (``{s}``, ``{i}``, ``{omega}``) as ``names`` gives, with those filled in, in the path and
+    in :attr:`Field.optional` (``i=3``: ``recycles/{i}/L`` becomes ``recycles/3/L``; none
+    given: the rows without one)."""
+    return tuple(replace(f, path=f.path.format(**names), optional=f.optional.format(**names))
+                 for f in rows(table, version, prefix) if f.path.count("{") == len(names))
 
 
 def row(table: tuple[Field, ...], path: str) -> Field:
@@ -334,7 +346,8 @@ T32_LAYOUT: tuple[Field, ...] = (
           "root attribute"),
     *_STAMPS,
     *PARAMETERS,
-    *_fields("miss/", "str", "name unit", ("n_m",), "", "the miss parameters", source=""),
+    *(Field(f"miss/{n}", "str", ("n_m",), "", "the miss parameters", f"miss_{n}")
+      for n in ("name", "unit")),
     Field("systems/{s}/chain", "float", ("n_o", "n_o"), "(row unit)/(column unit)",
           "∂x^s/∂x, s = common, fit, real: the system chain of the deck (permutations and "
           "constraints of q)"),
@@ -352,7 +365,7 @@ T32_LAYOUT: tuple[Field, ...] = (
     *(Field(f"apriori/{n}_factor", "factor", ("L",), FACTOR_UNITS[what], text,
             f"{n}_factor", since=2) for n, what, text in _T32_APRIORI),
     *(Field(f"apriori/{n}", "symmetric", ("L",), "", text + " (the matrix itself)",
-            until=1) for n, _, text in _T32_APRIORI),
+            f"{n}_factor", until=1) for n, _, text in _T32_APRIORI),
     Field("recycles/number", "int", ("n_r",), "", "recycle number i' = 1..n_r", "number"),
     Field("recycles/k", "int", ("n_r",), "", "current T13 index (ascending)", "k"),
     Field("recycles/l", "int", ("n_r",), "", "last recycle's T13 index (l_i = k_{i-1})", "l"),
@@ -364,7 +377,7 @@ T32_LAYOUT: tuple[Field, ...] = (
     *(Field(f"recycles/{{i}}/{n}_factor", "factor", ("L",), FACTOR_UNITS[what], text,
             f"{n}_factor", since=2, big=True) for n, what, _, text in T32_SYMMETRIC),
     *(Field(f"recycles/{{i}}/{n}", "symmetric", ("L",), "", text + " (the matrix itself)",
-            until=1) for n, _, _, text in T32_SYMMETRIC),
+            f"{n}_factor", until=1) for n, _, _, text in T32_SYMMETRIC),
     Field("recycles/{i}/L", "float", ("n_o", "n_o"), "u_a/u_b", "∂(a posteriori error)/"
           "∂(a priori error at t_l), both in x^k", "L", big=True),
     Field("recycles/{i}/transition", "float", ("n_o", "n_o"), "u_a/u_b", "∂x^k/∂x^{k_prev}, "
@@ -459,6 +472,12 @@ def sourced(obj: object, source: str) -> object:
             return None
         obj = getattr(obj, name)
     return obj
+
+
+def build(cls: type, group: str, values: dict[str, object]) -> object:
+    """An instance of the dataclass ``cls`` from values read by source (``group.field`` for
+    each of its fields)."""
+    return cls(**{f.name: values[f"{group}.{f.name}"] for f in fields(cls)})
 
 
 def resolve(shape: tuple[str, ...], dims: dict[str, int]) -> tuple[int, ...] | None:

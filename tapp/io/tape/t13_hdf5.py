@@ -57,7 +57,7 @@ from tapp.io.atomic import atomic_write
 from tapp.io.tape import hdf5io
 from tapp.io.tape.checks import PACKINGS, Checker, frozen
 from tapp.io.tape.hdf5io import Reader
-from tapp.io.tape.layout import T13_LAYOUT, Field, rows, sourced
+from tapp.io.tape.layout import T13_LAYOUT, Field, build, rows, sourced
 from tapp.io.tape.packing import pack_tr, scaled_difference, unpack_tr
 from tapp.io.tape.t13 import (
     FORMAT,
@@ -253,11 +253,6 @@ def _check_legacy_parts(c, name: str, parts: np.ndarray, total: np.ndarray, offs
 _DEFAULTS = {"miss.kind": "", "miss.t_s": math.nan, "raw.kinds": ()}
 
 
-def _build(cls, group: str, values: dict[str, object]):
-    """An instance of the dataclass ``cls`` from the values read, by source ``group.field``."""
-    return cls(**{f.name: values[f"{group}.{f.name}"] for f in fields(cls)})
-
-
 def _read(r: Reader, version: int, *, raw: bool, matrices: bool
           ) -> tuple[T13Header, np.ndarray]:
     """Return the tape (a :class:`T13` with its factors if ``matrices``, else its
@@ -282,10 +277,10 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool
             provenance[field.name] = value
         values[field.source or field.path] = value
     values.update({key: value for key, value in _DEFAULTS.items() if key not in values})
-    parameters = _build(TapeParameters, "parameters", values)
-    stations = _build(TapeStations, "stations", values)
-    miss = _build(TapeMiss, "miss", values)
-    records = _build(TapeRecords, "records", values)
+    parameters = build(TapeParameters, "parameters", values)
+    stations = build(TapeStations, "stations", values)
+    miss = build(TapeMiss, "miss", values)
+    records = build(TapeRecords, "records", values)
     for name, value in (("n_o", len(parameters.name)), ("n_m", len(miss.name)),
                         ("n_ts", len(stations.name)), ("n_it", records.k.size)):
         if dims[name] != value:
@@ -310,7 +305,7 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool
                 r.stored_shape(name, lead, n_o)
     pairs = TapePairs(values["pairs.k"], values["pairs.station"], values["pairs.n_obs"],
                       *factors)
-    editing = _build(TapeEditing, "editing", values) if "editing.rule" in values else None
+    editing = build(TapeEditing, "editing", values) if "editing.rule" in values else None
     stochastic = None
     if "stochastic.frame" in values:
         stochastic = StochasticAccelerations(
@@ -319,11 +314,11 @@ def _read(r: Reader, version: int, *, raw: bool, matrices: bool
             values["stochastic.sigma_km_s2"], values["stochastic.tau_s"])
     manoeuvres = _read_manoeuvres(r.check, values) if "manoeuvres/name" in values else ()
     header = T13Header(values["iden"], epoch, dims["n_p"], parameters, stations, miss,
-                       records, pairs, _build(TapePasses, "passes", values), provenance,
+                       records, pairs, build(TapePasses, "passes", values), provenance,
                        editing, stochastic, manoeuvres)
     if not matrices:
         return header, values["records.t_s"]
-    tape_raw = _build(TapeRaw, "raw", values) if "raw.t_s" in values else None
+    tape_raw = build(TapeRaw, "raw", values) if "raw.t_s" in values else None
     return T13(**{f.name: getattr(header, f.name) for f in fields(T13Header)}, raw=tape_raw), \
         values["records.t_s"]
 

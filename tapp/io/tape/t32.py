@@ -43,7 +43,7 @@ import numpy as np
 from tapp.estimation.factors import gram
 from tapp.frames.time import Epoch
 from tapp.io.tape.checks import MAX_MAGNITUDE, Checker
-from tapp.io.tape.layout import T32_SYMMETRIC
+from tapp.io.tape.layout import T32_LAYOUT, T32_SYMMETRIC, Field, filled, sourced
 from tapp.io.tape.t13 import TapeParameters, check_parameters
 
 FORMAT = "T32"
@@ -294,23 +294,35 @@ class T32:
 # ---------------------------------------------------------------------------------------------
 
 
-def _matrix(c: Checker, name: str, m: np.ndarray, shape: tuple[int, ...],
-            limit: float = MAX_MAGNITUDE) -> None:
-    if not isinstance(m, np.ndarray):
-        c.fail(name, f"an array of shape {shape}", type(m).__name__)
-    c.shape(name, m, shape)
-    c.finite(name, m, limit)
+def system_values(t32: T32) -> dict[str, object]:
+    """The values of the layout rows ``systems/{s}/chain`` and ``systems/{s}/names`` of each
+    chained system, by path."""
+    return {f"systems/{name}/{leaf}": value for name in CHAINED
+            for leaf, value in (("chain", t32.systems[name]),
+                                ("names", t32.system_names[name]))}
 
 
 def _factor(c: Checker, name: str, m: np.ndarray, n: int) -> None:
     """An (n, n) upper-triangular factor, finite, with a non-negative diagonal."""
-    _matrix(c, name, m, (n, n))
+    c.shape(name, m, (n, n))
+    c.finite(name, m)
     if np.any(np.tril(m, -1) != 0):
         c.fail(name, "an upper-triangular factor (zero below the diagonal)")
     diag = np.diagonal(m)
     if np.any(diag < 0):
         row = int(np.argmax(diag < 0))
         c.fail(name, "a factor with a non-negative diagonal", f"{diag[row]:.3g} in row {row}")
+
+
+def _check_rows(c: Checker, table: tuple[Field, ...], obj: object, dims: dict[str, int],
+                n_o: int) -> None:
+    """The layout rows ``table`` (placeholders filled in) of ``obj`` (the tape, a recycle,
+    an entity), their values by source: factors by :func:`_factor`, the others by
+    :meth:`Checker.rows` (shapes, finite numbers)."""
+    for row in table:
+        if row.dtype == "factor":
+            _factor(c, row.path, sourced(obj, row.source), n_o)
+    c.rows(table, lambda row: sourced(obj, row.source), dims)
 
 
 def validate(t32: T32, source: str = "T32") -> None:
@@ -326,22 +338,24 @@ def validate(t32: T32, source: str = "T32") -> None:
     strictly ascending, 0 <= l < k with l_i = k_{i-1}, 0 <= j < k, 0 <= t_l < t_k with
     t_l of a recycle the t_k of the one before; the other matrices of the right shapes and
     finite; entity numbers ω >= 1 ascending, matrices (len(rows), len(cols)) and finite;
-    provenance text under names that are not schema attributes.
+    provenance text under names that are not schema attributes. The shapes are those of the
+    rows of :data:`tapp.io.tape.layout.T32_LAYOUT` (:meth:`Checker.rows`).
     """
     c = Checker(source)
     n_o, n_p, n_m = t32.n_o, t32.n_p, t32.n_m
+    dims = {"n_o": n_o, "n_p": n_p, "n_m": n_m, "n_r": len(t32.recycles),
+            "n_partitions": len(t32.partitions)}
     check_parameters(c, t32.parameters, n_p)
-    if len(t32.miss_unit) != n_m:
-        c.fail("miss/unit", f"{n_m} entries", len(t32.miss_unit))
+    _check_rows(c, filled(T32_LAYOUT, VERSION, "miss/"), t32, dims, n_o)
 
     for what, mapping in (("systems", t32.systems), ("system_names", t32.system_names)):
         if sorted(mapping) != sorted(CHAINED):
             c.fail("systems", f"the systems {', '.join(CHAINED)} ({what})",
                    ", ".join(sorted(mapping)) or "none")
-    for name in CHAINED:
-        _matrix(c, f"systems/{name}/chain", t32.systems[name], (n_o, n_o))
-        if len(t32.system_names[name]) != n_o:
-            c.fail(f"systems/{name}/names", f"{n_o} names", len(t32.system_names[name]))
+    chains = system_values(t32)
+    c.rows(tuple(f for name in CHAINED for f in filled(T32_LAYOUT, VERSION, "systems/{s}/",
+                                                         s=name)),
+           lambda field: chains[field.path], dims)
 
     seen: set[str] = set()
     for i, p in enumerate(t32.partitions):
@@ -362,8 +376,7 @@ def validate(t32: T32, source: str = "T32") -> None:
                                              f"{p.system} system for {p.name}: "
                                              f"{', '.join(expected)}", ", ".join(p.names))
 
-    _factor(c, "apriori/S0_fit_factor", t32.S0_fit_factor, n_o)
-    _factor(c, "apriori/Lambda0_real_factor", t32.Lambda0_real_factor, n_o)
+    _check_rows(c, filled(T32_LAYOUT, VERSION, "apriori/"), t32, dims, n_o)
 
     prev: T32Recycle | None = None
     for i, rc in enumerate(t32.recycles):
@@ -388,18 +401,17 @@ def validate(t32: T32, source: str = "T32") -> None:
             c.fail("recycles/t_l_s", "finite times 0 <= t_l < t_k, t_l = t_k of the recycle "
                                      "before", f"t_l = {rc.t_l_s}, t_k = {rc.t_s} in recycle "
                                                f"{rc.number}")
-        _matrix(c, "recycles/info", rc.info, (6,))
-        for name, _, _ in SYMMETRIC:
-            _factor(c, f"{base}/{name}_factor", getattr(rc, f"{name}_factor"), n_o)
-        for name in ("L", "transition", "transition_adjoint"):
-            _matrix(c, f"{base}/{name}", getattr(rc, name), (n_o, n_o))
+        # this recycle's row of recycles/info (n_r, 6)
+        c.shape("recycles/info", rc.info, (6,))
+        c.finite("recycles/info", rc.info)
+        _check_rows(c, filled(T32_LAYOUT, VERSION, "recycles/{i}/", i=rc.number), rc, dims,
+                    n_o)
         terms = np.abs(rc.transition.T) @ np.abs(rc.transition_adjoint)
         defect = np.abs(rc.transition.T @ rc.transition_adjoint - np.eye(n_o))
         if np.any(defect > ADJOINT_TOL * np.maximum(terms, 1.0)):
             c.fail(f"{base}/transition_adjoint", "the inverse transpose of the transition "
                    f"(|Tᵀ A − I| <= {ADJOINT_TOL:g} of the terms)",
                    f"{float(np.max(defect / np.maximum(terms, 1.0))):.3g}")
-        _matrix(c, f"{base}/B", rc.B, (n_m, n_o))
         omega = 0
         for e in rc.entities:
             where = f"{base}/entities/{e.omega}"
@@ -409,9 +421,11 @@ def validate(t32: T32, source: str = "T32") -> None:
             omega = e.omega
             if not e.command.strip():
                 c.fail(f"{where}.attrs/command", "the command in seed notation", repr(e.command))
+            _check_rows(c, filled(T32_LAYOUT, VERSION, "recycles/{i}/entities/{omega}",
+                                  i=rc.number, omega=e.omega), e,
+                        {"rows": len(e.rows), "cols": len(e.cols)}, n_o)
             # an output entity may be a covariance: a product of two tape values
-            _matrix(c, f"{where}/matrix", e.matrix, (len(e.rows), len(e.cols)),
-                    MAX_MAGNITUDE**2)
+            c.finite(f"{where}/matrix", e.matrix, MAX_MAGNITUDE**2)
         prev = rc
 
     for key, value in t32.provenance.items():

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 
 import h5py
@@ -49,14 +48,13 @@ from tapp.io.atomic import atomic_write
 from tapp.io.tape import hdf5io
 from tapp.io.tape.checks import MAX_MAGNITUDE
 from tapp.io.tape.hdf5io import Reader
-from tapp.io.tape.layout import STAMPED, T32_LAYOUT, Field, rows, sourced
+from tapp.io.tape.layout import STAMPED, T32_LAYOUT, Field, build, filled, rows, sourced
 from tapp.io.tape.t13 import TapeParameters
 from tapp.io.tape.t32 import (
     CHAINED,
     FORMAT,
     SIGMA_ROUNDING,
     SUPPORTED_VERSIONS,
-    SYMMETRIC,
     T32,
     UNITS_NOTE,
     V1_PSD_TOL,
@@ -64,6 +62,7 @@ from tapp.io.tape.t32 import (
     T32Entity,
     T32Partition,
     T32Recycle,
+    system_values,
     validate,
 )
 
@@ -89,7 +88,6 @@ def _write(f: h5py.File, t32: T32) -> None:
         "attrs/epoch_jd_fraction": t32.epoch.jd_fraction, "attrs/time_scale": "UTC",
         "attrs/units": UNITS_NOTE, "attrs/provenance_keys": list(extra),
         **{f"attrs/{key}": value for key, value in hdf5io.provenance_attrs().items()},
-        "miss/name": t32.miss_name, "miss/unit": t32.miss_unit,
         "partitions/name": [p.name for p in parts],
         "partitions/system": [p.system for p in parts],
         "partitions/tail": np.array([p.tail for p in parts], dtype=np.int64),
@@ -106,16 +104,14 @@ def _write(f: h5py.File, t32: T32) -> None:
 
     def write(prefix: str, obj: object, values: dict[str, object], **names: object) -> None:
         """The rows under ``prefix`` (with {s}, {i}, {omega} filled in from ``names``)."""
-        table = tuple(replace(field, path=field.path.format(**names))
-                      for field in rows(T32_LAYOUT, VERSION, prefix)
-                      if field.path.count("{") == len(names))
-        hdf5io.write_rows(f, table, lambda field: values[field.path] if field.path in values
+        hdf5io.write_rows(f, filled(T32_LAYOUT, VERSION, prefix, **names),
+                          lambda field: values[field.path] if field.path in values
                           else sourced(obj, field.source), big=big)
 
     write("", t32, computed)
+    chains = system_values(t32)
     for name in CHAINED:
-        write("systems/{s}/", None, {f"systems/{name}/chain": t32.systems[name],
-                                     f"systems/{name}/names": t32.system_names[name]}, s=name)
+        write("systems/{s}/", None, chains, s=name)
     for rc in rcs:
         write("recycles/{i}/", rc, {}, i=rc.number)
         for e in rc.entities:
@@ -165,21 +161,23 @@ def write_t32(path: Path | str, t32: T32) -> Path:
 # ---------------------------------------------------------------------------------------------
 
 
-def _entities(r: Reader, base: str) -> tuple[T32Entity, ...]:
-    group = r.dataset_or_group(f"{base}/entities")
+def _entities(r: Reader, version: int, i: int) -> tuple[T32Entity, ...]:
+    """The command outputs of recycle ``i``: the rows under ``recycles/{i}/entities/{omega}``
+    of each command number ω found, ascending."""
+    where = f"recycles/{i}/entities"
+    group = r.dataset_or_group(where)
     if not isinstance(group, h5py.Group):
-        r.check.fail(f"{base}/entities", "a group of command outputs", "a dataset")
-    with r.guard(f"{base}/entities", "a readable group"):
+        r.check.fail(where, "a group of command outputs", "a dataset")
+    with r.guard(where, "a readable group"):
         keys = list(group.keys())
     if not all(key.isdigit() and int(key) >= 1 for key in keys):
-        r.check.fail(f"{base}/entities", "command numbers ω >= 1 as group names", keys)
+        r.check.fail(where, "command numbers ω >= 1 as group names", keys)
     out = []
     for omega in sorted(int(key) for key in keys):
-        where = f"{base}/entities/{omega}"
-        out.append(T32Entity(omega, r.attr("command", str, owner=where),
-                             r.attr("alias", str, owner=where, default=""),
-                             r.strings(f"{where}/rows"), r.strings(f"{where}/cols"),
-                             r.read(f"{where}/matrix")))
+        values = {field.source: r.row(field) if r.present(field) else ""
+                  for field in filled(T32_LAYOUT, version, "recycles/{i}/entities/{omega}",
+                                      i=i, omega=omega)}
+        out.append(T32Entity(omega=omega, **values))
     return tuple(out)
 
 
@@ -204,17 +202,6 @@ def _v1_factor(r: Reader, name: str, n: int, floor: np.ndarray | None = None,
     return k
 
 
-def _v1_recycle_factors(r: Reader, base: str, n: int) -> dict[str, np.ndarray]:
-    real = np.clip(np.diagonal(r.symmetric(f"{base}/Lambda_real", (), n)), 0.0, None)
-    out = {}
-    for name, _, _ in SYMMETRIC:
-        # Σ <= Λ̄' in exact arithmetic: Λ̄' sets its rounding floor and its scale
-        sigma = name == "Sigma"
-        out[name] = _v1_factor(r, f"{base}/{name}", n, SIGMA_ROUNDING * real if sigma else None,
-                               real if sigma else None)
-    return out
-
-
 def _v1_adjoint(r: Reader, name: str, transition: np.ndarray) -> np.ndarray:
     """Version 1 has no adjoint: (T⁻¹)ᵀ by an LU solve."""
     r.check.finite(name, transition)
@@ -224,7 +211,49 @@ def _v1_adjoint(r: Reader, name: str, transition: np.ndarray) -> np.ndarray:
         r.check.fail(name, "an invertible transition")
 
 
+def _matrices(r: Reader, fields: tuple[Field, ...], n_o: int, real: np.ndarray | None = None
+              ) -> dict[str, object]:
+    """The values of ``fields`` (placeholders filled in) by source: factors unpacked, the
+    symmetric matrices of version 1 as their factors (:func:`_v1_factor`; Σ <= Λ̄' in exact
+    arithmetic: ``real``, the diagonal of Λ̄', sets Σ's rounding floor and its scale), the
+    others by their types."""
+    out: dict[str, object] = {}
+    for field in fields:
+        if field.dtype == "factor":
+            out[field.source] = r.triangular(field.path, (), n_o)
+        elif field.dtype == "symmetric":
+            sigma = field.name == "Sigma"
+            out[field.source] = _v1_factor(r, field.path, n_o,
+                                           SIGMA_ROUNDING * real if sigma else None,
+                                           real if sigma else None)
+        else:
+            out[field.source] = r.row(field)
+    return out
+
+
+def _recycle(r: Reader, version: int, i: int, table: dict[str, np.ndarray], n_o: int
+             ) -> T32Recycle:
+    """Recycle ``i`` (1-based): its entries of the ``recycles/`` rows read (``table``, by
+    source, shapes checked) and its rows under ``recycles/{i}/``."""
+    base = f"recycles/{i}"
+    real = None
+    if version == 1:  # Λ̄' first: its diagonal bounds Σ's
+        real = np.clip(np.diagonal(r.symmetric(f"{base}/Lambda_real", (), n_o)), 0.0, None)
+    values = _matrices(r, filled(T32_LAYOUT, version, "recycles/{i}/", i=i), n_o, real)
+    if version == 1:
+        values["transition_adjoint"] = _v1_adjoint(r, f"{base}/transition",
+                                                   values["transition"])
+    entries = {source: column[i - 1] for source, column in table.items()}
+    return T32Recycle(**{source: entry.item() if entry.ndim == 0 else entry
+                         for source, entry in entries.items()}, **values,
+                      entities=_entities(r, version, i))
+
+
 def _read(r: Reader) -> T32:
+    """Return the tape: the rows of :data:`T32_LAYOUT` of its version read by their types
+    (by source; the attributes the writer computes as the dimensions), those under
+    ``systems/{s}``, ``recycles/{i}`` and their entities once per system, recycle and
+    command, after the dimensions are checked against the datasets."""
     version = r.format_version(FORMAT, SUPPORTED_VERSIONS)
     if version == 1:
         warnings.warn(f"{r.check.source}: T32 version 1 carries the covariances, not their "
@@ -234,12 +263,16 @@ def _read(r: Reader) -> T32:
     dims = {name: r.attr(name, int) for name in ("n_o", "n_p", "n_m", "n_recycles",
                                                  "n_partitions")}
     n_o = dims["n_o"]
+    dims["n_r"] = dims["n_recycles"]
     epoch = Epoch(r.attr("epoch_jd_whole", float), r.attr("epoch_jd_fraction", float))
-    parameters = TapeParameters(r.strings("parameters/name"), r.strings("parameters/unit"),
-                                r.strings("parameters/kind"), r.read("parameters/station", "i"),
-                                r.read("parameters/nominal"))
-    miss_name, miss_unit = r.strings("miss/name"), r.strings("miss/unit")
-    for name, value in (("n_o", len(parameters.name)), ("n_m", len(miss_name))):
+    values: dict[str, object] = {}
+    for field in rows(T32_LAYOUT, version):
+        if "{" in field.path or field.dtype in ("factor", "symmetric") \
+                or (field.is_attr and not field.source):
+            continue  # a row of each system, recycle, command, a matrix (below), computed
+        values[field.source or field.path] = r.row(field)
+    parameters = build(TapeParameters, "parameters", values)
+    for name, value in (("n_o", len(parameters.name)), ("n_m", len(values["miss_name"]))):
         if dims[name] != value:
             r.check.fail(f"attrs/{name}", f"{name} = {value} as the datasets have", dims[name])
 
@@ -250,17 +283,17 @@ def _read(r: Reader) -> T32:
         keys = sorted(group.keys())
     if keys != sorted(CHAINED):
         r.check.fail("systems", f"the systems {', '.join(CHAINED)}", keys)
-    systems = {name: r.read(f"systems/{name}/chain") for name in CHAINED}
-    system_names = {name: r.strings(f"systems/{name}/names") for name in CHAINED}
+    chains = {name: {field.name: r.row(field)
+                     for field in filled(T32_LAYOUT, version, "systems/{s}/", s=name)}
+              for name in CHAINED}
 
-    n_part = dims["n_partitions"]
-    p_name, p_system = r.strings("partitions/name"), r.strings("partitions/system")
-    tail, head = r.read("partitions/tail", "i"), r.read("partitions/head", "i")
-    for name, values in (("name", p_name), ("system", p_system), ("tail", tail),
-                         ("head", head)):
-        if len(values) != n_part:
-            r.check.fail(f"partitions/{name}", f"n_partitions = {n_part} entries", len(values))
-    flat = r.strings("partitions/names")
+    # the rows of partitions and recycles indexed below: their lengths first
+    indexed = tuple(f for f in rows(T32_LAYOUT, version) if "{" not in f.path
+                    and f.path.startswith(("partitions/", "recycles/")))
+    r.check.rows(indexed, lambda field: values[field.source or field.path], dims,
+                 finite=False)
+    tail, head = values["partitions/tail"], values["partitions/head"]
+    flat = values["partitions/names"]
     sizes = head - tail
     if np.any(sizes < 0) or int(sizes.sum()) != len(flat):
         r.check.fail("partitions/names", "head - tail names for each partition, "
@@ -268,48 +301,24 @@ def _read(r: Reader) -> T32:
                      len(flat))
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
     partitions = tuple(
-        T32Partition(p_name[i], p_system[i], int(tail[i]), int(head[i]),
-                     flat[offsets[i]:offsets[i + 1]]) for i in range(n_part))
+        T32Partition(values["partitions/name"][i], values["partitions/system"][i],
+                     int(tail[i]), int(head[i]), flat[offsets[i]:offsets[i + 1]])
+        for i in range(dims["n_partitions"]))
 
-    if version == 1:
-        s0 = _v1_factor(r, "apriori/S0_fit", n_o)
-        lam0 = _v1_factor(r, "apriori/Lambda0_real", n_o)
-    else:
-        s0 = r.triangular("apriori/S0_fit_factor", (), n_o)
-        lam0 = r.triangular("apriori/Lambda0_real_factor", (), n_o)
-
-    n_r = dims["n_recycles"]
-    table = {name: r.read(f"recycles/{name}", "i") for name in ("number", "k", "l", "j")}
-    table.update({name: r.read(f"recycles/{name}") for name in ("t_s", "t_l_s")})
-    for name, values in table.items():
-        r.check.shape(f"recycles/{name}", values, (n_r,))
-    info = r.read("recycles/info")
-    r.check.shape("recycles/info", info, (n_r, 6))
-    if not np.array_equal(table["number"], np.arange(1, n_r + 1)):
+    apriori = _matrices(r, filled(T32_LAYOUT, version, "apriori/"), n_o)
+    n_r = dims["n_r"]
+    if not np.array_equal(values["number"], np.arange(1, n_r + 1)):
         r.check.fail("recycles/number", f"recycle numbers 1..{n_r} in order",
-                     table["number"].tolist())
-    recycles = []
-    for i in range(n_r):
-        base = f"recycles/{i + 1}"
-        transition = r.read(f"{base}/transition")
-        if version == 1:
-            fac = _v1_recycle_factors(r, base, n_o)
-            adjoint = _v1_adjoint(r, f"{base}/transition", transition)
-        else:
-            fac = {name: r.triangular(f"{base}/{name}_factor", (), n_o)
-                   for name, _, _ in SYMMETRIC}
-            adjoint = r.read(f"{base}/transition_adjoint")
-        recycles.append(T32Recycle(
-            i + 1, int(table["k"][i]), int(table["l"][i]), int(table["j"][i]),
-            float(table["t_s"][i]), float(table["t_l_s"][i]), info[i], fac["S_fit"],
-            fac["Lambda_fit"], fac["Lambda_real"], r.read(f"{base}/L"), fac["Sigma"],
-            fac["J"], fac["Jt"], r.read(f"{base}/B"), transition, adjoint,
-            _entities(r, base)))
+                     values["number"].tolist())
+    table = {f.source: values[f.source] for f in indexed if f.path.startswith("recycles/")}
+    recycles = tuple(_recycle(r, version, i, table, n_o) for i in range(1, n_r + 1))
 
     keys = r.attr("provenance_keys", list, default=())
     provenance = {key: r.attr(key, str) for key in (*STAMPED, *keys) if r.has_attr(key)}
-    return T32(r.attr("iden", str), epoch, dims["n_p"], parameters, miss_name, miss_unit,
-               systems, system_names, partitions, s0, lam0, tuple(recycles), provenance)
+    return T32(values["iden"], epoch, dims["n_p"], parameters, values["miss_name"],
+               values["miss_unit"], {name: chains[name]["chain"] for name in CHAINED},
+               {name: chains[name]["names"] for name in CHAINED}, partitions, **apriori,
+               recycles=recycles, provenance=provenance)
 
 
 def read_t32(path: Path | str) -> T32:
