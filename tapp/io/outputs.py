@@ -379,8 +379,10 @@ class OutputSet:
         """
         written: list[tuple[_Output, Path]] = []
         created: list[Path] = []
-        in_place = [out for out in self._outputs if written_in_place(out.path)]
-        files = [out for out in self._outputs if all(out is not o for o in in_place)]
+        in_place: list[_Output] = []
+        files: list[_Output] = []
+        for out in self._outputs:
+            (in_place if written_in_place(out.path) else files).append(out)
         current = None
         try:
             for out in files:

@@ -232,6 +232,31 @@ def _observations(run: RunSetup, stations: str | None, given: Observations | Pat
     return obs, (note,)
 
 
+@dataclass(frozen=True, slots=True)
+class _Arc:
+    """The observations of a DC or EKF run: all of them, those of the arc, the Earth
+    orientation's record over the arc, the brief's offset initial estimate (6,) and the
+    observations' check notes."""
+
+    every: Observations
+    window: Observations
+    used: dict
+    x_start: np.ndarray
+    notes: tuple[str, ...]
+
+
+def _arc(run: RunSetup, arc: str | float, arc_s: float, stations: str | None,
+         given: Observations | Path | str | None, seed: int | None, chosen: bool,
+         notify: Notify | None) -> _Arc:
+    """The observations (:func:`_observations`, ``seed`` checked as ``--seed``) cut to the
+    arc (a bad one names ``--arc``), and the run's start."""
+    every, notes = _observations(run, stations, given, check_seed("--seed", seed), chosen,
+                                 notify)
+    window = every.arc(arc_s, "--arc", got=arc)
+    return _Arc(every, window, setup.orientation_record(run.orientation, window.t_s),
+                setup.initial_estimate(run.x_true, offset(run.study)), notes)
+
+
 def _short_arc(exc: TooFewMeasurementsError, data: Observations, arc: str | float
                ) -> InputError | TooFewMeasurementsError:
     """The error of an arc (``arc`` as given) of ``data`` holding fewer measurements than
@@ -280,20 +305,17 @@ def run_dc(study: Study | Path | str, orbit: str, *, arc: str | float = "24h",
     settings = dc_settings(study, max_iter)
     orient = setup.orientation(study, earth_orientation)
     run = _run_setup(study, orbit, truth, stm, orient, allow_subsurface)
-    data, notes = _observations(run, stations, observations, check_seed("--seed", seed),
-                                earth_orientation is not None, notify)
-    window = data.arc(arc_s, "--arc", got=arc)
-    used = setup.orientation_record(orient, window.t_s)
-    x_start = setup.initial_estimate(run.x_true, offset(study))
+    a = _arc(run, arc, arc_s, stations, observations, seed, earth_orientation is not None,
+             notify)
     try:
-        result = differential_correction(window, run.propagator, x_start, orientation=orient,
-                                         settings=settings)
+        result = differential_correction(a.window, run.propagator, a.x_start,
+                                         orientation=orient, settings=settings)
     except TooFewMeasurementsError as exc:
-        raise _short_arc(exc, data, arc) from None
+        raise _short_arc(exc, a.every, arc) from None
     except IllConditionedError as exc:
-        raise IllConditionedFit(exc, run, data, window, used) from None
-    return FitRun(run, arc, arc_s, data, window, used, x_start, result, _rate(run, window),
-                  notes)
+        raise IllConditionedFit(exc, run, a.every, a.window, a.used) from None
+    return FitRun(run, arc, arc_s, a.every, a.window, a.used, a.x_start, result,
+                  _rate(run, a.window), a.notes)
 
 
 def apriori_covariance(apriori: str, study: Study) -> np.ndarray:
@@ -306,7 +328,7 @@ def apriori_covariance(apriori: str, study: Study) -> np.ndarray:
             sig = np.asarray(table[apriori], dtype=float)
         except (TypeError, ValueError):
             sig = np.empty(0)
-        if sig.shape != (6,) or not np.all(np.isfinite(sig)) or np.any(sig <= 0):
+        if not _six_sigmas(sig):
             raise InputError(str(study.path), f"ekf.apriori.{apriori}",
                              "six standard deviations > 0 (km, km/s)", table[apriori])
     else:
@@ -318,9 +340,14 @@ def apriori_covariance(apriori: str, study: Study) -> np.ndarray:
             sig = np.array([float(pairs[k]) for k in APRIORI_KEYS])
         except ValueError:
             raise InputError("--apriori", "apriori", "numbers", apriori) from None
-    if sig.shape != (6,) or not np.all(np.isfinite(sig)) or np.any(sig <= 0):
-        raise InputError("--apriori", "apriori", "six standard deviations > 0", apriori)
+        if not _six_sigmas(sig):
+            raise InputError("--apriori", "apriori", "six standard deviations > 0", apriori)
     return np.diag(sig**2)
+
+
+def _six_sigmas(sig: np.ndarray) -> bool:
+    """Whether ``sig`` is six finite standard deviations > 0."""
+    return sig.shape == (6,) and bool(np.all(np.isfinite(sig))) and not np.any(sig <= 0)
 
 
 def run_ekf(study: Study | Path | str, orbit: str, *, arc: str | float = "18h",
@@ -345,18 +372,15 @@ def run_ekf(study: Study | Path | str, orbit: str, *, arc: str | float = "18h",
     run = _run_setup(study, orbit, truth, stm, orient, allow_subsurface)
     p0 = apriori_covariance(apriori, study)
     q_km2_s3 = check_nonnegative("--process-noise", process_noise)
-    every, notes = _observations(run, stations, observations, check_seed("--seed", seed),
-                                 earth_orientation is not None, notify)
-    data = every.arc(arc_s, "--arc", got=arc)
-    used = setup.orientation_record(orient, data.t_s)
-    x_start = setup.initial_estimate(run.x_true, offset(study))
+    a = _arc(run, arc, arc_s, stations, observations, seed, earth_orientation is not None,
+             notify)
     try:
-        result = extended_kalman_filter(data, run.propagator, x_start, p0, orientation=orient,
-                                        q_km2_s3=q_km2_s3)
+        result = extended_kalman_filter(a.window, run.propagator, a.x_start, p0,
+                                        orientation=orient, q_km2_s3=q_km2_s3)
     except TooFewMeasurementsError as exc:
-        raise _short_arc(exc, every, arc) from None
-    return FilterRun(run, arc, arc_s, apriori, p0, q_km2_s3, every, data, used, x_start,
-                     result, notes)
+        raise _short_arc(exc, a.every, arc) from None
+    return FilterRun(run, arc, arc_s, apriori, p0, q_km2_s3, a.every, a.window, a.used,
+                     a.x_start, result, a.notes)
 
 
 def run_rsig(study: Study | Path | str, orbit: str, *, truth: str = "J2", stm: str = "J2",
